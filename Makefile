@@ -1,0 +1,20 @@
+# The two set-up commands of the README: `make demo` and `make test`. CI runs `make test`.
+PYTHON ?= python3
+LLVM ?= /usr/lib/x86_64-linux-gnu/libLLVM.so.19.1
+SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
+export DRJIT_LIBLLVM_PATH ?= $(LLVM)
+
+.PHONY: install llvm demo test figures benchmark
+
+install:
+	$(PYTHON) -m pip install -q -e '.[test]'
+
+# Mitsuba's llvm_ad_rgb variant needs a libLLVM that Dr.Jit can use; Debian 12's libLLVM 15 is not one.
+llvm:
+	@[ -e $(LLVM) ] || ($(SUDO) apt-get update -qq && $(SUDO) apt-get install -y -qq libllvm19 >/dev/null)
+
+demo: install
+	warprt render -o warprt.png
+
+test: install llvm
+	$(PYTHON) -m pytest -q

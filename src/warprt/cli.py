@@ -1,0 +1,181 @@
+"""The ``warprt`` command line: render, info (and compare, figures where those parts are present).
+
+Bad input is one line on stderr naming the file and field, exit status 2, no output file;
+a traceback only with --debug.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+import tomllib
+from pathlib import Path
+
+from . import __version__
+from .errors import SceneError
+
+EXAMPLES = """examples:
+  warprt render                               the built-in default scene -> warprt.png
+  warprt render scenes/cornell.toml -o c.png  a scene file
+  warprt render bunny.obj -o bunny.png        any mesh trimesh reads, framed automatically
+  warprt render s.toml --spp 16 --max-depth 5 --width 1024 --height 768
+  warprt render s.toml --no-shadows --effects ambient,diffuse --stats
+  warprt render s.toml --set camera.fovy=30 --set 'lights[0].color=[1,0.9,0.8]'
+  warprt info s.toml
+"""
+
+
+def _parse_set(items) -> dict:
+    """--set section.key=value; the value is read as a TOML value, or as a string if it is not one."""
+    out = {}
+    for item in items or ():
+        if "=" not in item:
+            raise SceneError("command line", "--set", f"expected section.key=value, got '{item}'")
+        key, value = item.split("=", 1)
+        try:
+            out[key.strip()] = tomllib.loads(f"v = {value}")["v"]
+        except tomllib.TOMLDecodeError:
+            out[key.strip()] = value
+    return out
+
+
+def _add_scene_options(p: argparse.ArgumentParser):
+    p.add_argument("scene", nargs="?", help="scene file (.toml) or mesh file; default: the built-in scene")
+    p.add_argument("--set", action="append", metavar="SECTION.KEY=VALUE", help="override a scene field (repeatable)")
+    p.add_argument("--width", type=int, help="image width in pixels")
+    p.add_argument("--height", type=int, help="image height in pixels")
+    p.add_argument("--spp", type=int, help="samples per pixel (a square: 1, 4, 9, 16, ...)")
+    p.add_argument("--max-depth", type=int, help="ray levels: 1 = primary rays only, 2 = one reflection, ...")
+    p.add_argument("--no-shadows", action="store_true", help="switch shadow rays off")
+
+
+def _load(args):
+    from .scene import load_scene
+
+    overrides = _parse_set(args.set)
+    for flag, key in (("width", "camera.width"), ("height", "camera.height"), ("spp", "render.spp"),
+                      ("max_depth", "render.max_depth")):
+        if getattr(args, flag) is not None:
+            overrides[key] = getattr(args, flag)
+    if args.no_shadows:
+        overrides["render.shadows"] = False
+    if args.scene is None or Path(args.scene).suffix.lower() == ".toml":
+        return load_scene(args.scene, overrides)
+    # A bare mesh: the framed default scene, then the same overrides through the same validation.
+    from dataclasses import asdict
+
+    from .scene import read_camera, read_render
+
+    scene = load_scene(args.scene)
+    if overrides:
+        doc = {"camera": asdict(scene.camera), "render": {k: v for k, v in asdict(scene.render).items() if v is not None}}
+        from .scene import apply_overrides
+
+        doc = apply_overrides(doc, overrides, scene.source)
+        for k in doc:
+            if k not in ("camera", "render"):
+                raise SceneError(scene.source, k, "only camera.* and render.* can be set for a mesh file")
+        doc["camera"] = {k: list(v) if isinstance(v, tuple) else v for k, v in doc["camera"].items()}
+        doc["render"] = {k: list(v) if isinstance(v, tuple) else v for k, v in doc["render"].items()}
+        scene.camera = read_camera(scene.source, doc["camera"])
+        scene.render = read_render(scene.source, doc["render"])
+    return scene
+
+
+def cmd_render(args) -> int:
+    from .film import check_output_path, write_image
+    from .render import render
+
+    out = check_output_path(args.output)
+    scene = _load(args)
+    effects = args.effects.split(",") if args.effects else None
+    result = render(scene, threads=args.threads, device=args.device, effects=effects)
+    t = time.perf_counter()
+    write_image(out, result.image)
+    stats = result.stats
+    stats.times["write"] = time.perf_counter() - t
+    if args.stats:
+        print(json.dumps(stats.to_dict(), indent=2))
+    if args.stats_file:
+        Path(args.stats_file).write_text(json.dumps(stats.to_dict(), indent=2) + "\n")
+    if not args.quiet and not args.stats:
+        r = stats.rays
+        print(f"wrote {out} ({stats.width}x{stats.height}, {stats.effects}; "
+              f"{r['total']:,} rays in {stats.times['trace']:.3f} s)", file=sys.stderr)
+    return 0
+
+
+def cmd_info(args) -> int:
+    from .effects import scene_effects
+
+    scene = _load(args)
+    lo, hi = scene.bounds()
+    cam = scene.camera
+    print(f"scene      {scene.source}")
+    print(f"image      {cam.width}x{cam.height}, spp {scene.render.spp}, max_depth {scene.render.max_depth}")
+    print(f"camera     eye {list(cam.eye)} center {list(cam.center)} up {list(cam.up)} fovy {cam.fovy:g} near {cam.near:g}")
+    print(f"objects    {len(scene.objects)}")
+    for o in scene.objects:
+        print(f"  {o.name:<16} {len(o.faces):>10,} triangles  material {o.material}{'  smooth' if o.smooth else ''}")
+    print(f"triangles  {scene.triangle_count:,}")
+    print(f"materials  {', '.join(m for m in scene.materials if m != 'default' or any(o.material == 'default' for o in scene.objects))}")
+    print(f"lights     {len(scene.lights)}")
+    print(f"bounds     {[round(float(x), 6) for x in lo]} .. {[round(float(x), 6) for x in hi]}")
+    print(f"effects    {scene_effects(scene)}")
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="warprt", description="A Whitted ray tracer in NVIDIA Warp kernels.",
+                                     epilog=EXAMPLES, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--version", action="version", version=f"warprt {__version__}")
+    parser.add_argument("--debug", action="store_true", help="show tracebacks")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+
+    p = sub.add_parser("render", help="render a scene to an image", epilog=EXAMPLES,
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
+    _add_scene_options(p)
+    p.add_argument("-o", "--output", default="warprt.png", help="output image: .png (sRGB 8-bit), .exr or .npy (linear float)")
+    p.add_argument("--threads", type=int, help="worker threads (default: all cores)")
+    p.add_argument("--device", default="cpu", choices=["cpu", "cuda"], help="Warp device (default: cpu)")
+    p.add_argument("--effects", help="comma-separated effects to keep: ambient,diffuse,specular,shadows,reflection,supersampling,smooth")
+    p.add_argument("--stats", action="store_true", help="print render statistics as JSON")
+    p.add_argument("--stats-file", help="write render statistics as JSON to this file")
+    p.add_argument("-q", "--quiet", action="store_true", help="print nothing but errors")
+    p.add_argument("--debug", action="store_true", help="show tracebacks")
+    p.set_defaults(func=cmd_render)
+
+    p = sub.add_parser("info", help="summarise a scene: triangles, objects, materials, lights, bounds, effects")
+    _add_scene_options(p)
+    p.add_argument("--debug", action="store_true", help="show tracebacks")
+    p.set_defaults(func=cmd_info)
+    return parser
+
+
+def main(argv=None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if args.command is None:
+        parser.print_help()
+        return 0
+    try:
+        return args.func(args)
+    except SceneError as e:
+        if args.debug:
+            raise
+        print(f"warprt: error: {e}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("warprt: interrupted", file=sys.stderr)
+        return 130
+    except Exception as e:
+        if args.debug:
+            raise
+        print(f"warprt: internal error: {type(e).__name__}: {e} (run with --debug for a traceback)", file=sys.stderr)
+        return 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,82 @@
+"""Which effects a render simulates: derived from the scene, narrowed by the user, never widened.
+
+Each distinct EffectSet compiles to its own kernel variant with the disabled code removed.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, fields
+
+import numpy as np
+
+from .errors import SceneError
+
+EFFECTS = ("ambient", "diffuse", "specular", "shadows", "reflection", "supersampling", "smooth")
+
+
+@dataclass(frozen=True)
+class EffectSet:
+    ambient: bool = True
+    diffuse: bool = True
+    specular: bool = True
+    shadows: bool = True
+    reflection: bool = True
+    supersampling: bool = False
+    smooth: bool = False
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        return tuple(f.name for f in fields(self) if getattr(self, f.name))
+
+    @property
+    def variant(self) -> str:
+        """A short stable name for the compiled kernel variant, e.g. 'trace_adsS_r'."""
+        letters = {"ambient": "a", "diffuse": "d", "specular": "s", "shadows": "S",
+                   "reflection": "r", "supersampling": "x", "smooth": "n"}
+        return "".join(letters[n] for n in self.names) or "none"
+
+    def __str__(self) -> str:
+        return ",".join(self.names) or "none"
+
+
+def scene_effects(scene) -> EffectSet:
+    """The effects the scene calls for: a term is simulated only where it can change a pixel."""
+    used = {o.material for o in scene.objects}
+    mats = [scene.materials[m] for m in used]
+    amb = np.asarray(scene.render.ambient)
+    lit = any(max(l.color) > 0 for l in scene.lights)
+    return EffectSet(
+        ambient=any(np.any(amb * np.asarray(m.ka_) > 0) for m in mats),
+        diffuse=lit and any(max(m.kd) > 0 for m in mats),
+        specular=lit and any(max(m.ks) > 0 for m in mats),
+        shadows=lit and scene.render.shadows and any(max(m.kd) > 0 or max(m.ks) > 0 for m in mats),
+        reflection=scene.render.max_depth > 1 and any(max(m.reflectivity) > 0 for m in mats),
+        supersampling=scene.render.spp > 1,
+        smooth=any(o.smooth for o in scene.objects),
+    )
+
+
+def parse_effects(names, source: str = "render", field: str = "render.effects") -> set[str]:
+    out = set()
+    for n in names:
+        n = n.strip()
+        if n == "":
+            continue
+        if n not in EFFECTS:
+            raise SceneError(source, field, f"unknown effect '{n}'; expected some of: {', '.join(EFFECTS)}")
+        out.add(n)
+    return out
+
+
+def resolve_effects(scene, allow=None, disable=()) -> EffectSet:
+    """The scene's effects, restricted to ``allow`` (if given) and minus ``disable``."""
+    fx = scene_effects(scene)
+    keep = set(EFFECTS)
+    if scene.render.effects is not None:
+        keep &= parse_effects(scene.render.effects, scene.source)
+    if allow is not None:
+        keep &= parse_effects(allow, "command line", "--effects")
+    keep -= parse_effects(disable, "command line", "--effects")
+    on = {n: getattr(fx, n) and n in keep for n in EFFECTS}
+    on["shadows"] = on["shadows"] and (on["diffuse"] or on["specular"])  # shadows only dim those terms
+    return EffectSet(**on)

@@ -1,0 +1,18 @@
+"""The one error type a user sees: bad input, named by file and field.
+
+The CLI prints it as a single line and exits with status 2; everything else is a bug.
+"""
+
+from __future__ import annotations
+
+
+class SceneError(ValueError):
+    """Invalid input. ``source`` is the file (or 'camera', 'render' for API input), ``field`` the
+    dotted key in the file's own vocabulary (``camera.fovy``, ``objects[2].mesh``)."""
+
+    def __init__(self, source: str, field: str | None, message: str):
+        self.source = str(source)
+        self.field = field
+        self.message = message
+        where = f"{self.source}: {field}" if field else self.source
+        super().__init__(f"{where}: {message}")

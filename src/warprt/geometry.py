@@ -1,0 +1,108 @@
+"""The scene flattened for the kernels: one triangle set in camera-relative float32, with a
+per-triangle material index, vertex normals for smooth objects, and material and light tables.
+
+Coordinates are made relative to the eye in float64 before the cast to float32, so a scene far
+from the origin keeps the precision it has near it (the camera ray origin is exactly 0).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import warp as wp
+
+
+def vertex_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """Angle-weighted vertex normals (float64), shared by vertices at the same position so that
+    a mesh with split seams (OBJ texture seams) still shades smoothly across them."""
+    _, canon, inverse = np.unique(vertices, axis=0, return_index=True, return_inverse=True)
+    inverse = inverse.reshape(-1)
+    p = vertices[faces]
+    fn = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
+    length = np.linalg.norm(fn, axis=1, keepdims=True)
+    fn = np.divide(fn, length, out=np.zeros_like(fn), where=length > 0)
+    acc = np.zeros((len(canon), 3))
+    for k in range(3):
+        e1 = p[:, (k + 1) % 3] - p[:, k]
+        e2 = p[:, (k + 2) % 3] - p[:, k]
+        n1, n2 = np.linalg.norm(e1, axis=1), np.linalg.norm(e2, axis=1)
+        cos = np.einsum("ij,ij->i", e1, e2) / np.maximum(n1 * n2, 1e-300)
+        angle = np.arccos(np.clip(cos, -1.0, 1.0))
+        np.add.at(acc, inverse[faces[:, k]], fn * angle[:, None])
+    length = np.linalg.norm(acc, axis=1, keepdims=True)
+    acc = np.divide(acc, length, out=np.zeros_like(acc), where=length > 0)
+    return acc[inverse]
+
+
+@wp.struct
+class SceneData:
+    mesh: wp.uint64
+    points: wp.array(dtype=wp.vec3)
+    indices: wp.array(dtype=wp.int32)
+    normals: wp.array(dtype=wp.vec3)  # per vertex; zero where the object is flat
+    tri_material: wp.array(dtype=wp.int32)
+    tri_smooth: wp.array(dtype=wp.int32)
+    ka: wp.array(dtype=wp.vec3)
+    kd: wp.array(dtype=wp.vec3)
+    ks: wp.array(dtype=wp.vec3)
+    kr: wp.array(dtype=wp.vec3)
+    shininess: wp.array(dtype=float)
+    light_pos: wp.array(dtype=wp.vec3)  # camera-relative
+    light_color: wp.array(dtype=wp.vec3)
+    num_lights: int
+    ambient: wp.vec3  # C_amb
+    background: wp.vec3
+
+
+class Geometry:
+    """Owns the device arrays and the BVH for one scene."""
+
+    def __init__(self, scene, device="cpu", bvh_constructor: str = "sah"):
+        self.device = device
+        self.origin = np.asarray(scene.camera.eye, np.float64)  # world position of the eye
+        names = list(scene.materials)
+        verts, faces, mats, smooth, normals = [], [], [], [], []
+        base = 0
+        for obj in scene.objects:
+            verts.append(obj.vertices - self.origin)
+            faces.append(obj.faces + base)
+            mats.append(np.full(len(obj.faces), names.index(obj.material), np.int32))
+            smooth.append(np.full(len(obj.faces), int(obj.smooth), np.int32))
+            normals.append(vertex_normals(obj.vertices, obj.faces) if obj.smooth else np.zeros_like(obj.vertices))
+            base += len(obj.vertices)
+        if not verts:  # an empty scene still gets a (degenerate, never hit) mesh so kernels can run
+            verts, faces = [np.zeros((3, 3))], [np.zeros((1, 3), np.int64)]
+            mats, smooth, normals = [np.zeros(1, np.int32)], [np.zeros(1, np.int32)], [np.zeros((3, 3))]
+            self.triangle_count = 0
+        else:
+            self.triangle_count = int(sum(len(f) for f in faces))
+        self.points_np = np.ascontiguousarray(np.concatenate(verts), np.float32)
+        self.indices_np = np.ascontiguousarray(np.concatenate(faces).reshape(-1), np.int32)
+        self.tri_material_np = np.concatenate(mats)
+        self.material_names = names
+
+        d = device
+        self.points = wp.array(self.points_np, dtype=wp.vec3, device=d)
+        self.indices = wp.array(self.indices_np, dtype=wp.int32, device=d)
+        self.mesh = wp.Mesh(points=self.points, indices=self.indices, bvh_constructor=bvh_constructor)
+
+        m = [scene.materials[n] for n in names]
+        lights = scene.lights
+        s = SceneData()
+        s.mesh = self.mesh.id
+        s.points = self.points
+        s.indices = self.indices
+        s.normals = wp.array(np.concatenate(normals).astype(np.float32), dtype=wp.vec3, device=d)
+        s.tri_material = wp.array(self.tri_material_np, dtype=wp.int32, device=d)
+        s.tri_smooth = wp.array(np.concatenate(smooth), dtype=wp.int32, device=d)
+        vec = lambda rows: wp.array(np.asarray(rows, np.float32).reshape(-1, 3), dtype=wp.vec3, device=d)
+        s.ka = vec([x.ka_ for x in m])
+        s.kd = vec([x.kd for x in m])
+        s.ks = vec([x.ks for x in m])
+        s.kr = vec([x.reflectivity for x in m])
+        s.shininess = wp.array(np.asarray([x.shininess for x in m], np.float32), dtype=float, device=d)
+        s.light_pos = vec([np.asarray(l.position) - self.origin for l in lights] or [[0, 0, 0]])
+        s.light_color = vec([l.color for l in lights] or [[0, 0, 0]])
+        s.num_lights = len(lights)
+        s.ambient = wp.vec3(*scene.render.ambient)
+        s.background = wp.vec3(*scene.render.background)
+        self.data = s

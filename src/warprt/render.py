@@ -1,0 +1,165 @@
+"""Render a Scene: build the BVH, pick the kernel variant for its effect set, launch bands of
+pixels from a thread pool, and report what it cost (time per phase, exact ray counts)."""
+
+from __future__ import annotations
+
+import math
+import os
+import time
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import asdict, dataclass, field
+from typing import NamedTuple
+
+import numpy as np
+import warp as wp
+
+from .camera import camera_basis
+from .effects import EffectSet, resolve_effects
+from .errors import SceneError
+from .geometry import Geometry
+from .scene import validate_camera
+
+_initialized = False
+
+
+def init_warp():
+    """Initialize Warp once. Its native layer warns on stderr when a machine has no CUDA driver,
+    which is the normal case for this CPU renderer: that one line is dropped, anything else kept."""
+    global _initialized
+    if _initialized:
+        return
+    import sys
+    import tempfile
+
+    sys.stderr.flush()
+    saved = os.dup(2)
+    with tempfile.TemporaryFile() as captured:
+        os.dup2(captured.fileno(), 2)
+        try:
+            wp.init()
+        finally:
+            os.dup2(saved, 2)
+            os.close(saved)
+        captured.seek(0)
+        for line in captured.read().decode(errors="replace").splitlines():
+            if "Could not find or load the NVIDIA CUDA driver" not in line:
+                print(line, file=sys.stderr)
+    _initialized = True
+
+
+@dataclass
+class RenderStats:
+    width: int = 0
+    height: int = 0
+    spp: int = 1
+    max_depth: int = 1
+    triangles: int = 0
+    lights: int = 0
+    device: str = "cpu"
+    threads: int = 1
+    bands: int = 1
+    algorithm: str = "raytrace"
+    effects: str = ""
+    variant: str = ""
+    rays: dict = field(default_factory=dict)  # primary, shadow, reflection, total
+    times: dict = field(default_factory=dict)  # seconds: load, bvh, compile, trace, write, total
+    rays_per_second: float = 0.0
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+class RenderResult(NamedTuple):
+    image: np.ndarray  # float32 (H, W, 3), linear RGB, row 0 at the top
+    stats: RenderStats
+
+
+def default_threads() -> int:
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+
+
+def _bands(n_pixels: int, n_bands: int) -> list[tuple[int, int]]:
+    """Split [0, n_pixels) into n_bands contiguous ranges (first pixel, count)."""
+    n_bands = max(1, min(n_bands, n_pixels))
+    edges = np.linspace(0, n_pixels, n_bands + 1).round().astype(int)
+    return [(int(a), int(b - a)) for a, b in zip(edges[:-1], edges[1:]) if b > a]
+
+
+def launch_bands(kernel, inputs_for, n_pixels: int, threads: int, bands: int, device: str):
+    """Launch ``kernel`` over pixel ranges; on the CPU each launch runs on one thread and releases
+    the GIL, so a pool of ``threads`` workers runs that many bands at once."""
+    ranges = _bands(n_pixels, bands)
+
+    def run(r):
+        first, count = r
+        wp.launch(kernel, dim=count, inputs=inputs_for(first), device=device)
+
+    if threads <= 1 or len(ranges) == 1 or device != "cpu":
+        for r in ranges:
+            run(r)
+    else:
+        with ThreadPoolExecutor(max_workers=threads) as pool:
+            list(pool.map(run, ranges))
+    wp.synchronize_device(device)
+
+
+def check_finite(image: np.ndarray, what: str = "render"):
+    """The renderer checks its own output: a NaN or Inf pixel is a bug, never an image."""
+    bad = ~np.isfinite(image)
+    if bad.any():
+        rows, cols = np.nonzero(bad.any(-1))
+        raise RuntimeError(f"{what} produced {len(rows)} non-finite pixels (first at row {rows[0]}, column {cols[0]})")
+
+
+def render(scene, *, threads: int | None = None, device: str = "cpu", effects=None, disable=(),
+           bands: int | None = None, geometry: Geometry | None = None) -> RenderResult:
+    """Render ``scene`` with the Whitted tracer. ``effects`` (names) limits the effect set,
+    ``disable`` removes effects; neither can add one the scene has nothing for."""
+    init_warp()
+    validate_camera(scene.camera, scene.source)
+    t_start = time.perf_counter()
+    threads = default_threads() if threads is None else int(threads)
+    if threads < 1:
+        raise SceneError("command line", "--threads", f"expected an integer >= 1, got {threads}")
+    cam = scene.camera
+    n_pixels = cam.width * cam.height
+    bands = bands or (1 if device != "cpu" else max(16, 8 * threads))
+    fx: EffectSet = resolve_effects(scene, effects, disable)
+    stats = RenderStats(width=cam.width, height=cam.height, spp=scene.render.spp,
+                        max_depth=scene.render.max_depth if fx.reflection else 1,
+                        lights=len(scene.lights), device=str(device), threads=threads, bands=bands,
+                        effects=str(fx), variant=f"trace_{fx.variant}")
+    if getattr(scene, "load_seconds", None) is not None:
+        stats.times["load"] = scene.load_seconds
+
+    t = time.perf_counter()
+    geom = geometry or Geometry(scene, device=device)
+    stats.triangles = geom.triangle_count
+    stats.times["bvh"] = time.perf_counter() - t
+
+    from .tracer import camera_data, make_trace_kernel
+
+    t = time.perf_counter()
+    kernel = make_trace_kernel(fx)
+    wp.load_module(kernel.module, device=device)
+    stats.times["compile"] = time.perf_counter() - t
+
+    t = time.perf_counter()
+    image = wp.empty(n_pixels, dtype=wp.vec3, device=device)
+    counts = wp.empty(n_pixels, dtype=wp.vec3i, device=device)
+    c = camera_data(camera_basis(cam))
+    k = math.isqrt(scene.render.spp)
+    max_depth = stats.max_depth
+    data = geom.data
+    launch_bands(kernel, lambda first: [data, c, max_depth, k, first, image, counts],
+                 n_pixels, threads, bands, device)
+    out = image.numpy().reshape(cam.height, cam.width, 3).copy()
+    per_kind = counts.numpy().astype(np.int64).sum(0)
+    stats.times["trace"] = time.perf_counter() - t
+    check_finite(out)
+
+    stats.rays = {"primary": int(per_kind[0]), "shadow": int(per_kind[1]), "reflection": int(per_kind[2])}
+    stats.rays["total"] = sum(stats.rays.values())
+    stats.rays_per_second = stats.rays["total"] / max(stats.times["trace"], 1e-9)
+    stats.times["total"] = time.perf_counter() - t_start
+    return RenderResult(out, stats)

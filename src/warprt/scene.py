@@ -1,0 +1,490 @@
+"""The scene: dataclasses that mirror the TOML file one to one, and the reader that validates it.
+
+Everything is float64 here; geometry becomes float32 only when it is handed to the BVH.
+Validation speaks the file's vocabulary: every error names the file and the dotted field.
+"""
+
+from __future__ import annotations
+
+import difflib
+import math
+import time
+import tomllib
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+import numpy as np
+
+from . import shapes
+from .errors import SceneError
+
+
+@dataclass(frozen=True)
+class Camera:
+    """The seed's pinhole camera: eye, center, up, fovy (degrees), near (d_f), image size."""
+
+    eye: tuple = (0.0, 1.5, 5.0)
+    center: tuple = (0.0, 0.8, 0.0)
+    up: tuple = (0.0, 1.0, 0.0)
+    fovy: float = 45.0
+    near: float = 1.0
+    width: int = 640
+    height: int = 480
+
+
+@dataclass(frozen=True)
+class RenderSettings:
+    ambient: tuple = (0.1, 0.1, 0.1)  # C_amb
+    background: tuple = (0.0, 0.0, 0.0)
+    max_depth: int = 3  # ray levels: 1 = primary only
+    shadows: bool = True
+    spp: int = 1  # k*k stratified samples per pixel
+    effects: tuple | None = None  # None: every effect the scene calls for
+
+
+@dataclass(frozen=True)
+class Light:
+    """A point light: position and colour C_l."""
+
+    position: tuple
+    color: tuple = (1.0, 1.0, 1.0)
+
+
+@dataclass(frozen=True)
+class Material:
+    """Phong coefficients ka, kd, ks, the exponent n (shininess) and the mirror weight k_r."""
+
+    kd: tuple = (0.7, 0.7, 0.7)
+    ka: tuple | None = None  # defaults to kd
+    ks: tuple = (0.0, 0.0, 0.0)
+    shininess: float = 32.0
+    reflectivity: tuple = (0.0, 0.0, 0.0)  # k_r
+
+    @property
+    def ka_(self) -> tuple:
+        return self.kd if self.ka is None else self.ka
+
+
+@dataclass
+class SceneObject:
+    """One object: its triangles in world space (float64) and the name of its material."""
+
+    name: str
+    vertices: np.ndarray  # (N, 3) float64, world space
+    faces: np.ndarray  # (M, 3) int64
+    material: str
+    smooth: bool = False
+
+
+@dataclass
+class Scene:
+    camera: Camera
+    render: RenderSettings
+    lights: list[Light]
+    materials: dict[str, Material]
+    objects: list[SceneObject]
+    source: str = "<scene>"
+    load_seconds: float | None = None  # time load_scene spent reading and validating
+
+    @property
+    def triangle_count(self) -> int:
+        return int(sum(len(o.faces) for o in self.objects))
+
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        v = np.concatenate([o.vertices for o in self.objects]) if self.objects else np.zeros((1, 3))
+        return v.min(0), v.max(0)
+
+    def with_camera(self, **kw) -> "Scene":
+        return replace(self, camera=replace(self.camera, **kw))
+
+    def with_render(self, **kw) -> "Scene":
+        return replace(self, render=replace(self.render, **kw))
+
+
+DEFAULT_MATERIAL = Material(kd=(0.7, 0.7, 0.7), ks=(0.3, 0.3, 0.3), shininess=32.0)
+MAX_IMAGE_SIDE = 16384
+
+_SECTIONS = {"camera", "render", "lights", "materials", "objects"}
+_CAMERA_KEYS = {"eye", "center", "up", "fovy", "near", "width", "height"}
+_RENDER_KEYS = {"ambient", "background", "max_depth", "shadows", "spp", "effects"}
+_LIGHT_KEYS = {"position", "color"}
+_MATERIAL_KEYS = {"ka", "kd", "ks", "shininess", "reflectivity"}
+_OBJECT_KEYS = {"name", "mesh", "shape", "material", "scale", "rotate", "translate", "smooth"}
+
+
+class _Reader:
+    """Typed access to one TOML table, raising SceneError with the file and dotted field."""
+
+    def __init__(self, source: str, table: dict, prefix: str):
+        self.source, self.table, self.prefix = source, table, prefix
+
+    def fail(self, key: str | None, message: str):
+        raise SceneError(self.source, f"{self.prefix}.{key}" if key else self.prefix, message)
+
+    def check_keys(self, allowed: set):
+        for key in self.table:
+            if key not in allowed:
+                close = difflib.get_close_matches(key, sorted(allowed), n=1)
+                hint = f" (did you mean '{close[0]}'?)" if close else f" (expected one of: {', '.join(sorted(allowed))})"
+                self.fail(key, f"unknown key{hint}")
+
+    def number(self, key, default=None, lo=None, hi=None, lo_open=False, hi_open=False):
+        v = self.table.get(key, default)
+        if v is None:
+            self.fail(key, "is required")
+        if isinstance(v, bool) or not isinstance(v, (int, float)):
+            self.fail(key, f"expected a number, got {_show(v)}")
+        v = float(v)
+        if not math.isfinite(v):
+            self.fail(key, f"expected a finite number, got {v}")
+        if lo is not None and (v < lo or (lo_open and v == lo)):
+            self.fail(key, f"expected a number {'>' if lo_open else '>='} {lo:g}, got {v:g}")
+        if hi is not None and (v > hi or (hi_open and v == hi)):
+            self.fail(key, f"expected a number {'<' if hi_open else '<='} {hi:g}, got {v:g}")
+        return v
+
+    def integer(self, key, default=None, lo=None, hi=None):
+        v = self.table.get(key, default)
+        if v is None:
+            self.fail(key, "is required")
+        if isinstance(v, bool) or not isinstance(v, int):
+            self.fail(key, f"expected an integer, got {_show(v)}")
+        if (lo is not None and v < lo) or (hi is not None and v > hi):
+            self.fail(key, f"expected an integer in [{lo}, {hi}], got {v}")
+        return int(v)
+
+    def boolean(self, key, default):
+        v = self.table.get(key, default)
+        if not isinstance(v, bool):
+            self.fail(key, f"expected true or false, got {_show(v)}")
+        return v
+
+    def string(self, key, default=None):
+        v = self.table.get(key, default)
+        if v is None:
+            self.fail(key, "is required")
+        if not isinstance(v, str):
+            self.fail(key, f"expected a string, got {_show(v)}")
+        return v
+
+    def vector(self, key, default=None, n=3, nonneg=False, allow_scalar=False):
+        v = self.table.get(key, default)
+        if v is None:
+            self.fail(key, "is required")
+        if allow_scalar and isinstance(v, (int, float)) and not isinstance(v, bool):
+            v = [v] * n
+        if not isinstance(v, (list, tuple)) or len(v) != n:
+            what = f"a number or a list of {n} numbers" if allow_scalar else f"a list of {n} numbers"
+            self.fail(key, f"expected {what}, got {_show(v)}")
+        out = []
+        for x in v:
+            if isinstance(x, bool) or not isinstance(x, (int, float)):
+                self.fail(key, f"expected a list of {n} numbers, got {_show(v)}")
+            if not math.isfinite(x):
+                self.fail(key, f"expected finite numbers, got {_show(v)}")
+            if nonneg and x < 0:
+                self.fail(key, f"expected non-negative numbers, got {_show(v)}")
+            out.append(float(x))
+        return tuple(out)
+
+
+def _show(v) -> str:
+    s = repr(v)
+    return s if len(s) <= 60 else s[:57] + "..."
+
+
+def _table(source, data, key, prefix=None) -> dict:
+    v = data.get(key, {})
+    if not isinstance(v, dict):
+        raise SceneError(source, prefix or key, f"expected a table, got {_show(v)}")
+    return v
+
+
+def _array_of_tables(source, data, key) -> list:
+    v = data.get(key, [])
+    if not isinstance(v, list) or not all(isinstance(t, dict) for t in v):
+        raise SceneError(source, key, f"expected an array of tables ([[{key}]]), got {_show(v)}")
+    return v
+
+
+def read_camera(source: str, t: dict) -> Camera:
+    r = _Reader(source, t, "camera")
+    r.check_keys(_CAMERA_KEYS)
+    d = Camera()
+    cam = Camera(
+        eye=r.vector("eye", d.eye),
+        center=r.vector("center", d.center),
+        up=r.vector("up", d.up),
+        fovy=r.number("fovy", d.fovy, lo=0.0, hi=180.0, lo_open=True, hi_open=True),
+        near=r.number("near", d.near, lo=0.0, lo_open=True),
+        width=r.integer("width", d.width, lo=1, hi=MAX_IMAGE_SIDE),
+        height=r.integer("height", d.height, lo=1, hi=MAX_IMAGE_SIDE),
+    )
+    validate_camera(cam, source)
+    return cam
+
+
+def validate_camera(cam: Camera, source: str = "camera"):
+    """The checks that need more than one field: a view direction, and an up not parallel to it."""
+    eye, center, up = (np.asarray(v, np.float64) for v in (cam.eye, cam.center, cam.up))
+    for name, v in (("eye", eye), ("center", center), ("up", up)):
+        if v.shape != (3,) or not np.all(np.isfinite(v)):
+            raise SceneError(source, f"camera.{name}", f"expected 3 finite numbers, got {list(v)}")
+    if not (0.0 < cam.fovy < 180.0) or not math.isfinite(cam.fovy):
+        raise SceneError(source, "camera.fovy", f"expected a number in (0, 180) degrees, got {cam.fovy:g}")
+    if not (cam.near > 0.0) or not math.isfinite(cam.near):
+        raise SceneError(source, "camera.near", f"expected a number > 0, got {cam.near:g}")
+    for name in ("width", "height"):
+        v = getattr(cam, name)
+        if not isinstance(v, (int, np.integer)) or not (1 <= v <= MAX_IMAGE_SIDE):
+            raise SceneError(source, f"camera.{name}", f"expected an integer in [1, {MAX_IMAGE_SIDE}], got {v}")
+    view = eye - center
+    if np.linalg.norm(view) <= 1e-12 * max(1.0, np.abs(eye).max()):
+        raise SceneError(source, "camera.center", "must differ from camera.eye (no viewing direction)")
+    z = view / np.linalg.norm(view)
+    if np.linalg.norm(up) == 0.0:
+        raise SceneError(source, "camera.up", "must not be the zero vector")
+    if np.linalg.norm(np.cross(up / np.linalg.norm(up), z)) < 1e-6:
+        raise SceneError(source, "camera.up", "is parallel to the viewing direction (eye - center)")
+
+
+def read_render(source: str, t: dict) -> RenderSettings:
+    r = _Reader(source, t, "render")
+    r.check_keys(_RENDER_KEYS)
+    d = RenderSettings()
+    spp = r.integer("spp", d.spp, lo=1, hi=4096)
+    k = math.isqrt(spp)
+    if k * k != spp:
+        r.fail("spp", f"expected a square number of samples (k*k stratified: 1, 4, 9, 16, ...), got {spp}")
+    effects = t.get("effects")
+    if effects is not None:
+        if not isinstance(effects, list) or not all(isinstance(e, str) for e in effects):
+            r.fail("effects", f"expected a list of effect names, got {_show(effects)}")
+        effects = tuple(effects)
+    return RenderSettings(
+        ambient=r.vector("ambient", d.ambient, nonneg=True),
+        background=r.vector("background", d.background, nonneg=True),
+        max_depth=r.integer("max_depth", d.max_depth, lo=1, hi=1024),
+        shadows=r.boolean("shadows", d.shadows),
+        spp=spp,
+        effects=effects,
+    )
+
+
+def read_light(source: str, t: dict, i: int) -> Light:
+    r = _Reader(source, t, f"lights[{i}]")
+    r.check_keys(_LIGHT_KEYS)
+    return Light(position=r.vector("position"), color=r.vector("color", (1.0, 1.0, 1.0), nonneg=True))
+
+
+def read_material(source: str, name: str, t) -> Material:
+    if not isinstance(t, dict):
+        raise SceneError(source, f"materials.{name}", f"expected a table, got {_show(t)}")
+    r = _Reader(source, t, f"materials.{name}")
+    r.check_keys(_MATERIAL_KEYS)
+    kd = r.vector("kd", DEFAULT_MATERIAL.kd, nonneg=True)
+    return Material(
+        kd=kd,
+        ka=r.vector("ka", kd, nonneg=True),
+        ks=r.vector("ks", (0.0, 0.0, 0.0), nonneg=True),
+        shininess=r.number("shininess", 32.0, lo=0.0),
+        reflectivity=r.vector("reflectivity", (0.0, 0.0, 0.0), nonneg=True, allow_scalar=True),
+    )
+
+
+def _rotation(degrees) -> np.ndarray:
+    """Rotation about x, then y, then z (R = Rz Ry Rx), angles in degrees."""
+    ax, ay, az = np.radians(degrees)
+    cx, sx, cy, sy, cz, sz = np.cos(ax), np.sin(ax), np.cos(ay), np.sin(ay), np.cos(az), np.sin(az)
+    rx = np.array([[1, 0, 0], [0, cx, -sx], [0, sx, cx]])
+    ry = np.array([[cy, 0, sy], [0, 1, 0], [-sy, 0, cy]])
+    rz = np.array([[cz, -sz, 0], [sz, cz, 0], [0, 0, 1]])
+    return rz @ ry @ rx
+
+
+def _shape_geometry(r: _Reader, kind: str):
+    builder, params = shapes.SHAPES[kind]
+    r.check_keys(_OBJECT_KEYS | set(params))
+    args = {}
+    for p, (ptype, default) in params.items():
+        if ptype == "positive":
+            args[p] = r.number(p, default, lo=0.0, lo_open=True)
+        elif ptype.startswith("int"):
+            lo = int(ptype[3:])
+            if isinstance(default, list):
+                v = r.vector(p, default, n=2)
+                if any(x != int(x) or x < 3 for x in v):
+                    r.fail(p, f"expected 2 integers >= 3, got {list(v)}")
+                args[p] = tuple(int(x) for x in v)
+            else:
+                args[p] = r.integer(p, default, lo=lo, hi=8 if p == "subdivisions" else 100000)
+        elif ptype in ("size3", "size2"):
+            v = r.vector(p, default, n=int(ptype[-1]), allow_scalar=True)
+            if min(v) <= 0:
+                r.fail(p, f"expected positive sizes, got {list(v)}")
+            args[p] = v
+        elif ptype == "points":
+            v = r.table.get(p)
+            try:
+                a = np.asarray(v, np.float64)
+            except (TypeError, ValueError):
+                a = None
+            if a is None or a.ndim != 2 or a.shape[1] != 3 or len(a) < 3:
+                r.fail(p, f"expected a list of [x, y, z] points (at least 3), got {_show(v)}")
+            if not np.all(np.isfinite(a)):
+                r.fail(p, "expected finite coordinates, found NaN or Inf")
+            args[p] = a
+        elif ptype == "faces":
+            v = r.table.get(p)
+            try:
+                a = np.asarray(v)
+            except (TypeError, ValueError):
+                a = None
+            if a is None or a.ndim != 2 or a.shape[1] != 3 or len(a) < 1 or a.dtype.kind not in "iu":
+                r.fail(p, f"expected a list of [i, j, k] integer vertex indices, got {_show(v)}")
+            args[p] = a.astype(np.int64)
+    return builder(**args)
+
+
+def _load_mesh_file(source: str, field_name: str, path: Path):
+    from . import meshio
+
+    try:
+        return meshio.load_mesh(path)
+    except SceneError:
+        raise
+    except FileNotFoundError:
+        raise SceneError(source, field_name, f"mesh file not found: {path}") from None
+    except Exception as e:  # trimesh raises many types for unreadable files
+        raise SceneError(source, field_name, f"cannot read mesh file {path}: {e}") from None
+
+
+def read_object(source: str, base: Path, t: dict, i: int, materials: dict) -> SceneObject:
+    r = _Reader(source, t, f"objects[{i}]")
+    if ("mesh" in t) == ("shape" in t):
+        r.fail(None, "expected exactly one of 'mesh' (a file) or 'shape' (" + ", ".join(shapes.SHAPES) + ")")
+    if "mesh" in t:
+        r.check_keys(_OBJECT_KEYS)
+        path = base / r.string("mesh")
+        vertices, faces = _load_mesh_file(source, f"objects[{i}].mesh", path)
+        default_name = path.stem
+    else:
+        kind = r.string("shape")
+        if kind not in shapes.SHAPES:
+            close = difflib.get_close_matches(kind, list(shapes.SHAPES), n=1)
+            hint = f" (did you mean '{close[0]}'?)" if close else ""
+            r.fail("shape", f"unknown shape '{kind}'{hint}; expected one of: {', '.join(shapes.SHAPES)}")
+        vertices, faces = _shape_geometry(r, kind)
+        default_name = kind
+    material = r.string("material", "default")
+    if material not in materials:
+        close = difflib.get_close_matches(material, list(materials), n=1)
+        hint = f" (did you mean '{close[0]}'?)" if close else f" (defined: {', '.join(materials) or 'none'})"
+        r.fail("material", f"no material named '{material}'{hint}")
+    scale = np.asarray(r.vector("scale", 1.0, allow_scalar=True))
+    if np.any(scale == 0.0):
+        r.fail("scale", f"expected non-zero scale factors, got {list(scale)}")
+    rot = _rotation(r.vector("rotate", (0.0, 0.0, 0.0)))
+    translate = np.asarray(r.vector("translate", (0.0, 0.0, 0.0)))
+    if len(faces) == 0:
+        r.fail("mesh" if "mesh" in t else "shape", "the mesh has no triangles")
+    if faces.min() < 0 or faces.max() >= len(vertices):
+        r.fail("faces" if "shape" in t else "mesh", f"vertex index out of range [0, {len(vertices) - 1}]")
+    world = (vertices * scale) @ rot.T + translate
+    if np.linalg.det(np.diag(scale)) < 0:  # a mirroring scale flips the winding; keep faces outward
+        faces = faces[:, ::-1]
+    return SceneObject(
+        name=r.string("name", default_name),
+        vertices=np.ascontiguousarray(world, np.float64),
+        faces=np.ascontiguousarray(faces, np.int64),
+        material=material,
+        smooth=r.boolean("smooth", False),
+    )
+
+
+def scene_from_dict(data: dict, source: str = "<scene>", base: Path | None = None) -> Scene:
+    """Build and validate a Scene from a parsed TOML document."""
+    base = Path(base) if base is not None else Path(".")
+    for key in data:
+        if key not in _SECTIONS:
+            close = difflib.get_close_matches(key, sorted(_SECTIONS), n=1)
+            hint = f" (did you mean '{close[0]}'?)" if close else f" (expected: {', '.join(sorted(_SECTIONS))})"
+            raise SceneError(source, key, f"unknown section{hint}")
+    camera = read_camera(source, _table(source, data, "camera"))
+    render = read_render(source, _table(source, data, "render"))
+    lights = [read_light(source, t, i) for i, t in enumerate(_array_of_tables(source, data, "lights"))]
+    materials = {"default": DEFAULT_MATERIAL}
+    for name, t in _table(source, data, "materials").items():
+        materials[name] = read_material(source, name, t)
+    objects = [read_object(source, base, t, i, materials) for i, t in enumerate(_array_of_tables(source, data, "objects"))]
+    return Scene(camera, render, lights, materials, objects, source)
+
+
+def apply_overrides(data: dict, overrides: dict, source: str) -> dict:
+    """Set dotted keys ("camera.width", "lights[0].color") on a parsed document before validation."""
+    for key, value in overrides.items():
+        node, parts = data, key.split(".")
+        for j, part in enumerate(parts):
+            name, index = part, None
+            if part.endswith("]") and "[" in part:
+                name, idx = part[:-1].split("[", 1)
+                if not idx.isdigit():
+                    raise SceneError(source, key, "expected an index like lights[0]")
+                index = int(idx)
+            last = j == len(parts) - 1
+            if index is None:
+                if last:
+                    node[name] = value
+                else:
+                    node = node.setdefault(name, {})
+                    if not isinstance(node, dict):
+                        raise SceneError(source, key, f"'{name}' is not a table")
+            else:
+                arr = node.get(name)
+                if not isinstance(arr, list) or index >= len(arr):
+                    raise SceneError(source, key, f"there is no {name}[{index}]")
+                if last:
+                    arr[index] = value
+                else:
+                    node = arr[index]
+    return data
+
+
+def load_scene(path=None, overrides: dict | None = None) -> Scene:
+    """Read a scene: a TOML scene file, any mesh file trimesh reads (framed automatically),
+    or None for the built-in default scene."""
+    t = time.perf_counter()
+    scene = _load_scene(path, overrides)
+    scene.load_seconds = time.perf_counter() - t
+    return scene
+
+
+def _load_scene(path, overrides) -> Scene:
+    if path is None:
+        path = default_scene_path()
+    path = Path(path)
+    source = str(path)
+    if path.suffix.lower() != ".toml":
+        from .autoframe import scene_for_mesh
+
+        scene = scene_for_mesh(path)
+        if overrides:
+            raise SceneError(source, None, "--set applies to TOML scene files only")
+        return scene
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise SceneError(source, None, "scene file not found") from None
+    except (OSError, UnicodeDecodeError) as e:
+        raise SceneError(source, None, f"cannot read scene file: {e}") from None
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as e:
+        raise SceneError(source, None, f"malformed TOML: {e}") from None
+    if overrides:
+        data = apply_overrides(data, overrides, source)
+    return scene_from_dict(data, source, path.parent)
+
+
+def default_scene_path() -> Path:
+    return Path(__file__).parent / "data" / "default.toml"

@@ -1,0 +1,152 @@
+"""The Whitted tracer: one Warp kernel per effect set, launched over bands of image rows.
+
+Per pixel and sample: a camera ray, nearest hit (wp.mesh_query_ray), local Phong shading with
+shadow rays (wp.mesh_query_ray_anyhit), then an iterative mirror bounce weighted by k_r.
+"""
+
+from __future__ import annotations
+
+import warp as wp
+
+from .geometry import SceneData
+from .shading import hit_point_error, make_shade, offset_ray_origin
+
+
+@wp.struct
+class CameraData:
+    """The seed's camera basis and image-plane size, in camera-relative space (eye at 0)."""
+
+    x_e: wp.vec3
+    y_e: wp.vec3
+    z_e: wp.vec3
+    d_f: float
+    h: float
+    w: float
+    width: int
+    height: int
+
+
+def camera_data(basis) -> CameraData:
+    c = CameraData()
+    c.x_e, c.y_e, c.z_e = (wp.vec3(*map(float, v)) for v in (basis.x_e, basis.y_e, basis.z_e))
+    c.d_f, c.h, c.w = float(basis.d_f), float(basis.h), float(basis.w)
+    c.width, c.height = int(basis.width), int(basis.height)
+    return c
+
+
+@wp.func
+def camera_ray(c: CameraData, x: int, row: int, sx: float, sy: float) -> wp.vec3:
+    """Unit direction d = -d_f z_e + h((y+sy)/h_p - 1/2) y_e + w((x+sx)/w_p - 1/2) x_e,
+    y = h_p - 1 - row counted from the bottom, so row 0 of the image is the top."""
+    y = float(c.height - 1 - row)
+    d = (-c.d_f) * c.z_e + c.h * ((y + sy) / float(c.height) - 0.5) * c.y_e \
+        + c.w * ((float(x) + sx) / float(c.width) - 0.5) * c.x_e
+    return wp.normalize(d)
+
+
+@wp.struct
+class Surface:
+    p: wp.vec3  # hit point, p0 u + p1 v + p2 (1 - u - v)
+    err: wp.vec3  # its absolute error bound
+    ng: wp.vec3  # geometric normal, turned to face the incoming ray
+    n: wp.vec3  # shading normal, on the same side
+    material: int
+
+
+_surface_cache: dict = {}
+
+
+def make_surface(smooth: bool):
+    """The hit record for face f at barycentrics (u, v), seen along direction d."""
+    if smooth in _surface_cache:
+        return _surface_cache[smooth]
+
+    @wp.func
+    def surface(s: SceneData, f: int, u: float, v: float, face_normal: wp.vec3, d: wp.vec3) -> Surface:
+        i0 = s.indices[f * 3 + 0]
+        i1 = s.indices[f * 3 + 1]
+        i2 = s.indices[f * 3 + 2]
+        p0 = s.points[i0]
+        p1 = s.points[i1]
+        p2 = s.points[i2]
+        w = 1.0 - u - v
+        out = Surface()
+        out.p = p0 * u + p1 * v + p2 * w
+        out.err = hit_point_error(p0, p1, p2, u, v, w)
+        side = 1.0
+        # Two-sided surfaces: Warp's face normal follows the winding; turn it to face the ray.
+        if wp.dot(face_normal, d) > 0.0:
+            side = -1.0
+        out.ng = face_normal * side
+        out.n = out.ng
+        if wp.static(smooth):
+            if s.tri_smooth[f] != 0:
+                ns = s.normals[i0] * u + s.normals[i1] * v + s.normals[i2] * w
+                if wp.length(ns) > 0.0:
+                    out.n = wp.normalize(ns) * side
+        out.material = s.tri_material[f]
+        return out
+
+    _surface_cache[smooth] = surface
+    return surface
+
+
+_kernel_cache: dict = {}
+
+
+def make_trace_kernel(fx):
+    """The kernel for one EffectSet; code for disabled effects is removed by wp.static."""
+    if fx in _kernel_cache:
+        return _kernel_cache[fx]
+    shade = make_shade(fx)
+    surface = make_surface(fx.smooth)
+    REFLECTION, SUPERSAMPLING = fx.reflection, fx.supersampling
+
+    @wp.kernel(module="unique", enable_backward=False)
+    def trace(s: SceneData, c: CameraData, max_depth: int, k: int, first_pixel: int,
+              image: wp.array(dtype=wp.vec3), counts: wp.array(dtype=wp.vec3i)):
+        pixel = first_pixel + wp.tid()
+        x = pixel % c.width
+        row = pixel / c.width
+        total = wp.vec3(0.0)
+        shadow_rays = int(0)
+        reflection_rays = int(0)
+        samples = int(1)
+        if wp.static(SUPERSAMPLING):
+            samples = k * k
+        for sample in range(samples):
+            sx = float(0.5)
+            sy = float(0.5)
+            if wp.static(SUPERSAMPLING):
+                sx = (float(sample % k) + 0.5) / float(k)
+                sy = (float(sample / k) + 0.5) / float(k)
+            o = wp.vec3(0.0)
+            d = camera_ray(c, x, row, sx, sy)
+            weight = wp.vec3(1.0)
+            color = wp.vec3(0.0)
+            depth = int(0)
+            while depth < max_depth:
+                q = wp.mesh_query_ray(s.mesh, o, d, 1.0e30)
+                if not q.result:
+                    color = color + wp.cw_mul(weight, s.background)
+                    break
+                hit = surface(s, q.face, q.u, q.v, q.normal, d)
+                r = shade(s, hit.material, hit.p, hit.err, hit.ng, hit.n, -d)
+                color = color + wp.cw_mul(weight, r.color)
+                shadow_rays += r.shadow_rays
+                depth += 1
+                if wp.static(REFLECTION):
+                    kr = s.kr[hit.material]
+                    if depth < max_depth and wp.max(kr) > 0.0:
+                        weight = wp.cw_mul(weight, kr)
+                        d = wp.normalize(d - 2.0 * wp.dot(d, hit.n) * hit.n)
+                        o = offset_ray_origin(hit.p, hit.err, hit.ng, d)
+                        reflection_rays += 1
+                        continue
+                break
+            total = total + color
+        image[pixel] = total / float(samples)
+        counts[pixel] = wp.vec3i(samples, shadow_rays, reflection_rays)
+
+    _kernel_cache[fx] = trace
+    return trace
