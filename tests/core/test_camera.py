@@ -1,0 +1,74 @@
+"""The camera: basis and ray directions against the seed's formulas, computed here from scratch."""
+
+import math
+
+import numpy as np
+import pytest
+import warp as wp
+
+from warprt.camera import camera_basis, pixel_ray_directions
+from warprt.render import init_warp
+from warprt.scene import Camera
+from warprt.tracer import CameraData, camera_data, camera_ray
+
+
+def seed_basis(eye, center, up):
+    eye, center, up = map(np.asarray, (eye, center, up))
+    z = (eye - center) / math.dist(eye, center)
+    x = np.cross(up, z) / np.linalg.norm(np.cross(up, z))
+    return z, x, np.cross(z, x)
+
+
+CAMERAS = [
+    Camera(eye=(0, 1.5, 5), center=(0, 0.8, 0), up=(0, 1, 0), fovy=45, near=1, width=64, height=48),
+    # Non-orthogonal up vector and a non-square (portrait) image.
+    Camera(eye=(3, 2, -4), center=(0.5, 0.2, 1), up=(0.3, 1, 0.4), fovy=70, near=2.5, width=37, height=53),
+]
+
+
+@pytest.mark.parametrize("cam", CAMERAS)
+def test_basis_is_the_seeds(cam):
+    b = camera_basis(cam)
+    z, x, y = seed_basis(cam.eye, cam.center, cam.up)
+    np.testing.assert_allclose(b.z_e, z, atol=1e-15)
+    np.testing.assert_allclose(b.x_e, x, atol=1e-15)
+    np.testing.assert_allclose(b.y_e, y, atol=1e-15)
+    assert b.h == pytest.approx(2 * cam.near * math.tan(math.radians(cam.fovy) / 2), rel=1e-15)
+    assert b.w == pytest.approx(b.h * cam.width / cam.height, rel=1e-15)
+    # Orthonormal and right-handed, whatever the up vector was.
+    np.testing.assert_allclose(np.stack([b.x_e, b.y_e, b.z_e]) @ np.stack([b.x_e, b.y_e, b.z_e]).T, np.eye(3), atol=1e-14)
+
+
+@pytest.mark.parametrize("cam", CAMERAS)
+def test_pixel_directions(cam):
+    """d = -d_f z_e + h(y/h_p - 1/2) y_e + w(x/w_p - 1/2) x_e at pixel centres, y from the bottom."""
+    z, x, y = seed_basis(cam.eye, cam.center, cam.up)
+    h = 2 * cam.near * math.tan(math.radians(cam.fovy) / 2)
+    w = h * cam.width / cam.height
+    d = pixel_ray_directions(camera_basis(cam))
+    for row, col in [(0, 0), (cam.height - 1, cam.width - 1), (cam.height // 2, 3), (7, cam.width - 5)]:
+        yb = cam.height - 1 - row
+        expect = -cam.near * z + h * ((yb + 0.5) / cam.height - 0.5) * y + w * ((col + 0.5) / cam.width - 0.5) * x
+        np.testing.assert_allclose(d[row, col], expect, atol=1e-14)
+    # Row 0 is the top of the image: its rays point further along y_e than the bottom row's.
+    assert d[0, 0] @ y > d[-1, 0] @ y and d[0, 0] @ x < d[0, -1] @ x
+
+
+@wp.kernel
+def _kernel_rays(c: CameraData, xs: wp.array(dtype=int), rows: wp.array(dtype=int), out: wp.array(dtype=wp.vec3)):
+    i = wp.tid()
+    out[i] = camera_ray(c, xs[i], rows[i], 0.5, 0.5)
+
+
+@pytest.mark.parametrize("cam", CAMERAS)
+def test_kernel_rays_match_the_formula(cam):
+    """The tracer's own camera_ray, run in a Warp kernel, gives the formula's unit directions."""
+    init_warp()
+    rng = np.random.default_rng(1)
+    cols = rng.integers(0, cam.width, 50)
+    rows = rng.integers(0, cam.height, 50)
+    out = wp.empty(50, dtype=wp.vec3, device="cpu")
+    wp.launch(_kernel_rays, 50, inputs=[camera_data(camera_basis(cam)), wp.array(cols, dtype=int), wp.array(rows, dtype=int), out])
+    d = pixel_ray_directions(camera_basis(cam))[rows, cols]
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    np.testing.assert_allclose(out.numpy(), d, atol=2e-7)
