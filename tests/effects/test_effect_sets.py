@@ -1,0 +1,151 @@
+"""Effect sets: derived from the scene, narrowed by the user, never widened; one compiled variant
+per set, with the code of disabled effects absent from the generated source."""
+
+import os
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import pytest
+import warp as wp
+
+import warprt
+from scenekit import make_scene
+from warprt.effects import EFFECTS, EffectSet, resolve_effects, scene_effects
+from warprt.render import init_warp
+from warprt.tracer import make_trace_kernel
+
+LIGHT = {"position": [0.0, 3.0, 4.0]}
+PLAIN = {"kd": [0.5, 0.5, 0.5]}
+WALL = {"shape": "plane", "size": [20.0, 20.0], "rotate": [90.0, 0.0, 0.0], "material": "m"}
+
+
+def fx_of(material=PLAIN, lights=(LIGHT,), objects=None, **render):
+    return scene_effects(make_scene(objects or [WALL], {"m": material}, lights, **{"ambient": [0.1] * 3, **render}))
+
+
+def test_a_plain_diffuse_scene_needs_only_ambient_diffuse_and_shadows():
+    assert fx_of() == EffectSet(ambient=True, diffuse=True, specular=False, shadows=True, reflection=False)
+
+
+def test_each_effect_appears_only_where_the_scene_calls_for_it():
+    assert not fx_of(ambient=[0.0, 0.0, 0.0]).ambient                      # C_amb = 0
+    assert not fx_of({"kd": [0.5] * 3, "ka": [0.0] * 3}).ambient           # ka = 0
+    assert fx_of({"kd": [0.5] * 3, "ka": [0.0, 0.1, 0.0]}).ambient         # one channel is enough
+    no_lights = fx_of(lights=())
+    assert not (no_lights.diffuse or no_lights.specular or no_lights.shadows)
+    assert not fx_of(lights=({"position": [0, 3, 4], "color": [0, 0, 0]},)).diffuse  # a black light lights nothing
+    assert not fx_of(shadows=False).shadows
+    assert fx_of({"kd": [0.5] * 3, "ks": [0.2] * 3}).specular
+    assert not fx_of({"kd": [0.5] * 3, "reflectivity": 0.5}, max_depth=1).reflection  # needs a second ray level
+    assert fx_of({"kd": [0.5] * 3, "reflectivity": 0.5}, max_depth=2).reflection
+    assert not fx_of().reflection                                           # k_r = 0 everywhere
+    assert fx_of(spp=4).supersampling and not fx_of(spp=1).supersampling
+    assert fx_of(objects=[{**WALL, "smooth": True}]).smooth and not fx_of().smooth
+
+
+def test_unused_materials_do_not_switch_effects_on():
+    scene = make_scene([WALL], {"m": PLAIN, "mirror": {"reflectivity": 1.0, "ks": [1.0] * 3}}, [LIGHT], max_depth=4)
+    fx = scene_effects(scene)
+    assert not fx.reflection and not fx.specular
+
+
+def test_users_can_switch_effects_off_but_never_on():
+    scene = make_scene([WALL], {"m": PLAIN}, [LIGHT], ambient=[0.1] * 3)
+    assert resolve_effects(scene, disable=["shadows"]) == EffectSet(True, True, False, False, False)
+    assert resolve_effects(scene, allow=["ambient"]) == EffectSet(True, False, False, False, False)
+    # Asking for every effect gives only what the scene has.
+    assert resolve_effects(scene, allow=list(EFFECTS)) == scene_effects(scene)
+    # Shadows only dim lit terms: with neither diffuse nor specular, no shadow rays.
+    assert not resolve_effects(scene, disable=["diffuse"]).shadows
+    with pytest.raises(warprt.SceneError, match="unknown effect 'refraction'"):
+        resolve_effects(scene, allow=["refraction"])
+
+
+def test_scene_file_effects_setting_and_cli_flags(tmp_path):
+    doc = textwrap.dedent("""
+        [camera]
+        eye = [0, 0, 5]
+        center = [0, 0, 0]
+        width = 16
+        height = 12
+        [render]
+        effects = ["ambient", "diffuse", "reflection"]
+        max_depth = 3
+        [[lights]]
+        position = [0, 3, 4]
+        [materials.m]
+        kd = [0.5, 0.5, 0.5]
+        ks = [0.5, 0.5, 0.5]
+        reflectivity = 0.5
+        [[objects]]
+        shape = "plane"
+        rotate = [90, 0, 0]
+        material = "m"
+    """)
+    (tmp_path / "s.toml").write_text(doc)
+    scene = warprt.load_scene(tmp_path / "s.toml")
+    assert str(resolve_effects(scene)) == "ambient,diffuse,reflection"
+    r = subprocess.run([sys.executable, "-m", "warprt", "render", str(tmp_path / "s.toml"), "-o", str(tmp_path / "o.png"),
+                        "--stats", "--effects", "ambient,diffuse,specular", "--max-depth", "1"],
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    import json
+
+    stats = json.loads(r.stdout)
+    assert stats["effects"] == "ambient,diffuse" and stats["variant"] == "trace_ad"
+    assert stats["rays"] == {"primary": 16 * 12, "shadow": 0, "reflection": 0, "total": 16 * 12}
+
+
+def _generated_source(fx) -> str:
+    init_warp()
+    kernel = make_trace_kernel(fx)
+    wp.load_module(kernel.module, device="cpu")
+    (module_exec,) = kernel.module.execs.values()
+    return Path(module_exec.binary_path).with_suffix("").with_suffix(".cpp").read_text()
+
+
+# A line of each effect's Python source, as Warp's code generator quotes it in the C++ it compiles.
+MARKERS = {
+    "ambient": "out.color = wp.cw_mul(s.ambient, s.ka[m])",
+    "diffuse": "phong_diffuse(s.kd[m], n_dot_l)",
+    "specular": "phong_specular(s.ks[m], s.shininess[m], n, L, v, n_dot_l)",
+    "shadows": "wp::mesh_query_ray_anyhit(",
+    "reflection": "kr = s.kr[hit.material]",
+    "supersampling": "sx = (float(sample % k) + 0.5) / float(k)",
+    "smooth": "ns = s.normals[i0] * u",
+}
+
+
+@pytest.mark.parametrize("off", EFFECTS)
+def test_disabled_effect_code_is_absent_from_the_compiled_variant(off):
+    full = EffectSet(supersampling=True, smooth=True)
+    assert all(m in _generated_source(full) for m in MARKERS.values())
+    source = _generated_source(EffectSet(**{**{e: getattr(full, e) for e in EFFECTS}, off: False}))
+    assert MARKERS[off] not in source
+    assert all(MARKERS[e] in source for e in EFFECTS if e != off)
+
+
+def test_a_second_process_loads_the_variant_from_the_disk_cache(tmp_path):
+    """Warp caches compiled modules on disk: the second process start must not compile again."""
+    script = textwrap.dedent(f"""
+        import warp as wp
+        wp.config.kernel_cache_dir = {str(tmp_path / 'cache')!r}
+        import warprt
+        scene = warprt.load_scene().with_camera(width=8, height=6)
+        image, stats = warprt.render(scene)
+        print(stats.variant)
+    """)
+
+    def snapshot():
+        return {p: p.stat().st_mtime_ns for p in (tmp_path / "cache").rglob("*") if p.is_file()}
+
+    first = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
+    assert first.returncode == 0, first.stderr
+    built = snapshot()
+    assert any(str(p).endswith(".o") for p in built), "the first start compiles into the cache"
+    second = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
+    assert second.returncode == 0, second.stderr
+    assert second.stdout == first.stdout
+    assert snapshot() == built, "the second start wrote to the cache: it compiled again"
