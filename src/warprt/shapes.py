@@ -7,13 +7,33 @@ outside, in the object's own space (centred at the origin; the plane lies in y =
 from __future__ import annotations
 
 import numpy as np
-import trimesh
+
+# Built here in NumPy rather than with trimesh.creation: importing trimesh costs about 0.6 s,
+# which a scene made of built-in shapes should not pay at every start.
 
 
 def sphere(radius: float = 1.0, subdivisions: int = 3):
-    """An icosphere: 20 * 4**subdivisions near-equal triangles."""
-    m = trimesh.creation.icosphere(subdivisions=subdivisions, radius=radius)
-    return np.asarray(m.vertices, np.float64), np.asarray(m.faces, np.int64)
+    """An icosphere: the icosahedron with each triangle split in four, subdivisions times,
+    vertices pushed onto the sphere; 20 * 4**subdivisions near-equal triangles."""
+    t = (1.0 + 5.0**0.5) / 2.0
+    v = np.array([[-1, t, 0], [1, t, 0], [-1, -t, 0], [1, -t, 0], [0, -1, t], [0, 1, t],
+                  [0, -1, -t], [0, 1, -t], [t, 0, -1], [t, 0, 1], [-t, 0, -1], [-t, 0, 1]], np.float64)
+    f = np.array([[0, 11, 5], [0, 5, 1], [0, 1, 7], [0, 7, 10], [0, 10, 11], [1, 5, 9], [5, 11, 4],
+                  [11, 10, 2], [10, 7, 6], [7, 1, 8], [3, 9, 4], [3, 4, 2], [3, 2, 6], [3, 6, 8],
+                  [3, 8, 9], [4, 9, 5], [2, 4, 11], [6, 2, 10], [8, 6, 7], [9, 8, 1]], np.int64)
+    v /= np.linalg.norm(v, axis=1, keepdims=True)
+    for _ in range(subdivisions):
+        # One new vertex per unique edge, shared by the two faces on either side of it.
+        edges = np.sort(np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]]), axis=1)
+        unique, inverse = np.unique(edges, axis=0, return_inverse=True)
+        mid = v[unique].mean(axis=1)
+        mid /= np.linalg.norm(mid, axis=1, keepdims=True)
+        m = inverse.reshape(3, -1) + len(v)  # midpoints of edges (0,1), (1,2), (2,0) of each face
+        a, b, c = f[:, 0], f[:, 1], f[:, 2]
+        f = np.concatenate([np.stack([a, m[0], m[2]], 1), np.stack([b, m[1], m[0]], 1),
+                            np.stack([c, m[2], m[1]], 1), np.stack([m[0], m[1], m[2]], 1)])
+        v = np.vstack([v, mid])
+    return v * radius, f
 
 
 def uv_sphere(radius: float = 1.0, segments=(32, 64)):
@@ -42,9 +62,13 @@ def uv_sphere(radius: float = 1.0, segments=(32, 64)):
 
 
 def box(size=(1.0, 1.0, 1.0)):
-    """An axis-aligned box of the given edge lengths, 12 triangles."""
-    m = trimesh.creation.box(extents=np.broadcast_to(np.asarray(size, np.float64), (3,)))
-    return np.asarray(m.vertices, np.float64), np.asarray(m.faces, np.int64)
+    """An axis-aligned box of the given edge lengths centred at the origin, 12 triangles."""
+    half = np.broadcast_to(np.asarray(size, np.float64), (3,)) * 0.5
+    corners = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], np.float64) * half
+    # Corner index = 4 * (x > 0) + 2 * (y > 0) + (z > 0); each side's quad counter-clockwise from outside.
+    quads = [(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3)]
+    faces = [(a, b, c) for a, b, c, d in quads] + [(a, c, d) for a, b, c, d in quads]
+    return corners, np.asarray(faces, np.int64)
 
 
 def plane(size=(10.0, 10.0)):
@@ -55,10 +79,20 @@ def plane(size=(10.0, 10.0)):
 
 
 def cylinder(radius: float = 0.5, height: float = 1.0, sections: int = 64):
-    """A capped cylinder along y, centred at the origin."""
-    m = trimesh.creation.cylinder(radius=radius, height=height, sections=sections)
-    v = np.asarray(m.vertices, np.float64)[:, [0, 2, 1]] * [1.0, 1.0, -1.0]  # z-up to y-up
-    return v, np.asarray(m.faces, np.int64)
+    """A capped cylinder along y, centred at the origin; caps are fans around their centres."""
+    phi = np.arange(sections) * (2.0 * np.pi / sections)
+    ring = np.stack([np.cos(phi), np.zeros_like(phi), -np.sin(phi)], 1) * radius
+    h = height / 2.0
+    v = np.vstack([ring + [0, -h, 0], ring + [0, h, 0], [[0, -h, 0], [0, h, 0]]])
+    i = np.arange(sections)
+    j = (i + 1) % sections
+    bottom, top = 2 * sections, 2 * sections + 1
+    faces = np.concatenate([
+        np.stack([i, j, j + sections], 1), np.stack([i, j + sections, i + sections], 1),  # side
+        np.stack([np.full(sections, bottom), j, i], 1),  # bottom cap, facing -y
+        np.stack([np.full(sections, top), i + sections, j + sections], 1),  # top cap, facing +y
+    ])
+    return v, faces.astype(np.int64)
 
 
 def triangles(vertices, faces):
