@@ -1,7 +1,9 @@
 """`warprt render`: the real command writes a real PNG that reads back as the API's image."""
 
+import os
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import trimesh
@@ -10,8 +12,13 @@ import warprt
 from warprt.film import read_image
 
 
+SRC = str(Path(__file__).resolve().parents[2] / "src")
+
+
 def run(*args, cwd=None):
-    return subprocess.run([sys.executable, "-m", "warprt", *args], capture_output=True, text=True, cwd=cwd)
+    """The real command, from this checkout's sources whatever is installed."""
+    env = {**os.environ, "PYTHONPATH": SRC + os.pathsep + os.environ.get("PYTHONPATH", "")}
+    return subprocess.run([sys.executable, "-m", "warprt", *args], capture_output=True, text=True, cwd=cwd, env=env)
 
 
 def test_render_default_scene_png_matches_api(tmp_path):
