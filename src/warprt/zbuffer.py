@@ -1,0 +1,530 @@
+"""The Z-buffer renderer: the seed's comparison algorithm, as Warp kernels. Triangles are clipped,
+projected with the tracer's camera, binned to tiles and depth-tested at the tracer's sample positions.
+
+Shading is the tracer's own local Phong function (make_shade with shadows off, make_surface) at the
+visible point, so the two renderers differ only in how they find what each sample sees.
+
+Stages, one kernel each: project (per triangle: clip, project, screen bounds) -> bin (host: tile
+lists in face order) -> raster (per tile: one thread owns its pixels and walks its list, so there
+are no races on any device) -> shade (per pixel).
+
+Near plane: the tracer's primary rays start at the eye and report every hit with t >= 0, so it draws
+geometry between the eye and the image plane at d_f = near. Clipping at z = -near, as OpenGL does,
+would cut exactly that away; the rasterizer clips at z = -CLIP_SCALE * R instead (R: the distance of
+the farthest vertex from the eye), which loses only what lies within about 1e-6 R of the eye.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+
+import numpy as np
+import warp as wp
+
+from .camera import camera_basis
+from .effects import EffectSet, resolve_effects
+from .geometry import Geometry, SceneData
+from .shading import make_shade
+from .tracer import CameraData, camera_data, camera_ray, make_surface
+
+CLIP_SCALE = 1.0e-6
+TILE = 16  # pixels per tile side: each raster thread owns one tile
+
+
+@wp.struct
+class RasterCamera:
+    """The camera basis in float64 and the projection onto continuous pixel coordinates
+    (X, Y) = (c_x + f_x x/z, c_y + f_y y/z), y counted up from the bottom edge like the tracer."""
+
+    x_e: wp.vec3d
+    y_e: wp.vec3d
+    z_e: wp.vec3d
+    f_x: wp.float64  # d_f * width / w: pixels per unit of x/z
+    f_y: wp.float64
+    c_x: wp.float64  # width / 2
+    c_y: wp.float64
+    z_clip: wp.float64  # clip distance in front of the eye
+    width: int
+    height: int
+
+
+def raster_camera(basis, z_clip: float) -> RasterCamera:
+    c = RasterCamera()
+    c.x_e, c.y_e, c.z_e = (wp.vec3d(*map(float, v)) for v in (basis.x_e, basis.y_e, basis.z_e))
+    c.f_x = wp.float64(basis.d_f * basis.width / basis.w)
+    c.f_y = wp.float64(basis.d_f * basis.height / basis.h)
+    c.c_x = wp.float64(basis.width / 2.0)
+    c.c_y = wp.float64(basis.height / 2.0)
+    c.z_clip = wp.float64(z_clip)
+    c.width, c.height = int(basis.width), int(basis.height)
+    return c
+
+
+@wp.struct
+class ClipVertex:
+    c: wp.vec3d  # camera coordinates (p.x_e, p.y_e, -p.z_e): the last is the depth in front of the eye
+    uv: wp.vec2  # Warp's barycentrics of the original triangle: p = p0 u + p1 v + p2 (1 - u - v)
+
+
+@wp.struct
+class Polygon:
+    """A triangle after clipping against the plane z = z_clip: n = 0, 3 or 4 vertices, in order."""
+
+    n: int
+    v0: ClipVertex
+    v1: ClipVertex
+    v2: ClipVertex
+    v3: ClipVertex
+
+
+@wp.struct
+class ScreenVertex:
+    x: wp.float64  # continuous pixel coordinates, y up
+    y: wp.float64
+    iz: wp.float64  # 1 / depth: linear in screen space, so it interpolates exactly
+    uv: wp.vec2
+
+
+@wp.func
+def lex_less(a: wp.vec3d, b: wp.vec3d) -> bool:
+    if a[0] != b[0]:
+        return a[0] < b[0]
+    if a[1] != b[1]:
+        return a[1] < b[1]
+    return a[2] < b[2]
+
+
+@wp.func
+def clip_vertex(c: RasterCamera, p: wp.vec3, uv: wp.vec2) -> ClipVertex:
+    """Camera coordinates of a camera-relative point: (p.x_e, p.y_e, -p.z_e)."""
+    q = wp.vec3d(wp.float64(p[0]), wp.float64(p[1]), wp.float64(p[2]))
+    out = ClipVertex()
+    out.c = wp.vec3d(wp.dot(q, c.x_e), wp.dot(q, c.y_e), -wp.dot(q, c.z_e))
+    out.uv = uv
+    return out
+
+
+@wp.func
+def clip_edge(a: ClipVertex, b: ClipVertex, z_clip: wp.float64) -> ClipVertex:
+    """Where the edge a-b crosses z = z_clip. Computed from the lexicographically smaller endpoint,
+    so two triangles sharing the edge get the same point and the clipped mesh stays watertight."""
+    p = a
+    q = b
+    if lex_less(b.c, a.c):
+        p = b
+        q = a
+    t = (z_clip - p.c[2]) / (q.c[2] - p.c[2])
+    out = ClipVertex()
+    out.c = wp.vec3d(p.c[0] + t * (q.c[0] - p.c[0]), p.c[1] + t * (q.c[1] - p.c[1]), z_clip)
+    out.uv = p.uv + float(t) * (q.uv - p.uv)
+    return out
+
+
+@wp.func
+def clip_triangle(c: RasterCamera, s: SceneData, f: int) -> Polygon:
+    """Sutherland-Hodgman against the one plane z = z_clip, in camera space (before the divide)."""
+    a = clip_vertex(c, s.points[s.indices[f * 3 + 0]], wp.vec2(1.0, 0.0))
+    b = clip_vertex(c, s.points[s.indices[f * 3 + 1]], wp.vec2(0.0, 1.0))
+    d = clip_vertex(c, s.points[s.indices[f * 3 + 2]], wp.vec2(0.0, 0.0))
+    in_a = a.c[2] >= c.z_clip
+    in_b = b.c[2] >= c.z_clip
+    in_d = d.c[2] >= c.z_clip
+    inside = int(in_a) + int(in_b) + int(in_d)
+    out = Polygon()
+    out.n = 0
+    if inside == 3:
+        out.n = 3
+        out.v0 = a
+        out.v1 = b
+        out.v2 = d
+    elif inside == 1:
+        # Rotate (keeping the winding) so the inside vertex comes first: (first, first-next, prev-first).
+        p0 = a
+        p1 = b
+        p2 = d
+        if in_b:
+            p0 = b
+            p1 = d
+            p2 = a
+        elif in_d:
+            p0 = d
+            p1 = a
+            p2 = b
+        out.n = 3
+        out.v0 = p0
+        out.v1 = clip_edge(p0, p1, c.z_clip)
+        out.v2 = clip_edge(p2, p0, c.z_clip)
+    elif inside == 2:
+        # Rotate so the outside vertex comes last: a quad (p0, p1, p1-p2, p2-p0).
+        p0 = a
+        p1 = b
+        p2 = d
+        if not in_a:
+            p0 = b
+            p1 = d
+            p2 = a
+        elif not in_b:
+            p0 = d
+            p1 = a
+            p2 = b
+        out.n = 4
+        out.v0 = p0
+        out.v1 = p1
+        out.v2 = clip_edge(p1, p2, c.z_clip)
+        out.v3 = clip_edge(p2, p0, c.z_clip)
+    return out
+
+
+@wp.func
+def project(c: RasterCamera, v: ClipVertex) -> ScreenVertex:
+    """(X, Y) = (c_x + f_x x/z, c_y + f_y y/z): the inverse of the tracer's camera_ray."""
+    out = ScreenVertex()
+    out.iz = wp.float64(1.0) / v.c[2]
+    out.x = c.c_x + c.f_x * v.c[0] * out.iz
+    out.y = c.c_y + c.f_y * v.c[1] * out.iz
+    out.uv = v.uv
+    return out
+
+
+@wp.func
+def edge_value(a: ScreenVertex, b: ScreenVertex, px: wp.float64, py: wp.float64) -> wp.float64:
+    """The edge function of a->b at P, (b - a) x (P - a): evaluated from the lexicographically smaller
+    endpoint and negated if needed, so the two triangles sharing an edge get exactly opposite values."""
+    if b.x < a.x or (b.x == a.x and b.y < a.y):
+        return -((a.x - b.x) * (py - b.y) - (a.y - b.y) * (px - b.x))
+    return (b.x - a.x) * (py - a.y) - (b.y - a.y) * (px - a.x)
+
+
+@wp.func
+def owns_zero(a: ScreenVertex, b: ScreenVertex, orientation: wp.float64) -> bool:
+    """The fill rule for a sample exactly on the edge a->b: it belongs to the triangle whose interior
+    lies on the positive side of the canonical (smaller endpoint first) edge function, which is the
+    top-left rule; of two triangles sharing the edge exactly one owns it."""
+    flip = wp.float64(1.0)
+    if b.x < a.x or (b.x == a.x and b.y < a.y):
+        flip = wp.float64(-1.0)
+    return flip * orientation > wp.float64(0.0)
+
+
+@wp.func
+def covers(e: wp.float64, owner: bool) -> bool:
+    return e > wp.float64(0.0) or (e == wp.float64(0.0) and owner)
+
+
+@wp.func
+def raster_triangle(s0: ScreenVertex, s1: ScreenVertex, s2: ScreenVertex, f: int, x_lo: int, x_hi: int,
+                    y_lo: int, y_hi: int, c: RasterCamera, k: int, samples: int,
+                    depth: wp.array(dtype=wp.float64), face: wp.array(dtype=wp.int32), uv: wp.array(dtype=wp.vec2)):
+    """Depth-test one screen triangle at every sample in the pixel rectangle [x_lo, x_hi] x [y_lo, y_hi]
+    (y up). Depth is 1/z, which is linear in screen space; (u, v) are interpolated perspective-correctly."""
+    area = edge_value(s0, s1, s2.x, s2.y)
+    if area == wp.float64(0.0):
+        return  # seen edge-on: no sample lies strictly inside
+    orientation = wp.float64(1.0)
+    if area < wp.float64(0.0):
+        orientation = wp.float64(-1.0)  # two-sided: either winding is drawn
+    own0 = owns_zero(s1, s2, orientation)
+    own1 = owns_zero(s2, s0, orientation)
+    own2 = owns_zero(s0, s1, orientation)
+    # The sample (x + sx, y + sy) lies in the triangle only if floor(min X) <= x <= floor(max X).
+    big = wp.float64(1.0e9)
+    x0 = wp.max(x_lo, int(wp.floor(wp.clamp(wp.min(wp.min(s0.x, s1.x), s2.x), -big, big))))
+    x1 = wp.min(x_hi, int(wp.floor(wp.clamp(wp.max(wp.max(s0.x, s1.x), s2.x), -big, big))))
+    y0 = wp.max(y_lo, int(wp.floor(wp.clamp(wp.min(wp.min(s0.y, s1.y), s2.y), -big, big))))
+    y1 = wp.min(y_hi, int(wp.floor(wp.clamp(wp.max(wp.max(s0.y, s1.y), s2.y), -big, big))))
+    for y in range(y0, y1 + 1):
+        row = c.height - 1 - y
+        for x in range(x0, x1 + 1):
+            for sample in range(samples):
+                px = wp.float64(x) + (wp.float64(sample % k) + wp.float64(0.5)) / wp.float64(k)
+                py = wp.float64(y) + (wp.float64(sample / k) + wp.float64(0.5)) / wp.float64(k)
+                e0 = orientation * edge_value(s1, s2, px, py)
+                e1 = orientation * edge_value(s2, s0, px, py)
+                e2 = orientation * edge_value(s0, s1, px, py)
+                if covers(e0, own0) and covers(e1, own1) and covers(e2, own2):
+                    total = e0 + e1 + e2
+                    w0 = e0 * s0.iz
+                    w1 = e1 * s1.iz
+                    w2 = e2 * s2.iz
+                    iz = (w0 + w1 + w2) / total
+                    i = (row * c.width + x) * samples + sample
+                    if iz > depth[i]:
+                        depth[i] = iz
+                        face[i] = f
+                        wsum = w0 + w1 + w2
+                        uv[i] = (s0.uv * float(w0 / wsum) + s1.uv * float(w1 / wsum)) + s2.uv * float(w2 / wsum)
+
+
+@wp.kernel(enable_backward=False)
+def project_kernel(s: SceneData, c: RasterCamera, first: int, bounds: wp.array(dtype=wp.vec4i)):
+    """Per triangle: the pixel rectangle (x0, x1, y0, y1), y up, that its clipped projection may
+    cover, clamped to the image; x0 > x1 when nothing of it can reach a sample."""
+    f = first + wp.tid()
+    poly = clip_triangle(c, s, f)
+    out = wp.vec4i(1, 0, 1, 0)
+    if poly.n > 0:
+        a = project(c, poly.v0)
+        b = project(c, poly.v1)
+        d = project(c, poly.v2)
+        lo_x = wp.min(wp.min(a.x, b.x), d.x)
+        hi_x = wp.max(wp.max(a.x, b.x), d.x)
+        lo_y = wp.min(wp.min(a.y, b.y), d.y)
+        hi_y = wp.max(wp.max(a.y, b.y), d.y)
+        if poly.n == 4:
+            e = project(c, poly.v3)
+            lo_x = wp.min(lo_x, e.x)
+            hi_x = wp.max(hi_x, e.x)
+            lo_y = wp.min(lo_y, e.y)
+            hi_y = wp.max(hi_y, e.y)
+        w = wp.float64(c.width)
+        h = wp.float64(c.height)
+        if hi_x >= wp.float64(0.0) and lo_x <= w and hi_y >= wp.float64(0.0) and lo_y <= h:
+            out = wp.vec4i(int(wp.floor(wp.max(lo_x, wp.float64(0.0)))), int(wp.floor(wp.min(hi_x, w - wp.float64(0.5)))),
+                           int(wp.floor(wp.max(lo_y, wp.float64(0.0)))), int(wp.floor(wp.min(hi_y, h - wp.float64(0.5)))))
+    bounds[f] = out
+
+
+@wp.kernel(enable_backward=False)
+def raster_kernel(s: SceneData, c: RasterCamera, tile_start: wp.array(dtype=wp.int32),
+                  tile_faces: wp.array(dtype=wp.int32), tiles_x: int, tile: int, k: int, samples: int, first: int,
+                  depth: wp.array(dtype=wp.float64), face: wp.array(dtype=wp.int32), uv: wp.array(dtype=wp.vec2)):
+    """One thread per tile: every triangle binned to it, in face order, clipped, projected and
+    depth-tested at the tile's samples. Only this thread writes the tile's pixels."""
+    t = first + wp.tid()
+    x_lo = (t % tiles_x) * tile
+    y_lo = (t / tiles_x) * tile
+    x_hi = wp.min(x_lo + tile, c.width) - 1
+    y_hi = wp.min(y_lo + tile, c.height) - 1
+    for j in range(tile_start[t], tile_start[t + 1]):
+        f = tile_faces[j]
+        poly = clip_triangle(c, s, f)
+        a = project(c, poly.v0)
+        b = project(c, poly.v1)
+        d = project(c, poly.v2)
+        raster_triangle(a, b, d, f, x_lo, x_hi, y_lo, y_hi, c, k, samples, depth, face, uv)
+        if poly.n == 4:
+            # The quad as the fan (v0, v1, v2), (v0, v2, v3): the diagonal is shared exactly.
+            e = project(c, poly.v3)
+            raster_triangle(a, d, e, f, x_lo, x_hi, y_lo, y_hi, c, k, samples, depth, face, uv)
+
+
+_shade_kernels: dict = {}
+
+
+def make_shade_kernel(fx: EffectSet):
+    """Per pixel: the tracer's surface and local shading at each sample's visible point, box-filtered."""
+    if fx in _shade_kernels:
+        return _shade_kernels[fx]
+    shade = make_shade(fx)
+    surface = make_surface(fx.smooth)
+    SUPERSAMPLING = fx.supersampling
+
+    @wp.kernel(module="unique", enable_backward=False)
+    def shade_zbuffer(s: SceneData, c: CameraData, k: int, first_pixel: int, face: wp.array(dtype=wp.int32),
+                      uv: wp.array(dtype=wp.vec2), image: wp.array(dtype=wp.vec3)):
+        pixel = first_pixel + wp.tid()
+        x = pixel % c.width
+        row = pixel / c.width
+        samples = int(1)
+        if wp.static(SUPERSAMPLING):
+            samples = k * k
+        total = wp.vec3(0.0)
+        for sample in range(samples):
+            i = pixel * samples + sample
+            f = face[i]
+            if f < 0:
+                total = total + s.background
+                continue
+            sx = float(0.5)
+            sy = float(0.5)
+            if wp.static(SUPERSAMPLING):
+                sx = (float(sample % k) + 0.5) / float(k)
+                sy = (float(sample / k) + 0.5) / float(k)
+            d = camera_ray(c, x, row, sx, sy)
+            p0 = s.points[s.indices[f * 3 + 0]]
+            p1 = s.points[s.indices[f * 3 + 1]]
+            p2 = s.points[s.indices[f * 3 + 2]]
+            # The same normal Warp's ray query reports, cross(p1 - p0, p2 - p0), so make_surface
+            # turns smooth normals to the same side as in the tracer.
+            hit = surface(s, f, uv[i][0], uv[i][1], wp.normalize(wp.cross(p1 - p0, p2 - p0)), d)
+            r = shade(s, hit.material, hit.p, hit.err, hit.ng, hit.n, -d)
+            total = total + r.color
+        image[pixel] = total / float(samples)
+
+    _shade_kernels[fx] = shade_zbuffer
+    return shade_zbuffer
+
+
+def bin_triangles(bounds: np.ndarray, width: int, height: int, tile: int):
+    """Tile lists from per-triangle pixel rectangles: (tile_start, tile_faces), faces ascending in
+    each list so ties in depth go to the same triangle whatever the launch order."""
+    tiles_x, tiles_y = -(-width // tile), -(-height // tile)
+    live = np.nonzero((bounds[:, 0] <= bounds[:, 1]) & (bounds[:, 2] <= bounds[:, 3]))[0].astype(np.int32)
+    b = bounds[live] // tile  # tile columns and rows, both counted like x and y (y up)
+    tx0, tx1, ty0, ty1 = b[:, 0], b[:, 1], b[:, 2], b[:, 3]
+    nx = tx1 - tx0 + 1
+    count = nx * (ty1 - ty0 + 1)
+    n_pairs = int(count.sum())
+    faces = np.repeat(live, count)
+    local = np.arange(n_pairs, dtype=np.int64) - np.repeat(np.cumsum(count) - count, count)
+    nx_r = np.repeat(nx, count)
+    tiles = (np.repeat(ty0, count) + local // nx_r) * tiles_x + np.repeat(tx0, count) + local % nx_r
+    order = np.argsort(tiles, kind="stable")
+    tile_start = np.zeros(tiles_x * tiles_y + 1, np.int32)
+    tile_start[1:] = np.cumsum(np.bincount(tiles, minlength=tiles_x * tiles_y))
+    return tile_start, np.ascontiguousarray(faces[order], np.int32), tiles_x, tiles_y
+
+
+
+class ZBuffer:
+    """Owns the per-sample buffers of one scene's rasterization: 1/depth, visible face, (u, v)."""
+
+    def __init__(self, scene, geometry: Geometry, fx: EffectSet, device: str = "cpu", tile: int = TILE):
+        cam = scene.camera
+        self.geometry, self.device, self.tile = geometry, device, int(tile)
+        self.basis = camera_basis(cam)
+        self.k = math.isqrt(scene.render.spp)
+        self.samples = self.k * self.k if fx.supersampling else 1
+        reach = float(np.abs(geometry.points_np).max(initial=0.0)) * math.sqrt(3.0)
+        self.camera = raster_camera(self.basis, CLIP_SCALE * max(reach, 1e-30))
+        n = cam.width * cam.height * self.samples
+        self.depth = wp.zeros(n, dtype=wp.float64, device=device)  # 1/z; 0 is "nothing yet"
+        self.face = wp.full(n, -1, dtype=wp.int32, device=device)
+        self.uv = wp.zeros(n, dtype=wp.vec2, device=device)
+        self.times: dict = {}
+        self.pairs = 0
+
+    def rasterize(self, threads: int, bands: int):
+        from .render import launch_bands
+
+        g, c, dev = self.geometry, self.camera, self.device
+        data = g.data
+        t = time.perf_counter()
+        bounds = wp.empty(max(g.triangle_count, 1), dtype=wp.vec4i, device=dev)
+        if g.triangle_count:
+            launch_bands(project_kernel, lambda first: [data, c, first, bounds], g.triangle_count, threads, bands, dev)
+        self.times["project"] = time.perf_counter() - t
+
+        t = time.perf_counter()
+        b = bounds.numpy()[: g.triangle_count]
+        tile_start, tile_faces, tiles_x, tiles_y = bin_triangles(b, c.width, c.height, self.tile)
+        self.pairs = len(tile_faces)
+        starts = wp.array(tile_start, dtype=wp.int32, device=dev)
+        faces = wp.array(tile_faces if len(tile_faces) else np.zeros(1, np.int32), dtype=wp.int32, device=dev)
+        self.times["bin"] = time.perf_counter() - t
+
+        t = time.perf_counter()
+        k, samples, tile = self.k, self.samples, self.tile
+        launch_bands(raster_kernel, lambda first: [data, c, starts, faces, tiles_x, tile, k, samples, first,
+                                                   self.depth, self.face, self.uv],
+                     tiles_x * tiles_y, threads, max(bands, 4 * threads), dev)
+        self.times["raster"] = time.perf_counter() - t
+
+    def faces(self) -> np.ndarray:
+        """The visible triangle of every sample, (height, width, samples), -1 where none."""
+        return self.face.numpy().reshape(self.basis.height, self.basis.width, self.samples)
+
+
+def _zbuffer_effects(scene, effects, disable) -> EffectSet:
+    """The scene's effect set without what a Z-buffer cannot simulate: shadows and reflections."""
+    return dataclasses.replace(resolve_effects(scene, effects, disable), shadows=False, reflection=False)
+
+
+def render_zbuffer(scene, *, threads: int | None = None, device: str = "cpu", effects=None, disable=(),
+                   bands: int | None = None, geometry: Geometry | None = None, tile: int = TILE,
+                   return_faces: bool = False):
+    """Render ``scene`` by rasterization with the tracer's local shading (no shadows, no reflections).
+    Returns a RenderResult, and with return_faces also the visible face per sample (H, W, samples)."""
+    from .errors import SceneError
+    from .render import RenderResult, RenderStats, check_finite, default_threads, init_warp, launch_bands
+    from .scene import validate_camera
+
+    init_warp()
+    validate_camera(scene.camera, scene.source)
+    t_start = time.perf_counter()
+    threads = default_threads() if threads is None else int(threads)
+    if threads < 1:
+        raise SceneError("command line", "--threads", f"expected an integer >= 1, got {threads}")
+    cam = scene.camera
+    n_pixels = cam.width * cam.height
+    bands = bands or (1 if device != "cpu" else max(16, 8 * threads))
+    fx = _zbuffer_effects(scene, effects, disable)
+    stats = RenderStats(width=cam.width, height=cam.height, spp=scene.render.spp, max_depth=1,
+                        lights=len(scene.lights), device=str(device), threads=threads, bands=bands,
+                        algorithm="zbuffer", effects=str(fx), variant=f"zbuffer_{fx.variant}")
+    stats.rays = {"primary": 0, "shadow": 0, "reflection": 0, "total": 0}  # none: visibility is rasterized
+    if getattr(scene, "load_seconds", None) is not None:
+        stats.times["load"] = scene.load_seconds
+
+    t = time.perf_counter()
+    geom = geometry or Geometry(scene, device=device, build_bvh=False)
+    stats.triangles = geom.triangle_count
+    stats.times["geometry"] = time.perf_counter() - t
+
+    t = time.perf_counter()
+    kernel = make_shade_kernel(fx)
+    for m in (kernel.module, raster_kernel.module):
+        wp.load_module(m, device=device)
+    stats.times["compile"] = time.perf_counter() - t
+
+    t = time.perf_counter()
+    zb = ZBuffer(scene, geom, fx, device=device, tile=tile)
+    zb.rasterize(threads, bands)
+    stats.times.update(zb.times)
+    t_shade = time.perf_counter()
+    image = wp.empty(n_pixels, dtype=wp.vec3, device=device)
+    c = camera_data(zb.basis)
+    data, k = geom.data, zb.k
+    launch_bands(kernel, lambda first: [data, c, k, first, zb.face, zb.uv, image], n_pixels, threads, bands, device)
+    out = image.numpy().reshape(cam.height, cam.width, 3).copy()
+    stats.times["shade"] = time.perf_counter() - t_shade
+    stats.times["render"] = time.perf_counter() - t  # project + bin + raster + shade
+    check_finite(out, "zbuffer")
+    stats.times["total"] = time.perf_counter() - t_start
+    result = RenderResult(out, stats)
+    return (result, zb.faces()) if return_faces else result
+
+
+# The tracer's primary visibility, for comparison: the very query the trace kernel makes first
+# (same camera_ray, origin at the eye, same max_t), without shading, so the hot path is untouched.
+
+
+@wp.kernel(enable_backward=False)
+def primary_faces_kernel(s: SceneData, c: CameraData, k: int, samples: int, first_pixel: int,
+                         face: wp.array(dtype=wp.int32)):
+    pixel = first_pixel + wp.tid()
+    x = pixel % c.width
+    row = pixel / c.width
+    for sample in range(samples):
+        sx = float(0.5)
+        sy = float(0.5)
+        if samples > 1:
+            sx = (float(sample % k) + 0.5) / float(k)
+            sy = (float(sample / k) + 0.5) / float(k)
+        q = wp.mesh_query_ray(s.mesh, wp.vec3(0.0), camera_ray(c, x, row, sx, sy), 1.0e30)
+        f = int(-1)
+        if q.result:
+            f = q.face
+        face[pixel * samples + sample] = f
+
+
+def traced_faces(scene, *, geometry: Geometry | None = None, effects=None, disable=(), threads: int | None = None,
+                 device: str = "cpu") -> np.ndarray:
+    """The face the ray tracer's primary ray hits at every sample, (height, width, samples), -1 for a miss;
+    samples as the tracer takes them for this effect set (k*k with supersampling, else the centre)."""
+    from .render import default_threads, init_warp, launch_bands
+
+    init_warp()
+    cam = scene.camera
+    fx = resolve_effects(scene, effects, disable)
+    k = math.isqrt(scene.render.spp)
+    samples = k * k if fx.supersampling else 1
+    geom = geometry or Geometry(scene, device=device)
+    threads = threads or default_threads()
+    face = wp.empty(cam.width * cam.height * samples, dtype=wp.int32, device=device)
+    c = camera_data(camera_basis(cam))
+    launch_bands(primary_faces_kernel, lambda first: [geom.data, c, k, samples, first, face],
+                 cam.width * cam.height, threads, max(16, 8 * threads), device)
+    return face.numpy().reshape(cam.height, cam.width, samples)
