@@ -22,6 +22,7 @@ EXAMPLES = """examples:
   warprt render bunny.obj -o bunny.png        any mesh trimesh reads, framed automatically
   warprt render s.toml --spp 16 --max-depth 5 --width 1024 --height 768
   warprt render s.toml --no-shadows --effects ambient,diffuse --stats
+  warprt render s.toml --algorithm zbuffer    rasterized: the tracer's local shading, no shadows/reflections
   warprt render s.toml --set camera.fovy=30 --set 'lights[0].color=[1,0.9,0.8]'
   warprt info s.toml
 """
@@ -91,7 +92,7 @@ def cmd_render(args) -> int:
     out = check_output_path(args.output)
     scene = _load(args)
     effects = args.effects.split(",") if args.effects else None
-    result = render(scene, threads=args.threads, device=args.device, effects=effects)
+    result = render(scene, threads=args.threads, device=args.device, effects=effects, algorithm=args.algorithm)
     t = time.perf_counter()
     write_image(out, result.image)
     stats = result.stats
@@ -100,7 +101,10 @@ def cmd_render(args) -> int:
         print(json.dumps(stats.to_dict(), indent=2))
     if args.stats_file:
         Path(args.stats_file).write_text(json.dumps(stats.to_dict(), indent=2) + "\n")
-    if not args.quiet and not args.stats:
+    if not args.quiet and not args.stats and stats.algorithm == "zbuffer":
+        print(f"wrote {out} ({stats.width}x{stats.height}, {stats.effects}; "
+              f"{stats.triangles:,} triangles rasterized in {stats.times['render']:.3f} s)", file=sys.stderr)
+    elif not args.quiet and not args.stats:
         r = stats.rays
         print(f"wrote {out} ({stats.width}x{stats.height}, {stats.effects}; "
               f"{r['total']:,} rays in {stats.times['trace']:.3f} s)", file=sys.stderr)
@@ -141,6 +145,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--threads", type=int, help="worker threads (default: all cores)")
     p.add_argument("--device", default="cpu", choices=["cpu", "cuda"], help="Warp device (default: cpu)")
     p.add_argument("--effects", help="comma-separated effects to keep: ambient,diffuse,specular,shadows,reflection,supersampling,smooth")
+    p.add_argument("--algorithm", default="raytrace", choices=["raytrace", "zbuffer"],
+                   help="raytrace (default), or zbuffer: rasterized, same local shading, no shadows or reflections")
     p.add_argument("--stats", action="store_true", help="print render statistics as JSON")
     p.add_argument("--stats-file", help="write render statistics as JSON to this file")
     p.add_argument("-q", "--quiet", action="store_true", help="print nothing but errors")

@@ -111,10 +111,21 @@ def check_finite(image: np.ndarray, what: str = "render"):
         raise RuntimeError(f"{what} produced {len(rows)} non-finite pixels (first at row {rows[0]}, column {cols[0]})")
 
 
+ALGORITHMS = ("raytrace", "zbuffer")
+
+
 def render(scene, *, threads: int | None = None, device: str = "cpu", effects=None, disable=(),
-           bands: int | None = None, geometry: Geometry | None = None) -> RenderResult:
-    """Render ``scene`` with the Whitted tracer. ``effects`` (names) limits the effect set,
-    ``disable`` removes effects; neither can add one the scene has nothing for."""
+           bands: int | None = None, geometry: Geometry | None = None, algorithm: str = "raytrace") -> RenderResult:
+    """Render ``scene`` with the Whitted tracer (or, algorithm="zbuffer", by rasterization with the same
+    local shading). ``effects`` (names) limits the effect set, ``disable`` removes effects; neither
+    can add one the scene has nothing for."""
+    if algorithm not in ALGORITHMS:
+        raise SceneError("command line", "--algorithm", f"unknown algorithm '{algorithm}'; expected one of: {', '.join(ALGORITHMS)}")
+    if algorithm == "zbuffer":
+        from .zbuffer import render_zbuffer
+
+        return render_zbuffer(scene, threads=threads, device=device, effects=effects, disable=disable,
+                              bands=bands, geometry=geometry)
     init_warp()
     validate_camera(scene.camera, scene.source)
     t_start = time.perf_counter()
