@@ -10,6 +10,8 @@ from __future__ import annotations
 import numpy as np
 import warp as wp
 
+from .bvh import build_mesh
+
 
 def vertex_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     """Angle-weighted vertex normals (float64), shared by vertices at the same position so that
@@ -83,9 +85,14 @@ class Geometry:
         self.material_names = names
 
         d = device
-        self.points = wp.array(self.points_np, dtype=wp.vec3, device=d)
-        self.indices = wp.array(self.indices_np, dtype=wp.int32, device=d)
-        self.mesh = wp.Mesh(points=self.points, indices=self.indices, bvh_constructor=bvh_constructor) if build_bvh else None
+        if build_bvh:
+            # Padded triangle boxes (bvh.py): rays through shared vertices and edges cannot leak.
+            # The points array then also holds the boxes' corners, after the V real points.
+            self.mesh, self.points, self.indices = build_mesh(self.points_np, self.indices_np, d, bvh_constructor)
+        else:
+            self.points = wp.array(self.points_np, dtype=wp.vec3, device=d)
+            self.indices = wp.array(self.indices_np, dtype=wp.int32, device=d)
+            self.mesh = None
 
         m = [scene.materials[n] for n in names]
         lights = scene.lights
