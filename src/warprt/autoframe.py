@@ -8,13 +8,21 @@ from pathlib import Path
 import numpy as np
 
 from .errors import SceneError
-from .scene import Camera, Light, Material, RenderSettings, Scene, SceneObject
+from .scene import Camera, Light, Material, RenderSettings, Scene
+
+
+# The framing below is written for a y-up file; a z-up one (a USD stage may say so) turns it
+# by +90 degrees about x, so that the camera's up is the file's up.
+_TO_UP = {"Y": np.eye(3), "Z": np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])}
 
 
 def scene_for_mesh(path: Path, width: int = 640, height: int = 480) -> Scene:
-    from .scene import _load_mesh_file
+    from .meshio import read_mesh_file
+    from .scene import split_by_material
 
-    vertices, faces = _load_mesh_file(str(path), "mesh", Path(path))
+    mesh = read_mesh_file(path)
+    vertices, faces, face_material, part_starts = mesh.concatenated()
+    to_up = _TO_UP.get(mesh.up_axis, _TO_UP["Y"])
     lo, hi = vertices.min(0), vertices.max(0)
     center = 0.5 * (lo + hi)
     radius = 0.5 * float(np.linalg.norm(hi - lo))
@@ -23,16 +31,25 @@ def scene_for_mesh(path: Path, width: int = 640, height: int = 480) -> Scene:
     fovy = 40.0
     # Distance at which the bounding sphere fills the vertical field of view, with a margin.
     dist = 1.1 * radius / math.sin(math.radians(fovy) / 2)
-    view = np.array([0.5, 0.35, 1.0])
+    view = to_up @ np.array([0.5, 0.35, 1.0])
     view /= np.linalg.norm(view)
     eye = center + dist * view
-    camera = Camera(eye=tuple(eye), center=tuple(center), up=(0.0, 1.0, 0.0), fovy=fovy,
+    camera = Camera(eye=_floats(eye), center=_floats(center), up=_floats(to_up @ [0.0, 1.0, 0.0]), fovy=fovy,
                     near=1.0, width=width, height=height)
     lights = [
-        Light(position=tuple(center + radius * np.array([4.0, 6.0, 4.0])), color=(0.8, 0.8, 0.8)),
-        Light(position=tuple(center + radius * np.array([-5.0, 3.0, 2.0])), color=(0.3, 0.3, 0.35)),
+        Light(position=_floats(center + radius * (to_up @ [4.0, 6.0, 4.0])), color=(0.8, 0.8, 0.8)),
+        Light(position=_floats(center + radius * (to_up @ [-5.0, 3.0, 2.0])), color=(0.3, 0.3, 0.35)),
     ]
-    material = Material(kd=(0.75, 0.72, 0.68), ka=(0.75, 0.72, 0.68), ks=(0.25, 0.25, 0.25), shininess=48.0)
-    obj = SceneObject(name=Path(path).stem, vertices=vertices, faces=faces, material="mesh", smooth=True)
-    return Scene(camera, RenderSettings(ambient=(0.15, 0.15, 0.15), max_depth=1), lights,
-                 {"mesh": material}, [obj], str(path))
+    materials = {"mesh": Material(kd=(0.75, 0.72, 0.68), ka=(0.75, 0.72, 0.68), ks=(0.25, 0.25, 0.25), shininess=48.0)}
+    # The file's own materials where it has them; "mesh" for faces without one.
+    objects = split_by_material(Path(path).stem, vertices, faces, face_material, mesh.materials, materials,
+                                "mesh", True, part_starts)
+    # Primary rays only, unless the file has mirrors (MTL illum 3): then two reflection levels.
+    mirrors = any(max(m.reflectivity) > 0 for _, m in mesh.materials)
+    return Scene(camera, RenderSettings(ambient=(0.15, 0.15, 0.15), max_depth=3 if mirrors else 1), lights,
+                 materials, objects, str(path))
+
+
+def _floats(v) -> tuple:
+    """Plain floats, as a scene file gives them (info prints them; NumPy scalars print noisily)."""
+    return tuple(float(x) for x in v)

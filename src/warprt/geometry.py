@@ -71,7 +71,11 @@ class Geometry:
             faces.append(obj.faces + base)
             mats.append(np.full(len(obj.faces), names.index(obj.material), np.int32))
             smooth.append(np.full(len(obj.faces), int(obj.smooth), np.int32))
-            normals.append(vertex_normals(obj.vertices, obj.faces) if obj.smooth else np.zeros_like(obj.vertices))
+            if obj.smooth:
+                given = getattr(obj, "normals", None)
+                normals.append(given if given is not None else vertex_normals(obj.vertices, obj.faces))
+            else:
+                normals.append(np.zeros_like(obj.vertices))
             base += len(obj.vertices)
         if not verts:  # an empty scene still gets a (degenerate, never hit) mesh so kernels can run
             verts, faces = [np.zeros((3, 3))], [np.zeros((1, 3), np.int64)]

@@ -74,6 +74,9 @@ class SceneObject:
     faces: np.ndarray  # (M, 3) int64
     material: str
     smooth: bool = False
+    # Vertex normals (N, 3) when the object is part of a larger smooth mesh (a file split by
+    # material): computed over the whole mesh, so the split leaves no crease.
+    normals: np.ndarray | None = None
 
 
 @dataclass
@@ -347,26 +350,65 @@ def _shape_geometry(r: _Reader, kind: str):
 
 
 def _load_mesh_file(source: str, field_name: str, path: Path):
+    """The file's parts and materials (meshio.MeshFile); its errors name the scene field too."""
     from . import meshio
 
     try:
-        return meshio.load_mesh(path)
-    except SceneError:
-        raise
-    except FileNotFoundError:
-        raise SceneError(source, field_name, f"mesh file not found: {path}") from None
-    except Exception as e:  # trimesh raises many types for unreadable files
-        raise SceneError(source, field_name, f"cannot read mesh file {path}: {e}") from None
+        return meshio.read_mesh_file(path)
+    except SceneError as e:
+        raise SceneError(source, field_name, str(e)) from None
+    except Exception as e:  # a reader's own failure on a damaged file
+        raise SceneError(source, field_name, f"{path}: cannot read mesh file: {' '.join(str(e).split())}") from None
 
 
-def read_object(source: str, base: Path, t: dict, i: int, materials: dict) -> SceneObject:
+def split_by_material(name: str, vertices, faces, face_material, file_materials, materials: dict,
+                      fallback: str, smooth: bool, part_starts=(0,)) -> list[SceneObject]:
+    """One SceneObject per material a file gives its faces (face_material indexes file_materials,
+    -1: ``fallback``). The file's materials join ``materials`` as "<name>/<material>". Smooth
+    normals are computed per part of the file before the split, so the split leaves no crease."""
+    keys = []
+    for mname, m in file_materials:
+        key, k = f"{name}/{mname}", 2
+        while key in materials and materials[key] != m:
+            key, k = f"{name}/{mname}#{k}", k + 1
+        materials[key] = m
+        keys.append(key)
+    used = np.unique(face_material)
+    if len(used) == 1:
+        material = fallback if used[0] < 0 else keys[used[0]]
+        return [SceneObject(name, vertices, faces, material, smooth)]
+    normals = None
+    if smooth:
+        from .geometry import vertex_normals
+
+        edges = list(part_starts) + [len(vertices)]
+        normals = np.zeros_like(vertices)
+        for a, b in zip(edges[:-1], edges[1:]):
+            sel = (faces[:, 0] >= a) & (faces[:, 0] < b)
+            if sel.any():
+                normals[a:b] = vertex_normals(vertices[a:b], faces[sel] - a)
+    out = []
+    for idx in used:
+        sel = face_material == idx
+        keep, inverse = np.unique(faces[sel], return_inverse=True)
+        material = fallback if idx < 0 else keys[idx]
+        out.append(SceneObject(material if idx >= 0 else f"{name}/{fallback}", np.ascontiguousarray(vertices[keep]),
+                               inverse.reshape(-1, 3).astype(np.int64), material, smooth,
+                               None if normals is None else np.ascontiguousarray(normals[keep])))
+    return out
+
+
+def read_object(source: str, base: Path, t: dict, i: int, materials: dict) -> list[SceneObject]:
+    """An [[objects]] table: one SceneObject, or one per material for a file with several."""
     r = _Reader(source, t, f"objects[{i}]")
     if ("mesh" in t) == ("shape" in t):
         r.fail(None, "expected exactly one of 'mesh' (a file) or 'shape' (" + ", ".join(shapes.SHAPES) + ")")
+    mesh = None
     if "mesh" in t:
         r.check_keys(_OBJECT_KEYS)
         path = base / r.string("mesh")
-        vertices, faces = _load_mesh_file(source, f"objects[{i}].mesh", path)
+        mesh = _load_mesh_file(source, f"objects[{i}].mesh", path)
+        vertices, faces, face_material, part_starts = mesh.concatenated()
         default_name = path.stem
     else:
         kind = r.string("shape")
@@ -393,13 +435,13 @@ def read_object(source: str, base: Path, t: dict, i: int, materials: dict) -> Sc
     world = (vertices * scale) @ rot.T + translate
     if np.linalg.det(np.diag(scale)) < 0:  # a mirroring scale flips the winding; keep faces outward
         faces = faces[:, ::-1]
-    return SceneObject(
-        name=r.string("name", default_name),
-        vertices=np.ascontiguousarray(world, np.float64),
-        faces=np.ascontiguousarray(faces, np.int64),
-        material=material,
-        smooth=r.boolean("smooth", False),
-    )
+    name, smooth = r.string("name", default_name), r.boolean("smooth", False)
+    world, faces = np.ascontiguousarray(world, np.float64), np.ascontiguousarray(faces, np.int64)
+    if mesh is not None and "material" not in t and mesh.materials:
+        # The file's own materials, unless the scene file names one for the object.
+        return split_by_material(name, world, faces, face_material, mesh.materials, materials,
+                                 material, smooth, part_starts)
+    return [SceneObject(name=name, vertices=world, faces=faces, material=material, smooth=smooth)]
 
 
 def scene_from_dict(data: dict, source: str = "<scene>", base: Path | None = None) -> Scene:
@@ -416,7 +458,8 @@ def scene_from_dict(data: dict, source: str = "<scene>", base: Path | None = Non
     materials = {"default": DEFAULT_MATERIAL}
     for name, t in _table(source, data, "materials").items():
         materials[name] = read_material(source, name, t)
-    objects = [read_object(source, base, t, i, materials) for i, t in enumerate(_array_of_tables(source, data, "objects"))]
+    objects = [o for i, t in enumerate(_array_of_tables(source, data, "objects"))
+               for o in read_object(source, base, t, i, materials)]
     return Scene(camera, render, lights, materials, objects, source)
 
 
