@@ -19,13 +19,26 @@ from .errors import SceneError
 EXAMPLES = """examples:
   warprt render                               the built-in default scene -> warprt.png
   warprt render scenes/cornell.toml -o c.png  a scene file
-  warprt render bunny.obj -o bunny.png        any mesh trimesh reads, framed automatically
+  warprt render bunny.obj -o bunny.png        a mesh file, framed automatically, with its own materials:
+                                              .obj (+.mtl) .ply .stl .off .glb .gltf .usd .usda .usdc .usdz
+  warprt render s.toml -o s.exr --stats-file s.json -q
+                                              linear float EXR (or .npy), statistics as JSON, nothing on stderr
   warprt render s.toml --spp 16 --max-depth 5 --width 1024 --height 768
   warprt render s.toml --no-shadows --effects ambient,diffuse --stats
   warprt render s.toml --algorithm zbuffer    rasterized: the tracer's local shading, no shadows/reflections
   warprt render s.toml --set camera.fovy=30 --set 'lights[0].color=[1,0.9,0.8]'
-  warprt info s.toml
+  warprt info s.toml                          triangles, objects, materials, lights, bounds, effects, memory
+
+Bad input is one line on stderr naming the file and the field, exit status 2, and no output file.
 """
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse, with its usage errors as the one line (and exit status 2) of every other bad input."""
+
+    def error(self, message):
+        print(f"warprt: error: command line: {message} (see '{self.prog} --help')", file=sys.stderr)
+        sys.exit(2)
 
 
 def _parse_set(items) -> dict:
@@ -44,11 +57,12 @@ def _parse_set(items) -> dict:
 
 def _add_scene_options(p: argparse.ArgumentParser):
     p.add_argument("scene", nargs="?", help="scene file (.toml) or mesh file; default: the built-in scene")
-    p.add_argument("--set", action="append", metavar="SECTION.KEY=VALUE", help="override a scene field (repeatable)")
-    p.add_argument("--width", type=int, help="image width in pixels")
-    p.add_argument("--height", type=int, help="image height in pixels")
-    p.add_argument("--spp", type=int, help="samples per pixel (a square: 1, 4, 9, 16, ...)")
-    p.add_argument("--max-depth", type=int, help="ray levels: 1 = primary rays only, 2 = one reflection, ...")
+    p.add_argument("--set", action="append", metavar="SECTION.KEY=VALUE",
+                   help="override any scene field, value in TOML syntax: camera.fovy=30, 'lights[0].color=[1,1,1]' (repeatable)")
+    p.add_argument("--width", type=int, metavar="PIXELS", help="image width in pixels")
+    p.add_argument("--height", type=int, metavar="PIXELS", help="image height in pixels")
+    p.add_argument("--spp", type=int, metavar="N", help="samples per pixel (a square: 1, 4, 9, 16, ...)")
+    p.add_argument("--max-depth", type=int, metavar="N", help="ray levels: 1 = primary rays only, 2 = one reflection, ...")
     p.add_argument("--no-shadows", action="store_true", help="switch shadow rays off")
 
 
@@ -85,22 +99,46 @@ def _load(args):
     return scene
 
 
+def _check_device(device: str):
+    if device == "cpu":
+        return
+    import warp as wp
+
+    from .render import init_warp
+
+    init_warp()
+    if not wp.is_cuda_available():
+        raise SceneError("command line", "--device", f"'{device}' is not available on this machine (Warp found no CUDA device); use --device cpu")
+
+
 def cmd_render(args) -> int:
-    from .film import check_output_path, write_image
+    from .film import check_output_path, check_text_path, write_image, write_text
+    from .memory import peak_rss
+    from .progress import Progress
     from .render import render
 
-    out = check_output_path(args.output)
+    # Everything that can be checked before the render is: a render whose result cannot be
+    # saved, or that cannot start, should fail at once and leave nothing behind.
+    out = check_output_path(args.output, "--output")
+    if args.stats_file:
+        check_text_path(args.stats_file, "--stats-file")
+    if args.threads is not None and args.threads < 1:
+        raise SceneError("command line", "--threads", f"expected an integer >= 1, got {args.threads}")
     scene = _load(args)
+    _check_device(args.device)
     effects = args.effects.split(",") if args.effects else None
-    result = render(scene, threads=args.threads, device=args.device, effects=effects, algorithm=args.algorithm)
+    progress = None if args.quiet else Progress()
+    result = render(scene, threads=args.threads, device=args.device, effects=effects, algorithm=args.algorithm,
+                    progress=progress)
     t = time.perf_counter()
-    write_image(out, result.image)
+    write_image(out, result.image, "--output")
     stats = result.stats
     stats.times["write"] = time.perf_counter() - t
+    stats.memory["peak_rss"] = peak_rss()
     if args.stats:
         print(json.dumps(stats.to_dict(), indent=2))
     if args.stats_file:
-        Path(args.stats_file).write_text(json.dumps(stats.to_dict(), indent=2) + "\n")
+        write_text(args.stats_file, json.dumps(stats.to_dict(), indent=2) + "\n", "--stats-file")
     if not args.quiet and not args.stats and stats.algorithm == "zbuffer":
         print(f"wrote {out} ({stats.width}x{stats.height}, {stats.effects}; "
               f"{stats.triangles:,} triangles rasterized in {stats.times['render']:.3f} s)", file=sys.stderr)
@@ -124,16 +162,26 @@ def cmd_info(args) -> int:
     for o in scene.objects:
         print(f"  {o.name:<16} {len(o.faces):>10,} triangles  material {o.material}{'  smooth' if o.smooth else ''}")
     print(f"triangles  {scene.triangle_count:,}")
-    print(f"materials  {', '.join(m for m in scene.materials if m != 'default' or any(o.material == 'default' for o in scene.objects))}")
+    used = {o.material for o in scene.objects}
+    print(f"materials  {', '.join(m for m in scene.materials if m in used)}")
     print(f"lights     {len(scene.lights)}")
     print(f"bounds     {[round(float(x), 6) for x in lo]} .. {[round(float(x), 6) for x in hi]}")
     print(f"effects    {scene_effects(scene)}")
+    # The geometry as a render builds it: its arrays and BVH, measured rather than estimated.
+    from .geometry import Geometry
+    from .memory import geometry_memory, human, peak_rss
+    from .render import init_warp
+
+    init_warp()
+    mem = geometry_memory(Geometry(scene))
+    print(f"memory     {human(mem['total'])} geometry: " + ", ".join(
+        f"{k.replace('_', ' ')} {human(v)}" for k, v in mem.items() if k != "total") + f"; peak RSS {human(peak_rss())}")
     return 0
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="warprt", description="A Whitted ray tracer in NVIDIA Warp kernels.",
-                                     epilog=EXAMPLES, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = _Parser(prog="warprt", description="A Whitted ray tracer in NVIDIA Warp kernels.",
+                     epilog=EXAMPLES, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--version", action="version", version=f"warprt {__version__}")
     parser.add_argument("--debug", action="store_true", help="show tracebacks")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
@@ -142,14 +190,15 @@ def build_parser() -> argparse.ArgumentParser:
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     _add_scene_options(p)
     p.add_argument("-o", "--output", default="warprt.png", help="output image: .png (sRGB 8-bit), .exr or .npy (linear float)")
-    p.add_argument("--threads", type=int, help="worker threads (default: all cores)")
+    p.add_argument("--threads", type=int, metavar="N", help="worker threads (default: all cores)")
     p.add_argument("--device", default="cpu", choices=["cpu", "cuda"], help="Warp device (default: cpu)")
     p.add_argument("--effects", help="comma-separated effects to keep: ambient,diffuse,specular,shadows,reflection,supersampling,smooth")
     p.add_argument("--algorithm", default="raytrace", choices=["raytrace", "zbuffer"],
                    help="raytrace (default), or zbuffer: rasterized, same local shading, no shadows or reflections")
-    p.add_argument("--stats", action="store_true", help="print render statistics as JSON")
-    p.add_argument("--stats-file", help="write render statistics as JSON to this file")
-    p.add_argument("-q", "--quiet", action="store_true", help="print nothing but errors")
+    p.add_argument("--stats", action="store_true", help="print render statistics (times, rays, memory) as JSON on stdout")
+    p.add_argument("--stats-file", metavar="FILE", help="write render statistics as JSON to this file")
+    p.add_argument("-q", "--quiet", action="store_true",
+                   help="print nothing but errors: no progress bar (shown only on a terminal, after 1 s), no summary")
     p.add_argument("--debug", action="store_true", help="show tracebacks")
     p.set_defaults(func=cmd_render)
 
@@ -166,12 +215,14 @@ def main(argv=None) -> int:
     if args.command is None:
         parser.print_help()
         return 0
+    # A subcommand's own --debug default would hide 'warprt --debug render ...'.
+    args.debug = getattr(args, "debug", False) or "--debug" in (sys.argv[1:] if argv is None else argv)
     try:
         return args.func(args)
     except SceneError as e:
         if args.debug:
             raise
-        print(f"warprt: error: {e}", file=sys.stderr)
+        print(f"warprt: error: {' '.join(str(e).split())}", file=sys.stderr)  # one line, always
         return 2
     except KeyboardInterrupt:
         print("warprt: interrupted", file=sys.stderr)

@@ -1,5 +1,5 @@
-"""Image output: the linear float image to PNG (sRGB 8-bit) or .npy (linear float32), written
-atomically so that a failed write never leaves a partial file behind."""
+"""Image output: the linear float image to PNG (sRGB 8-bit), OpenEXR or .npy (linear float32),
+written atomically so that a failed write never leaves a partial file behind."""
 
 from __future__ import annotations
 
@@ -29,27 +29,77 @@ def to_srgb8(image: np.ndarray) -> np.ndarray:
     return np.round(linear_to_srgb(image) * 255.0).astype(np.uint8)
 
 
-def check_output_path(path) -> Path:
-    """Fail before rendering on an unknown extension or a folder we cannot write to."""
+def check_output_path(path, field: str = "output") -> Path:
+    """Fail before rendering on an unknown extension or a folder we cannot write to: a render
+    that cannot be saved should not run."""
     path = Path(path)
     ext = path.suffix.lower()
     if ext not in FORMATS:
-        raise SceneError(str(path), "output", f"unknown image extension '{ext or '(none)'}'; expected one of: {', '.join(FORMATS)}")
+        raise SceneError(str(path), field, f"unknown image extension '{ext or '(none)'}'; expected one of: {', '.join(FORMATS)}")
+    _check_writable(path, field)
+    return path
+
+
+def _check_writable(path: Path, field: str):
     parent = path.parent if str(path.parent) else Path(".")
+    if not parent.exists():
+        raise SceneError(str(path), field, f"folder does not exist: {parent}")
     if not parent.is_dir():
-        raise SceneError(str(path), "output", f"folder does not exist: {parent}")
-    if not os.access(parent, os.W_OK):
-        raise SceneError(str(path), "output", f"folder is not writable: {parent}")
+        raise SceneError(str(path), field, f"not a folder: {parent}")
     if path.is_dir():
-        raise SceneError(str(path), "output", "is a folder, not a file")
+        raise SceneError(str(path), field, "is a folder, not a file")
+    # Permission bits do not tell (root ignores them; a read-only mount does not show in them):
+    # create and remove a file where the output will go.
+    try:
+        fd, probe = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".probe", dir=parent)
+        os.close(fd)
+        os.unlink(probe)
+    except OSError as e:
+        raise SceneError(str(path), field, f"cannot write to folder {parent}: {e.strerror or e}") from None
+
+
+def check_text_path(path, field: str) -> Path:
+    """The same checks for a text output (--stats-file), whatever its extension."""
+    path = Path(path)
+    _check_writable(path, field)
+    return path
+
+
+def _atomic(path: Path, write):
+    """Write through a temporary file in the target folder, then rename: the file appears complete
+    or not at all, and an earlier file of that name survives a failed write."""
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=path.suffix, dir=path.parent if str(path.parent) else ".")
+    os.close(fd)
+    try:
+        write(tmp)
+        os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes it 0600; an image gets the usual mode
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+
+
+def _umask() -> int:
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
+def write_text(path, text: str, field: str = "output") -> Path:
+    path = check_text_path(path, field)
+    try:
+        _atomic(path, lambda tmp: Path(tmp).write_text(text))
+    except OSError as e:
+        raise SceneError(str(path), field, f"cannot write: {e.strerror or e}") from None
     return path
 
 
 def _write_exr(fileobj, image: np.ndarray):
     try:
-        import OpenEXR  # optional: the 'exr' extra
+        import OpenEXR
     except ImportError:
-        raise SceneError("output", None, "writing EXR needs the OpenEXR package (pip install 'warprt[exr]')") from None
+        raise SceneError("output", None, "writing EXR needs the OpenEXR package (pip install OpenEXR)") from None
     h, w = image.shape[:2]
     channels = {c: np.ascontiguousarray(image[:, :, i], np.float32) for i, c in enumerate("RGB")}
     header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
@@ -57,13 +107,12 @@ def _write_exr(fileobj, image: np.ndarray):
         f.write(fileobj)
 
 
-def write_image(path, image: np.ndarray) -> Path:
+def write_image(path, image: np.ndarray, field: str = "output") -> Path:
     """Write by extension; the file appears complete or not at all (temporary file, then rename)."""
-    path = check_output_path(path)
+    path = check_output_path(path, field)
     ext = path.suffix.lower()
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=ext, dir=path.parent if str(path.parent) else ".")
-    os.close(fd)
-    try:
+
+    def write(tmp):
         if ext == ".png":
             from PIL import Image
 
@@ -73,11 +122,11 @@ def write_image(path, image: np.ndarray) -> Path:
                 np.save(f, np.asarray(image, np.float32))
         elif ext == ".exr":
             _write_exr(tmp, image)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+
+    try:
+        _atomic(path, write)
+    except OSError as e:  # a full disk, a folder removed meanwhile
+        raise SceneError(str(path), field, f"cannot write: {e.strerror or e}") from None
     return path
 
 

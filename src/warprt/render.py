@@ -64,6 +64,7 @@ class RenderStats:
     rays: dict = field(default_factory=dict)  # primary, shadow, reflection, total
     times: dict = field(default_factory=dict)  # seconds: load, bvh, compile, trace, write, total
     rays_per_second: float = 0.0
+    memory: dict = field(default_factory=dict)  # bytes: geometry arrays and BVH by role, image, peak_rss
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -85,14 +86,19 @@ def _bands(n_pixels: int, n_bands: int) -> list[tuple[int, int]]:
     return [(int(a), int(b - a)) for a, b in zip(edges[:-1], edges[1:]) if b > a]
 
 
-def launch_bands(kernel, inputs_for, n_pixels: int, threads: int, bands: int, device: str):
+def launch_bands(kernel, inputs_for, n_pixels: int, threads: int, bands: int, device: str, on_band=None):
     """Launch ``kernel`` over pixel ranges; on the CPU each launch runs on one thread and releases
-    the GIL, so a pool of ``threads`` workers runs that many bands at once."""
+    the GIL, so a pool of ``threads`` workers runs that many bands at once. ``on_band(first, count)``
+    is called when a band has finished, on the worker thread that ran it."""
     ranges = _bands(n_pixels, bands)
 
     def run(r):
         first, count = r
         wp.launch(kernel, dim=count, inputs=inputs_for(first), device=device)
+        if on_band is not None:
+            if device != "cpu":  # a GPU launch returns before the band is done
+                wp.synchronize_device(device)
+            on_band(first, count)
 
     if threads <= 1 or len(ranges) == 1 or device != "cpu":
         for r in ranges:
@@ -115,7 +121,8 @@ ALGORITHMS = ("raytrace", "zbuffer")
 
 
 def render(scene, *, threads: int | None = None, device: str = "cpu", effects=None, disable=(),
-           bands: int | None = None, geometry: Geometry | None = None, algorithm: str = "raytrace") -> RenderResult:
+           bands: int | None = None, geometry: Geometry | None = None, algorithm: str = "raytrace",
+           progress=None) -> RenderResult:
     """Render ``scene`` with the Whitted tracer (or, algorithm="zbuffer", by rasterization with the same
     local shading). ``effects`` (names) limits the effect set, ``disable`` removes effects; neither
     can add one the scene has nothing for."""
@@ -162,8 +169,22 @@ def render(scene, *, threads: int | None = None, device: str = "cpu", effects=No
     k = math.isqrt(scene.render.spp)
     max_depth = stats.max_depth
     data = geom.data
-    launch_bands(kernel, lambda first: [data, c, max_depth, k, first, image, counts],
-                 n_pixels, threads, bands, device)
+    on_band = None
+    if progress is not None:  # a progress.Progress: tiles done and their exact ray counts
+        # On the CPU the counts live in host memory and a finished band's counts are final.
+        counts_host = counts.numpy() if device == "cpu" else None
+
+        def on_band(first, count):
+            rays = int(counts_host[first:first + count].sum(dtype=np.int64)) if counts_host is not None else 0
+            progress.band_done(count, rays)
+
+        progress.begin(len(_bands(n_pixels, bands)), n_pixels)
+    try:
+        launch_bands(kernel, lambda first: [data, c, max_depth, k, first, image, counts],
+                     n_pixels, threads, bands, device, on_band)
+    finally:
+        if progress is not None:
+            progress.end()
     out = image.numpy().reshape(cam.height, cam.width, 3).copy()
     per_kind = counts.numpy().astype(np.int64).sum(0)
     stats.times["trace"] = time.perf_counter() - t
@@ -173,4 +194,8 @@ def render(scene, *, threads: int | None = None, device: str = "cpu", effects=No
     stats.rays["total"] = sum(stats.rays.values())
     stats.rays_per_second = stats.rays["total"] / max(stats.times["trace"], 1e-9)
     stats.times["total"] = time.perf_counter() - t_start
+    from .memory import geometry_memory, peak_rss
+
+    stats.memory = {"geometry": geometry_memory(geom), "image": int(image.capacity + counts.capacity),
+                    "peak_rss": peak_rss()}
     return RenderResult(out, stats)
