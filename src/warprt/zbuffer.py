@@ -250,17 +250,34 @@ def raster_triangle(s0: ScreenVertex, s1: ScreenVertex, s2: ScreenVertex, f: int
                     w2 = e2 * s2.iz
                     iz = (w0 + w1 + w2) / total
                     i = (row * c.width + x) * samples + sample
-                    if iz > depth[i]:
+                    # Equal depth goes to the lower face index, so the image does not depend on the
+                    # order of a tile's list (which atomics make arbitrary on a GPU).
+                    if iz > depth[i] or (iz == depth[i] and f < face[i]):
                         depth[i] = iz
                         face[i] = f
                         wsum = w0 + w1 + w2
                         uv[i] = (s0.uv * float(w0 / wsum) + s1.uv * float(w1 / wsum)) + s2.uv * float(w2 / wsum)
 
 
+@wp.func
+def sample_span(lo: wp.float64, hi: wp.float64, k: int, n: int) -> wp.vec2i:
+    """The pixels (first, last) whose samples x + (j + 1/2)/k, j < k, fall in [lo, hi] on one axis of n
+    pixels; first > last when none does. Widened by a hair so rounding can only add a pixel."""
+    kf = wp.float64(k)
+    pad = wp.float64(1.0e-9) * (wp.float64(1.0) + wp.abs(lo) + wp.abs(hi))
+    big = wp.float64(4.0e9)  # keeps int() in range for vertices projected from just in front of the eye
+    m_lo = wp.max(wp.ceil(wp.clamp(kf * (lo - pad) - wp.float64(0.5), -big, big)), wp.float64(0.0))
+    m_hi = wp.min(wp.floor(wp.clamp(kf * (hi + pad) - wp.float64(0.5), -big, big)), wp.float64(n * k - 1))
+    if m_lo > m_hi:
+        return wp.vec2i(1, 0)
+    return wp.vec2i(int(m_lo) / k, int(m_hi) / k)
+
+
 @wp.kernel(enable_backward=False)
-def project_kernel(s: SceneData, c: RasterCamera, first: int, bounds: wp.array(dtype=wp.vec4i)):
-    """Per triangle: the pixel rectangle (x0, x1, y0, y1), y up, that its clipped projection may
-    cover, clamped to the image; x0 > x1 when nothing of it can reach a sample."""
+def project_kernel(s: SceneData, c: RasterCamera, k: int, first: int, bounds: wp.array(dtype=wp.vec4i)):
+    """Per triangle: the pixel rectangle (x0, x1, y0, y1), y up, whose samples its clipped projection
+    may cover; x0 > x1 when it can cover none (behind the eye, off the image, or so small that it
+    falls between samples, the fate of most triangles of a mesh finer than the pixels)."""
     f = first + wp.tid()
     poly = clip_triangle(c, s, f)
     out = wp.vec4i(1, 0, 1, 0)
@@ -278,11 +295,10 @@ def project_kernel(s: SceneData, c: RasterCamera, first: int, bounds: wp.array(d
             hi_x = wp.max(hi_x, e.x)
             lo_y = wp.min(lo_y, e.y)
             hi_y = wp.max(hi_y, e.y)
-        w = wp.float64(c.width)
-        h = wp.float64(c.height)
-        if hi_x >= wp.float64(0.0) and lo_x <= w and hi_y >= wp.float64(0.0) and lo_y <= h:
-            out = wp.vec4i(int(wp.floor(wp.max(lo_x, wp.float64(0.0)))), int(wp.floor(wp.min(hi_x, w - wp.float64(0.5)))),
-                           int(wp.floor(wp.max(lo_y, wp.float64(0.0)))), int(wp.floor(wp.min(hi_y, h - wp.float64(0.5)))))
+        span_x = sample_span(lo_x, hi_x, k, c.width)
+        span_y = sample_span(lo_y, hi_y, k, c.height)
+        if span_x[0] <= span_x[1] and span_y[0] <= span_y[1]:
+            out = wp.vec4i(span_x[0], span_x[1], span_y[0], span_y[1])
     bounds[f] = out
 
 
@@ -357,25 +373,28 @@ def make_shade_kernel(fx: EffectSet):
     return shade_zbuffer
 
 
-def bin_triangles(bounds: np.ndarray, width: int, height: int, tile: int):
-    """Tile lists from per-triangle pixel rectangles: (tile_start, tile_faces), faces ascending in
-    each list so ties in depth go to the same triangle whatever the launch order."""
-    tiles_x, tiles_y = -(-width // tile), -(-height // tile)
-    live = np.nonzero((bounds[:, 0] <= bounds[:, 1]) & (bounds[:, 2] <= bounds[:, 3]))[0].astype(np.int32)
-    b = bounds[live] // tile  # tile columns and rows, both counted like x and y (y up)
-    tx0, tx1, ty0, ty1 = b[:, 0], b[:, 1], b[:, 2], b[:, 3]
-    nx = tx1 - tx0 + 1
-    count = nx * (ty1 - ty0 + 1)
-    n_pairs = int(count.sum())
-    faces = np.repeat(live, count)
-    local = np.arange(n_pairs, dtype=np.int64) - np.repeat(np.cumsum(count) - count, count)
-    nx_r = np.repeat(nx, count)
-    tiles = (np.repeat(ty0, count) + local // nx_r) * tiles_x + np.repeat(tx0, count) + local % nx_r
-    order = np.argsort(tiles, kind="stable")
-    tile_start = np.zeros(tiles_x * tiles_y + 1, np.int32)
-    tile_start[1:] = np.cumsum(np.bincount(tiles, minlength=tiles_x * tiles_y))
-    return tile_start, np.ascontiguousarray(faces[order], np.int32), tiles_x, tiles_y
+@wp.kernel(enable_backward=False)
+def count_kernel(bounds: wp.array(dtype=wp.vec4i), tile: int, tiles_x: int, tile_count: wp.array(dtype=wp.int32)):
+    """Per triangle: +1 for every tile its pixel rectangle touches."""
+    b = bounds[wp.tid()]
+    if b[0] > b[1]:
+        return  # culled
+    for ty in range(b[2] / tile, b[3] / tile + 1):
+        for tx in range(b[0] / tile, b[1] / tile + 1):
+            wp.atomic_add(tile_count, ty * tiles_x + tx, 1)
 
+
+@wp.kernel(enable_backward=False)
+def fill_kernel(bounds: wp.array(dtype=wp.vec4i), tile: int, tiles_x: int, cursor: wp.array(dtype=wp.int32),
+                tile_faces: wp.array(dtype=wp.int32)):
+    """Per triangle: its index into the list of every tile it touches."""
+    f = wp.tid()
+    b = bounds[f]
+    if b[0] > b[1]:
+        return
+    for ty in range(b[2] / tile, b[3] / tile + 1):
+        for tx in range(b[0] / tile, b[1] / tile + 1):
+            tile_faces[wp.atomic_add(cursor, ty * tiles_x + tx, 1)] = f
 
 
 class ZBuffer:
@@ -401,22 +420,34 @@ class ZBuffer:
 
         g, c, dev = self.geometry, self.camera, self.device
         data = g.data
+        k = self.k if self.samples > 1 else 1
         t = time.perf_counter()
         bounds = wp.empty(max(g.triangle_count, 1), dtype=wp.vec4i, device=dev)
         if g.triangle_count:
-            launch_bands(project_kernel, lambda first: [data, c, first, bounds], g.triangle_count, threads, bands, dev)
+            # A few thousand triangles per launch: below that, launching costs more than projecting.
+            launch_bands(project_kernel, lambda first: [data, c, k, first, bounds], g.triangle_count, threads,
+                         max(1, min(bands, g.triangle_count // 4096)), dev)
         self.times["project"] = time.perf_counter() - t
 
+        # Binning: count per tile, scan, fill. One launch each: Warp's atomics are plain
+        # read-modify-writes on the CPU, safe within a launch (one thread) but not across launches.
         t = time.perf_counter()
-        b = bounds.numpy()[: g.triangle_count]
-        tile_start, tile_faces, tiles_x, tiles_y = bin_triangles(b, c.width, c.height, self.tile)
-        self.pairs = len(tile_faces)
+        tile = self.tile
+        tiles_x, tiles_y = -(-c.width // tile), -(-c.height // tile)
+        tile_count = wp.zeros(tiles_x * tiles_y, dtype=wp.int32, device=dev)
+        wp.launch(count_kernel, dim=g.triangle_count, inputs=[bounds, tile, tiles_x, tile_count], device=dev)
+        tile_start = np.zeros(tiles_x * tiles_y + 1, np.int32)
+        tile_start[1:] = np.cumsum(tile_count.numpy())
+        self.pairs = int(tile_start[-1])
         starts = wp.array(tile_start, dtype=wp.int32, device=dev)
-        faces = wp.array(tile_faces if len(tile_faces) else np.zeros(1, np.int32), dtype=wp.int32, device=dev)
+        cursor = wp.array(tile_start[:-1], dtype=wp.int32, device=dev)
+        faces = wp.empty(max(self.pairs, 1), dtype=wp.int32, device=dev)
+        wp.launch(fill_kernel, dim=g.triangle_count, inputs=[bounds, tile, tiles_x, cursor, faces], device=dev)
+        wp.synchronize_device(dev)
         self.times["bin"] = time.perf_counter() - t
 
         t = time.perf_counter()
-        k, samples, tile = self.k, self.samples, self.tile
+        samples = self.samples
         launch_bands(raster_kernel, lambda first: [data, c, starts, faces, tiles_x, tile, k, samples, first,
                                                    self.depth, self.face, self.uv],
                      tiles_x * tiles_y, threads, max(bands, 4 * threads), dev)
