@@ -1,0 +1,11 @@
+"""The independent reference: any warprt Scene rendered by Mitsuba 3 with a Whitted integrator,
+and the comparison (SSIM, PSNR, share of pixels off) that the accuracy suite and `warprt compare` use.
+
+    from reference import compare
+    result = compare(warprt.load_scene("scenes/cornell.toml"), width=160, height=120)
+"""
+
+from .compare import CompareResult, compare, side_by_side
+from .mitsuba_whitted import MitsubaScene, Switches, mitsuba_variant, render_mitsuba
+
+__all__ = ["CompareResult", "MitsubaScene", "Switches", "compare", "mitsuba_variant", "render_mitsuba", "side_by_side"]
