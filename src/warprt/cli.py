@@ -28,6 +28,8 @@ EXAMPLES = """examples:
   warprt render s.toml --algorithm zbuffer    rasterized: the tracer's local shading, no shadows/reflections
   warprt render s.toml --set camera.fovy=30 --set 'lights[0].color=[1,0.9,0.8]'
   warprt info s.toml                          triangles, objects, materials, lights, bounds, effects, memory
+  warprt compare s.toml -o cmp.png --width 320 --height 240
+                                              warprt | Mitsuba 3 | |difference| x 10; prints SSIM, PSNR
 
 Bad input is one line on stderr naming the file and the field, exit status 2, and no output file.
 """
@@ -179,6 +181,45 @@ def cmd_info(args) -> int:
     return 0
 
 
+def _reference():
+    """The Mitsuba reference: the repository's top-level reference/ package (not in the wheel)."""
+    try:
+        import reference
+    except ImportError:
+        root = Path(__file__).resolve().parents[2]  # src/warprt/cli.py -> the checkout
+        if str(root) not in sys.path:
+            sys.path.insert(0, str(root))
+        try:
+            import reference
+        except ImportError:
+            raise SceneError("command line", "compare", "needs the reference/ package of a warprt checkout "
+                             "(run it from the repository, installed with pip install -e '.[test]')") from None
+    return reference
+
+
+def cmd_compare(args) -> int:
+    from .film import check_output_path
+
+    out = check_output_path(args.output)
+    reference = _reference()
+    scene = _load(args)
+    try:
+        variant = reference.mitsuba_variant()
+    except ImportError as e:
+        raise SceneError("command line", "compare", f"needs Mitsuba 3 (pip install -e '.[test]'): {e}") from None
+    effects = args.effects.split(",") if args.effects else None
+    result = reference.compare(scene, effects=effects, threads=args.threads, output=out)
+    cam = scene.camera
+    print(f"scene    {scene.source} ({cam.width}x{cam.height}, spp {scene.render.spp}, effects {result.effects})")
+    print(f"SSIM     {result.ssim:.6f}")
+    print(f"PSNR     {result.psnr:.2f} dB")
+    print(f"off      {100 * result.frac_off:.3f}% of pixels differ by more than 2/255 in a channel "
+          f"({int(result.off_mask.sum())} of {result.off_mask.size}); max |difference| {result.max_abs:.4f}")
+    print(f"times    warprt {result.times['warprt']:.3f} s, Mitsuba ({variant}) {result.times['mitsuba']:.3f} s")
+    print(f"wrote    {out} (warprt | Mitsuba | |difference| x 10)")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="warprt", description="A Whitted ray tracer in NVIDIA Warp kernels.",
                      epilog=EXAMPLES, formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -206,6 +247,14 @@ def build_parser() -> argparse.ArgumentParser:
     _add_scene_options(p)
     p.add_argument("--debug", action="store_true", help="show tracebacks")
     p.set_defaults(func=cmd_info)
+
+    p = sub.add_parser("compare", help="render with warprt and with Mitsuba 3 (the reference): SSIM, PSNR, side-by-side image")
+    _add_scene_options(p)
+    p.add_argument("-o", "--output", default="compare.png", help="side-by-side image: warprt | Mitsuba | |difference| x 10")
+    p.add_argument("--effects", help="comma-separated effects to keep, on both sides: ambient,diffuse,specular,shadows,reflection,supersampling,smooth")
+    p.add_argument("--threads", type=int, metavar="N", help="warprt worker threads (default: all cores)")
+    p.add_argument("--debug", action="store_true", help="show tracebacks")
+    p.set_defaults(func=cmd_compare)
     return parser
 
 
