@@ -95,6 +95,33 @@ def cylinder(radius: float = 0.5, height: float = 1.0, sections: int = 64):
     return v, faces.astype(np.int64)
 
 
+def torus_knot(p: int = 2, q: int = 3, radius: float = 1.0, tube: float = 0.15, segments=(1024, 64)):
+    """A (p, q) torus knot: the curve ((2 + cos q t) cos p t, -sin q t, (2 + cos q t) sin p t) radius/3,
+    swept by a circle of radius tube in its Frenet frame; 2 * segments[0] * segments[1] triangles,
+    so a procedural mesh of any size (segments = [2048, 128]: 524,288 triangles)."""
+    n, m = int(segments[0]), int(segments[1])
+    t = np.arange(n) * (2.0 * np.pi / n)
+
+    def curve(t):
+        r = 2.0 + np.cos(q * t)
+        return np.stack([r * np.cos(p * t), -np.sin(q * t), r * np.sin(p * t)], -1) * (radius / 3.0)
+
+    h = 1e-4  # central differences: the frame's error (h^2) is far below the mesh's own
+    c, d1 = curve(t), (curve(t + h) - curve(t - h)) / (2 * h)
+    d2 = (curve(t + h) - 2 * curve(t) + curve(t - h)) / (h * h)
+    tangent = d1 / np.linalg.norm(d1, axis=1, keepdims=True)
+    binormal = np.cross(d1, d2)  # a torus knot's curvature never vanishes, so the frame is defined
+    binormal /= np.linalg.norm(binormal, axis=1, keepdims=True)
+    normal = np.cross(binormal, tangent)
+    phi = np.arange(m) * (2.0 * np.pi / m)
+    v = c[:, None] + tube * (np.cos(phi)[None, :, None] * normal[:, None] + np.sin(phi)[None, :, None] * binormal[:, None])
+    i, j = np.meshgrid(np.arange(n), np.arange(m), indexing="ij")
+    a, b = i * m + j, ((i + 1) % n) * m + j
+    c2, d = ((i + 1) % n) * m + (j + 1) % m, i * m + (j + 1) % m
+    faces = np.concatenate([np.stack([a, c2, b], -1).reshape(-1, 3), np.stack([a, d, c2], -1).reshape(-1, 3)])  # outward
+    return v.reshape(-1, 3), faces.astype(np.int64)
+
+
 def triangles(vertices, faces):
     """Explicit vertices and faces, as given."""
     return np.asarray(vertices, np.float64).reshape(-1, 3), np.asarray(faces, np.int64).reshape(-1, 3)
@@ -107,5 +134,7 @@ SHAPES = {
     "box": (box, {"size": ("size3", [1.0, 1.0, 1.0])}),
     "plane": (plane, {"size": ("size2", [10.0, 10.0])}),
     "cylinder": (cylinder, {"radius": ("positive", 0.5), "height": ("positive", 1.0), "sections": ("int3", 64)}),
+    "torus_knot": (torus_knot, {"p": ("int1", 2), "q": ("int1", 3), "radius": ("positive", 1.0), "tube": ("positive", 0.15),
+                                "segments": ("int2", [1024, 64])}),
     "triangles": (triangles, {"vertices": ("points", None), "faces": ("faces", None)}),
 }
