@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 import time
 import tomllib
@@ -71,11 +72,21 @@ def _add_scene_options(p: argparse.ArgumentParser):
 def _load(args):
     from .scene import load_scene
 
+    from .scene import MAX_IMAGE_SIDE
+
     overrides = _parse_set(args.set)
-    for flag, key in (("width", "camera.width"), ("height", "camera.height"), ("spp", "render.spp"),
-                      ("max_depth", "render.max_depth")):
-        if getattr(args, flag) is not None:
-            overrides[key] = getattr(args, flag)
+    # A flag's bad value is reported as that flag, not as the scene field it sets.
+    for flag, key, lo, hi in (("width", "camera.width", 1, MAX_IMAGE_SIDE), ("height", "camera.height", 1, MAX_IMAGE_SIDE),
+                              ("spp", "render.spp", 1, 4096), ("max_depth", "render.max_depth", 1, 1024)):
+        v = getattr(args, flag)
+        if v is None:
+            continue
+        name = "--" + flag.replace("_", "-")
+        if not lo <= v <= hi:
+            raise SceneError("command line", name, f"expected an integer in [{lo}, {hi}], got {v}")
+        if flag == "spp" and math.isqrt(v) ** 2 != v:
+            raise SceneError("command line", name, f"expected a square number of samples (1, 4, 9, 16, ...), got {v}")
+        overrides[key] = v
     if args.no_shadows:
         overrides["render.shadows"] = False
     if args.scene is None or Path(args.scene).suffix.lower() == ".toml":
@@ -90,10 +101,10 @@ def _load(args):
         doc = {"camera": asdict(scene.camera), "render": {k: v for k, v in asdict(scene.render).items() if v is not None}}
         from .scene import apply_overrides
 
+        for k in overrides:
+            if k.split(".")[0] not in ("camera", "render"):
+                raise SceneError("command line", "--set", f"{k}: only camera.* and render.* can be set for a mesh file")
         doc = apply_overrides(doc, overrides, scene.source)
-        for k in doc:
-            if k not in ("camera", "render"):
-                raise SceneError(scene.source, k, "only camera.* and render.* can be set for a mesh file")
         doc["camera"] = {k: list(v) if isinstance(v, tuple) else v for k, v in doc["camera"].items()}
         doc["render"] = {k: list(v) if isinstance(v, tuple) else v for k, v in doc["render"].items()}
         scene.camera = read_camera(scene.source, doc["camera"])

@@ -84,6 +84,12 @@ def load_mesh(path) -> tuple[np.ndarray, np.ndarray]:
     return vertices, faces
 
 
+def is_mesh_path(path) -> bool:
+    """Whether the extension names a mesh format read here."""
+    ext = Path(path).suffix.lower()
+    return ext in FORMATS or (bool(ext) and _trimesh_reads(ext))
+
+
 def _trimesh_reads(ext: str) -> bool:
     import trimesh
 
@@ -126,8 +132,11 @@ def _load_trimesh(path: Path) -> MeshFile:
     try:
         # process=False keeps the file's vertices as they are: no merging, no removal of faces.
         loaded = trimesh.load(str(path), process=False)
-    except IndexError:  # trimesh's OBJ reader on a face index past the vertex list
-        raise SceneError(src, None, "a face refers to a vertex that does not exist") from None
+    except IndexError as e:  # trimesh's OBJ reader on a face index past the vertex list
+        m = re.search(r"index (-?\d+) is out of bounds for axis 0 with size (\d+)", str(e))
+        # OBJ counts vertices from 1: trimesh's index 8 is the file's 'f ... 9'.
+        which = f" (vertex {int(m[1]) + 1}; the file has {m[2]})" if m and ext == ".obj" and int(m[1]) >= 0 else ""
+        raise SceneError(src, None, f"a face refers to a vertex that does not exist{which}") from None
     except Exception as e:
         raise SceneError(src, None, f"cannot read {ext[1:].upper()} file: {_one_line(e)}") from None
     if isinstance(loaded, trimesh.Trimesh):

@@ -509,7 +509,13 @@ def _load_scene(path, overrides) -> Scene:
     source = str(path)
     if path.suffix.lower() != ".toml":
         from .autoframe import scene_for_mesh
+        from .meshio import FORMATS, is_mesh_path
 
+        if path.is_dir():
+            raise SceneError(source, None, "is a folder; expected a scene file (.toml) or a mesh file")
+        if not is_mesh_path(path):
+            raise SceneError(source, None, f"unknown file type '{path.suffix or '(none)'}'; expected a scene file "
+                                           f"(.toml) or a mesh file ({', '.join(FORMATS)})")
         scene = scene_for_mesh(path)
         if overrides:
             raise SceneError(source, None, "--set applies to TOML scene files only")
@@ -518,8 +524,14 @@ def _load_scene(path, overrides) -> Scene:
         text = path.read_text(encoding="utf-8")
     except FileNotFoundError:
         raise SceneError(source, None, "scene file not found") from None
-    except (OSError, UnicodeDecodeError) as e:
-        raise SceneError(source, None, f"cannot read scene file: {e}") from None
+    except IsADirectoryError:
+        raise SceneError(source, None, "is a folder, not a scene file") from None
+    except UnicodeDecodeError as e:
+        line = e.object[:e.start].count(b"\n") + 1
+        raise SceneError(source, None, f"not UTF-8 text (byte 0x{e.object[e.start]:02x} on line {line}); "
+                                       "a TOML file must be UTF-8") from None
+    except OSError as e:
+        raise SceneError(source, None, f"cannot read scene file: {e.strerror or e}") from None
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as e:

@@ -1,0 +1,237 @@
+"""Bad input, through the real command: each case of the corpus (tests/cli/corpus) gives exactly its
+one-line message on stderr, exit status 2, no traceback, and leaves no file behind, not even a
+temporary one.
+
+Each case runs in its own copy of the corpus folder, so its paths are relative and the folder can be
+compared file by file before and after. The cases run four at a time (each is a fresh process).
+"""
+
+import os
+import shutil
+import subprocess
+import sys
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+import pytest
+
+CORPUS = Path(__file__).parent / "corpus"
+SRC = str(Path(__file__).resolve().parents[2] / "src")
+EXTS = ".obj, .ply, .stl, .off, .glb, .gltf, .usd, .usda, .usdc, .usdz"
+
+# (case, command line, the message after "warprt: error: "). "-o out.png" is added where the case
+# names no output.
+CASES = [
+    # The scene file: syntax, keys, types, lengths, values.
+    ("malformed TOML", ["render", "malformed.toml"],
+     "malformed.toml: malformed TOML: Expected ']' at the end of a table declaration (at line 2, column 8)"),
+    ("not UTF-8", ["render", "latin1.toml"],
+     "latin1.toml: not UTF-8 text (byte 0xe9 on line 1); a TOML file must be UTF-8"),
+    ("scene file missing", ["render", "nothere.toml"], "nothere.toml: scene file not found"),
+    ("unknown section", ["render", "unknown_section.toml"],
+     "unknown_section.toml: camra: unknown section (did you mean 'camera'?)"),
+    ("unknown camera key", ["render", "unknown_camera_key.toml"],
+     "unknown_camera_key.toml: camera.fvoy: unknown key (did you mean 'fovy'?)"),
+    ("unknown material key", ["render", "unknown_material_key.toml"],
+     "unknown_material_key.toml: materials.red.shinyness: unknown key (did you mean 'shininess'?)"),
+    ("unknown object key", ["render", "unknown_object_key.toml"],
+     "unknown_object_key.toml: objects[0].tranlsate: unknown key (did you mean 'translate'?)"),
+    ("string for a number", ["render", "fovy_string.toml"],
+     "fovy_string.toml: camera.fovy: expected a number, got 'wide'"),
+    ("vector of 2", ["render", "eye_two_numbers.toml"],
+     "eye_two_numbers.toml: camera.eye: expected a list of 3 numbers, got [0.0, 1.0]"),
+    ("string in a colour", ["render", "color_not_number.toml"],
+     "color_not_number.toml: lights[0].color: expected a list of 3 numbers, got [1.0, 'red', 1.0]"),
+    ("negative kd", ["render", "kd_negative.toml"],
+     "kd_negative.toml: materials.paint.kd: expected non-negative numbers, got [-0.2, 0.5, 0.5]"),
+    ("negative shininess", ["render", "shininess_negative.toml"],
+     "shininess_negative.toml: materials.paint.shininess: expected a number >= 0, got -8"),
+    ("NaN fovy", ["render", "fovy_nan.toml"], "fovy_nan.toml: camera.fovy: expected a finite number, got nan"),
+    ("infinite light position", ["render", "light_position_inf.toml"],
+     "light_position_inf.toml: lights[0].position: expected finite numbers, got [inf, 2.0, 3.0]"),
+    ("width 0", ["render", "width_zero.toml"],
+     "width_zero.toml: camera.width: expected an integer in [1, 16384], got 0"),
+    ("height 100000", ["render", "height_huge.toml"],
+     "height_huge.toml: camera.height: expected an integer in [1, 16384], got 100000"),
+    ("spp not a square", ["render", "spp_not_square.toml"],
+     "spp_not_square.toml: render.spp: expected a square number of samples (k*k stratified: 1, 4, 9, 16, ...), got 3"),
+    ("max_depth 0", ["render", "max_depth_zero.toml"],
+     "max_depth_zero.toml: render.max_depth: expected an integer in [1, 1024], got 0"),
+    ("up along the view", ["render", "up_parallel.toml"],
+     "up_parallel.toml: camera.up: is parallel to the viewing direction (eye - center)"),
+    ("eye at center", ["render", "eye_is_center.toml"],
+     "eye_is_center.toml: camera.center: must differ from camera.eye (no viewing direction)"),
+    ("material not a table", ["render", "material_not_table.toml"],
+     "material_not_table.toml: materials.red: expected a table, got 3"),
+    ("lights not tables", ["render", "lights_not_tables.toml"],
+     "lights_not_tables.toml: lights: expected an array of tables ([[lights]]), got 3"),
+    ("no such material", ["render", "no_such_material.toml"],
+     "no_such_material.toml: objects[0].material: no material named 'rde' (did you mean 'red'?)"),
+    ("mesh and shape", ["render", "mesh_and_shape.toml"],
+     "mesh_and_shape.toml: objects[0]: expected exactly one of 'mesh' (a file) or 'shape' "
+     "(sphere, uv_sphere, box, plane, cylinder, triangles)"),
+    ("unknown shape", ["render", "unknown_shape.toml"],
+     "unknown_shape.toml: objects[0].shape: unknown shape 'sphre' (did you mean 'sphere'?); "
+     "expected one of: sphere, uv_sphere, box, plane, cylinder, triangles"),
+    ("face index out of range", ["render", "faces_out_of_range.toml"],
+     "faces_out_of_range.toml: objects[0].faces: vertex index out of range [0, 2]"),
+    # Mesh files named by a scene.
+    ("mesh file missing", ["render", "missing_mesh.toml"],
+     "missing_mesh.toml: objects[0].mesh: meshes/nothere.obj: mesh file not found"),
+    ("mesh is a folder", ["render", "folder_mesh.toml"],
+     "folder_mesh.toml: objects[0].mesh: meshes/folder.obj: is a folder, not a mesh file"),
+    ("mesh of points only", ["render", "vertices_only.toml"],
+     "vertices_only.toml: objects[0].mesh: meshes/vertices_only.obj: the mesh has no triangles"),
+    ("mesh file empty", ["render", "empty_file.toml"],
+     "empty_file.toml: objects[0].mesh: meshes/empty.ply: the file is empty"),
+    ("not a PLY", ["render", "junk_ply.toml"],
+     "junk_ply.toml: objects[0].mesh: meshes/junk.ply: not a PLY file (it does not start with 'ply')"),
+    ("not an STL", ["render", "junk_stl.toml"],
+     "junk_stl.toml: objects[0].mesh: meshes/junk.stl: not an STL file (binary STL of 25 bytes, expected 84 + 50 * triangles)"),
+    ("not a USDA", ["render", "junk_usda.toml"],
+     "junk_usda.toml: objects[0].mesh: meshes/junk.usda: not a USDA file (it does not start with '#usda')"),
+    ("NaN vertex", ["render", "nan_vertex.toml"],
+     "nan_vertex.toml: objects[0].mesh: meshes/nan_vertex.obj: vertex coordinates contain NaN or Inf"),
+    ("OBJ face past the vertices", ["render", "bad_index.toml"],
+     "bad_index.toml: objects[0].mesh: meshes/bad_index.obj: a face refers to a vertex that does not exist "
+     "(vertex 9; the file has 3)"),
+    ("unknown mesh format", ["render", "unknown_mesh_format.toml"],
+     f"unknown_mesh_format.toml: objects[0].mesh: meshes/model.fbx: unknown mesh format '.fbx'; expected one of: {EXTS}"),
+    ("negative Kd in the MTL", ["render", "bad_mtl.toml"],
+     "bad_mtl.toml: objects[0].mesh: meshes/bad_mtl.obj: newmtl paint: Kd: expected 3 non-negative numbers, "
+     "got [-1.0, 0.5, 0.5]"),
+    # A bare file on the command line.
+    ("bare mesh not a PLY", ["render", "meshes/junk.ply"], "meshes/junk.ply: not a PLY file (it does not start with 'ply')"),
+    ("unknown file type", ["render", "notes.txt"],
+     f"notes.txt: unknown file type '.txt'; expected a scene file (.toml) or a mesh file ({EXTS})"),
+    ("scene is a folder", ["render", "meshes"], "meshes: is a folder; expected a scene file (.toml) or a mesh file"),
+    ("--set on a mesh beyond camera/render", ["render", "meshes/tri.obj", "--set", "lights[0].color=[1,1,1]"],
+     "command line: --set: lights[0].color: only camera.* and render.* can be set for a mesh file"),
+    ("info on a missing file", ["info", "nothere.toml"], "nothere.toml: scene file not found"),
+    # Flags.
+    ("--width 0", ["render", "ok.toml", "--width", "0"], "command line: --width: expected an integer in [1, 16384], got 0"),
+    ("--height 100000", ["render", "ok.toml", "--height", "100000"],
+     "command line: --height: expected an integer in [1, 16384], got 100000"),
+    ("--spp 5", ["render", "ok.toml", "--spp", "5"],
+     "command line: --spp: expected a square number of samples (1, 4, 9, 16, ...), got 5"),
+    ("--max-depth 0", ["render", "ok.toml", "--max-depth", "0"],
+     "command line: --max-depth: expected an integer in [1, 1024], got 0"),
+    ("--threads 0", ["render", "ok.toml", "--threads", "0"], "command line: --threads: expected an integer >= 1, got 0"),
+    ("--width abc", ["render", "ok.toml", "--width", "abc"],
+     "command line: argument --width: invalid int value: 'abc' (see 'warprt render --help')"),
+    ("unknown flag", ["render", "ok.toml", "--frobnicate"],
+     "command line: unrecognized arguments: --frobnicate (see 'warprt --help')"),
+    ("--set without =", ["render", "ok.toml", "--set", "camera.fovy"],
+     "command line: --set: expected section.key=value, got 'camera.fovy'"),
+    ("--set unknown key", ["render", "ok.toml", "--set", "camera.fvoy=30"],
+     "ok.toml: camera.fvoy: unknown key (did you mean 'fovy'?)"),
+    ("--set negative fovy", ["render", "ok.toml", "--set", "camera.fovy=-30"],
+     "ok.toml: camera.fovy: expected a number > 0, got -30"),
+    ("--set NaN", ["render", "ok.toml", "--set", "render.ambient=[0.1, nan, 0.1]"],
+     "ok.toml: render.ambient: expected finite numbers, got [0.1, nan, 0.1]"),
+    ("--set a light that is not there", ["render", "ok.toml", "--set", "lights[7].color=[1,1,1]"],
+     "ok.toml: lights[7].color: there is no lights[7]"),
+    ("--effects unknown", ["render", "ok.toml", "--effects", "glow"],
+     "command line: --effects: unknown effect 'glow'; expected some of: ambient, diffuse, specular, shadows, "
+     "reflection, supersampling, smooth"),
+    # Output paths: checked before anything renders.
+    ("output .jpg", ["render", "ok.toml", "-o", "out.jpg"],
+     "out.jpg: --output: unknown image extension '.jpg'; expected one of: .png, .npy, .exr"),
+    ("output without extension", ["render", "ok.toml", "-o", "out"],
+     "out: --output: unknown image extension '(none)'; expected one of: .png, .npy, .exr"),
+    ("output folder missing", ["render", "ok.toml", "-o", "nowhere/out.png"],
+     "nowhere/out.png: --output: folder does not exist: nowhere"),
+    ("output folder is a file", ["render", "ok.toml", "-o", "notes.txt/out.png"],
+     "notes.txt/out.png: --output: not a folder: notes.txt"),
+    ("output is a folder", ["render", "ok.toml", "-o", "adir.png"], "adir.png: --output: is a folder, not a file"),
+    ("output folder unwritable", ["render", "ok.toml", "-o", "/proc/warprt.png"],
+     "/proc/warprt.png: --output: cannot write to folder /proc: No such file or directory"),
+    ("stats file folder missing", ["render", "ok.toml", "--stats-file", "nowhere/stats.json"],
+     "nowhere/stats.json: --stats-file: folder does not exist: nowhere"),
+]
+
+
+def _listing(root: Path) -> dict:
+    """Every file and folder under root (hidden ones too) with its size."""
+    return {str(p.relative_to(root)): (p.stat().st_size if p.is_file() else -1) for p in root.rglob("*")}
+
+
+def _run(argv, cwd):
+    env = {**os.environ, "PYTHONPATH": SRC + os.pathsep + os.environ.get("PYTHONPATH", "")}
+    return subprocess.run([sys.executable, "-m", "warprt", *argv], cwd=cwd, env=env, capture_output=True,
+                          text=True, stdin=subprocess.DEVNULL, timeout=120)
+
+
+@pytest.fixture(scope="module")
+def outcomes(tmp_path_factory):
+    """Run every case once, four processes at a time: {case: (result, files before, files after)}."""
+
+    # The folders are made here, one after another: tmp_path_factory is not thread-safe.
+    folders = {name: tmp_path_factory.mktemp("case") / "corpus" for name, _, _ in CASES}
+    for work in folders.values():
+        shutil.copytree(CORPUS, work)
+
+    def one(case):
+        name, argv, _ = case
+        work = folders[name]
+        argv = list(argv)
+        if argv[0] == "render" and "-o" not in argv:
+            argv += ["-o", "out.png"]
+        before = _listing(work)
+        result = _run(argv, work)
+        return name, (result, before, _listing(work))
+
+    with ThreadPoolExecutor(max_workers=4) as pool:
+        return dict(pool.map(one, CASES))
+
+
+def test_corpus_is_large_enough():
+    assert len(CASES) >= 30
+    assert len({name for name, _, _ in CASES}) == len(CASES)
+
+
+@pytest.mark.parametrize("name,argv,message", CASES, ids=[c[0] for c in CASES])
+def test_bad_input_gives_its_message(outcomes, name, argv, message):
+    result, before, after = outcomes[name]
+    assert result.stderr == f"warprt: error: {message}\n"
+    assert result.returncode == 2
+    assert "Traceback" not in result.stderr
+    assert result.stdout == ""
+    # Nothing written: no image, no statistics, no temporary file.
+    assert after == before
+
+
+def test_unavailable_device_is_a_bad_input(tmp_path):
+    import warp as wp
+
+    from warprt.render import init_warp
+
+    init_warp()
+    if wp.is_cuda_available():
+        pytest.skip("this machine has a CUDA device")
+    shutil.copytree(CORPUS, tmp_path / "c")
+    before = _listing(tmp_path / "c")
+    r = _run(["render", "ok.toml", "--device", "cuda", "-o", "out.png"], tmp_path / "c")
+    assert r.stderr == ("warprt: error: command line: --device: 'cuda' is not available on this machine "
+                        "(Warp found no CUDA device); use --device cpu\n")
+    assert r.returncode == 2
+    assert _listing(tmp_path / "c") == before
+
+
+def test_debug_shows_the_traceback(tmp_path):
+    shutil.copytree(CORPUS, tmp_path / "c")
+    for argv in (["render", "--debug", "missing_mesh.toml"], ["--debug", "render", "missing_mesh.toml"]):
+        r = _run([*argv, "-o", "out.png"], tmp_path / "c")
+        assert r.returncode != 0
+        assert "Traceback (most recent call last)" in r.stderr
+        assert r.stderr.rstrip().endswith("missing_mesh.toml: objects[0].mesh: meshes/nothere.obj: mesh file not found")
+
+
+def test_a_failed_render_keeps_the_earlier_image(tmp_path):
+    """The output is replaced only by a complete new image: a bad input leaves the old one intact."""
+    shutil.copytree(CORPUS, tmp_path / "c")
+    old = tmp_path / "c" / "out.png"
+    old.write_bytes(b"an earlier image")
+    r = _run(["render", "kd_negative.toml", "-o", "out.png"], tmp_path / "c")
+    assert r.returncode == 2
+    assert old.read_bytes() == b"an earlier image"

@@ -1,0 +1,122 @@
+"""Image files out, chosen by extension and read back: .exr and .npy hold the linear float image
+exactly (values above 1 too), .png holds its sRGB encoding in 8 bits; a failed write leaves nothing."""
+
+import os
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from warprt.film import read_image, write_image
+
+SRC = str(Path(__file__).resolve().parents[2] / "src")
+
+# Two squares seen face-on, shown by their ambient term only (C_amb = 2): the left one's pixels are
+# 2 * ka, above 1 in red, the right one's are small enough for the sRGB curve's linear segment.
+SCENE = textwrap.dedent("""
+    [camera]
+    eye = [0.0, 0.0, 5.0]
+    center = [0.0, 0.0, 0.0]
+    fovy = 60.0
+    width = 40
+    height = 20
+
+    [render]
+    ambient = [2.0, 2.0, 2.0]
+    background = [0.25, 0.5, 0.75]
+
+    [materials.hot]
+    ka = [0.9, 0.3, 0.05]
+    kd = [0.0, 0.0, 0.0]
+
+    [materials.dim]
+    ka = [0.001, 0.0015, 0.2]
+    kd = [0.0, 0.0, 0.0]
+
+    [[objects]]
+    shape = "plane"
+    size = [1.0, 1.0]
+    rotate = [90.0, 0.0, 0.0]
+    translate = [-1.5, 0.0, 0.0]
+    material = "hot"
+
+    [[objects]]
+    shape = "plane"
+    size = [1.0, 1.0]
+    rotate = [90.0, 0.0, 0.0]
+    translate = [1.5, 0.0, 0.0]
+    material = "dim"
+    """)
+
+
+def srgb8(linear):
+    """IEC 61966-2-1, written out here: the test's own encoder."""
+    x = np.clip(np.asarray(linear, np.float64), 0.0, 1.0)
+    y = np.where(x <= 0.0031308, 12.92 * x, 1.055 * x ** (1 / 2.4) - 0.055)
+    return np.round(y * 255.0).astype(np.int64)
+
+
+@pytest.fixture(scope="module")
+def outputs(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("images")
+    (folder / "s.toml").write_text(SCENE)
+    env = {**os.environ, "PYTHONPATH": SRC + os.pathsep + os.environ.get("PYTHONPATH", "")}
+    for ext in ("npy", "exr", "png"):
+        r = subprocess.run([sys.executable, "-m", "warprt", "render", "s.toml", "-o", f"out.{ext}", "-q"],
+                           cwd=folder, env=env, capture_output=True, text=True)
+        assert r.returncode == 0, r.stderr
+        assert r.stderr == ""  # -q
+    return folder
+
+
+def test_npy_is_the_linear_image(outputs):
+    image = np.load(outputs / "out.npy")
+    assert image.dtype == np.float32 and image.shape == (20, 40, 3)
+    # Closed form: a square's pixel is C_amb * ka; a pixel off the squares is the background.
+    # The squares' centres, x = -1.5 and 1.5 on a plane 2 * 5 tan(30 deg) * 2 wide, fall in columns 14.8 and 25.2.
+    np.testing.assert_allclose(image[10, 15], [1.8, 0.6, 0.1], rtol=1e-6)
+    np.testing.assert_allclose(image[10, 25], [0.002, 0.003, 0.4], rtol=1e-6)
+    np.testing.assert_allclose(image[0, 0], [0.25, 0.5, 0.75], rtol=1e-6)
+
+
+def test_exr_is_linear_float_and_exact(outputs):
+    import OpenEXR
+
+    with OpenEXR.File(str(outputs / "out.exr")) as f:
+        # The File's dicts are emptied when it closes: read everything inside.
+        (x0, y0), (x1, y1) = f.header()["dataWindow"]
+        channels = f.channels()
+        rgb = np.array(channels["RGB"].pixels if "RGB" in channels else
+                       np.stack([channels[c].pixels for c in "RGB"], -1))
+    assert rgb.dtype == np.float32  # full float, not half
+    assert (x1 - x0 + 1, y1 - y0 + 1) == (40, 20)
+    np.testing.assert_array_equal(rgb, np.load(outputs / "out.npy"))
+    assert rgb[10, 15, 0] == pytest.approx(1.8)  # above 1: not clamped
+    np.testing.assert_array_equal(read_image(outputs / "out.exr"), rgb)
+
+
+def test_png_is_srgb_8bit(outputs):
+    from PIL import Image
+
+    png = Image.open(outputs / "out.png")
+    assert png.mode == "RGB" and png.size == (40, 20)
+    np.testing.assert_array_equal(np.asarray(png, np.int64), srgb8(np.load(outputs / "out.npy")))
+
+
+def test_failed_write_leaves_no_file(tmp_path):
+    """An image the encoder rejects: no output and no temporary file remain."""
+    with pytest.raises(Exception):
+        write_image(tmp_path / "bad.png", np.zeros((4, 4, 5), np.float32))
+    with pytest.raises(Exception):
+        write_image(tmp_path / "bad.exr", np.zeros((4, 4), np.float32))
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_written_image_has_the_usual_mode(tmp_path):
+    write_image(tmp_path / "a.png", np.zeros((2, 2, 3), np.float32))
+    umask = os.umask(0)
+    os.umask(umask)
+    assert (tmp_path / "a.png").stat().st_mode & 0o777 == 0o666 & ~umask
