@@ -123,11 +123,11 @@ def clip_edge(a: ClipVertex, b: ClipVertex, z_clip: wp.float64) -> ClipVertex:
 
 
 @wp.func
-def clip_triangle(c: RasterCamera, s: SceneData, f: int) -> Polygon:
+def clip_triangle(c: RasterCamera, points: wp.array(dtype=wp.vec3), indices: wp.array(dtype=wp.int32), f: int) -> Polygon:
     """Sutherland-Hodgman against the one plane z = z_clip, in camera space (before the divide)."""
-    a = clip_vertex(c, s.points[s.indices[f * 3 + 0]], wp.vec2(1.0, 0.0))
-    b = clip_vertex(c, s.points[s.indices[f * 3 + 1]], wp.vec2(0.0, 1.0))
-    d = clip_vertex(c, s.points[s.indices[f * 3 + 2]], wp.vec2(0.0, 0.0))
+    a = clip_vertex(c, points[indices[f * 3 + 0]], wp.vec2(1.0, 0.0))
+    b = clip_vertex(c, points[indices[f * 3 + 1]], wp.vec2(0.0, 1.0))
+    d = clip_vertex(c, points[indices[f * 3 + 2]], wp.vec2(0.0, 0.0))
     in_a = a.c[2] >= c.z_clip
     in_b = b.c[2] >= c.z_clip
     in_d = d.c[2] >= c.z_clip
@@ -188,29 +188,49 @@ def project(c: RasterCamera, v: ClipVertex) -> ScreenVertex:
     return out
 
 
+@wp.struct
+class Edge:
+    """The edge function of a->b, (b - a) x (P - a), set up from the lexicographically smaller endpoint:
+    two triangles sharing an edge evaluate the very same expression, so their values are exactly
+    opposite and no sample falls in both or in neither."""
+
+    ax: wp.float64  # the smaller endpoint
+    ay: wp.float64
+    dx: wp.float64  # larger - smaller
+    dy: wp.float64
+    sign: wp.float64  # +1 where the triangle's interior is on the positive side of the canonical function
+
+
 @wp.func
-def edge_value(a: ScreenVertex, b: ScreenVertex, px: wp.float64, py: wp.float64) -> wp.float64:
-    """The edge function of a->b at P, (b - a) x (P - a): evaluated from the lexicographically smaller
-    endpoint and negated if needed, so the two triangles sharing an edge get exactly opposite values."""
+def make_edge(a: ScreenVertex, b: ScreenVertex, orientation: wp.float64) -> Edge:
+    e = Edge()
     if b.x < a.x or (b.x == a.x and b.y < a.y):
-        return -((a.x - b.x) * (py - b.y) - (a.y - b.y) * (px - b.x))
-    return (b.x - a.x) * (py - a.y) - (b.y - a.y) * (px - a.x)
+        e.ax = b.x
+        e.ay = b.y
+        e.dx = a.x - b.x
+        e.dy = a.y - b.y
+        e.sign = -orientation
+    else:
+        e.ax = a.x
+        e.ay = a.y
+        e.dx = b.x - a.x
+        e.dy = b.y - a.y
+        e.sign = orientation
+    return e
 
 
 @wp.func
-def owns_zero(a: ScreenVertex, b: ScreenVertex, orientation: wp.float64) -> bool:
-    """The fill rule for a sample exactly on the edge a->b: it belongs to the triangle whose interior
-    lies on the positive side of the canonical (smaller endpoint first) edge function, which is the
-    top-left rule; of two triangles sharing the edge exactly one owns it."""
-    flip = wp.float64(1.0)
-    if b.x < a.x or (b.x == a.x and b.y < a.y):
-        flip = wp.float64(-1.0)
-    return flip * orientation > wp.float64(0.0)
+def edge_at(e: Edge, row_term: wp.float64, px: wp.float64) -> wp.float64:
+    """sign ((b - a) x (P - a)), with row_term = dx (P.y - a.y) computed once per sample row."""
+    return e.sign * (row_term - e.dy * (px - e.ax))
 
 
 @wp.func
-def covers(e: wp.float64, owner: bool) -> bool:
-    return e > wp.float64(0.0) or (e == wp.float64(0.0) and owner)
+def covers(e: Edge, value: wp.float64) -> bool:
+    """Inside, or exactly on the edge and on its owning side: the top-left rule, since the canonical
+    function is positive below a rightward edge and right of an upward one; of two triangles sharing
+    the edge exactly one owns such a sample."""
+    return value > wp.float64(0.0) or (value == wp.float64(0.0) and e.sign > wp.float64(0.0))
 
 
 @wp.func
@@ -219,44 +239,51 @@ def raster_triangle(s0: ScreenVertex, s1: ScreenVertex, s2: ScreenVertex, f: int
                     depth: wp.array(dtype=wp.float64), face: wp.array(dtype=wp.int32), uv: wp.array(dtype=wp.vec2)):
     """Depth-test one screen triangle at every sample in the pixel rectangle [x_lo, x_hi] x [y_lo, y_hi]
     (y up). Depth is 1/z, which is linear in screen space; (u, v) are interpolated perspective-correctly."""
-    area = edge_value(s0, s1, s2.x, s2.y)
+    one = wp.float64(1.0)
+    probe = make_edge(s1, s2, one)
+    area = edge_at(probe, probe.dx * (s0.y - probe.ay), s0.x)  # twice the signed area, as the edges see it
     if area == wp.float64(0.0):
         return  # seen edge-on: no sample lies strictly inside
-    orientation = wp.float64(1.0)
+    orientation = one
     if area < wp.float64(0.0):
-        orientation = wp.float64(-1.0)  # two-sided: either winding is drawn
-    own0 = owns_zero(s1, s2, orientation)
-    own1 = owns_zero(s2, s0, orientation)
-    own2 = owns_zero(s0, s1, orientation)
+        orientation = -one  # two-sided: either winding is drawn
+    e0 = make_edge(s1, s2, orientation)
+    e1 = make_edge(s2, s0, orientation)
+    e2 = make_edge(s0, s1, orientation)
     # The sample (x + sx, y + sy) lies in the triangle only if floor(min X) <= x <= floor(max X).
     big = wp.float64(1.0e9)
     x0 = wp.max(x_lo, int(wp.floor(wp.clamp(wp.min(wp.min(s0.x, s1.x), s2.x), -big, big))))
     x1 = wp.min(x_hi, int(wp.floor(wp.clamp(wp.max(wp.max(s0.x, s1.x), s2.x), -big, big))))
     y0 = wp.max(y_lo, int(wp.floor(wp.clamp(wp.min(wp.min(s0.y, s1.y), s2.y), -big, big))))
     y1 = wp.min(y_hi, int(wp.floor(wp.clamp(wp.max(wp.max(s0.y, s1.y), s2.y), -big, big))))
+    step = one / wp.float64(k)
+    half = wp.float64(0.5) * step
     for y in range(y0, y1 + 1):
         row = c.height - 1 - y
-        for x in range(x0, x1 + 1):
-            for sample in range(samples):
-                px = wp.float64(x) + (wp.float64(sample % k) + wp.float64(0.5)) / wp.float64(k)
-                py = wp.float64(y) + (wp.float64(sample / k) + wp.float64(0.5)) / wp.float64(k)
-                e0 = orientation * edge_value(s1, s2, px, py)
-                e1 = orientation * edge_value(s2, s0, px, py)
-                e2 = orientation * edge_value(s0, s1, px, py)
-                if covers(e0, own0) and covers(e1, own1) and covers(e2, own2):
-                    total = e0 + e1 + e2
-                    w0 = e0 * s0.iz
-                    w1 = e1 * s1.iz
-                    w2 = e2 * s2.iz
-                    iz = (w0 + w1 + w2) / total
-                    i = (row * c.width + x) * samples + sample
-                    # Equal depth goes to the lower face index, so the image does not depend on the
-                    # order of a tile's list (which atomics make arbitrary on a GPU).
-                    if iz > depth[i] or (iz == depth[i] and f < face[i]):
-                        depth[i] = iz
-                        face[i] = f
+        for j in range(k):  # sample rows: sample index j k + i sits at (x + (i + 1/2)/k, y + (j + 1/2)/k)
+            py = wp.float64(y) + (wp.float64(j) * step + half)
+            r0 = e0.dx * (py - e0.ay)
+            r1 = e1.dx * (py - e1.ay)
+            r2 = e2.dx * (py - e2.ay)
+            for x in range(x0, x1 + 1):
+                for i in range(k):
+                    px = wp.float64(x) + (wp.float64(i) * step + half)
+                    v0 = edge_at(e0, r0, px)
+                    v1 = edge_at(e1, r1, px)
+                    v2 = edge_at(e2, r2, px)
+                    if covers(e0, v0) and covers(e1, v1) and covers(e2, v2):
+                        w0 = v0 * s0.iz
+                        w1 = v1 * s1.iz
+                        w2 = v2 * s2.iz
                         wsum = w0 + w1 + w2
-                        uv[i] = (s0.uv * float(w0 / wsum) + s1.uv * float(w1 / wsum)) + s2.uv * float(w2 / wsum)
+                        iz = wsum / (v0 + v1 + v2)
+                        n = (row * c.width + x) * samples + j * k + i
+                        # Equal depth goes to the lower face index, so the image does not depend on
+                        # the order of a tile's list (which atomics make arbitrary on a GPU).
+                        if iz > depth[n] or (iz == depth[n] and f < face[n]):
+                            depth[n] = iz
+                            face[n] = f
+                            uv[n] = (s0.uv * float(w0 / wsum) + s1.uv * float(w1 / wsum)) + s2.uv * float(w2 / wsum)
 
 
 @wp.func
@@ -279,7 +306,7 @@ def project_kernel(s: SceneData, c: RasterCamera, k: int, first: int, bounds: wp
     may cover; x0 > x1 when it can cover none (behind the eye, off the image, or so small that it
     falls between samples, the fate of most triangles of a mesh finer than the pixels)."""
     f = first + wp.tid()
-    poly = clip_triangle(c, s, f)
+    poly = clip_triangle(c, s.points, s.indices, f)
     out = wp.vec4i(1, 0, 1, 0)
     if poly.n > 0:
         a = project(c, poly.v0)
@@ -315,7 +342,7 @@ def raster_kernel(s: SceneData, c: RasterCamera, tile_start: wp.array(dtype=wp.i
     y_hi = wp.min(y_lo + tile, c.height) - 1
     for j in range(tile_start[t], tile_start[t + 1]):
         f = tile_faces[j]
-        poly = clip_triangle(c, s, f)
+        poly = clip_triangle(c, s.points, s.indices, f)
         a = project(c, poly.v0)
         b = project(c, poly.v1)
         d = project(c, poly.v2)
