@@ -17,7 +17,7 @@ from .camera import camera_basis
 from .effects import EffectSet, resolve_effects
 from .errors import SceneError
 from .geometry import Geometry
-from .scene import validate_camera
+from .scene import validate_scene
 
 _initialized = False
 
@@ -128,13 +128,13 @@ def render(scene, *, threads: int | None = None, device: str = "cpu", effects=No
     can add one the scene has nothing for."""
     if algorithm not in ALGORITHMS:
         raise SceneError("command line", "--algorithm", f"unknown algorithm '{algorithm}'; expected one of: {', '.join(ALGORITHMS)}")
+    validate_scene(scene)  # a Scene built in Python gets the file's checks too, before any kernel
     if algorithm == "zbuffer":
         from .zbuffer import render_zbuffer
 
         return render_zbuffer(scene, threads=threads, device=device, effects=effects, disable=disable,
                               bands=bands, geometry=geometry)
     init_warp()
-    validate_camera(scene.camera, scene.source)
     t_start = time.perf_counter()
     threads = default_threads() if threads is None else int(threads)
     if threads < 1:

@@ -227,20 +227,33 @@ def read_camera(source: str, t: dict) -> Camera:
     return cam
 
 
+def _is_real(v) -> bool:
+    return isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool)
+
+
+def _num(v) -> str:
+    return f"{v:g}" if _is_real(v) else _show(v)
+
+
 def validate_camera(cam: Camera, source: str = "camera"):
     """The checks that need more than one field: a view direction, and an up not parallel to it."""
     eye, center, up = (np.asarray(v, np.float64) for v in (cam.eye, cam.center, cam.up))
     for name, v in (("eye", eye), ("center", center), ("up", up)):
         if v.shape != (3,) or not np.all(np.isfinite(v)):
             raise SceneError(source, f"camera.{name}", f"expected 3 finite numbers, got {list(v)}")
-    if not (0.0 < cam.fovy < 180.0) or not math.isfinite(cam.fovy):
-        raise SceneError(source, "camera.fovy", f"expected a number in (0, 180) degrees, got {cam.fovy:g}")
-    if not (cam.near > 0.0) or not math.isfinite(cam.near):
-        raise SceneError(source, "camera.near", f"expected a number > 0, got {cam.near:g}")
+    if not _is_real(cam.fovy) or not (0.0 < cam.fovy < 180.0) or not math.isfinite(cam.fovy):
+        raise SceneError(source, "camera.fovy", f"expected a number in (0, 180) degrees, got {_num(cam.fovy)}")
+    if not _is_real(cam.near) or not (cam.near > 0.0) or not math.isfinite(cam.near):
+        raise SceneError(source, "camera.near", f"expected a number > 0, got {_num(cam.near)}")
     for name in ("width", "height"):
         v = getattr(cam, name)
         if not isinstance(v, (int, np.integer)) or not (1 <= v <= MAX_IMAGE_SIDE):
             raise SceneError(source, f"camera.{name}", f"expected an integer in [1, {MAX_IMAGE_SIDE}], got {v}")
+    # The kernels build ray directions from d_f = near and the image plane's h, w in float32.
+    h = 2.0 * cam.near * math.tan(math.radians(cam.fovy) / 2.0)
+    if not (1e-30 <= cam.near and h <= 1e30 and h * cam.width / cam.height <= 1e30):
+        raise SceneError(source, "camera.near", f"near {cam.near:g} puts the image plane (height 2 near tan(fovy/2) = "
+                                                f"{h:.3g}) outside float32 range [1e-30, 1e30]")
     view = eye - center
     if np.linalg.norm(view) <= 1e-12 * max(1.0, np.abs(eye).max()):
         raise SceneError(source, "camera.center", "must differ from camera.eye (no viewing direction)")
@@ -249,6 +262,88 @@ def validate_camera(cam: Camera, source: str = "camera"):
         raise SceneError(source, "camera.up", "must not be the zero vector")
     if np.linalg.norm(np.cross(up / np.linalg.norm(up), z)) < 1e-6:
         raise SceneError(source, "camera.up", "is parallel to the viewing direction (eye - center)")
+
+
+# float32 ray tests multiply coordinate differences: beyond about 1e19 from the eye the products
+# overflow and triangles silently vanish, so scenes must stay within this reach of the eye.
+MAX_REACH = 1e18
+FLOAT32_MAX = float(np.finfo(np.float32).max)
+
+
+def _check_vector(source, field_name, v, nonneg=False):
+    a = np.asarray(v, np.float64) if v is not None else None
+    if a is None or a.shape != (3,) or not np.all(np.isfinite(a)) or (nonneg and np.any(a < 0)):
+        what = "3 finite non-negative numbers" if nonneg else "3 finite numbers"
+        raise SceneError(source, field_name, f"expected {what}, got {_show(v)}")
+    return a
+
+
+def _check_number(source, field_name, v, lo=0.0):
+    if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)) or not math.isfinite(v) or v < lo:
+        raise SceneError(source, field_name, f"expected a finite number >= {lo:g}, got {_show(v)}")
+
+
+def validate_scene(scene: Scene):
+    """Everything render() relies on, for scenes built in Python as well as read from files: finite
+    values in range, geometry within float32 reach of the eye, and an image that cannot overflow.
+    Raises SceneError naming the field, before any kernel runs."""
+    src = scene.source
+    cam = scene.camera
+    validate_camera(cam, src)
+    eye = np.asarray(cam.eye, np.float64)
+    r = scene.render
+    ambient = _check_vector(src, "render.ambient", r.ambient, nonneg=True)
+    background = _check_vector(src, "render.background", r.background, nonneg=True)
+    for name, lo, hi in (("max_depth", 1, 1024), ("spp", 1, 4096)):
+        v = getattr(r, name)
+        if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or not lo <= v <= hi:
+            raise SceneError(src, f"render.{name}", f"expected an integer in [{lo}, {hi}], got {_show(v)}")
+    if math.isqrt(r.spp) ** 2 != r.spp:
+        raise SceneError(src, "render.spp", f"expected a square number of samples (1, 4, 9, ...), got {r.spp}")
+    light_max = np.zeros(3)
+    for i, light in enumerate(scene.lights):
+        position = _check_vector(src, f"lights[{i}].position", light.position)
+        light_max = light_max + _check_vector(src, f"lights[{i}].color", light.color, nonneg=True)
+        if np.abs(position - eye).max() > MAX_REACH:
+            raise SceneError(src, f"lights[{i}].position", f"is more than {MAX_REACH:g} from camera.eye; "
+                                                           "float32 ray tests cannot reach it")
+    lit_max, kr_max, coef_max = np.zeros(3), 0.0, 0.0
+    for name, m in scene.materials.items():
+        for key in ("kd", "ks", "reflectivity") + (("ka",) if m.ka is not None else ()):
+            _check_vector(src, f"materials.{name}.{key}", getattr(m, key), nonneg=True)
+        _check_number(src, f"materials.{name}.shininess", m.shininess)
+        lit = ambient * np.asarray(m.ka_) + light_max * (np.asarray(m.kd) + np.asarray(m.ks))
+        lit_max = np.maximum(lit_max, lit)
+        kr_max = max(kr_max, float(np.max(m.reflectivity)))
+        coef_max = max(coef_max, float(np.max(np.asarray(m.kd) + np.asarray(m.ks))), float(np.max(m.ka_)))
+    for i, obj in enumerate(scene.objects):
+        where = f"objects[{i}]"
+        v = np.asarray(obj.vertices)
+        f = np.asarray(obj.faces)
+        if v.ndim != 2 or v.shape[1:] != (3,) or not np.all(np.isfinite(v)):
+            raise SceneError(src, f"{where}.vertices", f"expected (N, 3) finite coordinates ('{obj.name}')")
+        if f.ndim != 2 or f.shape[1:] != (3,) or f.dtype.kind not in "iu" or len(f) == 0 or f.min() < 0 or f.max() >= len(v):
+            raise SceneError(src, f"{where}.faces", f"expected (M, 3) vertex indices in [0, {len(v) - 1}] ('{obj.name}')")
+        if obj.material not in scene.materials:
+            raise SceneError(src, f"{where}.material", f"no material named '{obj.material}'")
+        if len(v) and np.abs(v - eye).max() > MAX_REACH:
+            raise SceneError(src, f"{where}.vertices", f"'{obj.name}' reaches more than {MAX_REACH:g} from "
+                                                       "camera.eye; float32 ray tests cannot reach it")
+    # The brightest possible pixel: every level of the mirror series fully lit, then the background.
+    depth = r.max_depth
+    grows = kr_max > 1.0 and depth * math.log(kr_max) > 700.0  # kr^depth beyond float64
+    if grows:
+        bound = math.inf
+    else:
+        series = float(depth) if kr_max == 1.0 else (kr_max**depth - 1.0) / (kr_max - 1.0)
+        bound = float(np.max(lit_max)) * series + float(np.max(background)) * kr_max ** (depth - 1)
+    if not bound < FLOAT32_MAX / 16:
+        if kr_max > 1.0:
+            raise SceneError(src, "render.max_depth", f"with reflectivity up to {kr_max:g} (> 1) light grows by that "
+                                                      f"factor per bounce and {depth} levels overflow float32")
+        field_name = "lights" if float(np.max(light_max)) >= coef_max else "materials"
+        raise SceneError(src, field_name, f"colours and light intensities this large (a pixel could reach "
+                                          f"{bound:.3g}) overflow float32")
 
 
 def read_render(source: str, t: dict) -> RenderSettings:
@@ -460,7 +555,9 @@ def scene_from_dict(data: dict, source: str = "<scene>", base: Path | None = Non
         materials[name] = read_material(source, name, t)
     objects = [o for i, t in enumerate(_array_of_tables(source, data, "objects"))
                for o in read_object(source, base, t, i, materials)]
-    return Scene(camera, render, lights, materials, objects, source)
+    scene = Scene(camera, render, lights, materials, objects, source)
+    validate_scene(scene)  # what needs the whole scene: reach from the eye, float32 overflow
+    return scene
 
 
 def apply_overrides(data: dict, overrides: dict, source: str) -> dict:
