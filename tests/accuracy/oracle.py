@@ -1,0 +1,176 @@
+"""A float64 brute-force Whitted tracer for single pixels: the tie-breaker for pixels where warprt
+and Mitsuba differ, run with Mitsuba's ray-origin offsets or chosen ones, with its decision margins.
+
+It tests every triangle with Moller-Trumbore in float64 (no BVH, no float32), so where it agrees
+with a renderer the renderer's decisions are the exact ones for the offsets it chose.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from warprt.camera import camera_basis, pixel_ray_directions
+from warprt.geometry import vertex_normals
+
+# Mitsuba (include/mitsuba/render/interaction.h, offset_p and spawn_ray_to): (1 + max|p|) RayEpsilon
+# along the geometric normal, RayEpsilon = 1500 * 2^-24; shadow rays stop ShadowEpsilon short.
+MITSUBA_RAY_EPSILON = 1500.0 * 2.0**-24
+MITSUBA_SHADOW_EPSILON = 10.0 * MITSUBA_RAY_EPSILON
+# warprt's offset is a float32 error bound (src/warprt/shading.py) that its authors tune; the oracle
+# does not copy it. It tries offsets of (1 + max|p|) times each of these instead, from next to
+# nothing up to Mitsuba's: a renderer whose value one of them reproduces decided as the exact model
+# does for an origin that close to the surface.
+OFFSET_SWEEP = (2.0**-20, 2.0**-23, 2.0**-17, 2.0**-26, 2.0**-14, 2.0**-34)  # likeliest first
+
+
+@dataclass
+class PixelTrace:
+    color: np.ndarray  # linear RGB, the average over the pixel's k*k samples
+    margin: float  # smallest decision margin met on any ray of any sample (see Oracle.margin)
+
+
+class Oracle:
+    """The scene's triangles in float64 world space and the Whitted model of reference.Switches."""
+
+    def __init__(self, scene, switches):
+        self.scene, self.sw = scene, switches
+        names = list(scene.materials)
+        verts, faces, mat, smooth, normals, base = [], [], [], [], [], 0
+        for obj in scene.objects:
+            verts.append(obj.vertices)
+            faces.append(obj.faces + base)
+            mat += [names.index(obj.material)] * len(obj.faces)
+            use_smooth = obj.smooth and switches.smooth
+            smooth += [use_smooth] * len(obj.faces)
+            normals.append(vertex_normals(obj.vertices, obj.faces) if use_smooth else np.zeros_like(obj.vertices))
+            base += len(obj.vertices)
+        self.V = np.concatenate(verts)
+        self.F = np.concatenate(faces)
+        self.N = np.concatenate(normals)
+        self.mat = np.asarray(mat)
+        self.smooth = np.asarray(smooth)
+        self.p0, self.p1, self.p2 = (self.V[self.F[:, k]] for k in range(3))
+        self.e1, self.e2 = self.p1 - self.p0, self.p2 - self.p0
+        # Bounding spheres, a little enlarged: a ray that misses one is far from every decision
+        # about its triangle, so only the others are tested (a large mesh stays quick).
+        self.centre = (self.p0 + self.p1 + self.p2) / 3.0
+        radius = np.max([np.linalg.norm(q - self.centre, axis=1) for q in (self.p0, self.p1, self.p2)], axis=0)
+        self.radius2 = (radius * 1.01 + 1e-9) ** 2
+        self.materials = [scene.materials[n] for n in names]
+
+    def _query(self, o, d, tmax):
+        """Nearest hit (face, t, b1, b2) or None, and the query's decision margin: the smallest
+        |barycentric edge margin| of any triangle whose plane the ray crosses before the hit, and
+        the relative gap to a second triangle at (nearly) the same distance."""
+        oc = self.centre - o
+        tc = oc @ d
+        near = np.nonzero(np.einsum("ij,ij->i", oc, oc) - tc * tc <= self.radius2)[0]
+        p0, e1, e2 = self.p0[near], self.e1[near], self.e2[near]
+        p = np.cross(d, e2)
+        det = np.einsum("ij,ij->i", p, e1)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            inv = 1.0 / det
+            s = o - p0
+            b1 = np.einsum("ij,ij->i", s, p) * inv
+            q = np.cross(s, e1)
+            b2 = (q @ d) * inv
+            t = np.einsum("ij,ij->i", e2, q) * inv
+        edge = np.minimum(np.minimum(b1, b2), 1.0 - b1 - b2)
+        in_range = np.isfinite(t) & (t > 0.0) & (t < tmax)
+        hit = in_range & (edge >= 0.0)
+        tt = np.where(hit, t, np.inf)
+        if len(tt) == 0:
+            return None, math.inf
+        f = int(np.argmin(tt))
+        t_hit = tt[f]
+        before = in_range & (t <= (t_hit * (1 + 1e-6) if np.isfinite(t_hit) else tmax))
+        margin = float(np.abs(edge[before]).min()) if before.any() else math.inf
+        if np.isfinite(t_hit):
+            others = hit & (np.arange(len(t)) != f)
+            if others.any():
+                margin = min(margin, float((tt[others].min() - t_hit) / t_hit))
+            return (int(near[f]), t_hit, b1[f], b2[f]), margin
+        return None, margin
+
+    @staticmethod
+    def _offset(offset, p, ng, w):
+        """The origin of a ray leaving the surface point p in direction w: pushed along the
+        geometric normal ng, to the side w leaves to, by (1 + max|p|) times the relative offset
+        (Mitsuba's RayEpsilon for offset="mitsuba")."""
+        rel = MITSUBA_RAY_EPSILON if offset == "mitsuba" else float(offset)
+        mag = (1.0 + float(np.abs(p).max())) * rel
+        return p + ng * (mag if ng @ w > 0 else -mag)
+
+    def _sample(self, offset, o, d):
+        sw, scene = self.sw, self.scene
+        C_amb = np.asarray(scene.render.ambient)
+        color, weight, margin = np.zeros(3), np.ones(3), math.inf
+        for depth in range(sw.max_depth):
+            hit, m = self._query(o, d, math.inf)
+            margin = min(margin, m)
+            if hit is None:
+                return color + weight * np.asarray(scene.render.background), margin
+            f, t, b1, b2 = hit
+            b = (1.0 - b1 - b2, b1, b2)
+            p = self.p0[f] * b[0] + self.p1[f] * b[1] + self.p2[f] * b[2]
+            ng = np.cross(self.e1[f], self.e2[f])
+            ng /= np.linalg.norm(ng)
+            side = -1.0 if ng @ d > 0 else 1.0  # two-sided: turn the normals towards the ray
+            ng = ng * side
+            n = ng
+            if self.smooth[f]:
+                ns = sum(self.N[self.F[f, k]] * b[k] for k in range(3))
+                n = ns / np.linalg.norm(ns) * side
+            mat = self.materials[self.mat[f]]
+            local = C_amb * np.asarray(mat.ka_) if sw.ambient else np.zeros(3)
+            if sw.diffuse or sw.specular:
+                for light in scene.lights:
+                    pos = np.asarray(light.position, np.float64)
+                    L = (pos - p) / np.linalg.norm(pos - p)
+                    n_dot_l = float(n @ L)
+                    margin = min(margin, abs(n_dot_l))
+                    if n_dot_l <= 0.0:
+                        continue
+                    if sw.shadows:
+                        so = self._offset(offset, p, ng, L)
+                        to_light = pos - so
+                        dist = float(np.linalg.norm(to_light))
+                        tmax = dist * (1.0 - MITSUBA_SHADOW_EPSILON) if offset == "mitsuba" else dist
+                        blocker, m = self._query(so, to_light / dist, tmax)
+                        margin = min(margin, m)
+                        if blocker is not None:
+                            continue
+                    term = np.zeros(3)
+                    if sw.diffuse:
+                        term += np.asarray(mat.kd) * n_dot_l
+                    if sw.specular:
+                        r_dot_v = float((2.0 * n_dot_l * n - L) @ -d)
+                        if r_dot_v > 0.0:
+                            term += np.asarray(mat.ks) * r_dot_v**mat.shininess
+                    local += np.asarray(light.color) * term
+            color = color + weight * local
+            kr = np.asarray(mat.reflectivity, np.float64)
+            if depth + 1 >= sw.max_depth or kr.max() <= 0.0:
+                break
+            weight = weight * kr
+            d = d - 2.0 * (d @ n) * n
+            d /= np.linalg.norm(d)
+            o = self._offset(offset, p, ng, d)
+        return color, margin
+
+    def pixel(self, x: int, row: int, offset="mitsuba") -> PixelTrace:
+        """Pixel (x, row), row 0 at the top, averaged over k*k samples at the stratum centres, with
+        secondary rays offset as Mitsuba does (offset="mitsuba") or by (1 + max|p|) * offset."""
+        k = math.isqrt(self.sw.spp)
+        basis = camera_basis(self.scene.camera)
+        total, margin = np.zeros(3), math.inf
+        for j in range(k):
+            for i in range(k):
+                d = pixel_ray_directions(basis, (i + 0.5) / k, (j + 0.5) / k)[row, x]
+                c, m = self._sample(offset, basis.eye.copy(), d / np.linalg.norm(d))
+                total += c
+                margin = min(margin, m)
+        return PixelTrace(total / (k * k), margin)
