@@ -1,0 +1,361 @@
+"""The seed's three experiments as figures, timed: Figure 6 (effect progression), Figure 7 (Z-buffer
+against ray tracing, three views), Figure 8 (gallery of scenes/), and the cost growth of both
+algorithms from 10^2 to 10^6 triangles.
+
+    python -m benchmarks.figures [--repeat 5] [--quick] [-o DIR]   -> benchmarks/figures/*.png and README.md
+
+Times are warm wall-clock medians of --repeat renders (kernels compiled, scene geometry and BVH
+prepared once per scene, as an interactive viewer would), on all cores of this machine.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import statistics
+import time
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import warp
+from PIL import Image, ImageDraw, ImageFont
+
+import warprt
+from benchmarks.effects import FIG6
+from warprt.film import to_srgb8
+from warprt.geometry import Geometry
+from warprt.scene import scene_from_dict
+
+ROOT = Path(__file__).resolve().parent
+SCENES = ROOT.parent / "scenes"
+OUT = ROOT / "figures"
+NO_SHADOWS_OR_REFLECTIONS = ["shadows", "reflection"]
+
+
+# --- timing --------------------------------------------------------------------------------------
+
+def timed(scene, geometry, repeat: int, **kw):
+    """(image, median seconds) of warm renders: the first call compiles or loads the variant."""
+    result = warprt.render(scene, geometry=geometry, **kw)
+    times = []
+    for _ in range(repeat):
+        t = time.perf_counter()
+        result = warprt.render(scene, geometry=geometry, **kw)
+        times.append(time.perf_counter() - t)
+    return result.image, statistics.median(times)
+
+
+def ms(seconds: float) -> str:
+    return f"{seconds * 1000:.0f} ms" if seconds >= 0.1 else f"{seconds * 1000:.1f} ms"
+
+
+# --- image grids with labels -----------------------------------------------------------------------
+
+def font(size: int):
+    """DejaVu Sans, which matplotlib ships, so labels look the same on every machine."""
+    from matplotlib import font_manager
+
+    return ImageFont.truetype(font_manager.findfont("DejaVu Sans"), size)
+
+
+def grid(cells, cols: int, path: Path, header=None, row_labels=None, col_labels=None, text_lines: int = 1):
+    """cells: [(linear image, [caption lines])]; images share one size. Writes a labelled PNG."""
+    h, w = cells[0][0].shape[:2]
+    f, fb = font(15), font(18)
+    line = 20
+    cap = 8 + line * text_lines
+    top = (34 if header else 0) + (26 if col_labels else 0)
+    left = 70 if row_labels else 0
+    rows = -(-len(cells) // cols)
+    canvas = Image.new("RGB", (left + cols * (w + 8) + 8, top + rows * (h + cap) + 8), "white")
+    draw = ImageDraw.Draw(canvas)
+    if header:
+        draw.text((8, 8), header, fill="black", font=fb)
+    for c, label in enumerate(col_labels or []):
+        draw.text((left + 8 + c * (w + 8) + w // 2, top - 14), label, fill="black", font=f, anchor="mm")
+    for r, label in enumerate(row_labels or []):
+        draw.text((left // 2, top + r * (h + cap) + h // 2), label, fill="black", font=f, anchor="mm")
+    for i, (image, captions) in enumerate(cells):
+        r, c = divmod(i, cols)
+        x, y = left + 8 + c * (w + 8), top + r * (h + cap)
+        canvas.paste(Image.fromarray(to_srgb8(image)), (x, y))
+        for j, text in enumerate(captions):
+            draw.text((x + w // 2, y + h + 4 + j * line), text, fill="black", font=f, anchor="ma")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    canvas.save(path, optimize=True)
+    return path
+
+
+# --- Figure 6: effect progression ------------------------------------------------------------------
+
+def figure6(out: Path, repeat: int, width: int, height: int) -> dict:
+    scene = warprt.load_scene(SCENES / "seed.toml").with_camera(width=width, height=height)
+    geometry = Geometry(scene)
+    cells, rows = [], []
+    for label, effects, depth in FIG6:
+        image, t = timed(scene.with_render(max_depth=depth), geometry, repeat, effects=effects)
+        cells.append((image, [label, ms(t)]))
+        rows.append({"label": label, "seconds": t})
+    grid(cells, 3, out / "fig6_effects.png", header="Figure 6: ray tracing, one effect at a time (scenes/seed.toml)",
+         text_lines=2)
+    return {"scene": "scenes/seed.toml", "size": [width, height], "panels": rows}
+
+
+# --- Figure 7: Z-buffer against ray tracing, three views -------------------------------------------
+
+VIEWS = [  # (eye, center): the scene's own camera, then from the left and above, then low from the right
+    None,
+    ([-4.5, 3.6, 4.2], [0.2, 0.7, 0.0]),
+    ([4.2, 0.7, 3.6], [-0.4, 1.0, -0.6]),
+]
+
+
+def figure7(out: Path, repeat: int, width: int, height: int) -> dict:
+    base = warprt.load_scene(SCENES / "seed.toml").with_camera(width=width, height=height)
+    cells, rows = [], []
+    for view in VIEWS:
+        scene = base if view is None else base.with_camera(eye=tuple(view[0]), center=tuple(view[1]))
+        geometry = Geometry(scene)
+        zb, t_zb = timed(scene, geometry, repeat, algorithm="zbuffer")
+        rt, t_rt = timed(scene, geometry, repeat, disable=NO_SHADOWS_OR_REFLECTIONS)
+        full, t_full = timed(scene.with_render(max_depth=2), geometry, repeat)
+        cells += [(zb, [ms(t_zb)]), (rt, [ms(t_rt)]), (full, [ms(t_full)])]
+        rows.append({"view": "scene camera" if view is None else {"eye": view[0], "center": view[1]},
+                     "zbuffer": t_zb, "raytrace_local": t_rt, "raytrace_full_2_levels": t_full})
+    grid(cells, 3, out / "fig7_zbuffer_vs_raytracing.png",
+         header=f"Figure 7: three views of scenes/seed.toml, {geometry.triangle_count:,} triangles; warm render time under each",
+         row_labels=["view 1", "view 2", "view 3"],
+         col_labels=["Z-buffer", "ray tracing, no shadows or reflections", "ray tracing, shadows, 2 ray levels"])
+    return {"scene": "scenes/seed.toml", "size": [width, height], "views": rows}
+
+
+# --- Figure 8: gallery -----------------------------------------------------------------------------
+
+GALLERY_FIRST = ["seed", "cornell", "mirrors", "bunny", "knot"]
+
+
+def figure8(out: Path, repeat: int, width: int, height: int) -> dict:
+    paths = sorted(SCENES.glob("*.toml"), key=lambda p: (GALLERY_FIRST.index(p.stem) if p.stem in GALLERY_FIRST
+                                                         else len(GALLERY_FIRST), p.stem))
+    cells, rows = [], []
+    for path in paths:
+        scene = warprt.load_scene(path)
+        # Keep each scene's aspect ratio inside a width x height cell: wide scenes get letterboxed.
+        scale = min(width / scene.camera.width, height / scene.camera.height)
+        scene = scene.with_camera(width=max(1, round(scene.camera.width * scale)),
+                                  height=max(1, round(scene.camera.height * scale)))
+        geometry = Geometry(scene)
+        image, t = timed(scene, geometry, max(1, repeat // 2))
+        cell = np.ones((height, width, 3), np.float32)
+        y0, x0 = (height - image.shape[0]) // 2, (width - image.shape[1]) // 2
+        cell[y0:y0 + image.shape[0], x0:x0 + image.shape[1]] = image
+        cells.append((cell, [f"{path.name}: {geometry.triangle_count:,} triangles",
+                             f"max_depth {scene.render.max_depth}, {ms(t)}"]))
+        rows.append({"scene": f"scenes/{path.name}", "triangles": geometry.triangle_count, "seconds": t})
+    grid(cells, 3 if len(cells) > 4 else 2, out / "fig8_gallery.png",
+         header="Figure 8: scenes/, full ray tracing (shadows, every reflection level the scene asks for)", text_lines=2)
+    return {"size": [width, height], "scenes": rows}
+
+
+# --- Cost growth -----------------------------------------------------------------------------------
+
+def growth_scene(subdivisions: int, width: int, height: int):
+    """scenes/seed.toml with its sphere replaced by an icosphere of 20 * 4^subdivisions flat triangles
+    (flat: smooth normals would add the same NumPy cost to both renderers' scene preparation)."""
+    doc = tomllib.loads((SCENES / "seed.toml").read_text())
+    for obj in doc["objects"]:
+        if obj.get("name") == "sphere":
+            obj.pop("segments", None)
+            obj.update(shape="sphere", subdivisions=subdivisions, smooth=False)
+    return scene_from_dict(doc, "scenes/seed.toml (sphere subdivided)", SCENES).with_camera(width=width, height=height)
+
+
+def once(fn):
+    t = time.perf_counter()
+    out = fn()
+    return out, time.perf_counter() - t
+
+
+def cost_growth(out: Path, repeat: int, sizes, subdivisions) -> dict:
+    runs = []
+    for width, height in sizes:
+        for s in subdivisions:
+            scene = growth_scene(s, width, height)
+            flat, t_flat = once(lambda: Geometry(scene, build_bvh=False))
+            with_bvh, t_bvh = once(lambda: Geometry(scene))
+            _, t_zb = timed(scene, flat, repeat, algorithm="zbuffer")
+            _, t_rt = timed(scene, with_bvh, repeat, disable=NO_SHADOWS_OR_REFLECTIONS)
+            runs.append({"width": width, "height": height, "triangles": flat.triangle_count, "zbuffer": t_zb,
+                         "raytrace": t_rt, "prepare_flat": t_flat, "prepare_bvh": t_bvh})
+            print(f"  {width}x{height} {flat.triangle_count:>9,} triangles: Z-buffer {ms(t_zb)}, ray tracing {ms(t_rt)}, "
+                  f"flatten {ms(t_flat)}, flatten + BVH {ms(t_bvh)}", flush=True)
+    plot_growth(runs, out / "cost_growth.png")
+    return {"runs": runs, "crossover": crossovers(runs)}
+
+
+def crossovers(runs) -> dict:
+    """Per image size: the triangle count where the Z-buffer's per-frame time first exceeds the tracer's
+    (log-interpolated between measured counts), for frames alone and with scene preparation."""
+    out = {}
+    for (w, h) in sorted({(r["width"], r["height"]) for r in runs}):
+        rs = [r for r in runs if (r["width"], r["height"]) == (w, h)]
+        n = np.array([r["triangles"] for r in rs], float)
+        frame = np.log(np.array([r["zbuffer"] / r["raytrace"] for r in rs]))
+        total = np.log(np.array([(r["zbuffer"] + r["prepare_flat"]) / (r["raytrace"] + r["prepare_bvh"]) for r in rs]))
+        out[f"{w}x{h}"] = {"frame": _first_crossing(n, frame), "with_preparation": _first_crossing(n, total)}
+    return out
+
+
+def _first_crossing(n, log_ratio):
+    for i in range(1, len(n)):
+        if log_ratio[i - 1] < 0 <= log_ratio[i]:
+            f = -log_ratio[i - 1] / (log_ratio[i] - log_ratio[i - 1])
+            return float(np.exp(np.log(n[i - 1]) + f * (np.log(n[i]) - np.log(n[i - 1]))))
+    return None
+
+
+def plot_growth(runs, path: Path):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import matplotlib.ticker
+
+    fig, axes = plt.subplots(1, 2, figsize=(12, 4.8), sharey=True)
+    sizes = sorted({(r["width"], r["height"]) for r in runs}, key=lambda s: s[0] * s[1])
+    colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    for ax, with_prep in zip(axes, (False, True)):
+        for k, (w, h) in enumerate(sizes):
+            rs = sorted((r for r in runs if (r["width"], r["height"]) == (w, h)), key=lambda r: r["triangles"])
+            n = [r["triangles"] for r in rs]
+            zb = [(r["zbuffer"] + (r["prepare_flat"] if with_prep else 0)) * 1000 for r in rs]
+            rt = [(r["raytrace"] + (r["prepare_bvh"] if with_prep else 0)) * 1000 for r in rs]
+            c = colors[k % len(colors)]
+            ax.loglog(n, zb, "o-", color=c, label=f"Z-buffer, {w}x{h}")
+            ax.loglog(n, rt, "s--", color=c, label=f"ray tracing, {w}x{h}")
+        for k, (size, c) in enumerate(crossovers(runs).items()):
+            n_cross = c["with_preparation" if with_prep else "frame"]
+            if n_cross is not None:
+                ax.axvline(n_cross, color=colors[k % len(colors)], alpha=0.4, lw=1)
+                ax.annotate(f"crossover {size}\n~{n_cross:,.0f}", (n_cross, 0.02), xycoords=("data", "axes fraction"),
+                            fontsize=7, rotation=90, ha="right", va="bottom", color=colors[k % len(colors)])
+        ax.set_xlabel("triangles")
+        plain = matplotlib.ticker.FuncFormatter(lambda y, _: f"{y:g}")
+        ax.yaxis.set_major_formatter(plain)
+        ax.yaxis.set_minor_formatter(plain)
+        ax.grid(True, which="both", alpha=0.3)
+        ax.set_title("per frame (geometry and BVH ready)" if not with_prep else
+                     "per frame + scene preparation (flatten; flatten + BVH build)")
+    axes[0].set_ylabel("time (ms)")
+    axes[0].legend(fontsize=8)
+    axes[1].legend(fontsize=8)
+    fig.suptitle("Cost growth: scenes/seed.toml, sphere subdivided; same image, no shadows or reflections, "
+                 f"{os.cpu_count()} CPU threads")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+# --- the report ------------------------------------------------------------------------------------
+
+def write_readme(out: Path, results: dict, seconds: float):
+    f6, f7, f8, g = results["fig6"], results["fig7"], results["fig8"], results["growth"]
+    lines = [
+        "# Figures",
+        "",
+        "Written by `python -m benchmarks.figures` (about "
+        f"{seconds / 60:.1f} minutes here). Times are warm wall-clock medians (kernels compiled, geometry and BVH "
+        f"prepared once per scene) on {cpu_name()}, {os.cpu_count()} CPU threads, Warp {results['warp']}; "
+        "a busy machine makes them noisy, so compare ratios within one run.",
+        "Regenerate: `python -m benchmarks.figures` from the repository root (`--quick` for a smoke test, `-o DIR` "
+        "to write elsewhere). Numbers: figures.json.",
+        "",
+        "## Figure 6: effect progression (scenes/seed.toml)",
+        "",
+        "![Figure 6](fig6_effects.png)",
+        "",
+        "| panel | time |",
+        "|---|---:|",
+        *[f"| {p['label']} | {ms(p['seconds'])} |" for p in f6["panels"]],
+        "",
+        "## Figure 7: Z-buffer against ray tracing, three views (scenes/seed.toml)",
+        "",
+        "![Figure 7](fig7_zbuffer_vs_raytracing.png)",
+        "",
+        "| view | Z-buffer | ray tracing, no shadows/reflections | ray tracing, shadows, 2 ray levels |",
+        "|---|---:|---:|---:|",
+        *[f"| {i + 1} | {ms(v['zbuffer'])} | {ms(v['raytrace_local'])} | {ms(v['raytrace_full_2_levels'])} |"
+          for i, v in enumerate(f7["views"])],
+        "",
+        "## Figure 8: gallery (scenes/)",
+        "",
+        "![Figure 8](fig8_gallery.png)",
+        "",
+        "| scene | triangles | time |",
+        "|---|---:|---:|",
+        *[f"| {s['scene']} | {s['triangles']:,} | {ms(s['seconds'])} |" for s in f8["scenes"]],
+        "",
+        "## Cost growth: Z-buffer and ray tracing from 10^2 to 10^6 triangles",
+        "",
+        "![Cost growth](cost_growth.png)",
+        "",
+        "| image | triangles | Z-buffer | ray tracing | flatten | flatten + BVH |",
+        "|---|---:|---:|---:|---:|---:|",
+        *[f"| {r['width']}x{r['height']} | {r['triangles']:,} | {ms(r['zbuffer'])} | {ms(r['raytrace'])} | "
+          f"{ms(r['prepare_flat'])} | {ms(r['prepare_bvh'])} |" for r in g["runs"]],
+        "",
+        "Crossover (the triangle count where the Z-buffer becomes the slower of the two):",
+        "",
+        *[f"- {size}: per frame {_n(c['frame'])}; with scene preparation {_n(c['with_preparation'])}"
+          for size, c in g["crossover"].items()],
+        "",
+    ]
+    (out / "README.md").write_text("\n".join(lines))
+
+
+def cpu_name() -> str:
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or platform.machine()
+
+
+def _n(x):
+    return "not reached in the measured range" if x is None else f"about {x:,.0f} triangles"
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--repeat", type=int, default=5, help="timed renders per image (median)")
+    ap.add_argument("--quick", action="store_true", help="small images and fewer sizes, for a smoke test")
+    ap.add_argument("-o", "--output", default=str(OUT), help="folder for the PNGs, figures.json and README.md")
+    args = ap.parse_args(argv)
+    t0 = time.perf_counter()
+    w, h = (160, 120) if args.quick else (400, 300)
+    subdivisions = [0, 2, 4, 6] if args.quick else list(range(0, 9))
+    sizes = [(160, 120)] if args.quick else [(160, 120), (640, 480)]
+    out = Path(args.output)
+    results = {"warp": warp.__version__}
+    print("Figure 6", flush=True)
+    results["fig6"] = figure6(out, args.repeat, w, h)
+    print("Figure 7", flush=True)
+    results["fig7"] = figure7(out, args.repeat, w, h)
+    print("Figure 8", flush=True)
+    results["fig8"] = figure8(out, args.repeat, w, h)
+    print("Cost growth", flush=True)
+    results["growth"] = cost_growth(out, args.repeat, sizes, subdivisions)
+    seconds = time.perf_counter() - t0
+    results["seconds"] = seconds
+    (out / "figures.json").write_text(json.dumps(results, indent=1) + "\n")
+    write_readme(out, results, seconds)
+    print(f"wrote {out} in {seconds:.0f} s", flush=True)
+
+
+if __name__ == "__main__":
+    main()
