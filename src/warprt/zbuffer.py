@@ -1,17 +1,16 @@
-"""The Z-buffer renderer: the seed's comparison algorithm, as Warp kernels. Triangles are clipped,
-projected with the tracer's camera, binned to tiles and depth-tested at the tracer's sample positions.
+"""The Z-buffer renderer, the seed's point of comparison, in Warp kernels: triangles clipped at the eye,
+projected with the tracer's camera, depth-tested at the tracer's samples, shaded by the tracer's Phong.
 
-Shading is the tracer's own local Phong function (make_shade with shadows off, make_surface) at the
-visible point, so the two renderers differ only in how they find what each sample sees.
-
-Stages, one kernel each: project (per triangle: clip, project, screen bounds) -> bin (host: tile
-lists in face order) -> raster (per tile: one thread owns its pixels and walks its list, so there
-are no races on any device) -> shade (per pixel).
+Stages, one kernel each: project (per triangle: clip, project, the pixels whose samples it may cover)
+-> bin (count per tile, scan, fill) -> raster (per tile: one thread owns the tile's samples and walks
+its triangles, so no two threads write one sample on any device) -> shade (per pixel: make_surface
+and make_shade with shadows off, the very functions the tracer calls at its primary hit).
 
 Near plane: the tracer's primary rays start at the eye and report every hit with t >= 0, so it draws
 geometry between the eye and the image plane at d_f = near. Clipping at z = -near, as OpenGL does,
-would cut exactly that away; the rasterizer clips at z = -CLIP_SCALE * R instead (R: the distance of
-the farthest vertex from the eye), which loses only what lies within about 1e-6 R of the eye.
+would cut exactly that away; the rasterizer clips at z = -CLIP_SCALE R instead (R bounds the distance
+of every vertex from the eye), which loses only what lies within about 1e-6 R of the eye. Screen
+coordinates are float64, so vertices clipped that close to the eye still rasterize exactly.
 """
 
 from __future__ import annotations
@@ -333,8 +332,8 @@ def project_kernel(s: SceneData, c: RasterCamera, k: int, first: int, bounds: wp
 def raster_kernel(s: SceneData, c: RasterCamera, tile_start: wp.array(dtype=wp.int32),
                   tile_faces: wp.array(dtype=wp.int32), tiles_x: int, tile: int, k: int, samples: int, first: int,
                   depth: wp.array(dtype=wp.float64), face: wp.array(dtype=wp.int32), uv: wp.array(dtype=wp.vec2)):
-    """One thread per tile: every triangle binned to it, in face order, clipped, projected and
-    depth-tested at the tile's samples. Only this thread writes the tile's pixels."""
+    """One thread per tile: every triangle binned to it clipped, projected and depth-tested at the
+    tile's samples. Only this thread writes the tile's samples."""
     t = first + wp.tid()
     x_lo = (t % tiles_x) * tile
     y_lo = (t / tiles_x) * tile
@@ -580,6 +579,8 @@ def traced_faces(scene, *, geometry: Geometry | None = None, effects=None, disab
     k = math.isqrt(scene.render.spp)
     samples = k * k if fx.supersampling else 1
     geom = geometry or Geometry(scene, device=device)
+    if geom.mesh is None:
+        raise ValueError("traced_faces needs a Geometry with its BVH (build_bvh=True)")
     threads = threads or default_threads()
     face = wp.empty(cam.width * cam.height * samples, dtype=wp.int32, device=device)
     c = camera_data(camera_basis(cam))

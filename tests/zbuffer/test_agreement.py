@@ -71,6 +71,7 @@ def built_in_cases():
                                             width=72, height=100),
         # 2 x 81,920 triangles of a few pixels each: samples on shared edges and vertices everywhere.
         "dense-spheres": dense,
+        "empty": make_scene([], camera={"width": 32, "height": 24}, background=[0.2, 0.3, 0.4]),
     }
 
 
