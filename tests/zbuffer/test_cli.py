@@ -1,13 +1,24 @@
 """`warprt render --algorithm zbuffer`: the real command writes the API's Z-buffer image."""
 
 import json
+import os
+import subprocess
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 import warprt
-from tests.core.test_cli import run
 from warprt.film import read_image
+
+SRC = str(Path(__file__).resolve().parents[2] / "src")
+
+
+def run(*args):
+    """The real command, from this checkout's sources whatever is installed."""
+    env = {**os.environ, "PYTHONPATH": SRC + os.pathsep + os.environ.get("PYTHONPATH", "")}
+    return subprocess.run([sys.executable, "-m", "warprt", *args], capture_output=True, text=True, env=env)
 
 
 def test_render_zbuffer_npy_matches_api(tmp_path):
