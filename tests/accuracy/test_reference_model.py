@@ -168,3 +168,28 @@ def test_scalar_fallback_without_llvm_renders_the_same_image(tmp_path):
 
     llvm = render_mitsuba(warprt.load_scene(scene_path, {"camera.width": 24, "camera.height": 18}))
     assert np.abs(np.load(out) - llvm).max() < 1e-4
+
+
+def test_repeated_renders_reuse_the_compiled_kernels():
+    """The integrator is traced again for each render, but its kernels are found in Dr.Jit's cache:
+    for the same scene, and for another scene with other light colours and materials (the tables
+    are kernel inputs, not constants), nothing is compiled."""
+    import drjit as dr
+
+    import warprt
+    from reference.mitsuba_whitted import mitsuba_scene
+
+    size = {"camera.width": 32, "camera.height": 24}
+    scene = warprt.load_scene(ROOT / "scenes" / "seed.toml", size)
+    mitsuba_scene(scene).render(Switches(max_depth=3))
+    other = warprt.load_scene(ROOT / "scenes" / "seed.toml", {**size, "lights[0].color": [1.0, 0.5, 0.25],
+                                                              "materials.orange.kd": [0.2, 0.3, 0.9]})
+    dr.set_flag(dr.JitFlag.KernelHistory, True)
+    try:
+        dr.kernel_history()  # clears it
+        mitsuba_scene(scene).render(Switches(max_depth=3))
+        mitsuba_scene(other).render(Switches(max_depth=3))
+        launched = [k for k in dr.kernel_history() if k["type"] == dr.KernelType.JIT]
+    finally:
+        dr.set_flag(dr.JitFlag.KernelHistory, False)
+    assert launched and all(k["cache_hit"] for k in launched)
