@@ -6,6 +6,7 @@ Metrics are taken on linear RGB clamped to [0, 1] (what a display can show), nev
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -68,8 +69,10 @@ def metrics(a: np.ndarray, b: np.ndarray) -> tuple[float, float, float, float]:
     a, b = _clamped(a), _clamped(b)
     if a.shape != b.shape:
         raise ValueError(f"image shapes differ: {a.shape} vs {b.shape}")
-    # SSIM's default 7x7 window needs images at least 7 pixels on each side.
-    ssim = float(structural_similarity(a, b, data_range=1.0, channel_axis=-1))
+    # SSIM's 7x7 window, narrowed (odd) for images smaller than that; below 3 pixels there is no SSIM.
+    side = min(a.shape[:2])
+    win = min(7, side if side % 2 else side - 1)
+    ssim = float(structural_similarity(a, b, data_range=1.0, channel_axis=-1, win_size=win)) if win >= 3 else math.nan
     diff = np.abs(a - b)
     psnr = float("inf") if not diff.any() else float(peak_signal_noise_ratio(a, b, data_range=1.0))
     return ssim, psnr, float((diff > OFF_THRESHOLD).any(-1).mean()), float(diff.max())

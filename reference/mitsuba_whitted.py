@@ -143,7 +143,8 @@ def _register_integrator(mi, dr):
                 active &= hit
                 # Two-sided surfaces: both normals turned to face the incoming ray, by the geometric side.
                 side = dr.select(dr.dot(si.n, ray.d) > 0.0, -1.0, 1.0)
-                n = si.sh_frame.n * side
+                # Where interpolated vertex normals cancel (normalised zero: NaN), the face normal.
+                n = dr.select(dr.isfinite(si.sh_frame.n.x), si.sh_frame.n, si.n) * side
                 mat = self.material(si, active)
                 color = dr.select(active, color + weight * self.local(scene, si, mat, n, -ray.d, active), color)
                 depth += 1
@@ -170,11 +171,14 @@ class _Tables:
         lights = [(np.asarray(l.position, np.float64), np.asarray(l.color, np.float64)) for l in scene.lights]
         mats = {sid: scene.materials[scene.objects[i].material] for sid, i in object_of_shape.items()}
         if self.jit:
-            # Opaque: kernel inputs rather than literals, so a kernel is not specialised to these values.
-            op = lambda tp, v: dr.opaque(tp, [float(x) for x in v]) if tp is not mi.Float else dr.opaque(tp, float(v))
-            self.lights = [(op(mi.Point3f, p), op(mi.Color3f, c)) for p, c in lights]
-            self.ambient = op(mi.Color3f, scene.render.ambient)
-            self.background = op(mi.Color3f, scene.render.background)
+            # Opaque: kernel inputs rather than literals, so the kernels are not specialised to these
+            # values and another scene with as many lights reuses them.
+            def opaque(tp, v):
+                return dr.opaque(tp, [float(x) for x in v])
+
+            self.lights = [(opaque(mi.Point3f, p), opaque(mi.Color3f, c)) for p, c in lights]
+            self.ambient = opaque(mi.Color3f, scene.render.ambient)
+            self.background = opaque(mi.Color3f, scene.render.background)
             ids = {}
             for shape in mi_scene.shapes():
                 ids[shape.id()] = int(dr.reinterpret_array(mi.UInt32, mi.ShapePtr(shape))[0])
