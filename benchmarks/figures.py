@@ -210,6 +210,10 @@ def crossovers(runs) -> dict:
 
 
 def _first_crossing(n, log_ratio):
+    """The interpolated count where log(Z-buffer / ray tracing) turns non-negative; 0 if the Z-buffer
+    is already the slower at the smallest count, None if it never is."""
+    if log_ratio[0] >= 0:
+        return 0.0
     for i in range(1, len(n)):
         if log_ratio[i - 1] < 0 <= log_ratio[i]:
             f = -log_ratio[i - 1] / (log_ratio[i] - log_ratio[i - 1])
@@ -238,7 +242,7 @@ def plot_growth(runs, path: Path):
             ax.loglog(n, rt, "s--", color=c, label=f"ray tracing, {w}x{h}")
         for k, (size, c) in enumerate(crossovers(runs).items()):
             n_cross = c["with_preparation" if with_prep else "frame"]
-            if n_cross is not None:
+            if n_cross:
                 ax.axvline(n_cross, color=colors[k % len(colors)], alpha=0.4, lw=1)
                 ax.annotate(f"crossover {size}\n~{n_cross:,.0f}", (n_cross, 0.02), xycoords=("data", "axes fraction"),
                             fontsize=7, rotation=90, ha="right", va="bottom", color=colors[k % len(colors)])
@@ -307,7 +311,9 @@ def write_readme(out: Path, results: dict, seconds: float):
         *[f"| {r['width']}x{r['height']} | {r['triangles']:,} | {ms(r['zbuffer'])} | {ms(r['raytrace'])} | "
           f"{ms(r['prepare_flat'])} | {ms(r['prepare_bvh'])} |" for r in g["runs"]],
         "",
-        "Crossover (the triangle count where the Z-buffer becomes the slower of the two):",
+        "Crossover (the triangle count where the Z-buffer becomes the slower of the two; Z-buffer work grows with the "
+        "triangle count, ray tracing with the pixel count times the BVH depth, so the crossover moves up with the image "
+        "size; counting the BVH build, which grows with the triangle count too, moves it further):",
         "",
         *[f"- {size}: per frame {_n(c['frame'])}; with scene preparation {_n(c['with_preparation'])}"
           for size, c in g["crossover"].items()],
@@ -327,7 +333,11 @@ def cpu_name() -> str:
 
 
 def _n(x):
-    return "not reached in the measured range" if x is None else f"about {x:,.0f} triangles"
+    if x is None:
+        return "none: the Z-buffer is the faster at every measured count"
+    if x == 0:
+        return "none: the Z-buffer is the slower already at the smallest count"
+    return f"about {x:,.0f} triangles"
 
 
 def main(argv=None):
