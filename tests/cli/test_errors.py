@@ -15,9 +15,12 @@ from pathlib import Path
 
 import pytest
 
+from warprt.shapes import SHAPES as SHAPE_TABLE
+
 CORPUS = Path(__file__).parent / "corpus"
 SRC = str(Path(__file__).resolve().parents[2] / "src")
 EXTS = ".obj, .ply, .stl, .off, .glb, .gltf, .usd, .usda, .usdc, .usdz"
+SHAPES = ", ".join(SHAPE_TABLE)  # the shape names the messages list, as the scene reader knows them
 
 # (case, command line, the message after "warprt: error: "). "-o out.png" is added where the case
 # names no output.
@@ -68,11 +71,9 @@ CASES = [
     ("no such material", ["render", "no_such_material.toml"],
      "no_such_material.toml: objects[0].material: no material named 'rde' (did you mean 'red'?)"),
     ("mesh and shape", ["render", "mesh_and_shape.toml"],
-     "mesh_and_shape.toml: objects[0]: expected exactly one of 'mesh' (a file) or 'shape' "
-     "(sphere, uv_sphere, box, plane, cylinder, triangles)"),
+     f"mesh_and_shape.toml: objects[0]: expected exactly one of 'mesh' (a file) or 'shape' ({SHAPES})"),
     ("unknown shape", ["render", "unknown_shape.toml"],
-     "unknown_shape.toml: objects[0].shape: unknown shape 'sphre' (did you mean 'sphere'?); "
-     "expected one of: sphere, uv_sphere, box, plane, cylinder, triangles"),
+     f"unknown_shape.toml: objects[0].shape: unknown shape 'sphre' (did you mean 'sphere'?); expected one of: {SHAPES}"),
     ("face index out of range", ["render", "faces_out_of_range.toml"],
      "faces_out_of_range.toml: objects[0].faces: vertex index out of range [0, 2]"),
     # Mesh files named by a scene.
