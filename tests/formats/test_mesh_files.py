@@ -390,3 +390,11 @@ def test_warp_example_assets_load():
         v, _, _, _ = mesh.concatenated()
         np.testing.assert_allclose(v.min(0), lo, rtol=1e-6)  # the assets sit at the identity transform
         np.testing.assert_allclose(v.max(0), hi, rtol=1e-6)
+
+
+def test_off(tmp_path):
+    (tmp_path / "t.off").write_text("OFF\n4 1 0\n0 0 0\n1 0 0\n1 2 0\n0 2 0\n4 0 1 2 3\n")
+    mesh = read_mesh_file(tmp_path / "t.off")
+    v, f, _, _ = mesh.concatenated()
+    assert len(f) == 2
+    assert sum(0.5 * np.linalg.norm(np.cross(v[b] - v[a], v[c] - v[a])) for a, b, c in f) == pytest.approx(2.0)
