@@ -119,6 +119,24 @@ def check_finite(image: np.ndarray, what: str = "render"):
 
 ALGORITHMS = ("raytrace", "zbuffer")
 
+_geometry_cache: dict = {}
+_GEOMETRY_CACHE_SIZE = 4
+
+
+def cached_geometry(scene, device: str = "cpu") -> Geometry:
+    """The scene's Geometry (BVH, normals, tables), built once and reused by the next frames of the
+    same scene from the same eye, as Mitsuba reuses a loaded scene. Keyed by the objects' identity
+    (Scene.with_camera/with_render share them) and every value the Geometry is made of."""
+    key = (id(scene.objects), tuple(id(o.vertices) for o in scene.objects), tuple(scene.camera.eye),
+           tuple(scene.materials.items()), tuple(scene.lights), scene.render.ambient, scene.render.background, str(device))
+    entry = _geometry_cache.pop(key, None)
+    if entry is None or entry[0] is not scene.objects:  # a new list may reuse a dead one's id
+        entry = (scene.objects, Geometry(scene, device=device))
+    _geometry_cache[key] = entry  # most recently used last
+    while len(_geometry_cache) > _GEOMETRY_CACHE_SIZE:
+        _geometry_cache.pop(next(iter(_geometry_cache)))
+    return entry[1]
+
 
 def render(scene, *, threads: int | None = None, device: str = "cpu", effects=None, disable=(),
            bands: int | None = None, geometry: Geometry | None = None, algorithm: str = "raytrace",
@@ -151,7 +169,7 @@ def render(scene, *, threads: int | None = None, device: str = "cpu", effects=No
         stats.times["load"] = scene.load_seconds
 
     t = time.perf_counter()
-    geom = geometry or Geometry(scene, device=device)
+    geom = geometry or cached_geometry(scene, device)
     stats.triangles = geom.triangle_count
     stats.times["bvh"] = time.perf_counter() - t
 
