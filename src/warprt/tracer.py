@@ -53,6 +53,18 @@ class Surface:
     material: int
 
 
+@wp.func
+def unit_normal(p0: wp.vec3, p1: wp.vec3, p2: wp.vec3) -> wp.vec3:
+    """normalize(cross(p1 - p0, p2 - p0)), scaled first by its largest component. Warp's query
+    normalizes the raw cross product, whose squared length underflows to 0 for triangles under
+    about 1e-10 across and overflows above about 1e10: it then reports a zero normal."""
+    e = wp.cross(p1 - p0, p2 - p0)
+    big = wp.max(wp.abs(e))
+    if big > 0.0:
+        e = e / big
+    return wp.normalize(e)
+
+
 _surface_cache: dict = {}
 
 
@@ -73,11 +85,14 @@ def make_surface(smooth: bool):
         out = Surface()
         out.p = p0 * u + p1 * v + p2 * w
         out.err = hit_point_error(p0, p1, p2, u, v, w)
+        ng = face_normal
+        if not (wp.length(ng) > 0.0):
+            ng = unit_normal(p0, p1, p2)
         side = 1.0
         # Two-sided surfaces: Warp's face normal follows the winding; turn it to face the ray.
-        if wp.dot(face_normal, d) > 0.0:
+        if wp.dot(ng, d) > 0.0:
             side = -1.0
-        out.ng = face_normal * side
+        out.ng = ng * side
         out.n = out.ng
         if wp.static(smooth):
             if s.tri_smooth[f] != 0:
