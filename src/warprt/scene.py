@@ -249,13 +249,15 @@ def validate_camera(cam: Camera, source: str = "camera"):
         v = getattr(cam, name)
         if not isinstance(v, (int, np.integer)) or not (1 <= v <= MAX_IMAGE_SIDE):
             raise SceneError(source, f"camera.{name}", f"expected an integer in [1, {MAX_IMAGE_SIDE}], got {v}")
-    # The kernels build ray directions from d_f = near and the image plane's h, w in float32.
+    # The kernels build ray directions from d_f = near and the image plane's h, w in float32 and
+    # normalize them: their squares must neither underflow nor overflow.
     h = 2.0 * cam.near * math.tan(math.radians(cam.fovy) / 2.0)
-    if not (1e-30 <= cam.near and h <= 1e30 and h * cam.width / cam.height <= 1e30):
+    if not (1e-18 <= cam.near and h <= 1e18 and h * cam.width / cam.height <= 1e18):
         raise SceneError(source, "camera.near", f"near {cam.near:g} puts the image plane (height 2 near tan(fovy/2) = "
-                                                f"{h:.3g}) outside float32 range [1e-30, 1e30]")
+                                                f"{h:.3g}) outside the float32 range of ray directions [1e-18, 1e18]")
     view = eye - center
-    if np.linalg.norm(view) <= 1e-12 * max(1.0, np.abs(eye).max()):
+    # Relative to the coordinates' size: a scene 1e-12 across is fine, eye and center a rounding apart are not.
+    if np.linalg.norm(view) <= 1e-12 * np.abs(np.concatenate([eye, center])).max():
         raise SceneError(source, "camera.center", "must differ from camera.eye (no viewing direction)")
     z = view / np.linalg.norm(view)
     if np.linalg.norm(up) == 0.0:
@@ -264,9 +266,11 @@ def validate_camera(cam: Camera, source: str = "camera"):
         raise SceneError(source, "camera.up", "is parallel to the viewing direction (eye - center)")
 
 
-# float32 ray tests multiply coordinate differences: beyond about 1e19 from the eye the products
-# overflow and triangles silently vanish, so scenes must stay within this reach of the eye.
-MAX_REACH = 1e18
+# Warp's float32 ray-triangle test multiplies three coordinate differences (its T = U Az): for
+# geometry 1e14 from the eye that overflows and triangles silently vanish (measured: a sphere of
+# radius 1e13 seen from 5e13 renders, radius 1e14 from 5e14 does not). Scenes must stay within
+# this reach of the eye.
+MAX_REACH = 1e12
 FLOAT32_MAX = float(np.finfo(np.float32).max)
 
 
@@ -327,7 +331,7 @@ def validate_scene(scene: Scene):
         if obj.material not in scene.materials:
             raise SceneError(src, f"{where}.material", f"no material named '{obj.material}'")
         if len(v) and np.abs(v - eye).max() > MAX_REACH:
-            raise SceneError(src, f"{where}.vertices", f"'{obj.name}' reaches more than {MAX_REACH:g} from "
+            raise SceneError(src, where, f"'{obj.name}' reaches more than {MAX_REACH:g} from "
                                                        "camera.eye; float32 ray tests cannot reach it")
     # The brightest possible pixel: every level of the mirror series fully lit, then the background.
     depth = r.max_depth
