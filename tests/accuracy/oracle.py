@@ -59,16 +59,27 @@ class Oracle:
         self.centre = (self.p0 + self.p1 + self.p2) / 3.0
         radius = np.max([np.linalg.norm(q - self.centre, axis=1) for q in (self.p0, self.p1, self.p2)], axis=0)
         self.radius2 = (radius * 1.01 + 1e-9) ** 2
+        # Altitudes over the edges opposite p0, p1, p2: barycentric b_k times h_k is the distance
+        # to that edge's line, so decision margins can be measured in world units.
+        normal = np.cross(self.e1, self.e2)
+        area2 = np.linalg.norm(normal, axis=1)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            self.n_hat = normal / area2[:, None]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            self.h = np.stack([area2 / np.linalg.norm(self.p2 - self.p1, axis=1),
+                               area2 / np.linalg.norm(self.e2, axis=1), area2 / np.linalg.norm(self.e1, axis=1)], 1)
         self.materials = [scene.materials[n] for n in names]
 
     def _query(self, o, d, tmax):
-        """Nearest hit (face, t, b1, b2) or None, and the query's decision margin: the smallest
-        |barycentric edge margin| of any triangle whose plane the ray crosses before the hit, and
-        the relative gap to a second triangle at (nearly) the same distance."""
+        """Nearest hit (face, t, b1, b2) or None, and the query's decision margin, relative to the
+        coordinates' magnitude (1 + max|p|), as float32 rounding is: how far the ray passes from an
+        edge of any triangle whose plane it crosses before the hit, and the gap to a second
+        triangle hit at (nearly) the same distance."""
         oc = self.centre - o
         tc = oc @ d
         near = np.nonzero(np.einsum("ij,ij->i", oc, oc) - tc * tc <= self.radius2)[0]
-        p0, e1, e2 = self.p0[near], self.e1[near], self.e2[near]
+        p0, e1, e2, h = self.p0[near], self.e1[near], self.e2[near], self.h[near]
+        cos = np.abs(self.n_hat[near] @ d)
         p = np.cross(d, e2)
         det = np.einsum("ij,ij->i", p, e1)
         with np.errstate(divide="ignore", invalid="ignore"):
@@ -79,6 +90,12 @@ class Oracle:
             b2 = (q @ d) * inv
             t = np.einsum("ij,ij->i", e2, q) * inv
         edge = np.minimum(np.minimum(b1, b2), 1.0 - b1 - b2)
+        with np.errstate(invalid="ignore"):
+            # Signed distance in the plane to the nearest edge line (exact inside, and outside next to
+            # an edge), times |n.d|: how far the ray must move sideways to cross that edge, which
+            # for a grazing ray is much less than the distance in the plane.
+            edge_distance = np.minimum(np.minimum((1.0 - b1 - b2) * h[:, 0], b1 * h[:, 1]), b2 * h[:, 2]) * cos
+            scale = 1.0 + np.abs(o + t[:, None] * d).max(axis=1)
         in_range = np.isfinite(t) & (t > 0.0) & (t < tmax)
         hit = in_range & (edge >= 0.0)
         tt = np.where(hit, t, np.inf)
@@ -87,11 +104,11 @@ class Oracle:
         f = int(np.argmin(tt))
         t_hit = tt[f]
         before = in_range & (t <= (t_hit * (1 + 1e-6) if np.isfinite(t_hit) else tmax))
-        margin = float(np.abs(edge[before]).min()) if before.any() else math.inf
+        margin = float(np.nanmin(np.abs(edge_distance[before]) / scale[before])) if before.any() else math.inf
         if np.isfinite(t_hit):
             others = hit & (np.arange(len(t)) != f)
             if others.any():
-                margin = min(margin, float((tt[others].min() - t_hit) / t_hit))
+                margin = min(margin, float((tt[others].min() - t_hit) / scale[f]))
             return (int(near[f]), t_hit, b1[f], b2[f]), margin
         return None, margin
 
