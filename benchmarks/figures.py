@@ -13,10 +13,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import platform
-import statistics
 import time
-import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -25,31 +22,13 @@ from PIL import Image, ImageDraw, ImageFont
 
 import warprt
 from benchmarks.effects import FIG6
+from benchmarks.timing import NO_SHADOWS_OR_REFLECTIONS, cpu_name, growth_runs, ms, timed
 from warprt.film import to_srgb8
 from warprt.geometry import Geometry
-from warprt.scene import scene_from_dict
 
 ROOT = Path(__file__).resolve().parent
 SCENES = ROOT.parent / "scenes"
 OUT = ROOT / "figures"
-NO_SHADOWS_OR_REFLECTIONS = ["shadows", "reflection"]
-
-
-# --- timing --------------------------------------------------------------------------------------
-
-def timed(scene, geometry, repeat: int, **kw):
-    """(image, median seconds) of warm renders: the first call compiles or loads the variant."""
-    result = warprt.render(scene, geometry=geometry, **kw)
-    times = []
-    for _ in range(repeat):
-        t = time.perf_counter()
-        result = warprt.render(scene, geometry=geometry, **kw)
-        times.append(time.perf_counter() - t)
-    return result.image, statistics.median(times)
-
-
-def ms(seconds: float) -> str:
-    return f"{seconds * 1000:.0f} ms" if seconds >= 0.1 else f"{seconds * 1000:.1f} ms"
 
 
 # --- image grids with labels -----------------------------------------------------------------------
@@ -162,36 +141,8 @@ def figure8(out: Path, repeat: int, width: int, height: int) -> dict:
 
 # --- Cost growth -----------------------------------------------------------------------------------
 
-def growth_scene(subdivisions: int, width: int, height: int):
-    """scenes/seed.toml with its sphere replaced by an icosphere of 20 * 4^subdivisions flat triangles
-    (flat: smooth normals would add the same NumPy cost to both renderers' scene preparation)."""
-    doc = tomllib.loads((SCENES / "seed.toml").read_text())
-    for obj in doc["objects"]:
-        if obj.get("name") == "sphere":
-            obj.pop("segments", None)
-            obj.update(shape="sphere", subdivisions=subdivisions, smooth=False)
-    return scene_from_dict(doc, "scenes/seed.toml (sphere subdivided)", SCENES).with_camera(width=width, height=height)
-
-
-def once(fn):
-    t = time.perf_counter()
-    out = fn()
-    return out, time.perf_counter() - t
-
-
 def cost_growth(out: Path, repeat: int, sizes, subdivisions) -> dict:
-    runs = []
-    for width, height in sizes:
-        for s in subdivisions:
-            scene = growth_scene(s, width, height)
-            flat, t_flat = once(lambda: Geometry(scene, build_bvh=False))
-            with_bvh, t_bvh = once(lambda: Geometry(scene))
-            _, t_zb = timed(scene, flat, repeat, algorithm="zbuffer")
-            _, t_rt = timed(scene, with_bvh, repeat, disable=NO_SHADOWS_OR_REFLECTIONS)
-            runs.append({"width": width, "height": height, "triangles": flat.triangle_count, "zbuffer": t_zb,
-                         "raytrace": t_rt, "prepare_flat": t_flat, "prepare_bvh": t_bvh})
-            print(f"  {width}x{height} {flat.triangle_count:>9,} triangles: Z-buffer {ms(t_zb)}, ray tracing {ms(t_rt)}, "
-                  f"flatten {ms(t_flat)}, flatten + BVH {ms(t_bvh)}", flush=True)
+    runs = growth_runs(repeat, sizes, subdivisions, log=lambda line: print(line, flush=True))
     plot_growth(runs, out / "cost_growth.png")
     return {"runs": runs, "crossover": crossovers(runs)}
 
@@ -320,16 +271,6 @@ def write_readme(out: Path, results: dict, seconds: float):
         "",
     ]
     (out / "README.md").write_text("\n".join(lines))
-
-
-def cpu_name() -> str:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or platform.machine()
 
 
 def _n(x):
