@@ -42,10 +42,12 @@ def padded_bounds(points: np.ndarray, faces: np.ndarray, pad: float = BOUNDS_PAD
 
 
 def build_mesh(points: np.ndarray, indices: np.ndarray, device="cpu", bvh_constructor: str = "sah",
-               pad: float = BOUNDS_PAD):
+               pad: float = BOUNDS_PAD, groups: np.ndarray | None = None):
     """A wp.Mesh over float32 ``points`` (V, 3) and flat int32 ``indices`` (3T,) whose BVH uses
     padded_bounds. Returns (mesh, points array, indices array): the points array holds the V real
-    points first, then the 2T proxy corners; the indices array holds the real indices."""
+    points first, then the 2T proxy corners; the indices array holds the real indices. pad = 0
+    gives Warp's own exact boxes (the stability suite measures what that loses); ``groups`` (one
+    int per triangle) gives each group its own subtree, for queries from wp.mesh_get_group_root."""
     points = np.asarray(points, np.float32).reshape(-1, 3)
     faces = np.asarray(indices, np.int32).reshape(-1, 3)
     v, t = len(points), len(faces)
@@ -55,7 +57,9 @@ def build_mesh(points: np.ndarray, indices: np.ndarray, device="cpu", bvh_constr
     proxy = np.stack([v + corner, v + t + corner, v + corner], axis=1)  # box of (lower, upper, lower)
     points_wp = wp.array(all_points, dtype=wp.vec3, device=device)
     indices_wp = wp.array(np.ascontiguousarray(proxy.reshape(-1)), dtype=wp.int32, device=device)
-    mesh = wp.Mesh(points=points_wp, indices=indices_wp, bvh_constructor=bvh_constructor)
+    if groups is not None:
+        groups = wp.array(np.ascontiguousarray(groups, np.int32), dtype=wp.int32, device=device)
+    mesh = wp.Mesh(points=points_wp, indices=indices_wp, bvh_constructor=bvh_constructor, groups=groups)
     # The mesh reads indices through the same buffer: from here on its triangles are the real ones.
     indices_wp.assign(np.ascontiguousarray(faces.reshape(-1)))
     return mesh, points_wp, indices_wp
