@@ -161,15 +161,18 @@ def crossovers(runs) -> dict:
 
 
 def _first_crossing(n, log_ratio):
-    """The interpolated count where log(Z-buffer / ray tracing) turns non-negative; 0 if the Z-buffer
-    is already the slower at the smallest count, None if it never is."""
-    if log_ratio[0] >= 0:
+    """The count from which on the Z-buffer stays the slower (log(Z-buffer / ray tracing) >= 0 up to
+    the largest count), log-interpolated; 0 if it is the slower at every count, None if it is the
+    faster at the largest. Timing noise can flip small-count ratios; the large counts decide."""
+    if log_ratio[-1] < 0:
+        return None
+    i = len(n) - 1
+    while i > 0 and log_ratio[i - 1] >= 0:
+        i -= 1
+    if i == 0:
         return 0.0
-    for i in range(1, len(n)):
-        if log_ratio[i - 1] < 0 <= log_ratio[i]:
-            f = -log_ratio[i - 1] / (log_ratio[i] - log_ratio[i - 1])
-            return float(np.exp(np.log(n[i - 1]) + f * (np.log(n[i]) - np.log(n[i - 1]))))
-    return None
+    f = -log_ratio[i - 1] / (log_ratio[i] - log_ratio[i - 1])
+    return float(np.exp(np.log(n[i - 1]) + f * (np.log(n[i]) - np.log(n[i - 1]))))
 
 
 def plot_growth(runs, path: Path):
@@ -264,7 +267,7 @@ def write_readme(out: Path, results: dict, seconds: float):
         *[f"| {r['width']}x{r['height']} | {r['triangles']:,} | {ms(r['zbuffer'])} | {ms(r['raytrace'])} | "
           f"{ms(r['prepare_flat'])} | {ms(r['prepare_bvh'])} |" for r in g["runs"]],
         "",
-        "Crossover (the triangle count where the Z-buffer becomes the slower of the two; Z-buffer work grows with the "
+        "Crossover (the triangle count from which on the Z-buffer is the slower of the two; Z-buffer work grows with the "
         "triangle count, ray tracing with the pixel count times the BVH depth, so the crossover moves up with the image "
         "size; counting the BVH build, which grows with the triangle count too, moves it further):",
         "",
@@ -277,9 +280,9 @@ def write_readme(out: Path, results: dict, seconds: float):
 
 def _n(x):
     if x is None:
-        return "none: the Z-buffer is the faster at every measured count"
+        return "none: the Z-buffer is still the faster at the largest count"
     if x == 0:
-        return "none: the Z-buffer is the slower already at the smallest count"
+        return "none: the Z-buffer is the slower at every count"
     return f"about {x:,.0f} triangles"
 
 
