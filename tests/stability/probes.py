@@ -19,6 +19,7 @@ from warprt.tracer import make_surface
 init_warp()
 
 ARTIFACT = Path(__file__).resolve().parents[1] / "_artifacts" / "stability.json"
+DEVICE = "cpu"  # the renderer's default device, where Geometry builds the BVH
 EPS32 = 2.0**-24
 
 
@@ -57,11 +58,11 @@ def closest_hit(mesh: wp.uint64, origins: wp.array(dtype=wp.vec3), dirs: wp.arra
 def cast(mesh_id, origins: np.ndarray, dirs: np.ndarray):
     """Nearest hit of each float32 ray on the mesh: (t, face), -1 where the ray escapes."""
     n = len(origins)
-    t = wp.empty(n, dtype=float)
-    face = wp.empty(n, dtype=int)
-    o = wp.array(np.ascontiguousarray(origins, np.float32), dtype=wp.vec3)
-    d = wp.array(np.ascontiguousarray(dirs, np.float32), dtype=wp.vec3)
-    wp.launch(closest_hit, dim=n, inputs=[mesh_id, o, d, t, face])
+    t = wp.empty(n, dtype=float, device=DEVICE)
+    face = wp.empty(n, dtype=int, device=DEVICE)
+    o = wp.array(np.ascontiguousarray(origins, np.float32), dtype=wp.vec3, device=DEVICE)
+    d = wp.array(np.ascontiguousarray(dirs, np.float32), dtype=wp.vec3, device=DEVICE)
+    wp.launch(closest_hit, dim=n, inputs=[mesh_id, o, d, t, face], device=DEVICE)
     return t.numpy(), face.numpy()
 
 
@@ -70,12 +71,12 @@ def surface_tables(mesh, points, indices, n_tri: int) -> SceneData:
     s = SceneData()
     s.mesh = mesh.id
     s.points, s.indices = points, indices
-    s.tri_material = wp.zeros(n_tri, dtype=wp.int32)
-    s.tri_smooth = wp.zeros(n_tri, dtype=wp.int32)
-    s.normals = wp.zeros(1, dtype=wp.vec3)
+    s.tri_material = wp.zeros(n_tri, dtype=wp.int32, device=DEVICE)
+    s.tri_smooth = wp.zeros(n_tri, dtype=wp.int32, device=DEVICE)
+    s.normals = wp.zeros(1, dtype=wp.vec3, device=DEVICE)
     for name in ("ka", "kd", "ks", "kr", "light_pos", "light_color"):
-        setattr(s, name, wp.zeros(1, dtype=wp.vec3))
-    s.shininess = wp.zeros(1, dtype=float)
+        setattr(s, name, wp.zeros(1, dtype=wp.vec3, device=DEVICE))
+    s.shininess = wp.zeros(1, dtype=float, device=DEVICE)
     return s
 
 
@@ -116,7 +117,7 @@ def offset_probe(s: SceneData, origin: wp.array(dtype=wp.vec3), target: wp.array
 def run_offset_probe(s: SceneData, origin, target, light, scale: float) -> np.ndarray:
     """offset_probe with the error bound at ``scale`` times its analytic value (OFFSET_SCALE as rendered)."""
     n = len(origin)
-    out = wp.empty(n, dtype=wp.vec4i)
-    arrays = [wp.array(np.ascontiguousarray(a, np.float32), dtype=wp.vec3) for a in (origin, target, light)]
-    wp.launch(offset_probe, dim=n, inputs=[s, *arrays, scale / OFFSET_SCALE, out])
+    out = wp.empty(n, dtype=wp.vec4i, device=DEVICE)
+    arrays = [wp.array(np.ascontiguousarray(a, np.float32), dtype=wp.vec3, device=DEVICE) for a in (origin, target, light)]
+    wp.launch(offset_probe, dim=n, inputs=[s, *arrays, scale / OFFSET_SCALE, out], device=DEVICE)
     return out.numpy()
