@@ -18,3 +18,11 @@ demo: install
 
 test: install llvm
 	$(PYTHON) -m pytest -q
+
+# The seed's Figures 6-8 and the cost-growth plot, into benchmarks/figures/.
+figures: install
+	$(PYTHON) -m benchmarks.figures
+
+# The performance report, benchmarks/REPORT.md (about 15-20 minutes on 2 cores; run on a quiet machine).
+benchmark: install llvm
+	$(PYTHON) -m benchmarks
