@@ -20,13 +20,21 @@ NO_SHADOWS_OR_REFLECTIONS = ["shadows", "reflection"]
 
 def timed(scene, geometry, repeat: int, **kw):
     """(image, median seconds) of warm renders: the first call compiles or loads the variant."""
-    result = warprt.render(scene, geometry=geometry, **kw)
+    result, seconds = timed_result(scene, geometry, repeat, **kw)
+    return result.image, seconds
+
+
+def timed_result(scene, geometry, repeat: int, warmup_size: tuple[int, int] | None = None, **kw):
+    """(the last RenderResult, median seconds) of ``repeat`` >= 1 warm renders. For an expensive frame,
+    ``warmup_size`` (width, height) makes the first, untimed call a small image instead of the frame."""
+    warmup = scene if warmup_size is None else scene.with_camera(width=warmup_size[0], height=warmup_size[1])
+    warprt.render(warmup, geometry=geometry, **kw)
     times = []
-    for _ in range(repeat):
+    for _ in range(max(1, repeat)):
         t = time.perf_counter()
         result = warprt.render(scene, geometry=geometry, **kw)
         times.append(time.perf_counter() - t)
-    return result.image, statistics.median(times)
+    return result, statistics.median(times)
 
 
 def once(fn):
