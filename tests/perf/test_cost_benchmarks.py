@@ -1,0 +1,115 @@
+"""The cost-growth and accuracy-cost benchmarks: their fits, upscaling and Pareto logic against closed
+forms, and a --quick run of each that writes its plots and a report whose image links resolve."""
+
+import json
+import math
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from benchmarks import accuracy_cost, growth
+from warprt.scene import Camera
+
+
+def test_fit_recovers_a_logarithmic_law_and_prefers_it_to_a_line():
+    n = np.geomspace(100, 1e6, 9)
+    t = 2e-3 + 5e-4 * np.log(n)
+    f = growth.growth_fits(n, t)
+    assert f["log"]["a"] == pytest.approx(2e-3, rel=1e-9)
+    assert f["log"]["b"] == pytest.approx(5e-4, rel=1e-9)
+    assert f["log"]["rms_rel"] < 1e-12 < f["linear"]["rms_rel"]
+
+
+def test_fit_recovers_a_linear_law_and_its_log_log_slope_tends_to_one():
+    n = np.geomspace(100, 1e6, 9)
+    t = 1e-3 + 2e-8 * n
+    f = growth.growth_fits(n, t)
+    assert f["linear"]["b"] == pytest.approx(2e-8, rel=1e-9)
+    assert f["linear"]["rms_rel"] < 1e-12 < f["log"]["rms_rel"]
+    # d ln t / d ln n = c n / (a + c n): 0.39 at n = 3e4, 0.95 at 1e6; a fixed cost hides the growth
+    # over the whole sweep, and the top of the sweep shows it.
+    assert f["slope"] < 0.5 < 0.8 < f["slope_top"] < 0.95
+
+
+def test_loglog_slope_of_a_power_law_is_its_exponent():
+    x = np.array([1.0, 10.0, 100.0, 1000.0])
+    assert growth.loglog_slope(x, 3.0 * x**0.5) == pytest.approx(0.5)
+
+
+def test_upscale_bilinear_reproduces_a_ramp_between_the_outer_pixel_centres():
+    w, h, W, H = 8, 6, 32, 24
+    # A ramp in output pixel units: source pixel i has its centre at (i + 0.5) * W / w.
+    xs = (np.arange(w) + 0.5) * W / w
+    src = np.repeat(np.repeat(xs[None, :, None], h, 0), 3, 2).astype(np.float32)
+    out = accuracy_cost.upscale_bilinear(src, W, H)
+    assert out.shape == (H, W, 3)
+    centres = np.arange(W) + 0.5
+    inside = (centres >= xs[0]) & (centres <= xs[-1])
+    np.testing.assert_allclose(out[0, inside, 0], centres[inside], rtol=0, atol=1e-4)
+    np.testing.assert_allclose(out[0, ~inside & (centres < xs[0]), 0], xs[0])  # clamped at the edges
+    np.testing.assert_allclose(out[0, ~inside & (centres > xs[-1]), 0], xs[-1])
+
+
+def test_upscale_bilinear_by_one_is_the_identity():
+    img = np.random.default_rng(1).random((5, 7, 3)).astype(np.float32)
+    np.testing.assert_allclose(accuracy_cost.upscale_bilinear(img, 7, 5), img, atol=1e-6)
+
+
+def test_reference_size_keeps_the_aspect_inside_the_box():
+    box = (320, 240)
+    assert accuracy_cost.reference_size(Camera(width=640, height=480), box) == (320, 240)
+    assert accuracy_cost.reference_size(Camera(width=560, height=560), box) == (240, 240)
+    assert accuracy_cost.reference_size(Camera(width=640, height=360), box) == (320, 180)
+    assert accuracy_cost.reference_size(Camera(width=160, height=120), box) == (160, 120)  # never enlarged
+
+
+def _p(seconds, ssim, rays=100):
+    return {"seconds": seconds, "ssim": ssim, "rays": rays}
+
+
+def test_pareto_front_keeps_only_points_nothing_beats_on_both_axes():
+    pts = [_p(1.0, 0.90), _p(2.0, 0.95), _p(2.5, 0.94), _p(3.0, 0.99), _p(0.5, 0.80), _p(4.0, 0.99)]
+    front = accuracy_cost.pareto(pts)
+    assert [(p["seconds"], p["ssim"]) for p in front] == [(0.5, 0.80), (1.0, 0.90), (2.0, 0.95), (3.0, 0.99)]
+
+
+def test_cheapest_breaks_a_timer_tie_by_rays_and_reports_none_when_unreached():
+    pts = [_p(1.00, 0.995, rays=500), _p(1.10, 0.995, rays=300), _p(2.0, 0.999, rays=900), _p(0.2, 0.9)]
+    assert accuracy_cost.cheapest(pts, 0.99)["rays"] == 300  # 10% slower on the timer, fewer rays: a tie it wins
+    assert accuracy_cost.cheapest(pts, 0.999)["seconds"] == 2.0
+    assert accuracy_cost.cheapest(pts, 0.9999) is None
+
+
+def _links_resolve(markdown: Path):
+    links = re.findall(r"!\[[^\]]*\]\(([^)]+)\)", markdown.read_text())
+    assert links
+    for link in links:
+        with Image.open(markdown.parent / link) as im:
+            assert im.width >= 400 and im.height >= 300, link
+
+
+def test_growth_quick_run_writes_plots_and_report(tmp_path):
+    growth.main(["--quick", "-o", str(tmp_path / "growth.md")])
+    _links_resolve(tmp_path / "growth.md")
+    data = json.loads((tmp_path / "growth.json").read_text())
+    counts = [r["triangles"] for r in data["triangles"]["runs"]]
+    assert counts == sorted(counts) and counts[-1] > 100 * counts[0]
+    assert [r["pixels"] for r in data["pixels"]["runs"]] == [128 * 96, 256 * 192, 512 * 384]
+    assert "1" in data["pixels"]["fits"]
+
+
+def test_accuracy_cost_quick_run_measures_what_each_knob_buys(tmp_path):
+    accuracy_cost.main(["--quick", "--scenes", "seed", "-o", str(tmp_path / "accuracy_cost.md")])
+    _links_resolve(tmp_path / "accuracy_cost.md")
+    (r,) = json.loads((tmp_path / "accuracy_cost.json").read_text())["scenes"]
+    pts = {(p["spp"], p["depth"], p["shadows"], p["scale"]): p for p in r["points"]}
+    # The seed scene has a mirror: more ray levels, more samples and shadows each bring warprt closer
+    # to the converged reference. These are the model's physics, not the timer's.
+    assert pts[(1, 1, True, 1)]["ssim"] < pts[(1, 3, True, 1)]["ssim"] < pts[(4, 3, True, 1)]["ssim"]
+    assert pts[(1, 3, False, 1)]["ssim"] < pts[(1, 3, True, 1)]["ssim"]
+    # At identical settings warprt and Mitsuba render the same image, up to a few edge pixels.
+    assert r["agreement"]["ssim"] > 0.999
+    assert all(math.isfinite(p["seconds"]) and p["seconds"] > 0 for p in r["points"])
