@@ -217,7 +217,8 @@ def scene_paths(only=None) -> list[Path]:
     return paths
 
 
-def run(quick: bool = False, scenes=None, out: Path | str = RESULTS, ref_spp: int | None = None) -> dict:
+def run(quick: bool = False, scenes=None, out: Path | str = RESULTS, ref_spp: int | None = None,
+        box: tuple[int, int] | None = None) -> dict:
     """Every scene in scenes/ (or those named in ``scenes``): reference, sweep, Pareto front, plots
     in ``out``. The returned dict is JSON-ready."""
     init_warp()
@@ -227,6 +228,8 @@ def run(quick: bool = False, scenes=None, out: Path | str = RESULTS, ref_spp: in
         if math.isqrt(ref_spp) ** 2 != ref_spp or ref_spp < 4:
             raise SystemExit(f"accuracy_cost: --ref-spp must be a square >= 4 (k x k stratum centres), got {ref_spp}")
         cfg["ref_spp"] = ref_spp
+    if box:
+        cfg["box"] = tuple(box)
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     print("accuracy against time", flush=True)
@@ -418,11 +421,19 @@ def main(argv=None):
     ap.add_argument("--quick", action="store_true", help="tiny images, few settings, a 16-spp reference: a smoke run")
     ap.add_argument("--scenes", default=None, help="comma-separated scene names from scenes/ (default: all)")
     ap.add_argument("--ref-spp", type=int, default=None, help="the reference's samples per pixel, a square (default 256; 16 with --quick)")
+    ap.add_argument("--size", default=None, metavar="WxH", help="the box each scene's image is shrunk to fit (default 320x240; 96x72 with --quick)")
     ap.add_argument("-o", "--output", default=str(RESULTS / "accuracy_cost.md"), help="Markdown report; plots and JSON beside it")
     args = ap.parse_args(argv)
+    box = None
+    if args.size:
+        try:
+            box = tuple(int(v) for v in args.size.lower().split("x"))
+            assert len(box) == 2 and min(box) >= 16
+        except (ValueError, AssertionError):
+            ap.error(f"--size: expected WxH with both sides >= 16, e.g. 320x240; got '{args.size}'")
     out = Path(args.output)
     data = run(quick=args.quick, scenes=args.scenes.split(",") if args.scenes else None, out=out.parent,
-               ref_spp=args.ref_spp)
+               ref_spp=args.ref_spp, box=box)
     out.with_suffix(".json").write_text(json.dumps(data, indent=1) + "\n")
     out.write_text(report(data, relative_to=out.parent) + "\n")
     print(f"wrote {out} and its plots in {data['seconds']:.0f} s", flush=True)
