@@ -106,6 +106,21 @@ def make_surface(smooth: bool):
     return surface
 
 
+@wp.func
+def tile_order_pixel(i: int, width: int, height: int, tile_w: int, tile_h: int) -> wp.vec2i:
+    """The (x, row) of the i-th pixel when the image is walked tile by tile: strips of tile_h rows
+    top to bottom, each cut into tiles tile_w wide, left to right, row-major inside a tile; the
+    right column and bottom strip of tiles may be narrower. Neighbouring rays then stay together
+    in a band, so they walk the same BVH nodes while those are in cache."""
+    strip = i / (width * tile_h)
+    local = i - strip * width * tile_h
+    th = wp.min(tile_h, height - strip * tile_h)
+    col = local / (tile_w * th)
+    within = local - col * tile_w * th
+    tw = wp.min(tile_w, width - col * tile_w)
+    return wp.vec2i(col * tile_w + within % tw, strip * tile_h + within / tw)
+
+
 _kernel_cache: dict = {}
 
 
@@ -118,11 +133,13 @@ def make_trace_kernel(fx):
     REFLECTION, SUPERSAMPLING = fx.reflection, fx.supersampling
 
     @wp.kernel(module="unique", enable_backward=False)
-    def trace(s: SceneData, c: CameraData, max_depth: int, k: int, first_pixel: int,
+    def trace(s: SceneData, c: CameraData, max_depth: int, k: int, first: int, tile_w: int, tile_h: int,
               image: wp.array(dtype=wp.vec3), counts: wp.array(dtype=wp.vec3i)):
-        pixel = first_pixel + wp.tid()
-        x = pixel % c.width
-        row = pixel / c.width
+        i = first + wp.tid()  # position in tile order; the image itself is row-major
+        xy = tile_order_pixel(i, c.width, c.height, tile_w, tile_h)
+        x = xy[0]
+        row = xy[1]
+        pixel = row * c.width + x
         total = wp.vec3(0.0)
         shadow_rays = int(0)
         reflection_rays = int(0)
@@ -161,7 +178,7 @@ def make_trace_kernel(fx):
                 break
             total = total + color
         image[pixel] = total / float(samples)
-        counts[pixel] = wp.vec3i(samples, shadow_rays, reflection_rays)
+        counts[i] = wp.vec3i(samples, shadow_rays, reflection_rays)  # in tile order: a band's counts are contiguous
 
     _kernel_cache[fx] = trace
     return trace
