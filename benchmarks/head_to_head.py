@@ -26,10 +26,12 @@ ENV = {**os.environ, "PYTHONPATH": os.pathsep.join([str(REPO / "src"), str(REPO)
 
 # Cold Mitsuba: what a user of Mitsuba's Python API runs from process start to image file.
 MITSUBA_COLD = """
-import sys, numpy as np, warprt
-from reference.mitsuba_whitted import render_mitsuba
-scene = warprt.load_scene(sys.argv[1], {"camera.width": int(sys.argv[3]), "camera.height": int(sys.argv[4])})
-np.save(sys.argv[2], render_mitsuba(scene))
+import sys, warprt
+from reference.mitsuba_whitted import mi, mitsuba, render_mitsuba
+size = {"camera.width": int(sys.argv[3]), "camera.height": int(sys.argv[4])} if len(sys.argv) > 3 else None
+scene = warprt.load_scene(sys.argv[1] or None, size)
+image = render_mitsuba(scene)
+mitsuba()[0].util.write_bitmap(sys.argv[2], image)  # an sRGB PNG, as warprt writes
 """
 
 # Warm frames: each engine renders the scene twice in one process; the second frame is timed.
@@ -66,15 +68,17 @@ def _run(cmd: list[str], env=None) -> float:
     return elapsed
 
 
-def cold(engine: str, scene: Path, width: int, height: int, repeat: int) -> float:
-    """Median seconds from process start to image file, after one untimed run fills every cache."""
-    out = Path(tempfile.mkdtemp()) / "out"
+def cold(engine: str, scene: Path | None, width: int | None, height: int | None, repeat: int) -> float:
+    """Median seconds from process start to PNG file, after one untimed run fills every cache.
+    scene None is the built-in default scene; width None keeps the scene's own size."""
+    out = Path(tempfile.mkdtemp()) / "out.png"
+    size = [] if width is None else [str(width), str(height)]
     if engine in ("warprt", "zbuffer"):
-        cmd = [sys.executable, "-m", "warprt", "render", str(scene), "-o", f"{out}.png", "-q",
-               "--width", str(width), "--height", str(height)] + (["--algorithm", "zbuffer"] if engine == "zbuffer" else [])
+        cmd = [sys.executable, "-m", "warprt", "render", *([str(scene)] if scene else []), "-o", str(out), "-q",
+               *(["--width", size[0], "--height", size[1]] if size else [])] + (["--algorithm", "zbuffer"] if engine == "zbuffer" else [])
         env = ENV
     else:
-        cmd = [sys.executable, "-c", MITSUBA_COLD, str(scene), f"{out}.npy", str(width), str(height)]
+        cmd = [sys.executable, "-c", MITSUBA_COLD, str(scene or ""), str(out), *size]
         env = {**ENV, "WARPRT_MITSUBA_VARIANT": "scalar_rgb" if engine == "mitsuba_scalar" else "llvm_ad_rgb"}
     _run(cmd, env)
     return statistics.median(_run(cmd, env) for _ in range(repeat))
@@ -97,6 +101,11 @@ def scenes() -> list[Path]:
 
 
 def run(width=1024, height=768, scalar_width=128, scalar_height=96, repeat=3, only=None) -> dict:
+    # The cold target: `warprt render` of the built-in default scene, at its own size, against the same
+    # scene rendered through Mitsuba's Python API, both from process start to PNG file.
+    default = {"warprt_cold": cold("warprt", None, None, None, repeat),
+               "mitsuba_llvm_cold": cold("mitsuba_llvm", None, None, None, repeat)}
+    print(f"default scene cold warprt/mitsuba {default['warprt_cold'] / default['mitsuba_llvm_cold']:.2f}", flush=True)
     rows = []
     for scene in scenes():
         if only and scene.stem not in only:
@@ -115,7 +124,7 @@ def run(width=1024, height=768, scalar_width=128, scalar_height=96, repeat=3, on
         rows.append(row)
         print(f"{scene.stem:<16} warm warprt/mitsuba {row['warprt_warm'] / row['mitsuba_llvm_warm']:.2f}  "
               f"cold {row['warprt_cold'] / row['mitsuba_llvm_cold']:.2f}", flush=True)
-    return {"rows": rows}
+    return {"rows": rows, "default_cold": default}
 
 
 def report(data: dict) -> str:
@@ -142,6 +151,11 @@ def report(data: dict) -> str:
         lines.append(f"| {r['scene']} | {r['rays']:,} | {m:.3f} | {r['warprt_warm']:.3f} | {r['warprt_warm'] / m:.2f} "
                      f"| {r['zbuffer_warm']:.3f} | {r['zbuffer_warm'] / m:.2f} | {mc:.2f} | {r['warprt_cold']:.2f} "
                      f"| {r['warprt_cold'] / mc:.2f} | {r['zbuffer_cold']:.2f} | {r['rays'] / r['warprt_warm'] / 1e6:.1f} |")
+    if "default_cold" in data:
+        d = data["default_cold"]
+        lines += ["", f"Cold target, the built-in default scene at its own 640x480 (`warprt render` against the same scene "
+                      f"through Mitsuba's Python API, each from process start to PNG file): warprt {d['warprt_cold']:.2f} s, "
+                      f"Mitsuba {d['mitsuba_llvm_cold']:.2f} s, ratio {d['warprt_cold'] / d['mitsuba_llvm_cold']:.2f}."]
     lines += ["", f"Mitsuba `scalar_rgb` runs the Python integrator per ray, so it is measured at {sw}x{sh} (warm frame):", "",
               "| scene | scalar_rgb | llvm_ad_rgb | warprt | scalar / llvm | warprt / llvm |", "|---|---:|---:|---:|---:|---:|"]
     for r in rows:
