@@ -88,9 +88,10 @@ def side_by_side(warprt_image: np.ndarray, mitsuba_image: np.ndarray, path) -> P
     return write_image(path, np.concatenate([a, gap, b, gap, diff], axis=1).astype(np.float32))
 
 
-def compare(scene, *, effects=None, disable=(), threads: int | None = None, output=None) -> CompareResult:
+def compare(scene, *, effects=None, disable=(), threads: int | None = None, output=None, **render_options) -> CompareResult:
     """Render ``scene`` with warprt and with the Mitsuba reference under the same effect set
-    (warprt.render's ``effects``/``disable``) and compare; write the side-by-side PNG to ``output``."""
+    (warprt.render's ``effects``/``disable``) and compare; write the side-by-side PNG to ``output``.
+    ``render_options`` go to warprt.render as they are (e.g. primary="zbuffer")."""
     import warprt
     from warprt.effects import resolve_effects
 
@@ -99,7 +100,7 @@ def compare(scene, *, effects=None, disable=(), threads: int | None = None, outp
     fx = resolve_effects(scene, effects, disable)
     switches = Switches.for_effects(fx, scene.render)
     t = time.perf_counter()
-    ours = warprt.render(scene, threads=threads, effects=effects, disable=disable).image
+    ours = warprt.render(scene, threads=threads, effects=effects, disable=disable, **render_options).image
     t_warprt = time.perf_counter() - t
     t = time.perf_counter()
     ref = mitsuba_scene(scene, switches.smooth).render(switches)

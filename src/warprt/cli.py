@@ -142,7 +142,7 @@ def cmd_render(args) -> int:
     effects = args.effects.split(",") if args.effects else None
     progress = None if args.quiet else Progress()
     result = render(scene, threads=args.threads, device=args.device, effects=effects, algorithm=args.algorithm,
-                    progress=progress)
+                    progress=progress, primary=args.primary)
     t = time.perf_counter()
     write_image(out, result.image, "--output")
     stats = result.stats
@@ -247,6 +247,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--effects", help="comma-separated effects to keep: ambient,diffuse,specular,shadows,reflection,supersampling,smooth")
     p.add_argument("--algorithm", default="raytrace", choices=["raytrace", "zbuffer"],
                    help="raytrace (default), or zbuffer: rasterized, same local shading, no shadows or reflections")
+    p.add_argument("--primary", default="raytrace", choices=["raytrace", "zbuffer", "auto"],
+                   help="where the tracer's first hits come from: raytrace (default), zbuffer (hybrid: rasterized, "
+                        "then shadows and reflections traced), or auto (the Z-buffer where it is the cheaper)")
     p.add_argument("--stats", action="store_true", help="print render statistics (times, rays, memory) as JSON on stdout")
     p.add_argument("--stats-file", metavar="FILE", help="write render statistics as JSON to this file")
     p.add_argument("-q", "--quiet", action="store_true",

@@ -3,6 +3,7 @@ pixels from a thread pool, and report what it cost (time per phase, exact ray co
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import os
 import time
@@ -59,6 +60,7 @@ class RenderStats:
     threads: int = 1
     bands: int = 1
     algorithm: str = "raytrace"
+    primary: str = "raytrace"  # where the first hits came from: "raytrace", or "zbuffer" (hybrid)
     effects: str = ""
     variant: str = ""
     rays: dict = field(default_factory=dict)  # primary, shadow, reflection, total
@@ -128,6 +130,16 @@ def check_finite(image: np.ndarray, what: str = "render"):
 
 
 ALGORITHMS = ("raytrace", "zbuffer")
+PRIMARY = ("auto", "raytrace", "zbuffer")
+
+
+def raster_is_cheaper(triangles: int, samples: int) -> bool:
+    """Whether rasterizing the primary hits beats tracing them. Rasterization costs about a fixed
+    amount per triangle plus per covered sample, tracing about log(triangles) per sample; at
+    1024x768 the Z-buffer found the first hits in 0.36-0.41x of the traced time with 5k-9k
+    triangles and in 2.7x with 524k (benchmarks/ATTEMPTS.md). Below one triangle per ten samples
+    the raster wins on every scene measured."""
+    return 0 < triangles <= samples // 10
 # Pixel order: bands walk the image in 8x8 tiles, so the rays of a band stay close together and
 # reuse the BVH nodes in cache. Measured at 1024x768 against row-major order: 0.83 to 0.96 of the
 # trace time on six of eight scenes, 1.01 and 1.03 on two (benchmarks/ATTEMPTS.md).
@@ -154,10 +166,14 @@ def cached_geometry(scene, device: str = "cpu") -> Geometry:
 
 def render(scene, *, threads: int | None = None, device: str = "cpu", effects=None, disable=(),
            bands: int | None = None, geometry: Geometry | None = None, algorithm: str = "raytrace",
-           progress=None, tile: tuple[int, int] | None = None) -> RenderResult:
+           progress=None, tile: tuple[int, int] | None = None, primary: str = "raytrace") -> RenderResult:
     """Render ``scene`` with the Whitted tracer (or, algorithm="zbuffer", by rasterization with the same
     local shading). ``effects`` (names) limits the effect set, ``disable`` removes effects; neither
-    can add one the scene has nothing for."""
+    can add one the scene has nothing for. ``primary`` says where the tracer's first hits come from:
+    "raytrace", "zbuffer" (hybrid rendering: rasterized, then shaded and traced on as usual), or "auto",
+    which rasterizes where that is the cheaper of the two (see raster_is_cheaper)."""
+    if primary not in PRIMARY:
+        raise SceneError("command line", "--primary", f"unknown primary visibility '{primary}'; expected one of: {', '.join(PRIMARY)}")
     if algorithm not in ALGORITHMS:
         raise SceneError("command line", "--algorithm", f"unknown algorithm '{algorithm}'; expected one of: {', '.join(ALGORITHMS)}")
     validate_scene(scene)  # a Scene built in Python gets the file's checks too, before any kernel
@@ -190,10 +206,30 @@ def render(scene, *, threads: int | None = None, device: str = "cpu", effects=No
 
     from .tracer import camera_data, make_trace_kernel
 
+    samples = n_pixels * (scene.render.spp if fx.supersampling else 1)
+    raster = primary == "zbuffer" or (primary == "auto" and raster_is_cheaper(geom.triangle_count, samples))
+    stats.primary = "zbuffer" if raster else "raytrace"
     t = time.perf_counter()
-    kernel = make_trace_kernel(fx)
+    kernel = make_trace_kernel(fx, raster_primary=raster)
     wp.load_module(kernel.module, device=device)
+    if raster:
+        from .zbuffer import raster_kernel
+
+        wp.load_module(raster_kernel.module, device=device)
     stats.times["compile"] = time.perf_counter() - t
+    stats.variant += "_zprimary" if raster else ""
+
+    if raster:
+        from .zbuffer import ZBuffer
+
+        t = time.perf_counter()
+        zb = ZBuffer(scene, geom, dataclasses.replace(fx, shadows=False, reflection=False), device=device)
+        zb.rasterize(threads, bands)
+        raster_face, raster_uv = zb.face, zb.uv
+        stats.times["raster"] = time.perf_counter() - t
+    else:
+        raster_face = wp.empty(0, dtype=wp.int32, device=device)
+        raster_uv = wp.empty(0, dtype=wp.vec2, device=device)
 
     t = time.perf_counter()
     image = wp.empty(n_pixels, dtype=wp.vec3, device=device)
@@ -213,7 +249,7 @@ def render(scene, *, threads: int | None = None, device: str = "cpu", effects=No
 
         progress.begin(len(_bands(n_pixels, bands)), n_pixels)
     try:
-        launch_bands(kernel, lambda first: [data, c, max_depth, k, first, tile_w, tile_h, image, counts],
+        launch_bands(kernel, lambda first: [data, c, max_depth, k, first, tile_w, tile_h, raster_face, raster_uv, image, counts],
                      n_pixels, threads, bands, device, on_band)
     finally:
         if progress is not None:

@@ -124,16 +124,20 @@ def tile_order_pixel(i: int, width: int, height: int, tile_w: int, tile_h: int) 
 _kernel_cache: dict = {}
 
 
-def make_trace_kernel(fx):
-    """The kernel for one EffectSet; code for disabled effects is removed by wp.static."""
-    if fx in _kernel_cache:
-        return _kernel_cache[fx]
+def make_trace_kernel(fx, raster_primary: bool = False):
+    """The kernel for one EffectSet; code for disabled effects is removed by wp.static. With
+    raster_primary, the first hit of each sample is read from the Z-buffer's (face, u, v) instead of
+    being traced (hybrid rendering); shadows and reflections are traced as always."""
+    key = (fx, raster_primary)
+    if key in _kernel_cache:
+        return _kernel_cache[key]
     shade = make_shade(fx)
     surface = make_surface(fx.smooth)
-    REFLECTION, SUPERSAMPLING = fx.reflection, fx.supersampling
+    REFLECTION, SUPERSAMPLING, RASTER = fx.reflection, fx.supersampling, raster_primary
 
     @wp.kernel(module="unique", enable_backward=False)
     def trace(s: SceneData, c: CameraData, max_depth: int, k: int, first: int, tile_w: int, tile_h: int,
+              raster_face: wp.array(dtype=wp.int32), raster_uv: wp.array(dtype=wp.vec2),
               image: wp.array(dtype=wp.vec3), counts: wp.array(dtype=wp.vec3i)):
         i = first + wp.tid()  # position in tile order; the image itself is row-major
         xy = tile_order_pixel(i, c.width, c.height, tile_w, tile_h)
@@ -158,11 +162,29 @@ def make_trace_kernel(fx):
             color = wp.vec3(0.0)
             depth = int(0)
             while depth < max_depth:
-                q = wp.mesh_query_ray(s.mesh, o, d, 1.0e30)
-                if not q.result:
+                f = int(-1)
+                u = float(0.0)
+                v = float(0.0)
+                face_normal = wp.vec3(0.0)
+                rasterized = False
+                if wp.static(RASTER):
+                    if depth == 0:
+                        rasterized = True
+                        f = raster_face[pixel * samples + sample]
+                        if f >= 0:  # face_normal stays 0: surface() computes it from the winding
+                            u = raster_uv[pixel * samples + sample][0]
+                            v = raster_uv[pixel * samples + sample][1]
+                if not rasterized:
+                    q = wp.mesh_query_ray(s.mesh, o, d, 1.0e30)
+                    if q.result:
+                        f = q.face
+                        u = q.u
+                        v = q.v
+                        face_normal = q.normal
+                if f < 0:
                     color = color + wp.cw_mul(weight, s.background)
                     break
-                hit = surface(s, q.face, q.u, q.v, q.normal, d)
+                hit = surface(s, f, u, v, face_normal, d)
                 r = shade(s, hit.material, hit.p, hit.err, hit.ng, hit.n, -d)
                 color = color + wp.cw_mul(weight, r.color)
                 shadow_rays += r.shadow_rays
@@ -180,5 +202,5 @@ def make_trace_kernel(fx):
         image[pixel] = total / float(samples)
         counts[i] = wp.vec3i(samples, shadow_rays, reflection_rays)  # in tile order: a band's counts are contiguous
 
-    _kernel_cache[fx] = trace
+    _kernel_cache[key] = trace
     return trace

@@ -85,10 +85,10 @@ def unexplained(scene, switches, result) -> list[str]:
     return bad
 
 
-def check(case: str, scene, effects=None, disable=()):
+def check(case: str, scene, effects=None, disable=(), **render_options):
     """Compare, assert the thresholds and that every differing pixel is explained; on failure
     write both images and the difference to tests/_artifacts/accuracy/<case>/ and name it."""
-    result = compare(scene, effects=effects, disable=disable)
+    result = compare(scene, effects=effects, disable=disable, **render_options)
     switches = Switches.for_effects(resolve_effects(scene, effects, disable), scene.render)
     problems = []
     if not result.ssim >= SSIM_MIN:

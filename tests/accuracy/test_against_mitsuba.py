@@ -3,6 +3,8 @@ effect level of the seed's Figure 6; thresholds and the pixel classes they may d
 
 import pytest
 
+import warprt
+
 from accuracy.harness import ROOT, SCENES, check, record, small
 
 pytestmark = pytest.mark.accuracy
@@ -29,6 +31,16 @@ def test_scene_matches_mitsuba(path):
     """Each scene as its file describes it (effects, ray levels, spp), at a small size."""
     result = check(f"scene_{path.stem}", small(path))
     print(f"\n{path.stem}: {record(result)}")
+
+
+@pytest.mark.parametrize("path", SCENES, ids=[p.stem for p in SCENES])
+def test_hybrid_rendering_matches_mitsuba(path):
+    """Primary hits from the Z-buffer, shadows and reflections traced: held to the same thresholds,
+    every differing pixel explained by the same float64 oracle."""
+    scene = small(path)
+    result = check(f"hybrid_{path.stem}", scene, primary="zbuffer")
+    assert warprt.render(scene, primary="zbuffer").stats.primary == "zbuffer"
+    print(f"\n{path.stem} hybrid: {record(result)}")
 
 
 @pytest.mark.parametrize("case, effects, max_depth", FIGURE_6, ids=[c for c, _, _ in FIGURE_6])
