@@ -36,7 +36,7 @@ from reference.compare import metrics
 from reference.mitsuba_whitted import Switches, mitsuba_scene, mitsuba_variant
 from warprt.effects import resolve_effects
 from warprt.geometry import Geometry
-from warprt.render import default_threads, init_warp
+from warprt.renderer import default_threads, init_warp
 
 ROOT = Path(__file__).resolve().parent
 RESULTS = ROOT / "results"

@@ -23,7 +23,7 @@ import warp
 import warprt
 from benchmarks.timing import SCENES, cpu_name, growth_runs, ms, timed
 from warprt.geometry import Geometry
-from warprt.render import default_threads, init_warp
+from warprt.renderer import default_threads, init_warp
 
 ROOT = Path(__file__).resolve().parent
 RESULTS = ROOT / "results"

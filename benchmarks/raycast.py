@@ -14,10 +14,9 @@ import time
 from pathlib import Path
 
 import numpy as np
-import warp as wp
 
-import warprt  # noqa: F401  (quiet Warp set-up)
-from warprt.render import _bands, init_warp
+from warprt._warp import wp  # Warp, quiet
+from warprt.renderer import _bands, init_warp
 from warprt.shapes import sphere
 
 os.environ.setdefault("DRJIT_LIBLLVM_PATH", "/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1")

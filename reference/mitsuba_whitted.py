@@ -224,7 +224,7 @@ class MitsubaScene:
     configuration hits Dr.Jit's kernel cache instead of compiling again."""
 
     def __init__(self, scene, smooth: bool = True):
-        from warprt.geometry import vertex_normals  # the scene's normals, as the scene defines them
+        from warprt.normals import vertex_normals  # the scene's normals, as the scene defines them
 
         mi, dr = self.mi, self.dr = mitsuba()
         self.scene = scene

@@ -4,18 +4,25 @@
     image, stats = warprt.render(scene)
 """
 
-import warp as _wp
-
-# Warp's start-up banner and module-load lines are noise for a renderer's users.
-_wp.config.quiet = True
-_wp.config.log_level = _wp.LOG_WARNING
-
 from .effects import EffectSet
 from .errors import SceneError
-from .render import RenderResult, RenderStats, render
 from .scene import Camera, Light, Material, RenderSettings, Scene, SceneObject, load_scene
 
 __version__ = "0.1.0"
 
 __all__ = ["Camera", "EffectSet", "Light", "Material", "RenderResult", "RenderSettings", "RenderStats",
            "Scene", "SceneError", "SceneObject", "load_scene", "render", "__version__"]
+
+_RENDERER_NAMES = ("render", "RenderResult", "RenderStats")
+
+
+def __getattr__(name):
+    """The renderer is imported on first use: importing Warp takes about 0.4 s, which reading or
+    checking a scene file (and Mitsuba's reference) should not pay."""
+    if name in _RENDERER_NAMES:
+        from . import renderer
+
+        for n in _RENDERER_NAMES:
+            globals()[n] = getattr(renderer, n)
+        return globals()[name]
+    raise AttributeError(f"module 'warprt' has no attribute '{name}'")

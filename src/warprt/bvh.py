@@ -17,7 +17,7 @@ same array afterwards: the BVH keeps the padded boxes, the triangle tests read t
 from __future__ import annotations
 
 import numpy as np
-import warp as wp
+from ._warp import wp
 
 EPS32 = 2.0**-24
 

@@ -115,9 +115,9 @@ def _load(args):
 def _check_device(device: str):
     if device == "cpu":
         return
-    import warp as wp
+    from ._warp import wp
 
-    from .render import init_warp
+    from .renderer import init_warp
 
     init_warp()
     if not wp.is_cuda_available():
@@ -128,7 +128,7 @@ def cmd_render(args) -> int:
     from .film import check_output_path, check_text_path, write_image, write_text
     from .memory import peak_rss
     from .progress import Progress
-    from .render import render
+    from .renderer import render
 
     # Everything that can be checked before the render is: a render whose result cannot be
     # saved, or that cannot start, should fail at once and leave nothing behind.
@@ -183,7 +183,7 @@ def cmd_info(args) -> int:
     # The geometry as a render builds it: its arrays and BVH, measured rather than estimated.
     from .geometry import Geometry
     from .memory import geometry_memory, human, peak_rss
-    from .render import init_warp
+    from .renderer import init_warp
 
     init_warp()
     mem = geometry_memory(Geometry(scene))

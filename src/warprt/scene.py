@@ -478,7 +478,7 @@ def split_by_material(name: str, vertices, faces, face_material, file_materials,
         return [SceneObject(name, vertices, faces, material, smooth)]
     normals = None
     if smooth:
-        from .geometry import vertex_normals
+        from .normals import vertex_normals
 
         edges = list(part_starts) + [len(vertices)]
         normals = np.zeros_like(vertices)

@@ -6,7 +6,7 @@ The local model (the seed's Figure 3), per colour channel and light l:
 
 from __future__ import annotations
 
-import warp as wp
+from ._warp import wp
 
 from .geometry import SceneData
 

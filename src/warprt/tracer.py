@@ -6,7 +6,7 @@ shadow rays (wp.mesh_query_ray_anyhit), then an iterative mirror bounce weighted
 
 from __future__ import annotations
 
-import warp as wp
+from ._warp import wp
 
 from .geometry import SceneData
 from .shading import hit_point_error, make_shade, offset_ray_origin

@@ -20,7 +20,7 @@ import math
 import time
 
 import numpy as np
-import warp as wp
+from ._warp import wp
 
 from .camera import camera_basis
 from .effects import EffectSet, resolve_effects
@@ -442,7 +442,7 @@ class ZBuffer:
         self.pairs = 0
 
     def rasterize(self, threads: int, bands: int):
-        from .render import launch_bands
+        from .renderer import launch_bands
 
         g, c, dev = self.geometry, self.camera, self.device
         data = g.data
@@ -495,7 +495,7 @@ def render_zbuffer(scene, *, threads: int | None = None, device: str = "cpu", ef
     """Render ``scene`` by rasterization with the tracer's local shading (no shadows, no reflections).
     Returns a RenderResult, and with return_faces also the visible face per sample (H, W, samples)."""
     from .errors import SceneError
-    from .render import RenderResult, RenderStats, check_finite, default_threads, init_warp, launch_bands
+    from .renderer import RenderResult, RenderStats, check_finite, default_threads, init_warp, launch_bands
     from .scene import validate_camera
 
     init_warp()
@@ -571,7 +571,7 @@ def traced_faces(scene, *, geometry: Geometry | None = None, effects=None, disab
                  device: str = "cpu") -> np.ndarray:
     """The face the ray tracer's primary ray hits at every sample, (height, width, samples), -1 for a miss;
     samples as the tracer takes them for this effect set (k*k with supersampling, else the centre)."""
-    from .render import default_threads, init_warp, launch_bands
+    from .renderer import default_threads, init_warp, launch_bands
 
     init_warp()
     cam = scene.camera

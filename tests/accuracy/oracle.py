@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from warprt.camera import camera_basis, pixel_ray_directions
-from warprt.geometry import vertex_normals
+from warprt.normals import vertex_normals
 
 # Mitsuba (include/mitsuba/render/interaction.h, offset_p and spawn_ray_to): (1 + max|p|) RayEpsilon
 # along the geometric normal, RayEpsilon = 1500 * 2^-24; shadow rays stop ShadowEpsilon short.

@@ -205,7 +205,7 @@ def test_bad_input_gives_its_message(outcomes, name, argv, message):
 def test_unavailable_device_is_a_bad_input(tmp_path):
     import warp as wp
 
-    from warprt.render import init_warp
+    from warprt.renderer import init_warp
 
     init_warp()
     if wp.is_cuda_available():

@@ -7,7 +7,7 @@ import pytest
 import warp as wp
 
 from warprt.camera import camera_basis, pixel_ray_directions
-from warprt.render import init_warp
+from warprt.renderer import init_warp
 from warprt.scene import Camera
 from warprt.tracer import CameraData, camera_data, camera_ray
 

@@ -13,7 +13,7 @@ import warp as wp
 import warprt
 from scenekit import make_scene
 from warprt.effects import EFFECTS, EffectSet, resolve_effects, scene_effects
-from warprt.render import init_warp
+from warprt.renderer import init_warp
 from warprt.tracer import make_trace_kernel
 
 LIGHT = {"position": [0.0, 3.0, 4.0]}

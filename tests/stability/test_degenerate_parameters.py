@@ -80,7 +80,7 @@ def no_kernels(monkeypatch):
     def refuse(*args, **kwargs):
         raise AssertionError("a kernel or BVH build ran before the bad input was reported")
     monkeypatch.setattr(wp, "launch", refuse)
-    render_module = importlib.import_module("warprt.render")  # warprt.render is also the function
+    render_module = importlib.import_module("warprt.renderer")  # warprt.render is also the function
     monkeypatch.setattr(render_module, "Geometry", refuse)
     monkeypatch.setattr(render_module, "launch_bands", refuse)
 

@@ -13,7 +13,7 @@ from scenekit import make_scene
 
 from stability.probes import record
 
-check_finite = importlib.import_module("warprt.render").check_finite
+check_finite = importlib.import_module("warprt.renderer").check_finite
 
 
 @pytest.mark.parametrize("bad", [np.nan, np.inf, -np.inf])
@@ -29,7 +29,7 @@ def test_check_finite_rejects_a_non_finite_pixel(bad):
 def test_render_refuses_to_return_a_non_finite_image(monkeypatch):
     """render() runs the check on what the kernel wrote: a NaN smuggled into the image buffer
     (here by a wrapped launch) becomes an error, not a picture."""
-    module = importlib.import_module("warprt.render")
+    module = importlib.import_module("warprt.renderer")
     real = module.launch_bands
 
     def poisoned(kernel, inputs_for, n_pixels, *args, **kwargs):

@@ -12,7 +12,7 @@ from dataclasses import asdict, dataclass, field
 from typing import NamedTuple
 
 import numpy as np
-import warp as wp
+from ._warp import wp
 
 from .camera import camera_basis
 from .effects import EffectSet, resolve_effects
