@@ -21,7 +21,6 @@ Error: SSIM (7x7 window, channels averaged) and PSNR of linear RGB clamped to [0
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import os
 import time
@@ -31,6 +30,7 @@ import numpy as np
 import warp
 
 import warprt
+from benchmarks.output import link, save
 from benchmarks.timing import SCENES, cpu_name, ms, once, timed_result
 from reference.compare import metrics
 from reference.mitsuba_whitted import Switches, mitsuba_scene, mitsuba_variant
@@ -345,10 +345,6 @@ def plot_fronts(results: list[dict], path: Path) -> Path:
 
 # --- the report ------------------------------------------------------------------------------------
 
-def _link(plot: str, relative_to) -> str:
-    return os.path.relpath(plot, relative_to) if relative_to is not None else plot
-
-
 def report(data: dict, relative_to: Path | str | None = ROOT) -> str:
     """Markdown for the performance report; image links relative to ``relative_to`` (the folder the
     Markdown is written to: benchmarks/ for `python -m benchmarks`)."""
@@ -378,7 +374,7 @@ def report(data: dict, relative_to: Path | str | None = ROOT) -> str:
         f"- Cheapest: the fastest setting that reaches the SSIM; settings within {NOISE * 100:.0f}% of its time are a tie "
         "(timer noise), won by the one that traces the fewest rays.",
         "",
-        f"![Pareto fronts]({_link(data['plots']['fronts'], relative_to)})",
+        f"![Pareto fronts]({link(data['plots']['fronts'], relative_to)})",
         "",
         "| scene | triangles | size | cheapest to SSIM 0.99 | cheapest to SSIM 0.999 | best measured | agreement | "
         "reference self-check |",
@@ -403,7 +399,7 @@ def report(data: dict, relative_to: Path | str | None = ROOT) -> str:
     lines.append("")
     for r in data["scenes"]:
         lines += [f"### {r['scene']}", "",
-                  f"![{r['name']}: error against time]({_link(data['plots'][r['name']], relative_to)})", ""]
+                  f"![{r['name']}: error against time]({link(data['plots'][r['name']], relative_to)})", ""]
         if not r["reflective"]:
             lines += ["No reflective material: ray levels change nothing, so only 1 level is measured.", ""]
         elif r["rows_stopped"]:
@@ -434,8 +430,7 @@ def main(argv=None):
     out = Path(args.output)
     data = run(quick=args.quick, scenes=args.scenes.split(",") if args.scenes else None, out=out.parent,
                ref_spp=args.ref_spp, box=box)
-    out.with_suffix(".json").write_text(json.dumps(data, indent=1) + "\n")
-    out.write_text(report(data, relative_to=out.parent) + "\n")
+    save(out, data, report(data, relative_to=out.parent))
     print(f"wrote {out} and its plots in {data['seconds']:.0f} s", flush=True)
 
 

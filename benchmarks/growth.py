@@ -12,7 +12,6 @@ to 2048x1536, on 1, 2, ... threads. Times are warm: kernels compiled, geometry a
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import time
 from pathlib import Path
@@ -21,6 +20,7 @@ import numpy as np
 import warp
 
 import warprt
+from benchmarks.output import link, save
 from benchmarks.timing import SCENES, cpu_name, growth_runs, ms, timed
 from warprt.geometry import Geometry
 from warprt.renderer import default_threads, init_warp
@@ -224,10 +224,6 @@ def plot_pixels(pix: dict, path: Path) -> Path:
 
 # --- the report ------------------------------------------------------------------------------------
 
-def _link(plot: str, relative_to) -> str:
-    return os.path.relpath(plot, relative_to) if relative_to is not None else plot
-
-
 def report(data: dict, relative_to: Path | str | None = ROOT) -> str:
     """Markdown for the performance report; image links relative to ``relative_to`` (the folder the
     Markdown is written to: benchmarks/ for `python -m benchmarks`)."""
@@ -258,7 +254,7 @@ def report(data: dict, relative_to: Path | str | None = ROOT) -> str:
         f"the same camera and {w}x{h} pixels, 1 spp, {tri['threads']} threads. The Z-buffer and the tracer with local "
         "shading make the same image; the full tracer adds the scene's shadows and 3 ray levels.",
         "",
-        f"![Cost against triangles]({_link(data['plots']['triangles'], relative_to)})",
+        f"![Cost against triangles]({link(data['plots']['triangles'], relative_to)})",
         "",
         "| triangles | Z-buffer | ray tracing, local | ray tracing, full | flatten | BVH build |",
         "|---:|---:|---:|---:|---:|---:|",
@@ -281,7 +277,7 @@ def report(data: dict, relative_to: Path | str | None = ROOT) -> str:
         f"{pix['runs'][0]['width']}x{pix['runs'][0]['height']} to {pix['runs'][-1]['width']}x{pix['runs'][-1]['height']}; "
         "`warprt.render(scene, threads=N)`.",
         "",
-        f"![Cost against pixels and threads]({_link(data['plots']['pixels'], relative_to)})",
+        f"![Cost against pixels and threads]({link(data['plots']['pixels'], relative_to)})",
         "",
         "| image | pixels | " + " | ".join(f"{n} thread{'s' * (n > 1)}" for n in pix["threads"]) + " | "
         + " | ".join(f"speed-up {n}/1" for n in pix["speedup"]) + " |",
@@ -320,8 +316,7 @@ def main(argv=None):
     args = ap.parse_args(argv)
     out = Path(args.output)
     data = run(quick=args.quick, repeat=args.repeat, out=out.parent)
-    out.with_suffix(".json").write_text(json.dumps(data, indent=1) + "\n")
-    out.write_text(report(data, relative_to=out.parent) + "\n")
+    save(out, data, report(data, relative_to=out.parent))
     print(f"wrote {out} and its plots in {data['seconds']:.0f} s", flush=True)
 
 

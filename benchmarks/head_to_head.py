@@ -19,6 +19,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from benchmarks.output import save
+
 ROOT = Path(__file__).resolve().parent
 REPO = ROOT.parent
 ENV = {**os.environ, "PYTHONPATH": os.pathsep.join([str(REPO / "src"), str(REPO), os.environ.get("PYTHONPATH", "")]),
@@ -178,10 +180,7 @@ def main():
     ap.add_argument("-o", "--output", default=str(ROOT / "results" / "head_to_head.md"))
     args = ap.parse_args()
     data = run(args.width, args.height, repeat=args.repeat, only=args.scene)
-    out = Path(args.output)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    out.with_suffix(".json").write_text(json.dumps(data, indent=1))
-    out.write_text(report(data) + "\n")
+    save(args.output, data, report(data))
     print(report(data))
 
 

@@ -7,7 +7,6 @@ against Mitsuba 3's ray_intersect_preliminary / ray_test (Embree underneath), on
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import statistics
 import time
@@ -15,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
+from benchmarks.output import save
 from warprt._warp import wp  # Warp, quiet
 from warprt.renderer import _bands, init_warp
 from warprt.shapes import sphere
@@ -152,10 +152,7 @@ def main():
     ap.add_argument("-o", "--output", default=str(ROOT / "results" / "raycast.md"))
     args = ap.parse_args()
     data = run(args.max_subdiv, args.repeat)
-    out = Path(args.output)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    out.with_suffix(".json").write_text(json.dumps(data, indent=1))
-    out.write_text(report(data) + "\n")
+    save(args.output, data, report(data))
     print(report(data))
 
 

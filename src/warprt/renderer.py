@@ -81,6 +81,15 @@ def default_threads() -> int:
     return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
 
 
+def launch_plan(threads: int | None, bands: int | None, device: str) -> tuple[int, int]:
+    """Threads and bands for a render: on the CPU each band is one launch, and 8 per thread (16 at
+    least) balance the load between threads; a GPU takes the whole image in one launch."""
+    threads = default_threads() if threads is None else int(threads)
+    if threads < 1:
+        raise SceneError("command line", "--threads", f"expected an integer >= 1, got {threads}")
+    return threads, bands or (1 if device != "cpu" else max(16, 8 * threads))
+
+
 def _bands(n_pixels: int, n_bands: int) -> list[tuple[int, int]]:
     """Split [0, n_pixels) into n_bands contiguous ranges (first pixel, count)."""
     n_bands = max(1, min(n_bands, n_pixels))
@@ -184,12 +193,9 @@ def render(scene, *, threads: int | None = None, device: str = "cpu", effects=No
                               bands=bands, geometry=geometry)
     init_warp()
     t_start = time.perf_counter()
-    threads = default_threads() if threads is None else int(threads)
-    if threads < 1:
-        raise SceneError("command line", "--threads", f"expected an integer >= 1, got {threads}")
+    threads, bands = launch_plan(threads, bands, device)
     cam = scene.camera
     n_pixels = cam.width * cam.height
-    bands = bands or (1 if device != "cpu" else max(16, 8 * threads))
     tile_w, tile_h = tile or TILE
     fx: EffectSet = resolve_effects(scene, effects, disable)
     stats = RenderStats(width=cam.width, height=cam.height, spp=scene.render.spp,

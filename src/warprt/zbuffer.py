@@ -494,19 +494,15 @@ def render_zbuffer(scene, *, threads: int | None = None, device: str = "cpu", ef
                    return_faces: bool = False):
     """Render ``scene`` by rasterization with the tracer's local shading (no shadows, no reflections).
     Returns a RenderResult, and with return_faces also the visible face per sample (H, W, samples)."""
-    from .errors import SceneError
-    from .renderer import RenderResult, RenderStats, check_finite, default_threads, init_warp, launch_bands
+    from .renderer import RenderResult, RenderStats, check_finite, init_warp, launch_bands, launch_plan
     from .scene import validate_camera
 
     init_warp()
     validate_camera(scene.camera, scene.source)
     t_start = time.perf_counter()
-    threads = default_threads() if threads is None else int(threads)
-    if threads < 1:
-        raise SceneError("command line", "--threads", f"expected an integer >= 1, got {threads}")
+    threads, bands = launch_plan(threads, bands, device)
     cam = scene.camera
     n_pixels = cam.width * cam.height
-    bands = bands or (1 if device != "cpu" else max(16, 8 * threads))
     fx = _zbuffer_effects(scene, effects, disable)
     stats = RenderStats(width=cam.width, height=cam.height, spp=scene.render.spp, max_depth=1,
                         lights=len(scene.lights), device=str(device), threads=threads, bands=bands,

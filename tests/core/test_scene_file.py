@@ -1,13 +1,11 @@
 """The scene file: the documented example parses to the documented values and defaults."""
 
-import textwrap
 
 import numpy as np
 import pytest
 import trimesh
 
 import warprt
-from warprt.scene import Material
 
 EXAMPLE = """
 [camera]

@@ -1,7 +1,6 @@
 """Effect sets: derived from the scene, narrowed by the user, never widened; one compiled variant
 per set, with the code of disabled effects absent from the generated source."""
 
-import os
 import subprocess
 import sys
 import textwrap

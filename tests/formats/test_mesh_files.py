@@ -296,7 +296,7 @@ def test_glb_as_scene_objects(glb_file, tmp_path):
 def usd_file(tmp_path):
     """A transformed, left-handed mesh with a quad, a pentagon, a triangle and a hole, a bound
     UsdPreviewSurface, a GeomSubset with another material, and a second prim with a displayColor."""
-    pxr = pytest.importorskip("pxr")
+    pytest.importorskip("pxr")
     from pxr import Gf, Sdf, Usd, UsdGeom, UsdShade
 
     path = tmp_path / "stage.usda"
@@ -368,7 +368,7 @@ def test_z_up_stage_is_framed_with_z_up(usd_file):
 
 def test_warp_example_assets_load():
     """The USD meshes shipped with warp-lang, triangulated as their face counts say."""
-    pxr = pytest.importorskip("pxr")
+    pytest.importorskip("pxr")
     import os
 
     import warp.examples
