@@ -60,13 +60,11 @@ def main():
     (RESULTS / "raycast.json").write_text(json.dumps(data, indent=1))
     sections.append(raycast.report(data).replace("# Raw ray casting", "## Raw ray casting", 1))
 
-    for name in ("growth", "accuracy_cost"):
-        try:
-            module = __import__(f"benchmarks.{name}", fromlist=["run", "report"])
-        except ImportError:
-            continue
+    from . import accuracy_cost, growth
+
+    for name, module in (("growth", growth), ("accuracy_cost", accuracy_cost)):
         print(f"{name} ...", file=sys.stderr, flush=True)
-        data = module.run(quick=q) if "quick" in module.run.__code__.co_varnames else module.run()
+        data = module.run(quick=q)
         (RESULTS / f"{name}.json").write_text(json.dumps(data, indent=1, default=str))
         sections.append(module.report(data))
 
