@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import sys
 import time
 import tomllib
@@ -297,5 +298,21 @@ def main(argv=None) -> int:
         return 1
 
 
+def run():
+    """The console script: main(), then exit without tearing the interpreter down. Everything the
+    command makes is written, renamed into place and closed by then; finalizing Warp's and LLVM's
+    native state and every module only delays the prompt (0.11 s of a 0.57 s cold render of the
+    default scene, measured with `python -m warprt render -q`)."""
+    try:
+        code = main()
+    except SystemExit as e:  # argparse's --help, --version and usage errors; sys.exit's meaning kept
+        code = e.code if isinstance(e.code, int) else (0 if e.code is None else 1)
+        if not isinstance(e.code, (int, type(None))):
+            print(e.code, file=sys.stderr)
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(code)
+
+
 if __name__ == "__main__":
-    sys.exit(main())
+    run()
