@@ -72,7 +72,7 @@ def main():
     started = time.time()
     sections = []
 
-    from . import effects, head_to_head, raycast
+    from . import effects, head_to_head, raycast, shadow_rays
 
     q = args.quick
     print("head to head ...", file=sys.stderr, flush=True)
@@ -93,6 +93,11 @@ def main():
         data = module.run(quick=q)
         (RESULTS / f"{name}.json").write_text(json.dumps(data, indent=1, default=str))
         sections.append(module.report(data))
+
+    print("shadow rays ...", file=sys.stderr, flush=True)
+    data = shadow_rays.run(*((256, 192) if q else (1024, 768)), repeat=1 if q else 5)
+    (RESULTS / "shadow_rays.json").write_text(json.dumps(data, indent=1))
+    sections.append(shadow_rays.report(data))
 
     print("effects ...", file=sys.stderr, flush=True)
     text = effects.run(*((128, 96) if q else (512, 384)), 1 if q else 5)

@@ -139,3 +139,18 @@ def test_targets_say_met_exactly_where_the_ratios_allow():
     h2h["rows"].pop()
     cast["rows"].pop()
     assert _targets_row(targets(h2h, cast), "Warm")[-1] == _targets_row(targets(h2h, cast), "Rays")[-1] == "met"
+
+
+def test_shadow_ray_diagnostic_casts_the_renderers_own_shadow_rays():
+    """benchmarks.shadow_rays rebuilds the shadow rays of every pixel centre's first hit: as many as the
+    renderer itself counts with one ray level, and on the Cornell box some, not all, are occluded."""
+    import warprt
+    from benchmarks import shadow_rays
+
+    path = Path(__file__).resolve().parents[2] / "scenes" / "cornell.toml"
+    row = shadow_rays.run(48, 36, repeat=1, scenes=[path])["rows"][0]
+    scene = warprt.load_scene(path).with_camera(width=48, height=36)
+    stats = warprt.render(scene.with_render(max_depth=1, spp=1)).stats
+    assert row["shadow_rays"] == stats.rays["shadow"] > 0
+    assert 0 < row["occluded"] < row["shadow_rays"]
+    assert "| cornell |" in shadow_rays.report({"width": 48, "height": 36, "rows": [row]})
