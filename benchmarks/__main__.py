@@ -38,7 +38,8 @@ def machine() -> str:
 
 
 def targets(h2h: dict, cast: dict) -> str:
-    """Issue 7's three targets, each measured against Mitsuba in this run: met or not, with the gap."""
+    """The three performance targets (warm frame, cold start, rays per second per core), each measured
+against Mitsuba in this run: met or not, with the gap."""
     warm = [r["warprt_warm"] / r["mitsuba_llvm_warm"] for r in h2h["rows"]]
     hybrid = [r["hybrid_warm"] / r["mitsuba_llvm_warm"] for r in h2h["rows"]]
     d = h2h["default_cold"]

@@ -90,7 +90,7 @@ def run(width: int = 1024, height: int = 768, repeat: int = 5, scenes=None) -> d
         rows.append({"scene": Path(path).stem, "shadow_rays": int(len(t)), "occluded": int(blocked.sum()),
                      "all_s": total, "occluded_s": occluded, "free_s": free})
         print(f"{rows[-1]['scene']}: {blocked.mean():.1%} occluded, {occluded / total:.1%} of the time", flush=True)
-    return {"width": width, "height": height, "rows": rows}
+    return {"width": width, "height": height, "repeat": repeat, "rows": rows}
 
 
 def report(data: dict) -> str:
@@ -98,7 +98,7 @@ def report(data: dict) -> str:
         "## Shadow rays: occluded and unoccluded",
         "",
         f"The renderer's own shadow rays from every pixel centre's first hit at {data['width']}x{data['height']}, "
-        "cast alone with `wp.mesh_query_ray_anyhit` on one thread (median of 5). Regenerate: "
+        f"cast alone with `wp.mesh_query_ray_anyhit` on one thread (median of {data['repeat']}). Regenerate: "
         "`python -m benchmarks.shadow_rays`.",
         "",
         "| scene | shadow rays | occluded | share of shadow time | ns per occluded ray | ns per unoccluded ray |",

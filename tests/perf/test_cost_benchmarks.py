@@ -153,4 +153,4 @@ def test_shadow_ray_diagnostic_casts_the_renderers_own_shadow_rays():
     stats = warprt.render(scene.with_render(max_depth=1, spp=1)).stats
     assert row["shadow_rays"] == stats.rays["shadow"] > 0
     assert 0 < row["occluded"] < row["shadow_rays"]
-    assert "| cornell |" in shadow_rays.report({"width": 48, "height": 36, "rows": [row]})
+    assert "| cornell |" in shadow_rays.report({"width": 48, "height": 36, "repeat": 1, "rows": [row]})
