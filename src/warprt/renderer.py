@@ -231,11 +231,11 @@ def render(scene, *, threads: int | None = None, device: str = "cpu", effects=No
         t = time.perf_counter()
         zb = ZBuffer(scene, geom, dataclasses.replace(fx, shadows=False, reflection=False), device=device)
         zb.rasterize(threads, bands)
-        raster_face, raster_uv = zb.face, zb.uv
+        raster_inputs = (zb.face, zb.depth, zb.near)
         stats.times["raster"] = time.perf_counter() - t
     else:
-        raster_face = wp.empty(0, dtype=wp.int32, device=device)
-        raster_uv = wp.empty(0, dtype=wp.vec2, device=device)
+        raster_inputs = (wp.empty(0, dtype=wp.int32, device=device), wp.empty(0, dtype=wp.float64, device=device),
+                         wp.empty(0, dtype=wp.float64, device=device))
 
     t = time.perf_counter()
     image = wp.empty(n_pixels, dtype=wp.vec3, device=device)
@@ -255,7 +255,7 @@ def render(scene, *, threads: int | None = None, device: str = "cpu", effects=No
 
         progress.begin(len(_bands(n_pixels, bands)), n_pixels)
     try:
-        launch_bands(kernel, lambda first: [data, c, max_depth, k, first, tile_w, tile_h, raster_face, raster_uv, image, counts],
+        launch_bands(kernel, lambda first: [data, c, max_depth, k, first, tile_w, tile_h, *raster_inputs, image, counts],
                      n_pixels, threads, bands, device, on_band)
     finally:
         if progress is not None:

@@ -121,23 +121,40 @@ def tile_order_pixel(i: int, width: int, height: int, tile_w: int, tile_h: int) 
     return wp.vec2i(col * tile_w + within % tw, strip * tile_h + within / tw)
 
 
+@wp.func_native("""
+float t, u, v, sign;
+if (wp::intersect_ray_tri_woop(o, d, p0, p1, p2, t, u, v, sign, nullptr) && t >= 0.0f)
+    return wp::vec3(t, u, v);
+return wp::vec3(-1.0f, 0.0f, 0.0f);
+""")
+def woop_hit(o: wp.vec3, d: wp.vec3, p0: wp.vec3, p1: wp.vec3, p2: wp.vec3) -> wp.vec3:
+    """(t, u, v) of the ray o + t d on one triangle, t = -1 for a miss: the very test, Woop's watertight
+    one, that wp.mesh_query_ray applies to each triangle of a BVH leaf, so on the triangle that query
+    returns it gives the query's t, u and v to the bit."""
+    ...
+
+
 _kernel_cache: dict = {}
 
 
 def make_trace_kernel(fx, raster_primary: bool = False):
     """The kernel for one EffectSet; code for disabled effects is removed by wp.static. With
-    raster_primary, the first hit of each sample is read from the Z-buffer's (face, u, v) instead of
-    being traced (hybrid rendering); shadows and reflections are traced as always."""
+    raster_primary (hybrid rendering), a sample's first hit is the Z-buffer's visible triangle, tested
+    with the ray query's own triangle test, wherever the rasterizer's answer is certain to be the
+    tracer's (zbuffer.uncertain); every other sample is traced. The image is the traced image, to
+    the bit; shadows and reflections are traced as always."""
     key = (fx, raster_primary)
     if key in _kernel_cache:
         return _kernel_cache[key]
+    from .zbuffer import uncertain  # zbuffer builds on this module
     shade = make_shade(fx)
     surface = make_surface(fx.smooth)
     REFLECTION, SUPERSAMPLING, RASTER = fx.reflection, fx.supersampling, raster_primary
 
     @wp.kernel(module="unique", enable_backward=False)
     def trace(s: SceneData, c: CameraData, max_depth: int, k: int, first: int, tile_w: int, tile_h: int,
-              raster_face: wp.array(dtype=wp.int32), raster_uv: wp.array(dtype=wp.vec2),
+              raster_face: wp.array(dtype=wp.int32), raster_depth: wp.array(dtype=wp.float64),
+              raster_near: wp.array(dtype=wp.float64),
               image: wp.array(dtype=wp.vec3), counts: wp.array(dtype=wp.vec3i)):
         i = first + wp.tid()  # position in tile order; the image itself is row-major
         xy = tile_order_pixel(i, c.width, c.height, tile_w, tile_h)
@@ -168,12 +185,22 @@ def make_trace_kernel(fx, raster_primary: bool = False):
                 face_normal = wp.vec3(0.0)
                 rasterized = False
                 if wp.static(RASTER):
-                    if depth == 0:
+                    n_s = pixel * samples + sample
+                    if depth == 0 and not uncertain(raster_depth[n_s], raster_near[n_s]):
                         rasterized = True
-                        f = raster_face[pixel * samples + sample]
-                        if f >= 0:  # face_normal stays 0: surface() computes it from the winding
-                            u = raster_uv[pixel * samples + sample][0]
-                            v = raster_uv[pixel * samples + sample][1]
+                        f = raster_face[n_s]
+                        if f >= 0:
+                            p0 = s.points[s.indices[f * 3 + 0]]
+                            p1 = s.points[s.indices[f * 3 + 1]]
+                            p2 = s.points[s.indices[f * 3 + 2]]
+                            h = woop_hit(o, d, p0, p1, p2)
+                            if h[0] >= 0.0:
+                                u = h[1]
+                                v = h[2]
+                                face_normal = wp.normalize(wp.cross(p1 - p0, p2 - p0))  # as the query reports it
+                            else:  # never seen: a certain sample is well inside its triangle
+                                rasterized = False
+                                f = -1
                 if not rasterized:
                     q = wp.mesh_query_ray(s.mesh, o, d, 1.0e30)
                     if q.result:

@@ -31,6 +31,15 @@ from .tracer import CameraData, camera_data, camera_ray, make_surface
 CLIP_SCALE = 1.0e-6
 TILE = 16  # pixels per tile side: each raster thread owns one tile
 
+# Where the rasterizer's float64 answer may not be the tracer's float32 one (hybrid rendering takes a
+# sample's first hit from here only where it is the same): a sample within MARGIN_PX pixels of a
+# triangle's edge, or two surfaces within TIE_REL of each other in depth. Float32 rounding moves the
+# tracer's rays by about 1e-4 pixel at 1024 pixels across (a few ulp of the direction, 1e-7 rad,
+# against 7.7e-4 rad per pixel at fovy 45) and its hit distances by about 1e-6 relative; both margins
+# are a hundred times that. Such samples are marked in `near`, and the hybrid traces them.
+MARGIN_PX = 1.0e-2
+TIE_REL = 1.0e-4
+
 
 @wp.struct
 class RasterCamera:
@@ -198,6 +207,7 @@ class Edge:
     dx: wp.float64  # larger - smaller
     dy: wp.float64
     sign: wp.float64  # +1 where the triangle's interior is on the positive side of the canonical function
+    m: wp.float64  # MARGIN_PX times the edge's length: the edge function's value MARGIN_PX pixels off the edge
 
 
 @wp.func
@@ -215,6 +225,7 @@ def make_edge(a: ScreenVertex, b: ScreenVertex, orientation: wp.float64) -> Edge
         e.dx = b.x - a.x
         e.dy = b.y - a.y
         e.sign = orientation
+    e.m = wp.float64(MARGIN_PX) * wp.sqrt(e.dx * e.dx + e.dy * e.dy)
     return e
 
 
@@ -235,9 +246,13 @@ def covers(e: Edge, value: wp.float64) -> bool:
 @wp.func
 def raster_triangle(s0: ScreenVertex, s1: ScreenVertex, s2: ScreenVertex, f: int, x_lo: int, x_hi: int,
                     y_lo: int, y_hi: int, c: RasterCamera, k: int, samples: int,
-                    depth: wp.array(dtype=wp.float64), face: wp.array(dtype=wp.int32), uv: wp.array(dtype=wp.vec2)):
+                    depth: wp.array(dtype=wp.float64), face: wp.array(dtype=wp.int32), uv: wp.array(dtype=wp.vec2),
+                    near: wp.array(dtype=wp.float64)):
     """Depth-test one screen triangle at every sample in the pixel rectangle [x_lo, x_hi] x [y_lo, y_hi]
-    (y up). Depth is 1/z, which is linear in screen space; (u, v) are interpolated perspective-correctly."""
+    (y up). Depth is 1/z, which is linear in screen space; (u, v) are interpolated perspective-correctly.
+    near[n] keeps the nearest 1/z of every surface that could be the tracer's answer at sample n but
+    need not be the rasterizer's: one within MARGIN_PX of an edge, inside or out, and one that lost
+    the depth test (see uncertain())."""
     one = wp.float64(1.0)
     probe = make_edge(s1, s2, one)
     area = edge_at(probe, probe.dx * (s0.y - probe.ay), s0.x)  # twice the signed area, as the edges see it
@@ -249,12 +264,14 @@ def raster_triangle(s0: ScreenVertex, s1: ScreenVertex, s2: ScreenVertex, f: int
     e0 = make_edge(s1, s2, orientation)
     e1 = make_edge(s2, s0, orientation)
     e2 = make_edge(s0, s1, orientation)
-    # The sample (x + sx, y + sy) lies in the triangle only if floor(min X) <= x <= floor(max X).
+    # The sample (x + sx, y + sy) lies in the triangle, or within MARGIN_PX of it, only if
+    # floor(min X - MARGIN_PX) <= x <= floor(max X + MARGIN_PX).
     big = wp.float64(1.0e9)
-    x0 = wp.max(x_lo, int(wp.floor(wp.clamp(wp.min(wp.min(s0.x, s1.x), s2.x), -big, big))))
-    x1 = wp.min(x_hi, int(wp.floor(wp.clamp(wp.max(wp.max(s0.x, s1.x), s2.x), -big, big))))
-    y0 = wp.max(y_lo, int(wp.floor(wp.clamp(wp.min(wp.min(s0.y, s1.y), s2.y), -big, big))))
-    y1 = wp.min(y_hi, int(wp.floor(wp.clamp(wp.max(wp.max(s0.y, s1.y), s2.y), -big, big))))
+    pad = wp.float64(MARGIN_PX)
+    x0 = wp.max(x_lo, int(wp.floor(wp.clamp(wp.min(wp.min(s0.x, s1.x), s2.x) - pad, -big, big))))
+    x1 = wp.min(x_hi, int(wp.floor(wp.clamp(wp.max(wp.max(s0.x, s1.x), s2.x) + pad, -big, big))))
+    y0 = wp.max(y_lo, int(wp.floor(wp.clamp(wp.min(wp.min(s0.y, s1.y), s2.y) - pad, -big, big))))
+    y1 = wp.min(y_hi, int(wp.floor(wp.clamp(wp.max(wp.max(s0.y, s1.y), s2.y) + pad, -big, big))))
     step = one / wp.float64(k)
     half = wp.float64(0.5) * step
     for y in range(y0, y1 + 1):
@@ -270,27 +287,47 @@ def raster_triangle(s0: ScreenVertex, s1: ScreenVertex, s2: ScreenVertex, f: int
                     v0 = edge_at(e0, r0, px)
                     v1 = edge_at(e1, r1, px)
                     v2 = edge_at(e2, r2, px)
-                    if covers(e0, v0) and covers(e1, v1) and covers(e2, v2):
-                        w0 = v0 * s0.iz
-                        w1 = v1 * s1.iz
-                        w2 = v2 * s2.iz
-                        wsum = w0 + w1 + w2
-                        iz = wsum / (v0 + v1 + v2)
-                        n = (row * c.width + x) * samples + j * k + i
+                    # Within the margin band around the triangle, and close to one of its edges.
+                    banded = v0 >= -e0.m and v1 >= -e1.m and v2 >= -e2.m
+                    if not banded:
+                        continue
+                    edgy = v0 <= e0.m or v1 <= e1.m or v2 <= e2.m
+                    inside = covers(e0, v0) and covers(e1, v1) and covers(e2, v2)
+                    w0 = v0 * s0.iz
+                    w1 = v1 * s1.iz
+                    w2 = v2 * s2.iz
+                    wsum = w0 + w1 + w2
+                    iz = wsum / (v0 + v1 + v2)  # 1/z is linear in screen space, off the triangle too
+                    n = (row * c.width + x) * samples + j * k + i
+                    if edgy:
+                        near[n] = wp.max(near[n], iz)
+                    if inside:
                         # Equal depth goes to the lower face index, so the image does not depend on
                         # the order of a tile's list (which atomics make arbitrary on a GPU).
                         if iz > depth[n] or (iz == depth[n] and f < face[n]):
+                            near[n] = wp.max(near[n], depth[n])  # the surface it hides, for the tie test
                             depth[n] = iz
                             face[n] = f
                             uv[n] = (s0.uv * float(w0 / wsum) + s1.uv * float(w1 / wsum)) + s2.uv * float(w2 / wsum)
+                        else:
+                            near[n] = wp.max(near[n], iz)
+
+
+@wp.func
+def uncertain(depth: wp.float64, near: wp.float64) -> bool:
+    """Whether the tracer may see another surface than the rasterizer at a sample: some surface near
+    an edge there, or hidden by less than TIE_REL in depth, is about as near as the visible one
+    (1/z at least (1 - TIE_REL) times the visible one's; depth 0 where nothing is visible)."""
+    return near > wp.float64(0.0) and near >= depth * wp.float64(1.0 - TIE_REL)
 
 
 @wp.func
 def sample_span(lo: wp.float64, hi: wp.float64, k: int, n: int) -> wp.vec2i:
     """The pixels (first, last) whose samples x + (j + 1/2)/k, j < k, fall in [lo, hi] on one axis of n
-    pixels; first > last when none does. Widened by a hair so rounding can only add a pixel."""
+    pixels; first > last when none does. Widened by MARGIN_PX, so samples near the triangle are seen
+    too, and by a hair more so that rounding can only add a pixel."""
     kf = wp.float64(k)
-    pad = wp.float64(1.0e-9) * (wp.float64(1.0) + wp.abs(lo) + wp.abs(hi))
+    pad = wp.float64(MARGIN_PX) + wp.float64(1.0e-9) * (wp.float64(1.0) + wp.abs(lo) + wp.abs(hi))
     big = wp.float64(4.0e9)  # keeps int() in range for vertices projected from just in front of the eye
     m_lo = wp.max(wp.ceil(wp.clamp(kf * (lo - pad) - wp.float64(0.5), -big, big)), wp.float64(0.0))
     m_hi = wp.min(wp.floor(wp.clamp(kf * (hi + pad) - wp.float64(0.5), -big, big)), wp.float64(n * k - 1))
@@ -331,7 +368,8 @@ def project_kernel(s: SceneData, c: RasterCamera, k: int, first: int, bounds: wp
 @wp.kernel(enable_backward=False)
 def raster_kernel(s: SceneData, c: RasterCamera, tile_start: wp.array(dtype=wp.int32),
                   tile_faces: wp.array(dtype=wp.int32), tiles_x: int, tile: int, k: int, samples: int, first: int,
-                  depth: wp.array(dtype=wp.float64), face: wp.array(dtype=wp.int32), uv: wp.array(dtype=wp.vec2)):
+                  depth: wp.array(dtype=wp.float64), face: wp.array(dtype=wp.int32), uv: wp.array(dtype=wp.vec2),
+                  near: wp.array(dtype=wp.float64)):
     """One thread per tile: every triangle binned to it clipped, projected and depth-tested at the
     tile's samples. Only this thread writes the tile's samples."""
     t = first + wp.tid()
@@ -345,11 +383,11 @@ def raster_kernel(s: SceneData, c: RasterCamera, tile_start: wp.array(dtype=wp.i
         a = project(c, poly.v0)
         b = project(c, poly.v1)
         d = project(c, poly.v2)
-        raster_triangle(a, b, d, f, x_lo, x_hi, y_lo, y_hi, c, k, samples, depth, face, uv)
+        raster_triangle(a, b, d, f, x_lo, x_hi, y_lo, y_hi, c, k, samples, depth, face, uv, near)
         if poly.n == 4:
             # The quad as the fan (v0, v1, v2), (v0, v2, v3): the diagonal is shared exactly.
             e = project(c, poly.v3)
-            raster_triangle(a, d, e, f, x_lo, x_hi, y_lo, y_hi, c, k, samples, depth, face, uv)
+            raster_triangle(a, d, e, f, x_lo, x_hi, y_lo, y_hi, c, k, samples, depth, face, uv, near)
 
 
 _shade_kernels: dict = {}
@@ -438,6 +476,7 @@ class ZBuffer:
         self.depth = wp.zeros(n, dtype=wp.float64, device=device)  # 1/z; 0 is "nothing yet"
         self.face = wp.full(n, -1, dtype=wp.int32, device=device)
         self.uv = wp.zeros(n, dtype=wp.vec2, device=device)
+        self.near = wp.zeros(n, dtype=wp.float64, device=device)  # 1/z of the nearest uncertain rival; 0: none
         self.times: dict = {}
         self.pairs = 0
 
@@ -475,9 +514,16 @@ class ZBuffer:
         t = time.perf_counter()
         samples = self.samples
         launch_bands(raster_kernel, lambda first: [data, c, starts, faces, tiles_x, tile, k, samples, first,
-                                                   self.depth, self.face, self.uv],
+                                                   self.depth, self.face, self.uv, self.near],
                      tiles_x * tiles_y, threads, max(bands, 4 * threads), dev)
         self.times["raster"] = time.perf_counter() - t
+
+    def uncertain(self) -> np.ndarray:
+        """Where the rasterizer's visible triangle may not be the tracer's, (height, width, samples):
+        uncertain() of every sample, in NumPy."""
+        depth, near = self.depth.numpy(), self.near.numpy()
+        shape = (self.basis.height, self.basis.width, self.samples)
+        return ((near > 0.0) & (near >= depth * (1.0 - TIE_REL))).reshape(shape)
 
     def faces(self) -> np.ndarray:
         """The visible triangle of every sample, (height, width, samples), -1 where none."""
