@@ -21,7 +21,7 @@ import warp
 
 import warprt
 from benchmarks.output import link, save
-from benchmarks.timing import SCENES, cpu_name, growth_runs, ms, timed
+from benchmarks.timing import SCENES, TRACED, cpu_name, growth_runs, ms, timed
 from warprt.geometry import Geometry
 from warprt.renderer import default_threads, init_warp
 
@@ -86,7 +86,8 @@ def pixel_sweep(repeat: int, sizes, threads) -> dict:
     for width, height in sizes:
         row = {"width": width, "height": height, "pixels": width * height, "seconds": {}}
         for n in threads:
-            row["seconds"][str(n)] = timed(scene.with_camera(width=width, height=height), geometry, repeat, threads=n)[1]
+            row["seconds"][str(n)] = timed(scene.with_camera(width=width, height=height), geometry, repeat, threads=n,
+                                           primary=TRACED)[1]
         runs.append(row)
         print(f"  {width}x{height}: " + ", ".join(f"{n} thread{'s' * (n > 1)} {ms(row['seconds'][str(n)])}"
                                                   for n in threads), flush=True)

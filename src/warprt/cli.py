@@ -248,9 +248,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--effects", help="comma-separated effects to keep: ambient,diffuse,specular,shadows,reflection,supersampling,smooth")
     p.add_argument("--algorithm", default="raytrace", choices=["raytrace", "zbuffer"],
                    help="raytrace (default), or zbuffer: rasterized, same local shading, no shadows or reflections")
-    p.add_argument("--primary", default="raytrace", choices=["raytrace", "zbuffer", "auto"],
-                   help="where the tracer's first hits come from: raytrace (default), zbuffer (hybrid: rasterized, "
-                        "then shadows and reflections traced), or auto (the Z-buffer where it is the cheaper)")
+    p.add_argument("--primary", default="auto", choices=["auto", "raytrace", "zbuffer"],
+                   help="where the tracer's first hits come from, the image being the same: auto (default: the "
+                        "Z-buffer where it is the cheaper), raytrace (every ray traced), or zbuffer (hybrid: the "
+                        "Z-buffer's visible triangle where it is certain, the rest traced)")
     p.add_argument("--stats", action="store_true", help="print render statistics (times, rays, memory) as JSON on stdout")
     p.add_argument("--stats-file", metavar="FILE", help="write render statistics as JSON to this file")
     p.add_argument("-q", "--quiet", action="store_true",

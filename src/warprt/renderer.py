@@ -60,7 +60,7 @@ class RenderStats:
     threads: int = 1
     bands: int = 1
     algorithm: str = "raytrace"
-    primary: str = "raytrace"  # where the first hits came from: "raytrace", or "zbuffer" (hybrid)
+    primary: str = "raytrace"  # where the first hits came from: "raytrace", or "zbuffer" (hybrid; same image)
     effects: str = ""
     variant: str = ""
     rays: dict = field(default_factory=dict)  # primary, shadow, reflection, total
@@ -142,13 +142,14 @@ ALGORITHMS = ("raytrace", "zbuffer")
 PRIMARY = ("auto", "raytrace", "zbuffer")
 
 
-def raster_is_cheaper(triangles: int, samples: int) -> bool:
+def raster_is_cheaper(triangles: int, samples: int, device: str = "cpu") -> bool:
     """Whether rasterizing the primary hits beats tracing them. Rasterization costs about a fixed
     amount per triangle plus per covered sample, tracing about log(triangles) per sample; at
     1024x768 the Z-buffer found the first hits in 0.36-0.41x of the traced time with 5k-9k
     triangles and in 2.7x with 524k (benchmarks/ATTEMPTS.md). Below one triangle per ten samples
-    the raster wins on every scene measured."""
-    return 0 < triangles <= samples // 10
+    the raster wins on every scene measured. Measured on the CPU only: on a GPU the primaries are
+    traced."""
+    return device == "cpu" and 0 < triangles <= samples // 10
 # Pixel order: bands walk the image in 8x8 tiles, so the rays of a band stay close together and
 # reuse the BVH nodes in cache. Measured at 1024x768 against row-major order: 0.83 to 0.96 of the
 # trace time on six of eight scenes, 1.01 and 1.03 on two (benchmarks/ATTEMPTS.md).
@@ -175,12 +176,13 @@ def cached_geometry(scene, device: str = "cpu") -> Geometry:
 
 def render(scene, *, threads: int | None = None, device: str = "cpu", effects=None, disable=(),
            bands: int | None = None, geometry: Geometry | None = None, algorithm: str = "raytrace",
-           progress=None, tile: tuple[int, int] | None = None, primary: str = "raytrace") -> RenderResult:
+           progress=None, tile: tuple[int, int] | None = None, primary: str = "auto") -> RenderResult:
     """Render ``scene`` with the Whitted tracer (or, algorithm="zbuffer", by rasterization with the same
     local shading). ``effects`` (names) limits the effect set, ``disable`` removes effects; neither
     can add one the scene has nothing for. ``primary`` says where the tracer's first hits come from:
-    "raytrace", "zbuffer" (hybrid rendering: rasterized, then shaded and traced on as usual), or "auto",
-    which rasterizes where that is the cheaper of the two (see raster_is_cheaper)."""
+    "raytrace"; "zbuffer" (hybrid rendering: the Z-buffer's visible triangle wherever it is certain
+    to be the traced one, the other samples traced; the image is the traced image to the bit); or
+    "auto", the default, which rasterizes where that is the cheaper of the two (raster_is_cheaper)."""
     if primary not in PRIMARY:
         raise SceneError("command line", "--primary", f"unknown primary visibility '{primary}'; expected one of: {', '.join(PRIMARY)}")
     if algorithm not in ALGORITHMS:
@@ -213,7 +215,11 @@ def render(scene, *, threads: int | None = None, device: str = "cpu", effects=No
     from .tracer import camera_data, make_trace_kernel
 
     samples = n_pixels * (scene.render.spp if fx.supersampling else 1)
-    raster = primary == "zbuffer" or (primary == "auto" and raster_is_cheaper(geom.triangle_count, samples))
+    raster = primary == "zbuffer" or (primary == "auto" and raster_is_cheaper(geom.triangle_count, samples, device))
+    if raster:
+        from .zbuffer import eye_on_surface
+
+        raster = not eye_on_surface(geom)  # the traced image is the promise: trace such a view
     stats.primary = "zbuffer" if raster else "raytrace"
     t = time.perf_counter()
     kernel = make_trace_kernel(fx, raster_primary=raster)

@@ -41,6 +41,38 @@ MARGIN_PX = 1.0e-2
 TIE_REL = 1.0e-4
 
 
+def clip_distance(geometry: Geometry) -> float:
+    """z_clip = CLIP_SCALE R, R = sqrt(3) max |coordinate| bounding every vertex's distance from the eye."""
+    reach = float(np.abs(geometry.points_np).max(initial=0.0)) * math.sqrt(3.0)
+    return CLIP_SCALE * max(reach, 1e-30)
+
+
+def eye_on_surface(geometry: Geometry) -> bool:
+    """Whether some triangle passes within 2 z_clip of the eye (its plane that close, and the eye inside
+    its box grown by as much): the tracer's rays, which start at the eye and keep hits from t = 0,
+    then hit that triangle at once, while the rasterizer clips it away. Hybrid rendering traces the
+    first hits of such a view; it is a camera placed on a surface, no ordinary one."""
+    cached = getattr(geometry, "_eye_on_surface", None)  # a Geometry is reused across frames
+    if cached is None:
+        cached = geometry._eye_on_surface = _eye_on_surface(geometry)
+    return cached
+
+
+def _eye_on_surface(geometry: Geometry) -> bool:
+    if geometry.triangle_count == 0:
+        return False
+    tol = 2.0 * clip_distance(geometry)
+    tri = geometry.points_np.astype(np.float64)[geometry.indices_np.reshape(-1, 3)]  # eye at the origin
+    in_box = np.all((tri.min(axis=1) <= tol) & (tri.max(axis=1) >= -tol), axis=1)
+    if not in_box.any():
+        return False
+    t = tri[in_box]
+    n = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
+    length = np.linalg.norm(n, axis=1)
+    plane = np.abs(np.einsum("ij,ij->i", n, t[:, 0]))  # |n . p0|: |n| times the eye's distance to the plane
+    return bool(np.any(plane <= tol * length))
+
+
 @wp.struct
 class RasterCamera:
     """The camera basis in float64 and the projection onto continuous pixel coordinates
@@ -470,8 +502,7 @@ class ZBuffer:
         self.basis = camera_basis(cam)
         self.k = math.isqrt(scene.render.spp)
         self.samples = self.k * self.k if fx.supersampling else 1
-        reach = float(np.abs(geometry.points_np).max(initial=0.0)) * math.sqrt(3.0)
-        self.camera = raster_camera(self.basis, CLIP_SCALE * max(reach, 1e-30))
+        self.camera = raster_camera(self.basis, clip_distance(geometry))
         n = cam.width * cam.height * self.samples
         self.depth = wp.zeros(n, dtype=wp.float64, device=device)  # 1/z; 0 is "nothing yet"
         self.face = wp.full(n, -1, dtype=wp.int32, device=device)

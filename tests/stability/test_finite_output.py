@@ -34,7 +34,9 @@ def test_render_refuses_to_return_a_non_finite_image(monkeypatch):
 
     def poisoned(kernel, inputs_for, n_pixels, *args, **kwargs):
         real(kernel, inputs_for, n_pixels, *args, **kwargs)
-        image = next(a for a in inputs_for(0) if isinstance(a, wp.array) and a.dtype == wp.vec3)
+        image = next((a for a in inputs_for(0) if isinstance(a, wp.array) and a.dtype == wp.vec3), None)
+        if image is None:  # a hybrid render's rasterization launches: no image among their inputs
+            return
         values = image.numpy()
         values[n_pixels // 2] = np.nan
         image.assign(values)

@@ -77,3 +77,35 @@ def test_at_full_size_the_tie_samples_are_marked_and_the_image_is_the_traced_one
     assert zb.uncertain().mean() < 0.005  # measured 0.155 % and 0.318 % (0.1 % to 0.3 % on the other files)
     assert np.array_equal(warprt.render(scene, primary="zbuffer", geometry=geometry).image,
                           warprt.render(scene, primary="raytrace", geometry=geometry).image)
+
+
+EYE_ON_VERTEX = {"eye": [0.0, 1.0, 0.0], "center": [0.0, 0.0, 0.0], "up": [1.0, 0.0, 0.0]}
+
+
+@pytest.mark.parametrize("camera, on_surface", [
+    (EYE_ON_VERTEX, True),                                                         # the sphere's pole vertex
+    ({"eye": [0.3, 0.0, 0.0], "center": [0.3, 0.0, -1.0]}, True),                  # inside a triangle of the wall
+    ({"eye": [0.3, 0.0, 1e-3], "center": [0.3, 0.0, -1.0]}, False),                # a millimetre in front of it
+    ({"eye": [0.0, 3.0, 4.0], "center": [0.0, 0.0, 0.0]}, False),                  # an ordinary view
+])
+def test_a_camera_on_a_surface_is_found(camera, on_surface):
+    from tests.scenekit import make_scene
+    from warprt.zbuffer import eye_on_surface
+
+    objects = ([{"shape": "uv_sphere", "material": "m", "segments": [8, 12]}] if camera is EYE_ON_VERTEX
+               else [{"shape": "plane", "size": [4.0, 4.0], "rotate": [90.0, 0.0, 0.0], "material": "m"}])
+    scene = make_scene(objects, {"m": {"kd": [0.7] * 3}}, [{"position": [0, 3, 3]}], camera=camera)
+    assert eye_on_surface(Geometry(scene)) is on_surface
+
+
+def test_a_camera_on_a_surface_is_traced_and_keeps_the_traced_image():
+    """With the eye on the sphere's pole vertex the tracer's rays hit the triangles around it at t = 0,
+    which the rasterizer clips away (measured: every sample's visible triangle differed): such a view is
+    traced even when the hybrid is asked for."""
+    from tests.scenekit import make_scene
+
+    scene = make_scene([{"shape": "sphere", "material": "w"}], {"w": {"kd": [0.7] * 3}}, [{"position": [0, 3, 3]}],
+                       camera=EYE_ON_VERTEX, ambient=[0.1] * 3, background=[0.2] * 3)
+    hybrid = warprt.render(scene, primary="zbuffer")
+    assert hybrid.stats.primary == "raytrace"
+    assert np.array_equal(hybrid.image, warprt.render(scene, primary="raytrace").image)
