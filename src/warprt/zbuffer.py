@@ -286,16 +286,6 @@ def raster_triangle(s0: ScreenVertex, s1: ScreenVertex, s2: ScreenVertex, f: int
     need not be the rasterizer's: one within MARGIN_PX of an edge, inside or out, and one that lost
     the depth test (see uncertain())."""
     one = wp.float64(1.0)
-    probe = make_edge(s1, s2, one)
-    area = edge_at(probe, probe.dx * (s0.y - probe.ay), s0.x)  # twice the signed area, as the edges see it
-    if area == wp.float64(0.0):
-        return  # seen edge-on: no sample lies strictly inside
-    orientation = one
-    if area < wp.float64(0.0):
-        orientation = -one  # two-sided: either winding is drawn
-    e0 = make_edge(s1, s2, orientation)
-    e1 = make_edge(s2, s0, orientation)
-    e2 = make_edge(s0, s1, orientation)
     # The sample (x + sx, y + sy) lies in the triangle, or within MARGIN_PX of it, only if
     # floor(min X - MARGIN_PX) <= x <= floor(max X + MARGIN_PX).
     big = wp.float64(1.0e9)
@@ -304,6 +294,22 @@ def raster_triangle(s0: ScreenVertex, s1: ScreenVertex, s2: ScreenVertex, f: int
     x1 = wp.min(x_hi, int(wp.floor(wp.clamp(wp.max(wp.max(s0.x, s1.x), s2.x) + pad, -big, big))))
     y0 = wp.max(y_lo, int(wp.floor(wp.clamp(wp.min(wp.min(s0.y, s1.y), s2.y) - pad, -big, big))))
     y1 = wp.min(y_hi, int(wp.floor(wp.clamp(wp.max(wp.max(s0.y, s1.y), s2.y) + pad, -big, big))))
+    probe = make_edge(s1, s2, one)
+    area = edge_at(probe, probe.dx * (s0.y - probe.ay), s0.x)  # twice the signed area, as the edges see it
+    if area == wp.float64(0.0):
+        # Seen edge-on: no sample lies strictly inside, but float32 rays near its line may hit it, so
+        # every sample of its box is uncertain (near = the largest 1/z: nearer than anything).
+        for y in range(y0, y1 + 1):
+            for x in range(x0, x1 + 1):
+                for i in range(samples):
+                    near[((c.height - 1 - y) * c.width + x) * samples + i] = wp.float64(1.0e300)
+        return
+    orientation = one
+    if area < wp.float64(0.0):
+        orientation = -one  # two-sided: either winding is drawn
+    e0 = make_edge(s1, s2, orientation)
+    e1 = make_edge(s2, s0, orientation)
+    e2 = make_edge(s0, s1, orientation)
     step = one / wp.float64(k)
     half = wp.float64(0.5) * step
     for y in range(y0, y1 + 1):

@@ -109,3 +109,26 @@ def test_a_camera_on_a_surface_is_traced_and_keeps_the_traced_image():
     hybrid = warprt.render(scene, primary="zbuffer")
     assert hybrid.stats.primary == "raytrace"
     assert np.array_equal(hybrid.image, warprt.render(scene, primary="raytrace").image)
+
+
+def test_a_triangle_seen_edge_on_leaves_its_samples_to_the_tracer():
+    """A wall in the plane x = 0, seen from an eye in that plane, projects to the image's centre column,
+    on the pixel centres of an odd-width image: zero area for the rasterizer, while float32 rays there
+    may graze it. Every sample of its box is left to the tracer, and the image stays the traced one."""
+    from tests.scenekit import make_scene
+
+    wall = {"shape": "triangles", "vertices": [[0.0, -1.0, -1.0], [0.0, 1.0, -1.0], [0.0, 0.0, 1.0]], "faces": [[0, 1, 2]],
+            "material": "m"}
+    floor = {"shape": "plane", "size": [6.0, 6.0], "translate": [0.3, -1.2, 0.0], "material": "m"}
+    scene = make_scene([wall, floor], {"m": {"kd": [0.7] * 3}}, [{"position": [2, 3, 4]}],
+                       camera={"eye": [0.0, 0.0, 5.0], "center": [0.0, 0.0, 0.0], "width": 33, "height": 25},
+                       ambient=[0.1] * 3)
+    geometry = Geometry(scene)
+    zb = ZBuffer(scene, geometry, _zbuffer_effects(scene, None, ()))
+    zb.rasterize(2, 16)
+    column = zb.uncertain()[:, 16, 0]
+    # The wall's rows: its corners (0, +-1, -1) lie 6 from the eye, so it spans +-f_y / 6 = +-3.6 rows
+    # around the centre (f_y = 25 / (2 tan 30 deg) = 21.65 pixels per unit of y/z).
+    assert column[10:15].all()
+    assert np.array_equal(warprt.render(scene, primary="zbuffer", geometry=geometry).image,
+                          warprt.render(scene, primary="raytrace", geometry=geometry).image)
