@@ -219,7 +219,7 @@ def render(scene, *, threads: int | None = None, device: str = "cpu", effects=No
     if raster:
         from .zbuffer import eye_on_surface
 
-        raster = not eye_on_surface(geom)  # the traced image is the promise: trace such a view
+        raster = not eye_on_surface(geom, camera_basis(cam))  # the traced image is the promise: trace such a view
     stats.primary = "zbuffer" if raster else "raytrace"
     t = time.perf_counter()
     kernel = make_trace_kernel(fx, raster_primary=raster)

@@ -47,21 +47,24 @@ def clip_distance(geometry: Geometry) -> float:
     return CLIP_SCALE * max(reach, 1e-30)
 
 
-def eye_on_surface(geometry: Geometry) -> bool:
-    """Whether some triangle passes within 2 z_clip of the eye (its plane that close, and the eye inside
-    its box grown by as much): the tracer's rays, which start at the eye and keep hits from t = 0,
-    then hit that triangle at once, while the rasterizer clips it away. Hybrid rendering traces the
-    first hits of such a view; it is a camera placed on a surface, no ordinary one."""
-    cached = getattr(geometry, "_eye_on_surface", None)  # a Geometry is reused across frames
-    if cached is None:
-        cached = geometry._eye_on_surface = _eye_on_surface(geometry)
-    return cached
+def eye_on_surface(geometry: Geometry, basis) -> bool:
+    """Whether some triangle comes within reach of the eye that the rasterizer clips: its plane that
+    close, and the eye inside its box grown by as much. The clip plane z = z_clip cuts away points
+    that camera rays (at most the corner ray's angle theta off the axis) reach within
+    z_clip / cos(theta); twice that is the reach. The tracer's rays, which start at the eye and keep
+    hits from t = 0, hit such a triangle there, as they do one the eye lies on. Hybrid rendering
+    traces the first hits of such a view: a camera placed on (or a hair from) a surface."""
+    cos_corner = basis.d_f / math.sqrt(basis.d_f ** 2 + (basis.h / 2.0) ** 2 + (basis.w / 2.0) ** 2)
+    tol = 2.0 * clip_distance(geometry) / cos_corner
+    cache = geometry.__dict__.setdefault("_eye_on_surface", {})  # a Geometry is reused across frames
+    if tol not in cache:
+        cache[tol] = _eye_on_surface(geometry, tol)
+    return cache[tol]
 
 
-def _eye_on_surface(geometry: Geometry) -> bool:
+def _eye_on_surface(geometry: Geometry, tol: float) -> bool:
     if geometry.triangle_count == 0:
         return False
-    tol = 2.0 * clip_distance(geometry)
     tri = geometry.points_np.astype(np.float64)[geometry.indices_np.reshape(-1, 3)]  # eye at the origin
     in_box = np.all((tri.min(axis=1) <= tol) & (tri.max(axis=1) >= -tol), axis=1)
     if not in_box.any():

@@ -86,16 +86,21 @@ EYE_ON_VERTEX = {"eye": [0.0, 1.0, 0.0], "center": [0.0, 0.0, 0.0], "up": [1.0, 
     (EYE_ON_VERTEX, True),                                                         # the sphere's pole vertex
     ({"eye": [0.3, 0.0, 0.0], "center": [0.3, 0.0, -1.0]}, True),                  # inside a triangle of the wall
     ({"eye": [0.3, 0.0, 1e-3], "center": [0.3, 0.0, -1.0]}, False),                # a millimetre in front of it
+    # 5e-5 in front: beyond 2 z_clip = 7e-6 (R = 3.5 here), but a fovy of 170 degrees lets corner rays
+    # reach points that close at z < z_clip (cos of the corner angle 0.053: reach 1.3e-4); at 60, 1e-5.
+    ({"eye": [0.3, 0.0, 5e-5], "center": [0.3, 0.0, -1.0], "fovy": 170.0}, True),
+    ({"eye": [0.3, 0.0, 5e-5], "center": [0.3, 0.0, -1.0], "fovy": 60.0}, False),
     ({"eye": [0.0, 3.0, 4.0], "center": [0.0, 0.0, 0.0]}, False),                  # an ordinary view
 ])
 def test_a_camera_on_a_surface_is_found(camera, on_surface):
     from tests.scenekit import make_scene
+    from warprt.camera import camera_basis
     from warprt.zbuffer import eye_on_surface
 
     objects = ([{"shape": "uv_sphere", "material": "m", "segments": [8, 12]}] if camera is EYE_ON_VERTEX
                else [{"shape": "plane", "size": [4.0, 4.0], "rotate": [90.0, 0.0, 0.0], "material": "m"}])
     scene = make_scene(objects, {"m": {"kd": [0.7] * 3}}, [{"position": [0, 3, 3]}], camera=camera)
-    assert eye_on_surface(Geometry(scene)) is on_surface
+    assert eye_on_surface(Geometry(scene), camera_basis(scene.camera)) is on_surface
 
 
 def test_a_camera_on_a_surface_is_traced_and_keeps_the_traced_image():
