@@ -142,14 +142,23 @@ ALGORITHMS = ("raytrace", "zbuffer")
 PRIMARY = ("auto", "raytrace", "zbuffer")
 
 
+# The Z-buffer's buffers per sample: 1/z and its nearest rival (float64 each), the face (int32), (u, v).
+RASTER_BYTES_PER_SAMPLE = 8 + 8 + 4 + 8
+# primary="auto" rasterizes only while those buffers stay under this: 19 million samples, 1920x1080
+# at 9 spp. Tracing needs no per-sample memory, so a bigger frame (4K at 16 spp would need 3.7 GB)
+# is traced rather than made to pay for its speed-up in memory.
+AUTO_RASTER_MAX_BYTES = 512 * 2**20
+
+
 def raster_is_cheaper(triangles: int, samples: int, device: str = "cpu") -> bool:
     """Whether rasterizing the primary hits beats tracing them. Rasterization costs about a fixed
     amount per triangle plus per covered sample, tracing about log(triangles) per sample; at
     1024x768 the Z-buffer found the first hits in 0.36-0.41x of the traced time with 5k-9k
     triangles and in 2.7x with 524k (benchmarks/ATTEMPTS.md). Below one triangle per ten samples
     the raster wins on every scene measured. Measured on the CPU only: on a GPU the primaries are
-    traced."""
-    return device == "cpu" and 0 < triangles <= samples // 10
+    traced. Within AUTO_RASTER_MAX_BYTES of buffers only."""
+    return (device == "cpu" and 0 < triangles <= samples // 10
+            and samples * RASTER_BYTES_PER_SAMPLE <= AUTO_RASTER_MAX_BYTES)
 # Pixel order: bands walk the image in 8x8 tiles, so the rays of a band stay close together and
 # reuse the BVH nodes in cache. Measured at 1024x768 against row-major order: 0.83 to 0.96 of the
 # trace time on six of eight scenes, 1.01 and 1.03 on two (benchmarks/ATTEMPTS.md).
@@ -278,5 +287,6 @@ def render(scene, *, threads: int | None = None, device: str = "cpu", effects=No
     from .memory import geometry_memory, peak_rss
 
     stats.memory = {"geometry": geometry_memory(geom), "image": int(image.capacity + counts.capacity),
+                    "raster": int(sum(a.capacity for a in raster_inputs) + (zb.uv.capacity if raster else 0)),
                     "peak_rss": peak_rss()}
     return RenderResult(out, stats)

@@ -32,6 +32,17 @@ def test_auto_rasterizes_only_where_it_is_cheaper():
     dense = warprt.load_scene().with_camera(width=32, height=24)      # more triangles than samples
     assert warprt.render(dense, primary="auto").stats.primary == "raytrace"
     assert raster_is_cheaper(1000, 10_000) and not raster_is_cheaper(1001, 10_000) and not raster_is_cheaper(0, 10)
+    assert not raster_is_cheaper(10, 10_000, device="cuda")
+
+
+def test_auto_traces_a_frame_whose_raster_buffers_would_be_large():
+    """28 bytes per sample: 1920x1080 at 9 spp (18.7 M samples, 522 MB) still rasterizes, 16 spp (33 M,
+    929 MB) is traced; the memory stats count the buffers when they exist."""
+    assert raster_is_cheaper(5000, 1920 * 1080 * 9) and not raster_is_cheaper(5000, 1920 * 1080 * 16)
+    scene = warprt.load_scene().with_camera(width=320, height=240)
+    stats = warprt.render(scene, primary="auto").stats
+    assert stats.primary == "zbuffer" and stats.memory["raster"] == 320 * 240 * 28
+    assert warprt.render(scene, primary="raytrace").stats.memory["raster"] == 0
 
 
 def test_unknown_primary_is_a_scene_error():
