@@ -89,11 +89,12 @@ class RasterCamera:
     c_x: wp.float64  # width / 2
     c_y: wp.float64
     z_clip: wp.float64  # clip distance in front of the eye
+    margin: wp.float64  # MARGIN_PX when the rasterizer tracks uncertain samples for the hybrid, else 0
     width: int
     height: int
 
 
-def raster_camera(basis, z_clip: float) -> RasterCamera:
+def raster_camera(basis, z_clip: float, margin: float = 0.0) -> RasterCamera:
     c = RasterCamera()
     c.x_e, c.y_e, c.z_e = (wp.vec3d(*map(float, v)) for v in (basis.x_e, basis.y_e, basis.z_e))
     c.f_x = wp.float64(basis.d_f * basis.width / basis.w)
@@ -101,6 +102,7 @@ def raster_camera(basis, z_clip: float) -> RasterCamera:
     c.c_x = wp.float64(basis.width / 2.0)
     c.c_y = wp.float64(basis.height / 2.0)
     c.z_clip = wp.float64(z_clip)
+    c.margin = wp.float64(margin)
     c.width, c.height = int(basis.width), int(basis.height)
     return c
 
@@ -287,12 +289,14 @@ def raster_triangle(s0: ScreenVertex, s1: ScreenVertex, s2: ScreenVertex, f: int
     (y up). Depth is 1/z, which is linear in screen space; (u, v) are interpolated perspective-correctly.
     near[n] keeps the nearest 1/z of every surface that could be the tracer's answer at sample n but
     need not be the rasterizer's: one within MARGIN_PX of an edge, inside or out, and one that lost
-    the depth test (see uncertain())."""
+    the depth test (see uncertain()); only where c.margin > 0, for hybrid rendering: a plain Z-buffer
+    image needs none of it, and it costs that 10-20 %."""
+    track = c.margin > wp.float64(0.0)
     one = wp.float64(1.0)
     # The sample (x + sx, y + sy) lies in the triangle, or within MARGIN_PX of it, only if
     # floor(min X - MARGIN_PX) <= x <= floor(max X + MARGIN_PX).
     big = wp.float64(1.0e9)
-    pad = wp.float64(MARGIN_PX)
+    pad = c.margin
     x0 = wp.max(x_lo, int(wp.floor(wp.clamp(wp.min(wp.min(s0.x, s1.x), s2.x) - pad, -big, big))))
     x1 = wp.min(x_hi, int(wp.floor(wp.clamp(wp.max(wp.max(s0.x, s1.x), s2.x) + pad, -big, big))))
     y0 = wp.max(y_lo, int(wp.floor(wp.clamp(wp.min(wp.min(s0.y, s1.y), s2.y) - pad, -big, big))))
@@ -300,6 +304,8 @@ def raster_triangle(s0: ScreenVertex, s1: ScreenVertex, s2: ScreenVertex, f: int
     probe = make_edge(s1, s2, one)
     area = edge_at(probe, probe.dx * (s0.y - probe.ay), s0.x)  # twice the signed area, as the edges see it
     if area == wp.float64(0.0):
+        if not track:
+            return
         # Seen edge-on: no sample lies strictly inside, but float32 rays near its line may hit it, so
         # every sample of its box is uncertain (near = the largest 1/z: nearer than anything).
         for y in range(y0, y1 + 1):
@@ -329,11 +335,14 @@ def raster_triangle(s0: ScreenVertex, s1: ScreenVertex, s2: ScreenVertex, f: int
                     v1 = edge_at(e1, r1, px)
                     v2 = edge_at(e2, r2, px)
                     # Within the margin band around the triangle, and close to one of its edges.
-                    banded = v0 >= -e0.m and v1 >= -e1.m and v2 >= -e2.m
-                    if not banded:
-                        continue
-                    edgy = v0 <= e0.m or v1 <= e1.m or v2 <= e2.m
                     inside = covers(e0, v0) and covers(e1, v1) and covers(e2, v2)
+                    edgy = False
+                    if track:
+                        if not (v0 >= -e0.m and v1 >= -e1.m and v2 >= -e2.m):
+                            continue
+                        edgy = v0 <= e0.m or v1 <= e1.m or v2 <= e2.m
+                    elif not inside:
+                        continue
                     w0 = v0 * s0.iz
                     w1 = v1 * s1.iz
                     w2 = v2 * s2.iz
@@ -346,11 +355,12 @@ def raster_triangle(s0: ScreenVertex, s1: ScreenVertex, s2: ScreenVertex, f: int
                         # Equal depth goes to the lower face index, so the image does not depend on
                         # the order of a tile's list (which atomics make arbitrary on a GPU).
                         if iz > depth[n] or (iz == depth[n] and f < face[n]):
-                            near[n] = wp.max(near[n], depth[n])  # the surface it hides, for the tie test
+                            if track:
+                                near[n] = wp.max(near[n], depth[n])  # the surface it hides, for the tie test
                             depth[n] = iz
                             face[n] = f
                             uv[n] = (s0.uv * float(w0 / wsum) + s1.uv * float(w1 / wsum)) + s2.uv * float(w2 / wsum)
-                        else:
+                        elif track:
                             near[n] = wp.max(near[n], iz)
 
 
@@ -363,12 +373,12 @@ def uncertain(depth: wp.float64, near: wp.float64) -> bool:
 
 
 @wp.func
-def sample_span(lo: wp.float64, hi: wp.float64, k: int, n: int) -> wp.vec2i:
+def sample_span(lo: wp.float64, hi: wp.float64, k: int, n: int, margin: wp.float64) -> wp.vec2i:
     """The pixels (first, last) whose samples x + (j + 1/2)/k, j < k, fall in [lo, hi] on one axis of n
-    pixels; first > last when none does. Widened by MARGIN_PX, so samples near the triangle are seen
+    pixels; first > last when none does. Widened by the margin, so samples near the triangle are seen
     too, and by a hair more so that rounding can only add a pixel."""
     kf = wp.float64(k)
-    pad = wp.float64(MARGIN_PX) + wp.float64(1.0e-9) * (wp.float64(1.0) + wp.abs(lo) + wp.abs(hi))
+    pad = margin + wp.float64(1.0e-9) * (wp.float64(1.0) + wp.abs(lo) + wp.abs(hi))
     big = wp.float64(4.0e9)  # keeps int() in range for vertices projected from just in front of the eye
     m_lo = wp.max(wp.ceil(wp.clamp(kf * (lo - pad) - wp.float64(0.5), -big, big)), wp.float64(0.0))
     m_hi = wp.min(wp.floor(wp.clamp(kf * (hi + pad) - wp.float64(0.5), -big, big)), wp.float64(n * k - 1))
@@ -399,8 +409,8 @@ def project_kernel(s: SceneData, c: RasterCamera, k: int, first: int, bounds: wp
             hi_x = wp.max(hi_x, e.x)
             lo_y = wp.min(lo_y, e.y)
             hi_y = wp.max(hi_y, e.y)
-        span_x = sample_span(lo_x, hi_x, k, c.width)
-        span_y = sample_span(lo_y, hi_y, k, c.height)
+        span_x = sample_span(lo_x, hi_x, k, c.width, c.margin)
+        span_y = sample_span(lo_y, hi_y, k, c.height, c.margin)
         if span_x[0] <= span_x[1] and span_y[0] <= span_y[1]:
             out = wp.vec4i(span_x[0], span_x[1], span_y[0], span_y[1])
     bounds[f] = out
@@ -505,18 +515,22 @@ def fill_kernel(bounds: wp.array(dtype=wp.vec4i), tile: int, tiles_x: int, curso
 class ZBuffer:
     """Owns the per-sample buffers of one scene's rasterization: 1/depth, visible face, (u, v)."""
 
-    def __init__(self, scene, geometry: Geometry, fx: EffectSet, device: str = "cpu", tile: int = TILE):
+    def __init__(self, scene, geometry: Geometry, fx: EffectSet, device: str = "cpu", tile: int = TILE,
+                 track_uncertain: bool = True):
         cam = scene.camera
         self.geometry, self.device, self.tile = geometry, device, int(tile)
+        self.track_uncertain = track_uncertain
         self.basis = camera_basis(cam)
         self.k = math.isqrt(scene.render.spp)
         self.samples = self.k * self.k if fx.supersampling else 1
-        self.camera = raster_camera(self.basis, clip_distance(geometry))
+        # track_uncertain: fill `near` for hybrid rendering (uncertain()); a plain Z-buffer image skips it.
+        self.camera = raster_camera(self.basis, clip_distance(geometry), MARGIN_PX if track_uncertain else 0.0)
         n = cam.width * cam.height * self.samples
         self.depth = wp.zeros(n, dtype=wp.float64, device=device)  # 1/z; 0 is "nothing yet"
         self.face = wp.full(n, -1, dtype=wp.int32, device=device)
         self.uv = wp.zeros(n, dtype=wp.vec2, device=device)
-        self.near = wp.zeros(n, dtype=wp.float64, device=device)  # 1/z of the nearest uncertain rival; 0: none
+        # 1/z of the nearest uncertain rival, 0 where none; only allocated when tracked
+        self.near = wp.zeros(n if track_uncertain else 0, dtype=wp.float64, device=device)
         self.times: dict = {}
         self.pairs = 0
 
@@ -561,6 +575,8 @@ class ZBuffer:
     def uncertain(self) -> np.ndarray:
         """Where the rasterizer's visible triangle may not be the tracer's, (height, width, samples):
         uncertain() of every sample, in NumPy."""
+        if not self.track_uncertain:
+            raise ValueError("this ZBuffer was made with track_uncertain=False: it has no uncertain samples to report")
         depth, near = self.depth.numpy(), self.near.numpy()
         shape = (self.basis.height, self.basis.width, self.samples)
         return ((near > 0.0) & (near >= depth * (1.0 - TIE_REL))).reshape(shape)
@@ -609,7 +625,7 @@ def render_zbuffer(scene, *, threads: int | None = None, device: str = "cpu", ef
     stats.times["compile"] = time.perf_counter() - t
 
     t = time.perf_counter()
-    zb = ZBuffer(scene, geom, fx, device=device, tile=tile)
+    zb = ZBuffer(scene, geom, fx, device=device, tile=tile, track_uncertain=False)
     zb.rasterize(threads, bands)
     stats.times.update(zb.times)
     t_shade = time.perf_counter()
