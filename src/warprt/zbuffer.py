@@ -244,11 +244,11 @@ class Edge:
     dx: wp.float64  # larger - smaller
     dy: wp.float64
     sign: wp.float64  # +1 where the triangle's interior is on the positive side of the canonical function
-    m: wp.float64  # MARGIN_PX times the edge's length: the edge function's value MARGIN_PX pixels off the edge
+    m: wp.float64  # the margin times the edge's length: the edge function's value that many pixels off the edge
 
 
 @wp.func
-def make_edge(a: ScreenVertex, b: ScreenVertex, orientation: wp.float64) -> Edge:
+def make_edge(a: ScreenVertex, b: ScreenVertex, orientation: wp.float64, margin: wp.float64) -> Edge:
     e = Edge()
     if b.x < a.x or (b.x == a.x and b.y < a.y):
         e.ax = b.x
@@ -262,7 +262,7 @@ def make_edge(a: ScreenVertex, b: ScreenVertex, orientation: wp.float64) -> Edge
         e.dx = b.x - a.x
         e.dy = b.y - a.y
         e.sign = orientation
-    e.m = wp.float64(MARGIN_PX) * wp.sqrt(e.dx * e.dx + e.dy * e.dy)
+    e.m = margin * wp.sqrt(e.dx * e.dx + e.dy * e.dy)
     return e
 
 
@@ -293,15 +293,15 @@ def raster_triangle(s0: ScreenVertex, s1: ScreenVertex, s2: ScreenVertex, f: int
     image needs none of it, and it costs that 10-20 %."""
     track = c.margin > wp.float64(0.0)
     one = wp.float64(1.0)
-    # The sample (x + sx, y + sy) lies in the triangle, or within MARGIN_PX of it, only if
-    # floor(min X - MARGIN_PX) <= x <= floor(max X + MARGIN_PX).
+    # The sample (x + sx, y + sy) lies in the triangle, or within the margin of it, only if
+    # floor(min X - margin) <= x <= floor(max X + margin).
     big = wp.float64(1.0e9)
     pad = c.margin
     x0 = wp.max(x_lo, int(wp.floor(wp.clamp(wp.min(wp.min(s0.x, s1.x), s2.x) - pad, -big, big))))
     x1 = wp.min(x_hi, int(wp.floor(wp.clamp(wp.max(wp.max(s0.x, s1.x), s2.x) + pad, -big, big))))
     y0 = wp.max(y_lo, int(wp.floor(wp.clamp(wp.min(wp.min(s0.y, s1.y), s2.y) - pad, -big, big))))
     y1 = wp.min(y_hi, int(wp.floor(wp.clamp(wp.max(wp.max(s0.y, s1.y), s2.y) + pad, -big, big))))
-    probe = make_edge(s1, s2, one)
+    probe = make_edge(s1, s2, one, c.margin)
     area = edge_at(probe, probe.dx * (s0.y - probe.ay), s0.x)  # twice the signed area, as the edges see it
     if area == wp.float64(0.0):
         if not track:
@@ -316,9 +316,9 @@ def raster_triangle(s0: ScreenVertex, s1: ScreenVertex, s2: ScreenVertex, f: int
     orientation = one
     if area < wp.float64(0.0):
         orientation = -one  # two-sided: either winding is drawn
-    e0 = make_edge(s1, s2, orientation)
-    e1 = make_edge(s2, s0, orientation)
-    e2 = make_edge(s0, s1, orientation)
+    e0 = make_edge(s1, s2, orientation, c.margin)
+    e1 = make_edge(s2, s0, orientation, c.margin)
+    e2 = make_edge(s0, s1, orientation, c.margin)
     step = one / wp.float64(k)
     half = wp.float64(0.5) * step
     for y in range(y0, y1 + 1):
@@ -334,10 +334,9 @@ def raster_triangle(s0: ScreenVertex, s1: ScreenVertex, s2: ScreenVertex, f: int
                     v0 = edge_at(e0, r0, px)
                     v1 = edge_at(e1, r1, px)
                     v2 = edge_at(e2, r2, px)
-                    # Within the margin band around the triangle, and close to one of its edges.
                     inside = covers(e0, v0) and covers(e1, v1) and covers(e2, v2)
                     edgy = False
-                    if track:
+                    if track:  # within the margin band around the triangle, and close to one of its edges?
                         if not (v0 >= -e0.m and v1 >= -e1.m and v2 >= -e2.m):
                             continue
                         edgy = v0 <= e0.m or v1 <= e1.m or v2 <= e2.m
