@@ -34,9 +34,10 @@ from benchmarks.output import link, save
 from benchmarks.timing import SCENES, cpu_name, ms, once, timed_result
 from reference.compare import metrics
 from reference.mitsuba_whitted import Switches, mitsuba_scene, mitsuba_variant
-from warprt.effects import resolve_effects
+from warprt.scene import resolve_effects
 from warprt.geometry import Geometry
-from warprt.renderer import default_threads, init_warp
+from warprt.image import default_threads
+from warprt.kernels import init_warp
 
 ROOT = Path(__file__).resolve().parent
 RESULTS = ROOT / "results"

@@ -14,7 +14,7 @@ import time
 from pathlib import Path
 
 import warprt
-from warprt.effects import resolve_effects
+from warprt.scene import resolve_effects
 from warprt.geometry import Geometry
 
 ROOT = Path(__file__).resolve().parent

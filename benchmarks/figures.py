@@ -23,7 +23,7 @@ from PIL import Image, ImageDraw, ImageFont
 import warprt
 from benchmarks.effects import FIG6
 from benchmarks.timing import NO_SHADOWS_OR_REFLECTIONS, TRACED, cpu_name, growth_runs, ms, timed
-from warprt.film import to_srgb8
+from warprt.image import to_srgb8
 from warprt.geometry import Geometry
 
 ROOT = Path(__file__).resolve().parent

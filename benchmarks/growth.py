@@ -23,7 +23,8 @@ import warprt
 from benchmarks.output import link, save
 from benchmarks.timing import SCENES, TRACED, cpu_name, growth_runs, ms, timed
 from warprt.geometry import Geometry
-from warprt.renderer import default_threads, init_warp
+from warprt.image import default_threads
+from warprt.kernels import init_warp
 
 ROOT = Path(__file__).resolve().parent
 RESULTS = ROOT / "results"

@@ -43,7 +43,7 @@ scene = warprt.load_scene(sys.argv[1], {"camera.width": int(sys.argv[2]), "camer
 engine, repeat = sys.argv[4], int(sys.argv[5])
 if engine.startswith("mitsuba"):
     from reference.mitsuba_whitted import Switches, mitsuba_scene
-    from warprt.effects import resolve_effects
+    from warprt.scene import resolve_effects
     switches = Switches.for_effects(resolve_effects(scene), scene.render)
     ms = mitsuba_scene(scene, switches.smooth)
     frame = lambda: ms.render(switches)

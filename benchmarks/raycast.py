@@ -15,9 +15,9 @@ from pathlib import Path
 import numpy as np
 
 from benchmarks.output import save
-from warprt._warp import wp  # Warp, quiet
-from warprt.renderer import _bands, init_warp
-from warprt.shapes import sphere
+from warprt.image import bands_of
+from warprt.kernels import init_warp, wp  # Warp, quiet
+from warprt.scene import shapes
 
 os.environ.setdefault("DRJIT_LIBLLVM_PATH", "/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1")
 ROOT = Path(__file__).resolve().parent
@@ -51,7 +51,7 @@ def time_warp(kernel, mesh, dirs, threads, repeat):
 
     n = dirs.shape[0]
     out = wp.empty(n, dtype=float, device="cpu")
-    ranges = _bands(n, 16 if threads > 1 else 1)
+    ranges = bands_of(n, 16 if threads > 1 else 1)
     run = lambda r: wp.launch(kernel, dim=r[1], inputs=[mesh.id, dirs, r[0], out], device="cpu")
     wp.load_module(kernel.module, device="cpu")
     run((0, n))
@@ -103,7 +103,7 @@ def run(max_subdiv: int, repeat: int) -> dict:
     dirs = wp.array(dirs_np, dtype=wp.vec3, device="cpu")
     rows = []
     for subdiv in range(2, max_subdiv + 1):
-        v, f = sphere(1.0, subdiv)
+        v, f = shapes.sphere(1.0, subdiv)
         v = v + [0.0, 0.0, -3.0]  # fills most of a 40-degree view from the origin
         mesh = wp.Mesh(points=wp.array(v.astype(np.float32), dtype=wp.vec3), indices=wp.array(f.ravel().astype(np.int32), dtype=wp.int32))
         row = {"triangles": len(f), "rays": len(dirs_np)}

@@ -18,13 +18,9 @@ from pathlib import Path
 import numpy as np
 
 from benchmarks.output import save
-from warprt._warp import wp
-from warprt.camera import camera_basis
 from warprt.geometry import Geometry, SceneData
-from warprt.renderer import init_warp
-from warprt.scene import load_scene
-from warprt.shading import offset_ray_origin
-from warprt.tracer import CameraData, camera_data, camera_ray, make_surface
+from warprt.kernels import CameraData, camera_data, camera_ray, init_warp, make_surface, offset_ray_origin, wp
+from warprt.scene import camera_basis, load_scene
 
 ROOT = Path(__file__).resolve().parent
 REPO = ROOT.parent

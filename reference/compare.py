@@ -44,7 +44,7 @@ class CompareResult:
 
     def write(self, folder) -> Path:
         """Both images (.npy linear float, .png sRGB), the difference and the side-by-side strip."""
-        from warprt.film import write_image
+        from warprt.image import write_image
 
         folder = Path(folder)
         folder.mkdir(parents=True, exist_ok=True)
@@ -80,7 +80,7 @@ def metrics(a: np.ndarray, b: np.ndarray) -> tuple[float, float, float, float]:
 
 def side_by_side(warprt_image: np.ndarray, mitsuba_image: np.ndarray, path) -> Path:
     """warprt | Mitsuba | |difference| x 10, one PNG, panels separated by a thin grey gap."""
-    from warprt.film import write_image
+    from warprt.image import write_image
 
     a, b = _clamped(warprt_image), _clamped(mitsuba_image)
     diff = np.clip(np.abs(a - b) * DIFF_GAIN, 0.0, 1.0)
@@ -93,7 +93,7 @@ def compare(scene, *, effects=None, disable=(), threads: int | None = None, outp
     (warprt.render's ``effects``/``disable``) and compare; write the side-by-side PNG to ``output``.
     ``render_options`` go to warprt.render as they are (e.g. primary="zbuffer")."""
     import warprt
-    from warprt.effects import resolve_effects
+    from warprt.scene import resolve_effects
 
     from .mitsuba_whitted import Switches, mitsuba_scene, mitsuba_variant
 

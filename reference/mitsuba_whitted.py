@@ -15,6 +15,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from warprt.scene import ObjectCache
+
 # Dr.Jit 1.5 needs an LLVM it can drive; Debian 12's libLLVM 15 crashes it ("Cannot select: fminimum").
 LLVM_PATH = "/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1"
 INTEGRATOR = "warprt_whitted"
@@ -187,7 +189,7 @@ class _Tables:
             shininess = np.zeros(rows)
             for sid, m in mats.items():
                 r = ids[sid]
-                table["ka"][r], table["kd"][r], table["ks"][r] = m.ka_, m.kd, m.ks
+                table["ka"][r], table["kd"][r], table["ks"][r] = m.ka, m.kd, m.ks
                 table["kr"][r], shininess[r] = m.reflectivity, m.shininess
             for k, v in table.items():
                 setattr(self, k, mi.Float(v.astype(np.float32).ravel()))
@@ -197,7 +199,7 @@ class _Tables:
             self.ambient = mi.Color3f(*map(float, scene.render.ambient))
             self.background = mi.Color3f(*map(float, scene.render.background))
             col = lambda v: mi.Color3f(*map(float, v))
-            self.by_id = {sid: (col(m.ka_), col(m.kd), col(m.ks), col(m.reflectivity), mi.Float(m.shininess))
+            self.by_id = {sid: (col(m.ka), col(m.kd), col(m.ks), col(m.reflectivity), mi.Float(m.shininess))
                           for sid, m in mats.items()}
             self.zero_material = (col((0, 0, 0)),) * 4 + (mi.Float(0.0),)
 
@@ -224,7 +226,7 @@ class MitsubaScene:
     configuration hits Dr.Jit's kernel cache instead of compiling again."""
 
     def __init__(self, scene, smooth: bool = True):
-        from warprt.normals import vertex_normals  # the scene's normals, as the scene defines them
+        from warprt.scene import vertex_normals  # the scene's normals, as the scene defines them
 
         mi, dr = self.mi, self.dr = mitsuba()
         self.scene = scene
@@ -282,26 +284,18 @@ class MitsubaScene:
         return np.array(image, dtype=np.float32)[:, :, :3]
 
 
-_scene_cache: dict = {}
-_SCENE_CACHE_SIZE = 4
+_scenes = ObjectCache(size=4)
 
 
 def mitsuba_scene(scene, smooth: bool = True) -> MitsubaScene:
     """The converted scene, built once per (Scene object, smooth) and kept for the next few calls
     (a comparison at several effect levels converts the scene once)."""
-    key = (id(scene), bool(smooth))
-    entry = _scene_cache.pop(key, None)
-    if entry is None or entry.scene is not scene:  # a new object may reuse a dead one's id
-        entry = MitsubaScene(scene, smooth)
-    _scene_cache[key] = entry  # most recently used last
-    while len(_scene_cache) > _SCENE_CACHE_SIZE:
-        _scene_cache.pop(next(iter(_scene_cache)))
-    return entry
+    return _scenes.get((id(scene), bool(smooth)), scene, lambda: MitsubaScene(scene, smooth))
 
 
 def render_mitsuba(scene, effects=None, disable=()) -> np.ndarray:
     """Render ``scene`` in Mitsuba with the effect set warprt.render(scene, effects=, disable=) uses."""
-    from warprt.effects import resolve_effects
+    from warprt.scene import resolve_effects
 
     fx = resolve_effects(scene, effects, disable)
     switches = Switches.for_effects(fx, scene.render)

@@ -2,11 +2,13 @@
 
     scene = warprt.load_scene("scene.toml")
     image, stats = warprt.render(scene)
+
+The data flows one way, and so do the imports: scene/ (file -> Scene) -> geometry/ (camera-relative
+float32 triangles, BVH) -> kernels/ (Warp functions) -> image/ (a frame on the host) -> cli.py.
 """
 
-from .effects import EffectSet
 from .errors import SceneError
-from .scene import Camera, Light, Material, RenderSettings, Scene, SceneObject, load_scene
+from .scene import Camera, EffectSet, Light, Material, RenderSettings, Scene, SceneObject, load_scene
 
 __version__ = "0.1.0"
 
@@ -20,9 +22,9 @@ def __getattr__(name):
     """The renderer is imported on first use: importing Warp takes about 0.4 s, which reading or
     checking a scene file (and Mitsuba's reference) should not pay."""
     if name in _RENDERER_NAMES:
-        from . import renderer
+        from . import image
 
         for n in _RENDERER_NAMES:
-            globals()[n] = getattr(renderer, n)
+            globals()[n] = getattr(image, n)
         return globals()[name]
     raise AttributeError(f"module 'warprt' has no attribute '{name}'")

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import os
 import sys
 import time
@@ -71,54 +70,24 @@ def _add_scene_options(p: argparse.ArgumentParser):
 
 
 def _load(args):
-    from .scene import load_scene
-
-    from .scene import MAX_IMAGE_SIDE
+    from .scene import check_setting, load_scene
 
     overrides = _parse_set(args.set)
     # A flag's bad value is reported as that flag, not as the scene field it sets.
-    for flag, key, lo, hi in (("width", "camera.width", 1, MAX_IMAGE_SIDE), ("height", "camera.height", 1, MAX_IMAGE_SIDE),
-                              ("spp", "render.spp", 1, 4096), ("max_depth", "render.max_depth", 1, 1024)):
+    for flag, key in (("width", "camera.width"), ("height", "camera.height"), ("spp", "render.spp"),
+                      ("max_depth", "render.max_depth")):
         v = getattr(args, flag)
-        if v is None:
-            continue
-        name = "--" + flag.replace("_", "-")
-        if not lo <= v <= hi:
-            raise SceneError("command line", name, f"expected an integer in [{lo}, {hi}], got {v}")
-        if flag == "spp" and math.isqrt(v) ** 2 != v:
-            raise SceneError("command line", name, f"expected a square number of samples (1, 4, 9, 16, ...), got {v}")
-        overrides[key] = v
+        if v is not None:
+            overrides[key] = check_setting("command line", "--" + flag.replace("_", "-"), key, v)
     if args.no_shadows:
         overrides["render.shadows"] = False
-    if args.scene is None or Path(args.scene).suffix.lower() == ".toml":
-        return load_scene(args.scene, overrides)
-    # A bare mesh: the framed default scene, then the same overrides through the same validation.
-    from dataclasses import asdict
-
-    from .scene import read_camera, read_render
-
-    scene = load_scene(args.scene)
-    if overrides:
-        doc = {"camera": asdict(scene.camera), "render": {k: v for k, v in asdict(scene.render).items() if v is not None}}
-        from .scene import apply_overrides
-
-        for k in overrides:
-            if k.split(".")[0] not in ("camera", "render"):
-                raise SceneError("command line", "--set", f"{k}: only camera.* and render.* can be set for a mesh file")
-        doc = apply_overrides(doc, overrides, scene.source)
-        doc["camera"] = {k: list(v) if isinstance(v, tuple) else v for k, v in doc["camera"].items()}
-        doc["render"] = {k: list(v) if isinstance(v, tuple) else v for k, v in doc["render"].items()}
-        scene.camera = read_camera(scene.source, doc["camera"])
-        scene.render = read_render(scene.source, doc["render"])
-    return scene
+    return load_scene(args.scene, overrides)
 
 
 def _check_device(device: str):
     if device == "cpu":
         return
-    from ._warp import wp
-
-    from .renderer import init_warp
+    from ._warp import init_warp, wp
 
     init_warp()
     if not wp.is_cuda_available():
@@ -126,10 +95,10 @@ def _check_device(device: str):
 
 
 def cmd_render(args) -> int:
-    from .film import check_output_path, check_text_path, write_image, write_text
-    from .memory import peak_rss
-    from .progress import Progress
-    from .renderer import render
+    from .image import render
+    from .image.film import check_output_path, check_text_path, write_image, write_text
+    from .image.memory import peak_rss
+    from .image.progress import Progress
 
     # Everything that can be checked before the render is: a render whose result cannot be
     # saved, or that cannot start, should fail at once and leave nothing behind.
@@ -164,7 +133,7 @@ def cmd_render(args) -> int:
 
 
 def cmd_info(args) -> int:
-    from .effects import scene_effects
+    from .scene import scene_effects
 
     scene = _load(args)
     lo, hi = scene.bounds()
@@ -182,9 +151,9 @@ def cmd_info(args) -> int:
     print(f"bounds     {[round(float(x), 6) for x in lo]} .. {[round(float(x), 6) for x in hi]}")
     print(f"effects    {scene_effects(scene)}")
     # The geometry as a render builds it: its arrays and BVH, measured rather than estimated.
+    from ._warp import init_warp
     from .geometry import Geometry
-    from .memory import geometry_memory, human, peak_rss
-    from .renderer import init_warp
+    from .image.memory import geometry_memory, human, peak_rss
 
     init_warp()
     mem = geometry_memory(Geometry(scene))
@@ -210,7 +179,7 @@ def _reference():
 
 
 def cmd_compare(args) -> int:
-    from .film import check_output_path
+    from .image.film import check_output_path
 
     out = check_output_path(args.output)
     reference = _reference()

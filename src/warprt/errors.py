@@ -16,3 +16,9 @@ class SceneError(ValueError):
         self.message = message
         where = f"{self.source}: {field}" if field else self.source
         super().__init__(f"{where}: {message}")
+
+
+def show(v) -> str:
+    """A value as an error message quotes it: its repr, cut to 60 characters."""
+    s = repr(v)
+    return s if len(s) <= 60 else s[:57] + "..."

@@ -29,7 +29,7 @@ import warprt
 from reference import compare
 from reference.compare import OFF_THRESHOLD
 from reference.mitsuba_whitted import Switches
-from warprt.effects import resolve_effects
+from warprt.scene import resolve_effects
 
 from accuracy.oracle import OFFSET_SWEEP, Oracle
 

@@ -12,14 +12,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from warprt.camera import camera_basis, pixel_ray_directions
-from warprt.normals import vertex_normals
+from warprt.scene import camera_basis, pixel_ray_directions, vertex_normals
 
 # Mitsuba (include/mitsuba/render/interaction.h, offset_p and spawn_ray_to): (1 + max|p|) RayEpsilon
 # along the geometric normal, RayEpsilon = 1500 * 2^-24; shadow rays stop ShadowEpsilon short.
 MITSUBA_RAY_EPSILON = 1500.0 * 2.0**-24
 MITSUBA_SHADOW_EPSILON = 10.0 * MITSUBA_RAY_EPSILON
-# warprt's offset is a float32 error bound (src/warprt/shading.py) that its authors tune; the oracle
+# warprt's offset is a float32 error bound (src/warprt/kernels/interaction.py) that its authors tune; the oracle
 # does not copy it. It tries offsets of (1 + max|p|) times each of these instead, from next to
 # nothing up to Mitsuba's: a renderer whose value one of them reproduces decided as the exact model
 # does for an origin that close to the surface.
@@ -142,7 +141,7 @@ class Oracle:
                 ns = sum(self.N[self.F[f, k]] * b[k] for k in range(3))
                 n = ns / np.linalg.norm(ns) * side
             mat = self.materials[self.mat[f]]
-            local = C_amb * np.asarray(mat.ka_) if sw.ambient else np.zeros(3)
+            local = C_amb * np.asarray(mat.ka) if sw.ambient else np.zeros(3)
             if sw.diffuse or sw.specular:
                 for light in scene.lights:
                     pos = np.asarray(light.position, np.float64)

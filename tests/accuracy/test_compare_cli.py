@@ -12,7 +12,7 @@ from skimage.metrics import peak_signal_noise_ratio, structural_similarity
 import warprt
 from reference.mitsuba_whitted import render_mitsuba
 from warprt.cli import main
-from warprt.film import to_srgb8
+from warprt.image import to_srgb8
 
 pytestmark = pytest.mark.accuracy
 

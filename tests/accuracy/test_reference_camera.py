@@ -1,13 +1,13 @@
 """The Mitsuba conversion's camera is warprt's camera: Mitsuba's perspective sensor, set up from
 look_at(eye, center, up) and the vertical fov, shoots through every pixel centre the ray of the
-seed's formula (warprt.camera), for an 'up' that is not orthogonal to the view and a non-square image."""
+seed's formula (warprt.scene.camera_basis), for an 'up' that is not orthogonal to the view and a non-square image."""
 
 import numpy as np
 import pytest
 
 from reference.mitsuba_whitted import MitsubaScene, mitsuba
 from scenekit import make_scene
-from warprt.camera import camera_basis, pixel_ray_directions
+from warprt.scene import camera_basis, pixel_ray_directions
 
 pytestmark = pytest.mark.accuracy
 

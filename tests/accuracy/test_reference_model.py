@@ -13,7 +13,7 @@ import pytest
 from core.geometry_oracle import camera_rays, ray_plane
 from reference.mitsuba_whitted import MitsubaScene, Switches, mitsuba
 from scenekit import make_scene
-from warprt.normals import vertex_normals
+from warprt.scene import vertex_normals
 
 pytestmark = pytest.mark.accuracy
 

@@ -15,7 +15,9 @@ from pathlib import Path
 
 import pytest
 
-from warprt.shapes import SHAPES as SHAPE_TABLE
+from warprt.scene import shapes
+
+SHAPE_TABLE = shapes.SHAPES
 
 CORPUS = Path(__file__).parent / "corpus"
 SRC = str(Path(__file__).resolve().parents[2] / "src")
@@ -107,14 +109,14 @@ CASES = [
      f"notes.txt: unknown file type '.txt'; expected a scene file (.toml) or a mesh file ({EXTS})"),
     ("scene is a folder", ["render", "meshes"], "meshes: is a folder; expected a scene file (.toml) or a mesh file"),
     ("--set on a mesh beyond camera/render", ["render", "meshes/tri.obj", "--set", "lights[0].color=[1,1,1]"],
-     "command line: --set: lights[0].color: only camera.* and render.* can be set for a mesh file"),
+     "meshes/tri.obj: lights[0].color: only camera.* and render.* can be set for a mesh file"),
     ("info on a missing file", ["info", "nothere.toml"], "nothere.toml: scene file not found"),
     # Flags.
     ("--width 0", ["render", "ok.toml", "--width", "0"], "command line: --width: expected an integer in [1, 16384], got 0"),
     ("--height 100000", ["render", "ok.toml", "--height", "100000"],
      "command line: --height: expected an integer in [1, 16384], got 100000"),
     ("--spp 5", ["render", "ok.toml", "--spp", "5"],
-     "command line: --spp: expected a square number of samples (1, 4, 9, 16, ...), got 5"),
+     "command line: --spp: expected a square number of samples (k*k stratified: 1, 4, 9, 16, ...), got 5"),
     ("--max-depth 0", ["render", "ok.toml", "--max-depth", "0"],
      "command line: --max-depth: expected an integer in [1, 1024], got 0"),
     ("--threads 0", ["render", "ok.toml", "--threads", "0"], "command line: --threads: expected an integer >= 1, got 0"),
@@ -205,7 +207,7 @@ def test_bad_input_gives_its_message(outcomes, name, argv, message):
 def test_unavailable_device_is_a_bad_input(tmp_path):
     import warp as wp
 
-    from warprt.renderer import init_warp
+    from warprt.kernels import init_warp
 
     init_warp()
     if wp.is_cuda_available():

@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from warprt.film import read_image
+from warprt.image import read_image
 
 SRC = str(Path(__file__).resolve().parents[2] / "src")
 ENV = {**os.environ, "PYTHONPATH": SRC + os.pathsep + os.environ.get("PYTHONPATH", "")}

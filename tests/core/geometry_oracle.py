@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from warprt.camera import camera_basis, pixel_ray_directions
+from warprt.scene import camera_basis, pixel_ray_directions
 
 
 def camera_rays(cam):

@@ -6,10 +6,8 @@ import numpy as np
 import pytest
 import warp as wp
 
-from warprt.camera import camera_basis, pixel_ray_directions
-from warprt.renderer import init_warp
-from warprt.scene import Camera
-from warprt.tracer import CameraData, camera_data, camera_ray
+from warprt.kernels import CameraData, camera_data, camera_ray, init_warp
+from warprt.scene import Camera, camera_basis, pixel_ray_directions
 
 
 def seed_basis(eye, center, up):

@@ -9,7 +9,7 @@ import numpy as np
 import trimesh
 
 import warprt
-from warprt.film import read_image
+from warprt.image import read_image
 
 
 SRC = str(Path(__file__).resolve().parents[2] / "src")

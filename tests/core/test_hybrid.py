@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 import warprt
-from warprt.renderer import raster_is_cheaper
+from warprt.image import raster_is_cheaper
 from core.test_shading import phong_terms, wall_scene
 
 

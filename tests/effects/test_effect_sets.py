@@ -11,9 +11,8 @@ import warp as wp
 
 import warprt
 from scenekit import make_scene
-from warprt.effects import EFFECTS, EffectSet, resolve_effects, scene_effects
-from warprt.renderer import init_warp
-from warprt.tracer import make_trace_kernel
+from warprt.kernels import init_warp, make_trace_kernel
+from warprt.scene import EFFECTS, EffectSet, resolve_effects, scene_effects
 
 LIGHT = {"position": [0.0, 3.0, 4.0]}
 PLAIN = {"kd": [0.5, 0.5, 0.5]}

@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from warprt.film import read_image, write_image
+from warprt.image import read_image, write_image
 
 SRC = str(Path(__file__).resolve().parents[2] / "src")
 

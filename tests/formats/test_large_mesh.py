@@ -62,7 +62,7 @@ mesh = "field.ply"
     assert mem["geometry"]["indices"] == 12 * n_tri  # 3 int32 indices per triangle
     assert mem["geometry"]["total"] >= 12 * n_tri + 12 * (N + 1) ** 2
     assert mem["peak_rss"] < 3 * 2**30
-    from warprt.film import read_image
+    from warprt.image import read_image
 
     image = read_image(tmp_path / "f.png")
     assert image.shape == (48, 64, 3)

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 import warprt
-from warprt.meshio import read_mesh_file
+from warprt.scene import read_mesh_file
 from warprt.scene import Material
 
 

@@ -9,8 +9,3 @@ from stability.probes import ARTIFACT
 def fresh_artifact():
     ARTIFACT.unlink(missing_ok=True)
     yield
-
-
-@pytest.fixture(autouse=True)
-def _both_primaries(both_primaries):
-    """Every test here runs with traced and with hybrid first hits (tests/conftest.py)."""

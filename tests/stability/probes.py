@@ -11,10 +11,8 @@ import numpy as np
 import warp as wp
 
 from warprt.geometry import SceneData
-from warprt.renderer import init_warp
 from warprt.scene import DEFAULT_MATERIAL, Camera, RenderSettings, Scene, SceneObject
-from warprt.shading import OFFSET_SCALE, offset_ray_origin
-from warprt.tracer import make_surface
+from warprt.kernels import OFFSET_SCALE, init_warp, make_surface, offset_ray_origin
 
 init_warp()
 

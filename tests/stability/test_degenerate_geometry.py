@@ -8,7 +8,7 @@ import numpy as np
 import warprt
 from scenekit import make_scene
 from core.geometry_oracle import camera_rays
-from warprt import shapes
+from warprt.scene import shapes
 
 from stability.oracle import shade_triangles, trace_triangles
 from stability.probes import record
@@ -50,7 +50,7 @@ def world_triangles(scene):
     for obj in scene.objects:
         tris.append(obj.vertices[obj.faces])
         mats += [names.index(obj.material)] * len(obj.faces)
-    return np.concatenate(tris), np.asarray(mats), [dict(scene.materials[n].__dict__, ka=scene.materials[n].ka_) for n in names]
+    return np.concatenate(tris), np.asarray(mats), [dict(scene.materials[n].__dict__, ka=scene.materials[n].ka) for n in names]
 
 
 def render_checked(scene):

@@ -10,8 +10,8 @@ self-intersection starts and so the margin OFFSET_SCALE leaves."""
 import numpy as np
 import pytest
 
-from warprt.bvh import build_mesh
-from warprt.shading import OFFSET_SCALE
+from warprt.geometry import build_mesh
+from warprt.kernels import OFFSET_SCALE
 
 from stability.probes import EPS32, record, run_offset_probe, surface_tables
 

@@ -13,9 +13,8 @@ import zlib
 import numpy as np
 import pytest
 
-from warprt import shapes
-from warprt.bvh import build_mesh
-from warprt.geometry import Geometry
+from warprt.geometry import Geometry, build_mesh
+from warprt.scene import shapes
 
 from stability.probes import cast, mesh_scene, record
 

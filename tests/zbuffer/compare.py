@@ -17,9 +17,9 @@ import numpy as np
 from skimage.metrics import structural_similarity
 
 import warprt
-from warprt.camera import camera_basis
+from warprt.scene import camera_basis
 from warprt.geometry import Geometry
-from warprt.zbuffer import render_zbuffer, traced_faces
+from warprt.image import render_zbuffer, traced_faces
 
 TOL = 1e-5  # barycentric (fraction of the triangle) and relative depth; float32 geometry rounds at ~1e-7
 

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import warprt
-from warprt.film import read_image
+from warprt.image import read_image
 
 SRC = str(Path(__file__).resolve().parents[2] / "src")
 

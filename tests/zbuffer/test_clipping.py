@@ -5,8 +5,8 @@ import numpy as np
 
 from tests.scenekit import make_scene
 from tests.zbuffer.test_agreement import FLOOR, LIGHTS, MATERIALS, WALL
-from warprt.camera import camera_basis, pixel_ray_directions
-from warprt.zbuffer import render_zbuffer
+from warprt.image import render_zbuffer
+from warprt.scene import camera_basis, pixel_ray_directions
 
 MARGIN = 1e-4  # pixels whose ray passes this close (barycentric) to an edge are left out of the oracle
 

@@ -1,5 +1,5 @@
 """Hybrid rendering takes each sample's first hit from the Z-buffer only where the rasterizer's answer
-must be the tracer's (zbuffer.uncertain), and traces the rest: its image must be the traced image
+must be the tracer's (warprt.kernels.uncertain), and traces the rest: its image must be the traced image
 to the bit, on every scene, built-in hard case and random scene, and at every sample where the two
 visibility algorithms disagree the Z-buffer must have said it was unsure.
 
@@ -16,7 +16,8 @@ import warprt
 from accuracy.test_random_scenes import random_scene
 from tests.zbuffer.test_agreement import CASES, built_in_cases, scene_file_case
 from warprt.geometry import Geometry
-from warprt.zbuffer import ZBuffer, _zbuffer_effects, traced_faces
+from warprt.image import ZBuffer, eye_on_surface, traced_faces
+from warprt.scene import camera_basis, zbuffer_effects
 
 ROOT = Path(__file__).resolve().parents[2]
 BUILT_IN = built_in_cases()
@@ -50,7 +51,7 @@ def test_every_disagreement_is_marked_uncertain_and_few_samples_are(name):
     others: each marked sample is traced, and costs what tracing costs."""
     scene = case_scene(name)
     geometry = Geometry(scene)
-    zb = ZBuffer(scene, geometry, _zbuffer_effects(scene, None, ()))
+    zb = ZBuffer(scene, geometry, zbuffer_effects(scene))
     zb.rasterize(2, 16)
     disagree = zb.faces() != traced_faces(scene, geometry=geometry)
     unsure = zb.uncertain()
@@ -69,7 +70,7 @@ def test_at_full_size_the_tie_samples_are_marked_and_the_image_is_the_traced_one
     must be marked uncertain, so the hybrid image is still the traced one."""
     scene = warprt.load_scene(ROOT / "scenes" / path).with_camera(width=size[0], height=size[1])
     geometry = Geometry(scene)
-    zb = ZBuffer(scene, geometry, _zbuffer_effects(scene, None, ()))
+    zb = ZBuffer(scene, geometry, zbuffer_effects(scene))
     zb.rasterize(2, 16)
     disagree = zb.faces() != traced_faces(scene, geometry=geometry)
     assert disagree.sum() > 0  # the case this test is for
@@ -94,8 +95,6 @@ EYE_ON_VERTEX = {"eye": [0.0, 1.0, 0.0], "center": [0.0, 0.0, 0.0], "up": [1.0, 
 ])
 def test_a_camera_on_a_surface_is_found(camera, on_surface):
     from tests.scenekit import make_scene
-    from warprt.camera import camera_basis
-    from warprt.zbuffer import eye_on_surface
 
     objects = ([{"shape": "uv_sphere", "material": "m", "segments": [8, 12]}] if camera is EYE_ON_VERTEX
                else [{"shape": "plane", "size": [4.0, 4.0], "rotate": [90.0, 0.0, 0.0], "material": "m"}])
@@ -129,7 +128,7 @@ def test_a_triangle_seen_edge_on_leaves_its_samples_to_the_tracer():
                        camera={"eye": [0.0, 0.0, 5.0], "center": [0.0, 0.0, 0.0], "width": 33, "height": 25},
                        ambient=[0.1] * 3)
     geometry = Geometry(scene)
-    zb = ZBuffer(scene, geometry, _zbuffer_effects(scene, None, ()))
+    zb = ZBuffer(scene, geometry, zbuffer_effects(scene))
     zb.rasterize(2, 16)
     column = zb.uncertain()[:, 16, 0]
     # The wall's rows: its corners (0, +-1, -1) lie 6 from the eye, so it spans +-f_y / 6 = +-3.6 rows

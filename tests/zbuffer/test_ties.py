@@ -7,7 +7,7 @@ from tests.scenekit import make_scene
 from tests.zbuffer.compare import classify_ties
 from tests.zbuffer.test_agreement import LIGHTS, MATERIALS
 from warprt.geometry import Geometry
-from warprt.zbuffer import traced_faces
+from warprt.image import traced_faces
 
 RING = [[1, 0], [1, 1], [0, 1], [-1, 1], [-1, 0], [-1, -1], [0, -1], [1, -1]]
 

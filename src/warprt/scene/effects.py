@@ -5,11 +5,11 @@ Each distinct EffectSet compiles to its own kernel variant with the disabled cod
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, fields, replace
 
 import numpy as np
 
-from .errors import SceneError
+from ..errors import SceneError
 
 EFFECTS = ("ambient", "diffuse", "specular", "shadows", "reflection", "supersampling", "smooth")
 
@@ -46,7 +46,7 @@ def scene_effects(scene) -> EffectSet:
     amb = np.asarray(scene.render.ambient)
     lit = any(max(l.color) > 0 for l in scene.lights)
     return EffectSet(
-        ambient=any(np.any(amb * np.asarray(m.ka_) > 0) for m in mats),
+        ambient=any(np.any(amb * np.asarray(m.ka) > 0) for m in mats),
         diffuse=lit and any(max(m.kd) > 0 for m in mats),
         specular=lit and any(max(m.ks) > 0 for m in mats),
         shadows=lit and scene.render.shadows and any(max(m.kd) > 0 or max(m.ks) > 0 for m in mats),
@@ -80,3 +80,8 @@ def resolve_effects(scene, allow=None, disable=()) -> EffectSet:
     on = {n: getattr(fx, n) and n in keep for n in EFFECTS}
     on["shadows"] = on["shadows"] and (on["diffuse"] or on["specular"])  # shadows only dim those terms
     return EffectSet(**on)
+
+
+def zbuffer_effects(scene, effects=None, disable=()) -> EffectSet:
+    """The scene's effect set without what a Z-buffer cannot simulate: shadows and reflections."""
+    return replace(resolve_effects(scene, effects, disable), shadows=False, reflection=False)

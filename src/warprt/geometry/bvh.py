@@ -17,9 +17,9 @@ same array afterwards: the BVH keeps the padded boxes, the triangle tests read t
 from __future__ import annotations
 
 import numpy as np
-from ._warp import wp
 
-EPS32 = 2.0**-24
+from .._warp import wp
+from ..floats import EPS32
 
 # The slab test computes t = (bound - o) * (1/d): three roundings, so |t error| <= gamma(3) |t|,
 # i.e. the box face seen by the ray moves by at most gamma(3) |bound - o| along that axis. Both

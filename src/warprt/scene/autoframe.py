@@ -7,8 +7,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import SceneError
-from .scene import Camera, Light, Material, RenderSettings, Scene
+from ..errors import SceneError
+from .meshio import read_mesh_file, split_by_material
+from .model import Camera, Light, Material, RenderSettings, Scene
 
 
 # The framing below is written for a y-up file; a z-up one (a USD stage may say so) turns it
@@ -17,9 +18,6 @@ _TO_UP = {"Y": np.eye(3), "Z": np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0
 
 
 def scene_for_mesh(path: Path, width: int = 640, height: int = 480) -> Scene:
-    from .meshio import read_mesh_file
-    from .scene import split_by_material
-
     mesh = read_mesh_file(path)
     vertices, faces, face_material, part_starts = mesh.concatenated()
     to_up = _TO_UP.get(mesh.up_axis, _TO_UP["Y"])

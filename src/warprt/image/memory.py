@@ -1,5 +1,5 @@
 """What a render holds in memory: the bytes of the geometry arrays the kernels read and of Warp's
-BVH, and the process's peak resident set size, for the stats and `warprt info`."""
+BVH, the frame's buffers, and the process's peak resident set size, for the stats and `warprt info`."""
 
 from __future__ import annotations
 
@@ -35,6 +35,13 @@ def geometry_memory(geom) -> dict:
     }
     out["total"] = sum(out.values())
     return out
+
+
+def frame_memory(geom, image_bytes: int, raster_bytes: int) -> dict:
+    """The stats' memory record of one frame: geometry by role, the image and ray-count buffers, the
+    Z-buffer's per-sample buffers (0 when no first hit came from it), and the peak RSS so far."""
+    return {"geometry": geometry_memory(geom), "image": int(image_bytes), "raster": int(raster_bytes),
+            "peak_rss": peak_rss()}
 
 
 def peak_rss() -> int:

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import SceneError
+from ..errors import SceneError
 
 FORMATS = (".png", ".npy", ".exr")
 

@@ -15,8 +15,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import SceneError
-from .scene import Material
+from ..errors import SceneError, show
+from .model import Material, SceneObject
+from .normals import vertex_normals
 
 TRIMESH_FORMATS = (".obj", ".ply", ".stl", ".off", ".glb", ".gltf")
 USD_FORMATS = (".usd", ".usda", ".usdc", ".usdz")
@@ -82,6 +83,41 @@ def load_mesh(path) -> tuple[np.ndarray, np.ndarray]:
     """All triangles of a file as one vertex (N, 3) float64 and face (M, 3) int64 array."""
     vertices, faces, _, _ = read_mesh_file(path).concatenated()
     return vertices, faces
+
+
+def split_by_material(name: str, vertices, faces, face_material, file_materials, materials: dict,
+                      fallback: str, smooth: bool, part_starts=(0,)) -> list[SceneObject]:
+    """One SceneObject per material a file gives its faces (face_material indexes file_materials,
+    -1: ``fallback``). The file's materials join ``materials`` as "<name>/<material>". Smooth
+    normals are computed per part of the file before the split, so the split leaves no crease."""
+    keys = []
+    for mname, m in file_materials:
+        key, k = f"{name}/{mname}", 2
+        while key in materials and materials[key] != m:
+            key, k = f"{name}/{mname}#{k}", k + 1
+        materials[key] = m
+        keys.append(key)
+    used = np.unique(face_material)
+    if len(used) == 1:
+        material = fallback if used[0] < 0 else keys[used[0]]
+        return [SceneObject(name, vertices, faces, material, smooth)]
+    normals = None
+    if smooth:
+        edges = list(part_starts) + [len(vertices)]
+        normals = np.zeros_like(vertices)
+        for a, b in zip(edges[:-1], edges[1:]):
+            sel = (faces[:, 0] >= a) & (faces[:, 0] < b)
+            if sel.any():
+                normals[a:b] = vertex_normals(vertices[a:b], faces[sel] - a)
+    out = []
+    for idx in used:
+        sel = face_material == idx
+        keep, inverse = np.unique(faces[sel], return_inverse=True)
+        material = fallback if idx < 0 else keys[idx]
+        out.append(SceneObject(material if idx >= 0 else f"{name}/{fallback}", np.ascontiguousarray(vertices[keep]),
+                               inverse.reshape(-1, 3).astype(np.int64), material, smooth,
+                               None if normals is None else np.ascontiguousarray(normals[keep])))
+    return out
 
 
 def is_mesh_path(path) -> bool:
@@ -228,7 +264,7 @@ def _phong_from_mtl(src: str, name: str, raw: dict) -> Material:
             v = v * 3  # 'Kd r' means r = g = b
         if v is None or len(v) != 3 or not all(math.isfinite(x) and x >= 0 for x in v):
             raise SceneError(src, f"newmtl {name}: {key.capitalize()}",
-                             f"expected 3 non-negative numbers, got {_show(raw.get(key))}")
+                             f"expected 3 non-negative numbers, got {show(raw.get(key))}")
         return tuple(v)
 
     kd = rgb("kd", (0.8, 0.8, 0.8))  # 0.8: what common MTL readers assume without a Kd
@@ -240,12 +276,12 @@ def _phong_from_mtl(src: str, name: str, raw: dict) -> Material:
     except (TypeError, ValueError, IndexError):
         ns = float("nan")
     if not (math.isfinite(ns) and ns >= 0):
-        raise SceneError(src, f"newmtl {name}: Ns", f"expected a number >= 0, got {_show(raw.get('ns'))}")
+        raise SceneError(src, f"newmtl {name}: Ns", f"expected a number >= 0, got {show(raw.get('ns'))}")
     illum = raw.get("illum")
     try:
         illum = int(float(np.atleast_1d(illum)[0])) if illum is not None else 2
     except (TypeError, ValueError, IndexError):
-        raise SceneError(src, f"newmtl {name}: illum", f"expected an integer, got {_show(illum)}") from None
+        raise SceneError(src, f"newmtl {name}: illum", f"expected an integer, got {show(illum)}") from None
     kr = ks if illum == 3 else (0.0, 0.0, 0.0)
     if illum in (0, 1):
         ks = (0.0, 0.0, 0.0)
@@ -419,8 +455,3 @@ def _unique(name: str, taken: list[str]) -> str:
     while out in taken:
         out, k = f"{name}#{k}", k + 1
     return out
-
-
-def _show(v) -> str:
-    s = repr(v)
-    return s if len(s) <= 60 else s[:57] + "..."

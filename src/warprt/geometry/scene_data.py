@@ -8,10 +8,9 @@ from the origin keeps the precision it has near it (the camera ray origin is exa
 from __future__ import annotations
 
 import numpy as np
-from ._warp import wp
-
+from .._warp import wp
+from ..scene import vertex_normals
 from .bvh import build_mesh
-from .normals import vertex_normals
 
 
 @wp.struct
@@ -87,7 +86,7 @@ class Geometry:
         s.tri_material = wp.array(self.tri_material_np, dtype=wp.int32, device=d)
         s.tri_smooth = wp.array(np.concatenate(smooth), dtype=wp.int32, device=d)
         vec = lambda rows: wp.array(np.asarray(rows, np.float32).reshape(-1, 3), dtype=wp.vec3, device=d)
-        s.ka = vec([x.ka_ for x in m])
+        s.ka = vec([x.ka for x in m])
         s.kd = vec([x.kd for x in m])
         s.ks = vec([x.ks for x in m])
         s.kr = vec([x.reflectivity for x in m])

@@ -1,0 +1,30 @@
+"""The host side of a frame: launching bands (launch.py), the stats and their timer (stats.py), the
+renderers and their policies (renderer.py), the Z-buffer's buffers (zbuffer.py), memory (memory.py),
+image files (film.py) and the progress line (progress.py).
+
+Warp is imported on first use of a name that needs it: writing or reading an image does not.
+"""
+
+from .film import FORMATS as IMAGE_FORMATS, linear_to_srgb, read_image, srgb_to_linear, to_srgb8, write_image
+from .stats import RenderResult, RenderStats
+
+_WARP_NAMES = {
+    "renderer": ("DEFAULTS", "AUTO_RASTER_MAX_BYTES", "RASTER_BYTES_PER_SAMPLE", "cached_geometry", "raster_is_cheaper",
+                 "render", "render_zbuffer", "check_finite"),
+    "zbuffer": ("ZBuffer", "eye_on_surface", "traced_faces"),
+    "launch": ("bands_of", "default_threads", "launch_bands"),
+}
+
+__all__ = ["IMAGE_FORMATS", "RenderResult", "RenderStats", "linear_to_srgb", "read_image", "srgb_to_linear", "to_srgb8",
+           "write_image", *(n for names in _WARP_NAMES.values() for n in names)]
+
+
+def __getattr__(name):
+    for module, names in _WARP_NAMES.items():
+        if name in names:
+            import importlib
+
+            value = getattr(importlib.import_module(f".{module}", __name__), name)
+            globals()[name] = value
+            return value
+    raise AttributeError(f"module 'warprt.image' has no attribute '{name}'")

@@ -1,0 +1,62 @@
+"""Launching a kernel over an image: bands of pixels from a thread pool. A Warp CPU launch runs on one
+thread and releases the GIL, so a pool of one worker per core runs that many bands at once."""
+
+from __future__ import annotations
+
+import functools
+import os
+from concurrent.futures import ThreadPoolExecutor
+
+import numpy as np
+
+from .._warp import wp
+from ..errors import SceneError
+
+
+def default_threads() -> int:
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+
+
+def launch_plan(threads: int | None, bands: int | None, device: str) -> tuple[int, int]:
+    """Threads and bands for a render: on the CPU each band is one launch, and 8 per thread (16 at
+    least) balance the load between threads; a GPU takes the whole image in one launch."""
+    threads = default_threads() if threads is None else int(threads)
+    if threads < 1:
+        raise SceneError("command line", "--threads", f"expected an integer >= 1, got {threads}")
+    return threads, bands or (1 if device != "cpu" else max(16, 8 * threads))
+
+
+def bands_of(n_items: int, n_bands: int) -> list[tuple[int, int]]:
+    """Split [0, n_items) into n_bands contiguous ranges (first, count)."""
+    n_bands = max(1, min(n_bands, n_items))
+    edges = np.linspace(0, n_items, n_bands + 1).round().astype(int)
+    return [(int(a), int(b - a)) for a, b in zip(edges[:-1], edges[1:]) if b > a]
+
+
+@functools.cache
+def _pool(threads: int) -> ThreadPoolExecutor:
+    """One long-lived pool per thread count: starting threads for every frame costs more than a
+    small frame's trace."""
+    return ThreadPoolExecutor(max_workers=threads, thread_name_prefix="warprt")
+
+
+def launch_bands(kernel, inputs_for, n_items: int, threads: int, bands: int, device: str, on_band=None):
+    """Launch ``kernel`` over ranges of [0, n_items), with ``inputs_for(first)`` as its inputs; on the
+    CPU ``threads`` bands run at once. ``on_band(first, count)`` is called when a band has finished,
+    on the worker thread that ran it."""
+    ranges = bands_of(n_items, bands)
+
+    def run(r):
+        first, count = r
+        wp.launch(kernel, dim=count, inputs=inputs_for(first), device=device)
+        if on_band is not None:
+            if device != "cpu":  # a GPU launch returns before the band is done
+                wp.synchronize_device(device)
+            on_band(first, count)
+
+    if threads <= 1 or len(ranges) == 1 or device != "cpu":
+        for r in ranges:
+            run(r)
+    else:
+        list(_pool(threads).map(run, ranges))
+    wp.synchronize_device(device)

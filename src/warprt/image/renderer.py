@@ -1,0 +1,216 @@
+"""Render a Scene: the Whitted tracer (render) or the Z-buffer (render_zbuffer), each a few named
+phases: geometry (BVH), kernel variant, rasterized first hits where the hybrid policy says so, the
+bands of pixels, and what it cost (time per phase, exact ray counts, memory)."""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from .._warp import init_warp, wp
+from ..errors import SceneError
+from ..geometry import Geometry
+from ..kernels import camera_data, make_shade_kernel, make_trace_kernel, raster_kernel
+from ..scene import EffectSet, ObjectCache, camera_basis, resolve_effects, validate_camera, validate_scene, zbuffer_effects
+from .launch import bands_of, launch_bands, launch_plan
+from .memory import frame_memory
+from .stats import RenderResult, RenderStats
+from .zbuffer import RASTER_TILE, ZBuffer, empty_fragments, eye_on_surface
+
+ALGORITHMS = ("raytrace", "zbuffer")
+PRIMARY = ("auto", "raytrace", "zbuffer")
+
+
+@dataclass
+class Defaults:
+    """render()'s defaults for what it is not told; the test suite sets ``primary`` to run whole
+    suites on both paths (tests/conftest.py)."""
+
+    primary: str = "auto"
+
+
+DEFAULTS = Defaults()
+
+# Pixel order: bands walk the image in 8x8 tiles, so the rays of a band stay close together and
+# reuse the BVH nodes in cache. Measured at 1024x768 against row-major order: 0.83 to 0.96 of the
+# trace time on six of eight scenes, 1.01 and 1.03 on two (benchmarks/ATTEMPTS.md).
+PIXEL_TILE = (8, 8)
+
+# The Z-buffer's buffers per sample: 1/z and its nearest rival (float64 each), the face (int32), (u, v).
+RASTER_BYTES_PER_SAMPLE = 8 + 8 + 4 + 8
+# primary="auto" rasterizes only while those buffers stay under this: 19 million samples, 1920x1080
+# at 9 spp. Tracing needs no per-sample memory, so a bigger frame (4K at 16 spp would need 3.7 GB)
+# is traced rather than made to pay for its speed-up in memory.
+AUTO_RASTER_MAX_BYTES = 512 * 2**20
+
+
+def raster_is_cheaper(triangles: int, samples: int, device: str = "cpu") -> bool:
+    """Whether rasterizing the primary hits beats tracing them. Rasterization costs about a fixed
+    amount per triangle plus per covered sample, tracing about log(triangles) per sample; at
+    1024x768 the Z-buffer found the first hits in 0.36-0.41x of the traced time with 5k-9k
+    triangles and in 2.7x with 524k (benchmarks/ATTEMPTS.md). Below one triangle per ten samples
+    the raster wins on every scene measured. Measured on the CPU only: on a GPU the primaries are
+    traced. Within AUTO_RASTER_MAX_BYTES of buffers only."""
+    return (device == "cpu" and 0 < triangles <= samples // 10
+            and samples * RASTER_BYTES_PER_SAMPLE <= AUTO_RASTER_MAX_BYTES)
+
+
+def primary_from_zbuffer(primary: str, geom: Geometry, basis, samples: int, device: str) -> bool:
+    """The hybrid policy: whether the first hits come from the Z-buffer. "zbuffer" asks for it, "auto"
+    where it is the cheaper; a camera on a surface is traced either way (the traced image is the promise)."""
+    wanted = primary == "zbuffer" or (primary == "auto" and raster_is_cheaper(geom.triangle_count, samples, device))
+    return wanted and not eye_on_surface(geom, basis)
+
+
+_geometries = ObjectCache(size=4)
+
+
+def cached_geometry(scene, device: str = "cpu") -> Geometry:
+    """The scene's Geometry (BVH, normals, tables), built once and reused by the next frames of the
+    same scene from the same eye, as Mitsuba reuses a loaded scene. Keyed by the objects' identity
+    (Scene.with_camera/with_render share them) and every value the Geometry is made of."""
+    key = (id(scene.objects), tuple(id(o.vertices) for o in scene.objects), tuple(scene.camera.eye),
+           tuple(scene.materials.items()), tuple(scene.lights), scene.render.ambient, scene.render.background, str(device))
+    return _geometries.get(key, scene.objects, lambda: Geometry(scene, device=device))
+
+
+def check_finite(image: np.ndarray, what: str = "render"):
+    """The renderer checks its own output: a NaN or Inf pixel is a bug, never an image."""
+    bad = ~np.isfinite(image)
+    if bad.any():
+        rows, cols = np.nonzero(bad.any(-1))
+        raise RuntimeError(f"{what} produced {len(rows)} non-finite pixels (first at row {rows[0]}, column {cols[0]})")
+
+
+def _check_choice(value: str, choices, flag: str, what: str):
+    if value not in choices:
+        raise SceneError("command line", flag, f"unknown {what} '{value}'; expected one of: {', '.join(choices)}")
+
+
+def render(scene, *, threads: int | None = None, device: str = "cpu", effects=None, disable=(),
+           bands: int | None = None, geometry: Geometry | None = None, algorithm: str = "raytrace",
+           progress=None, tile: tuple[int, int] | None = None, primary: str | None = None) -> RenderResult:
+    """Render ``scene`` with the Whitted tracer (or, algorithm="zbuffer", by rasterization with the same
+    local shading). ``effects`` (names) limits the effect set, ``disable`` removes effects; neither
+    can add one the scene has nothing for. ``primary`` says where the tracer's first hits come from:
+    "raytrace"; "zbuffer" (hybrid rendering: the Z-buffer's visible triangle wherever it is certain
+    to be the traced one, the other samples traced; the image is the traced image to the bit); or
+    "auto", the default, which rasterizes where that is the cheaper of the two (raster_is_cheaper)."""
+    primary = DEFAULTS.primary if primary is None else primary
+    _check_choice(primary, PRIMARY, "--primary", "primary visibility")
+    _check_choice(algorithm, ALGORITHMS, "--algorithm", "algorithm")
+    validate_scene(scene)  # a Scene built in Python gets the file's checks too, before any kernel
+    if algorithm == "zbuffer":
+        return render_zbuffer(scene, threads=threads, device=device, effects=effects, disable=disable,
+                              bands=bands, geometry=geometry)
+    init_warp()
+    t_start = time.perf_counter()
+    threads, bands = launch_plan(threads, bands, device)
+    cam = scene.camera
+    basis = camera_basis(cam)
+    fx: EffectSet = resolve_effects(scene, effects, disable)
+    stats = RenderStats.begin(scene, fx, threads=threads, bands=bands, device=device, algorithm="raytrace",
+                              variant=f"trace_{fx.variant}", max_depth=scene.render.max_depth if fx.reflection else 1)
+
+    with stats.phase("bvh"):
+        geom = geometry or cached_geometry(scene, device)
+    stats.triangles = geom.triangle_count
+    n_pixels = cam.width * cam.height
+    raster = primary_from_zbuffer(primary, geom, basis, n_pixels * (scene.render.spp if fx.supersampling else 1), device)
+    stats.primary = "zbuffer" if raster else "raytrace"
+
+    with stats.phase("compile"):
+        kernel = make_trace_kernel(fx, raster_primary=raster)
+        wp.load_module(kernel.module, device=device)
+        if raster:
+            wp.load_module(raster_kernel.module, device=device)
+    stats.variant += "_zprimary" if raster else ""
+
+    zb = None
+    if raster:
+        with stats.phase("raster"):
+            zb = ZBuffer(scene, geom, replace(fx, shadows=False, reflection=False), device=device)
+            zb.rasterize(threads, bands)
+    frags = zb.fragments if zb is not None else empty_fragments(device)
+
+    with stats.phase("trace"):
+        image = wp.empty(n_pixels, dtype=wp.vec3, device=device)
+        counts = wp.empty(n_pixels, dtype=wp.vec3i, device=device)
+        c, k, max_depth, data = camera_data(basis), math.isqrt(scene.render.spp), stats.max_depth, geom.data
+        tile_w, tile_h = tile or PIXEL_TILE
+        inputs = lambda first: [data, c, max_depth, k, first, tile_w, tile_h, frags, image, counts]
+        _launch_with_progress(kernel, inputs, n_pixels, threads, bands, device, counts, progress)
+        out = image.numpy().reshape(cam.height, cam.width, 3).copy()
+        per_kind = counts.numpy().astype(np.int64).sum(0)
+    check_finite(out)
+
+    stats.rays = {"primary": int(per_kind[0]), "shadow": int(per_kind[1]), "reflection": int(per_kind[2])}
+    stats.rays["total"] = sum(stats.rays.values())
+    stats.rays_per_second = stats.rays["total"] / max(stats.times["trace"], 1e-9)
+    stats.times["total"] = time.perf_counter() - t_start
+    stats.memory = frame_memory(geom, image.capacity + counts.capacity, zb.nbytes if zb is not None else 0)
+    return RenderResult(out, stats)
+
+
+def _launch_with_progress(kernel, inputs, n_pixels, threads, bands, device, counts, progress):
+    """launch_bands, telling ``progress`` (a progress.Progress) of each band done and its exact ray count."""
+    on_band = None
+    if progress is not None:
+        # On the CPU the counts live in host memory and a finished band's counts are final.
+        counts_host = counts.numpy() if device == "cpu" else None
+
+        def report(first, count):
+            rays = int(counts_host[first:first + count].sum(dtype=np.int64)) if counts_host is not None else 0
+            progress.band_done(count, rays)
+
+        on_band = report
+
+        progress.begin(len(bands_of(n_pixels, bands)), n_pixels)
+    try:
+        launch_bands(kernel, inputs, n_pixels, threads, bands, device, on_band)
+    finally:
+        if progress is not None:
+            progress.end()
+
+
+def render_zbuffer(scene, *, threads: int | None = None, device: str = "cpu", effects=None, disable=(),
+                   bands: int | None = None, geometry: Geometry | None = None, tile: int = RASTER_TILE,
+                   return_faces: bool = False):
+    """Render ``scene`` by rasterization with the tracer's local shading (no shadows, no reflections).
+    Returns a RenderResult, and with return_faces also the visible face per sample (H, W, samples)."""
+    init_warp()
+    validate_camera(scene.camera, scene.source)
+    t_start = time.perf_counter()
+    threads, bands = launch_plan(threads, bands, device)
+    cam = scene.camera
+    fx = zbuffer_effects(scene, effects, disable)
+    stats = RenderStats.begin(scene, fx, threads=threads, bands=bands, device=device, algorithm="zbuffer",
+                              variant=f"zbuffer_{fx.variant}", max_depth=1)
+    stats.rays = {"primary": 0, "shadow": 0, "reflection": 0, "total": 0}  # none: visibility is rasterized
+
+    with stats.phase("geometry"):
+        geom = geometry or Geometry(scene, device=device, build_bvh=False)
+    stats.triangles = geom.triangle_count
+
+    with stats.phase("compile"):
+        kernel = make_shade_kernel(fx)
+        for m in (kernel.module, raster_kernel.module):
+            wp.load_module(m, device=device)
+
+    with stats.phase("render"):  # project + bin + raster + shade
+        zb = ZBuffer(scene, geom, fx, device=device, tile=tile, track_uncertain=False)
+        zb.rasterize(threads, bands)
+        stats.times.update(zb.times)
+        with stats.phase("shade"):
+            n_pixels = cam.width * cam.height
+            image = wp.empty(n_pixels, dtype=wp.vec3, device=device)
+            c, data, k, frags = camera_data(zb.basis), geom.data, zb.k, zb.fragments
+            launch_bands(kernel, lambda first: [data, c, k, first, frags, image], n_pixels, threads, bands, device)
+            out = image.numpy().reshape(cam.height, cam.width, 3).copy()
+    check_finite(out, "zbuffer")
+    stats.times["total"] = time.perf_counter() - t_start
+    result = RenderResult(out, stats)
+    return (result, zb.faces()) if return_faces else result

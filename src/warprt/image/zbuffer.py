@@ -1,0 +1,159 @@
+"""The Z-buffer's host side: the per-sample buffers of one rasterization (ZBuffer, handing on
+kernels.raster.Fragments), the eye-on-a-surface test that sends a view to the tracer, and the
+tracer's own first hits for comparison (traced_faces)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .._warp import init_warp, wp
+from ..geometry import Geometry
+from ..kernels import (CLIP_SCALE, MARGIN_PX, Fragments, camera_data, count_kernel, fill_kernel, primary_faces_kernel,
+                       project_kernel, raster_camera, raster_kernel, uncertain_np)
+from ..scene import EffectSet, camera_basis, resolve_effects
+from .launch import default_threads, launch_bands
+from .stats import timed
+
+RASTER_TILE = 16  # pixels per raster tile side: each raster thread owns one tile
+
+
+def clip_distance(geometry: Geometry) -> float:
+    """z_clip = CLIP_SCALE R, R = sqrt(3) max |coordinate| bounding every vertex's distance from the eye."""
+    reach = float(np.abs(geometry.points_np).max(initial=0.0)) * math.sqrt(3.0)
+    return CLIP_SCALE * max(reach, 1e-30)
+
+
+def eye_on_surface(geometry: Geometry, basis) -> bool:
+    """Whether some triangle comes within reach of the eye that the rasterizer clips: its plane that
+    close, and the eye inside its box grown by as much. The clip plane z = z_clip cuts away points
+    that camera rays (at most the corner ray's angle theta off the axis) reach within
+    z_clip / cos(theta); twice that is the reach. The tracer's rays, which start at the eye and keep
+    hits from t = 0, hit such a triangle there, as they do one the eye lies on. Hybrid rendering
+    traces the first hits of such a view: a camera placed on (or a hair from) a surface."""
+    cos_corner = basis.d_f / math.sqrt(basis.d_f ** 2 + (basis.h / 2.0) ** 2 + (basis.w / 2.0) ** 2)
+    tol = 2.0 * clip_distance(geometry) / cos_corner
+    cache = geometry.__dict__.setdefault("_eye_on_surface", {})  # a Geometry is reused across frames
+    if tol not in cache:
+        cache[tol] = _eye_on_surface(geometry, tol)
+    return cache[tol]
+
+
+def _eye_on_surface(geometry: Geometry, tol: float) -> bool:
+    if geometry.triangle_count == 0:
+        return False
+    tri = geometry.points_np.astype(np.float64)[geometry.indices_np.reshape(-1, 3)]  # eye at the origin
+    in_box = np.all((tri.min(axis=1) <= tol) & (tri.max(axis=1) >= -tol), axis=1)
+    if not in_box.any():
+        return False
+    t = tri[in_box]
+    n = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
+    length = np.linalg.norm(n, axis=1)
+    plane = np.abs(np.einsum("ij,ij->i", n, t[:, 0]))  # |n . p0|: |n| times the eye's distance to the plane
+    return bool(np.any(plane <= tol * length))
+
+
+def empty_fragments(device) -> Fragments:
+    """Fragments of no samples: what the trace kernel gets when no first hit comes from the Z-buffer."""
+    frags = Fragments()
+    frags.face = wp.empty(0, dtype=wp.int32, device=device)
+    frags.inv_depth = wp.empty(0, dtype=wp.float64, device=device)
+    frags.uv = wp.empty(0, dtype=wp.vec2, device=device)
+    frags.rival_inv_depth = wp.empty(0, dtype=wp.float64, device=device)
+    return frags
+
+
+class ZBuffer:
+    """Owns the per-sample buffers of one scene's rasterization (self.fragments)."""
+
+    def __init__(self, scene, geometry: Geometry, fx: EffectSet, device: str = "cpu", tile: int = RASTER_TILE,
+                 track_uncertain: bool = True):
+        cam = scene.camera
+        self.geometry, self.device, self.tile = geometry, device, int(tile)
+        self.track_uncertain = track_uncertain
+        self.basis = camera_basis(cam)
+        self.k = math.isqrt(scene.render.spp)
+        self.samples = self.k * self.k if fx.supersampling else 1
+        # track_uncertain: fill rival_inv_depth for hybrid rendering; a plain Z-buffer image skips it.
+        self.camera = raster_camera(self.basis, clip_distance(geometry), MARGIN_PX if track_uncertain else 0.0)
+        n = cam.width * cam.height * self.samples
+        frags = Fragments()
+        frags.face = wp.full(n, -1, dtype=wp.int32, device=device)
+        frags.inv_depth = wp.zeros(n, dtype=wp.float64, device=device)  # 0 is "nothing yet"
+        frags.uv = wp.zeros(n, dtype=wp.vec2, device=device)
+        frags.rival_inv_depth = wp.zeros(n if track_uncertain else 0, dtype=wp.float64, device=device)  # 0: none
+        self.fragments = frags
+        self.times: dict = {}
+        self.pairs = 0
+
+    @property
+    def nbytes(self) -> int:
+        f = self.fragments
+        return int(f.face.capacity + f.inv_depth.capacity + f.uv.capacity + f.rival_inv_depth.capacity)
+
+    def rasterize(self, threads: int, bands: int):
+        """Project, bin and depth-test every triangle; times["project"|"bin"|"raster"] in seconds."""
+        g, c, dev = self.geometry, self.camera, self.device
+        data = g.data
+        k = self.k if self.samples > 1 else 1
+        with timed(self.times, "project"):
+            bounds = wp.empty(max(g.triangle_count, 1), dtype=wp.vec4i, device=dev)
+            if g.triangle_count:
+                # A few thousand triangles per launch: below that, launching costs more than projecting.
+                launch_bands(project_kernel, lambda first: [data, c, k, first, bounds], g.triangle_count, threads,
+                             max(1, min(bands, g.triangle_count // 4096)), dev)
+
+        # Binning: count per tile, scan, fill. One launch each: Warp's atomics are plain
+        # read-modify-writes on the CPU, safe within a launch (one thread) but not across launches.
+        with timed(self.times, "bin"):
+            tile = self.tile
+            tiles_x, tiles_y = -(-c.width // tile), -(-c.height // tile)
+            tile_count = wp.zeros(tiles_x * tiles_y, dtype=wp.int32, device=dev)
+            wp.launch(count_kernel, dim=g.triangle_count, inputs=[bounds, tile, tiles_x, tile_count], device=dev)
+            tile_start = np.zeros(tiles_x * tiles_y + 1, np.int32)
+            tile_start[1:] = np.cumsum(tile_count.numpy())
+            self.pairs = int(tile_start[-1])
+            starts = wp.array(tile_start, dtype=wp.int32, device=dev)
+            cursor = wp.array(tile_start[:-1], dtype=wp.int32, device=dev)
+            faces = wp.empty(max(self.pairs, 1), dtype=wp.int32, device=dev)
+            wp.launch(fill_kernel, dim=g.triangle_count, inputs=[bounds, tile, tiles_x, cursor, faces], device=dev)
+            wp.synchronize_device(dev)
+
+        with timed(self.times, "raster"):
+            samples, frags = self.samples, self.fragments
+            launch_bands(raster_kernel, lambda first: [data, c, starts, faces, tiles_x, tile, k, samples, first, frags],
+                         tiles_x * tiles_y, threads, max(bands, 4 * threads), dev)
+
+    def uncertain(self) -> np.ndarray:
+        """Where the rasterizer's visible triangle may not be the tracer's, (height, width, samples):
+        hybrid.uncertain() of every sample."""
+        if not self.track_uncertain:
+            raise ValueError("this ZBuffer was made with track_uncertain=False: it has no uncertain samples to report")
+        f = self.fragments
+        shape = (self.basis.height, self.basis.width, self.samples)
+        return uncertain_np(f.inv_depth.numpy(), f.rival_inv_depth.numpy()).reshape(shape)
+
+    def faces(self) -> np.ndarray:
+        """The visible triangle of every sample, (height, width, samples), -1 where none."""
+        return self.fragments.face.numpy().reshape(self.basis.height, self.basis.width, self.samples)
+
+
+def traced_faces(scene, *, geometry: Geometry | None = None, effects=None, disable=(), threads: int | None = None,
+                 device: str = "cpu") -> np.ndarray:
+    """The face the ray tracer's primary ray hits at every sample, (height, width, samples), -1 for a miss;
+    samples as the tracer takes them for this effect set (k*k with supersampling, else the centre)."""
+    init_warp()
+    cam = scene.camera
+    fx = resolve_effects(scene, effects, disable)
+    k = math.isqrt(scene.render.spp)
+    samples = k * k if fx.supersampling else 1
+    geom = geometry or Geometry(scene, device=device)
+    if geom.mesh is None:
+        raise ValueError("traced_faces needs a Geometry with its BVH (build_bvh=True)")
+    threads = threads or default_threads()
+    face = wp.empty(cam.width * cam.height * samples, dtype=wp.int32, device=device)
+    c = camera_data(camera_basis(cam))
+    launch_bands(primary_faces_kernel, lambda first: [geom.data, c, k, samples, first, face],
+                 cam.width * cam.height, threads, max(16, 8 * threads), device)
+    return face.numpy().reshape(cam.height, cam.width, samples)

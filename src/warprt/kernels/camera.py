@@ -1,0 +1,79 @@
+"""The cameras the kernels see: the tracer's pinhole (CameraData: the seed's basis, float32, eye at
+the origin) and the rasterizer's projection of it (RasterCamera, float64), and where a sample sits."""
+
+from __future__ import annotations
+
+from .._warp import wp
+
+
+@wp.struct
+class CameraData:
+    """The seed's camera basis and image-plane size, in camera-relative space (eye at 0)."""
+
+    x_e: wp.vec3
+    y_e: wp.vec3
+    z_e: wp.vec3
+    d_f: float
+    h: float
+    w: float
+    width: int
+    height: int
+
+
+def camera_data(basis) -> CameraData:
+    """From a scene.CameraBasis."""
+    c = CameraData()
+    c.x_e, c.y_e, c.z_e = (wp.vec3(*map(float, v)) for v in (basis.x_e, basis.y_e, basis.z_e))
+    c.d_f, c.h, c.w = float(basis.d_f), float(basis.h), float(basis.w)
+    c.width, c.height = int(basis.width), int(basis.height)
+    return c
+
+
+@wp.func
+def camera_ray(c: CameraData, x: int, row: int, sx: float, sy: float) -> wp.vec3:
+    """Unit direction d = -d_f z_e + h((y+sy)/h_p - 1/2) y_e + w((x+sx)/w_p - 1/2) x_e,
+    y = h_p - 1 - row counted from the bottom, so row 0 of the image is the top."""
+    y = float(c.height - 1 - row)
+    d = (-c.d_f) * c.z_e + c.h * ((y + sy) / float(c.height) - 0.5) * c.y_e \
+        + c.w * ((float(x) + sx) / float(c.width) - 0.5) * c.x_e
+    return wp.normalize(d)
+
+
+@wp.func
+def sample_offset(sample: int, k: int) -> wp.vec2:
+    """Where sample j k + i of a pixel's k x k stratified samples lies in the pixel: the centre of
+    stratum (i, j), counted from the pixel's lower-left corner."""
+    sx = (float(sample % k) + 0.5) / float(k)
+    sy = (float(sample / k) + 0.5) / float(k)
+    return wp.vec2(sx, sy)
+
+
+@wp.struct
+class RasterCamera:
+    """The camera basis in float64 and the projection onto continuous pixel coordinates
+    (X, Y) = (c_x + f_x x/z, c_y + f_y y/z), y counted up from the bottom edge like the tracer."""
+
+    x_e: wp.vec3d
+    y_e: wp.vec3d
+    z_e: wp.vec3d
+    f_x: wp.float64  # d_f * width / w: pixels per unit of x/z
+    f_y: wp.float64
+    c_x: wp.float64  # width / 2
+    c_y: wp.float64
+    z_clip: wp.float64  # clip distance in front of the eye
+    margin: wp.float64  # hybrid.MARGIN_PX when the rasterizer tracks uncertain samples for the hybrid, else 0
+    width: int
+    height: int
+
+
+def raster_camera(basis, z_clip: float, margin: float = 0.0) -> RasterCamera:
+    c = RasterCamera()
+    c.x_e, c.y_e, c.z_e = (wp.vec3d(*map(float, v)) for v in (basis.x_e, basis.y_e, basis.z_e))
+    c.f_x = wp.float64(basis.d_f * basis.width / basis.w)
+    c.f_y = wp.float64(basis.d_f * basis.height / basis.h)
+    c.c_x = wp.float64(basis.width / 2.0)
+    c.c_y = wp.float64(basis.height / 2.0)
+    c.z_clip = wp.float64(z_clip)
+    c.margin = wp.float64(margin)
+    c.width, c.height = int(basis.width), int(basis.height)
+    return c

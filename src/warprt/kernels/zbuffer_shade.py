@@ -1,0 +1,53 @@
+"""The Z-buffer's shading pass: per pixel, the tracer's own hit record and local shading at each
+sample's visible point (the rasterizer's Fragments), box-filtered. No shadows, no reflections."""
+
+from __future__ import annotations
+
+import functools
+
+from .._warp import wp
+from ..geometry import SceneData
+from .camera import CameraData, camera_ray, sample_offset
+from .interaction import make_surface
+from .raster import Fragments
+from .shading import make_shade
+from .triangle import query_normal, triangle
+
+
+@functools.cache
+def make_shade_kernel(fx):
+    """The shading kernel for one EffectSet (shadows and reflection are ignored: a Z-buffer has neither)."""
+    shade = make_shade(fx)
+    surface = make_surface(fx.smooth)
+    SUPERSAMPLING = fx.supersampling
+
+    @wp.kernel(module="unique", enable_backward=False)
+    def shade_zbuffer(s: SceneData, c: CameraData, k: int, first_pixel: int, frags: Fragments,
+                      image: wp.array(dtype=wp.vec3)):
+        pixel = first_pixel + wp.tid()
+        x = pixel % c.width
+        row = pixel / c.width
+        samples = int(1)
+        if wp.static(SUPERSAMPLING):
+            samples = k * k
+        total = wp.vec3(0.0)
+        for sample in range(samples):
+            i = pixel * samples + sample
+            f = frags.face[i]
+            if f < 0:
+                total = total + s.background
+                continue
+            offset = wp.vec2(0.5, 0.5)
+            if wp.static(SUPERSAMPLING):
+                offset = sample_offset(sample, k)
+            d = camera_ray(c, x, row, offset[0], offset[1])
+            p0, p1, p2 = triangle(s, f)
+            # The normal Warp's ray query reports, so make_surface turns smooth normals to the same
+            # side as in the tracer.
+            uv = frags.uv[i]
+            hit = surface(s, f, uv[0], uv[1], query_normal(p0, p1, p2), d)
+            r = shade(s, hit.material, hit.p, hit.err, hit.ng, hit.n, -d)
+            total = total + r.color
+        image[pixel] = total / float(samples)
+
+    return shade_zbuffer

@@ -1,0 +1,26 @@
+"""A small cache of values derived from an object (a Scene's BVH, its Mitsuba conversion), kept for
+the next few calls with the same object, as Mitsuba keeps a loaded scene."""
+
+from __future__ import annotations
+
+
+class ObjectCache:
+    """Least-recently-used, at most ``size`` entries. An entry is found by its key and kept only
+    while it was made for the very object given (a new object may reuse a dead one's id)."""
+
+    def __init__(self, size: int = 4):
+        self.size = size
+        self._entries: dict = {}
+
+    def get(self, key, holder, make):
+        """The value for ``key`` made from ``holder``, or ``make()``'s, which is then kept."""
+        entry = self._entries.pop(key, None)
+        if entry is None or entry[0] is not holder:
+            entry = (holder, make())
+        self._entries[key] = entry  # most recently used last
+        while len(self._entries) > self.size:
+            self._entries.pop(next(iter(self._entries)))
+        return entry[1]
+
+    def clear(self):
+        self._entries.clear()

@@ -1,0 +1,304 @@
+"""The TOML scene file to a Scene: typed access to each table, with every error naming the file and
+the dotted field in the file's own vocabulary (``camera.fovy``, ``objects[2].mesh``)."""
+
+from __future__ import annotations
+
+import difflib
+import math
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import SceneError, show
+from . import shapes
+from .meshio import read_mesh_file, split_by_material
+from .model import DEFAULT_MATERIAL, Camera, Light, Material, RenderSettings, Scene, SceneObject
+from .validate import check_setting, validate_camera, validate_scene
+
+SECTIONS = {"camera", "render", "lights", "materials", "objects"}
+_CAMERA_KEYS = {"eye", "center", "up", "fovy", "near", "width", "height"}
+_RENDER_KEYS = {"ambient", "background", "max_depth", "shadows", "spp", "effects"}
+_LIGHT_KEYS = {"position", "color"}
+_MATERIAL_KEYS = {"ka", "kd", "ks", "shininess", "reflectivity"}
+_OBJECT_KEYS = {"name", "mesh", "shape", "material", "scale", "rotate", "translate", "smooth"}
+
+
+class _Reader:
+    """Typed access to one TOML table, raising SceneError with the file and dotted field."""
+
+    def __init__(self, source: str, table: dict, prefix: str):
+        self.source, self.table, self.prefix = source, table, prefix
+
+    def fail(self, key: str | None, message: str):
+        raise SceneError(self.source, f"{self.prefix}.{key}" if key else self.prefix, message)
+
+    def check_keys(self, allowed: set):
+        for key in self.table:
+            if key not in allowed:
+                close = difflib.get_close_matches(key, sorted(allowed), n=1)
+                hint = f" (did you mean '{close[0]}'?)" if close else f" (expected one of: {', '.join(sorted(allowed))})"
+                self.fail(key, f"unknown key{hint}")
+
+    def number(self, key, default=None, lo=None, hi=None, lo_open=False, hi_open=False):
+        v = self.table.get(key, default)
+        if v is None:
+            self.fail(key, "is required")
+        if isinstance(v, bool) or not isinstance(v, (int, float)):
+            self.fail(key, f"expected a number, got {show(v)}")
+        v = float(v)
+        if not math.isfinite(v):
+            self.fail(key, f"expected a finite number, got {v}")
+        if lo is not None and (v < lo or (lo_open and v == lo)):
+            self.fail(key, f"expected a number {'>' if lo_open else '>='} {lo:g}, got {v:g}")
+        if hi is not None and (v > hi or (hi_open and v == hi)):
+            self.fail(key, f"expected a number {'<' if hi_open else '<='} {hi:g}, got {v:g}")
+        return v
+
+    def integer(self, key, default=None, lo=None, hi=None):
+        v = self.table.get(key, default)
+        if v is None:
+            self.fail(key, "is required")
+        if isinstance(v, bool) or not isinstance(v, int):
+            self.fail(key, f"expected an integer, got {show(v)}")
+        if (lo is not None and v < lo) or (hi is not None and v > hi):
+            self.fail(key, f"expected an integer in [{lo}, {hi}], got {v}")
+        return int(v)
+
+    def boolean(self, key, default):
+        v = self.table.get(key, default)
+        if not isinstance(v, bool):
+            self.fail(key, f"expected true or false, got {show(v)}")
+        return v
+
+    def string(self, key, default=None):
+        v = self.table.get(key, default)
+        if v is None:
+            self.fail(key, "is required")
+        if not isinstance(v, str):
+            self.fail(key, f"expected a string, got {show(v)}")
+        return v
+
+    def vector(self, key, default=None, n=3, nonneg=False, allow_scalar=False):
+        v = self.table.get(key, default)
+        if v is None:
+            self.fail(key, "is required")
+        if allow_scalar and isinstance(v, (int, float)) and not isinstance(v, bool):
+            v = [v] * n
+        if not isinstance(v, (list, tuple)) or len(v) != n:
+            what = f"a number or a list of {n} numbers" if allow_scalar else f"a list of {n} numbers"
+            self.fail(key, f"expected {what}, got {show(v)}")
+        out = []
+        for x in v:
+            if isinstance(x, bool) or not isinstance(x, (int, float)):
+                self.fail(key, f"expected a list of {n} numbers, got {show(v)}")
+            if not math.isfinite(x):
+                self.fail(key, f"expected finite numbers, got {show(v)}")
+            if nonneg and x < 0:
+                self.fail(key, f"expected non-negative numbers, got {show(v)}")
+            out.append(float(x))
+        return tuple(out)
+
+
+def _table(source, data, key, prefix=None) -> dict:
+    v = data.get(key, {})
+    if not isinstance(v, dict):
+        raise SceneError(source, prefix or key, f"expected a table, got {show(v)}")
+    return v
+
+
+def _array_of_tables(source, data, key) -> list:
+    v = data.get(key, [])
+    if not isinstance(v, list) or not all(isinstance(t, dict) for t in v):
+        raise SceneError(source, key, f"expected an array of tables ([[{key}]]), got {show(v)}")
+    return v
+
+
+def read_camera(source: str, t: dict) -> Camera:
+    r = _Reader(source, t, "camera")
+    r.check_keys(_CAMERA_KEYS)
+    d = Camera()
+    cam = Camera(
+        eye=r.vector("eye", d.eye),
+        center=r.vector("center", d.center),
+        up=r.vector("up", d.up),
+        fovy=r.number("fovy", d.fovy, lo=0.0, hi=180.0, lo_open=True, hi_open=True),
+        near=r.number("near", d.near, lo=0.0, lo_open=True),
+        width=check_setting(source, "camera.width", "camera.width", r.integer("width", d.width)),
+        height=check_setting(source, "camera.height", "camera.height", r.integer("height", d.height)),
+    )
+    validate_camera(cam, source)
+    return cam
+
+
+def read_render(source: str, t: dict) -> RenderSettings:
+    r = _Reader(source, t, "render")
+    r.check_keys(_RENDER_KEYS)
+    d = RenderSettings()
+    spp = check_setting(source, "render.spp", "render.spp", r.integer("spp", d.spp))
+    effects = t.get("effects")
+    if effects is not None:
+        if not isinstance(effects, list) or not all(isinstance(e, str) for e in effects):
+            r.fail("effects", f"expected a list of effect names, got {show(effects)}")
+        effects = tuple(effects)
+    return RenderSettings(
+        ambient=r.vector("ambient", d.ambient, nonneg=True),
+        background=r.vector("background", d.background, nonneg=True),
+        max_depth=check_setting(source, "render.max_depth", "render.max_depth", r.integer("max_depth", d.max_depth)),
+        shadows=r.boolean("shadows", d.shadows),
+        spp=spp,
+        effects=effects,
+    )
+
+
+def read_light(source: str, t: dict, i: int) -> Light:
+    r = _Reader(source, t, f"lights[{i}]")
+    r.check_keys(_LIGHT_KEYS)
+    return Light(position=r.vector("position"), color=r.vector("color", (1.0, 1.0, 1.0), nonneg=True))
+
+
+def read_material(source: str, name: str, t) -> Material:
+    if not isinstance(t, dict):
+        raise SceneError(source, f"materials.{name}", f"expected a table, got {show(t)}")
+    r = _Reader(source, t, f"materials.{name}")
+    r.check_keys(_MATERIAL_KEYS)
+    kd = r.vector("kd", DEFAULT_MATERIAL.kd, nonneg=True)
+    return Material(
+        kd=kd,
+        ka=r.vector("ka", kd, nonneg=True),
+        ks=r.vector("ks", (0.0, 0.0, 0.0), nonneg=True),
+        shininess=r.number("shininess", 32.0, lo=0.0),
+        reflectivity=r.vector("reflectivity", (0.0, 0.0, 0.0), nonneg=True, allow_scalar=True),
+    )
+
+
+def rotation(degrees) -> np.ndarray:
+    """Rotation about x, then y, then z (R = Rz Ry Rx), angles in degrees."""
+    ax, ay, az = np.radians(degrees)
+    cx, sx, cy, sy, cz, sz = np.cos(ax), np.sin(ax), np.cos(ay), np.sin(ay), np.cos(az), np.sin(az)
+    rx = np.array([[1, 0, 0], [0, cx, -sx], [0, sx, cx]])
+    ry = np.array([[cy, 0, sy], [0, 1, 0], [-sy, 0, cy]])
+    rz = np.array([[cz, -sz, 0], [sz, cz, 0], [0, 0, 1]])
+    return rz @ ry @ rx
+
+
+def _shape_geometry(r: _Reader, kind: str):
+    builder, params = shapes.SHAPES[kind]
+    r.check_keys(_OBJECT_KEYS | set(params))
+    args = {}
+    for p, (ptype, default) in params.items():
+        if ptype == "positive":
+            args[p] = r.number(p, default, lo=0.0, lo_open=True)
+        elif ptype.startswith("int"):
+            lo = int(ptype[3:])
+            if isinstance(default, list):
+                v = r.vector(p, default, n=2)
+                if any(x != int(x) or x < 3 for x in v):
+                    r.fail(p, f"expected 2 integers >= 3, got {list(v)}")
+                args[p] = tuple(int(x) for x in v)
+            else:
+                args[p] = r.integer(p, default, lo=lo, hi=8 if p == "subdivisions" else 100000)
+        elif ptype in ("size3", "size2"):
+            v = r.vector(p, default, n=int(ptype[-1]), allow_scalar=True)
+            if min(v) <= 0:
+                r.fail(p, f"expected positive sizes, got {list(v)}")
+            args[p] = v
+        elif ptype == "points":
+            v = r.table.get(p)
+            try:
+                a = np.asarray(v, np.float64)
+            except (TypeError, ValueError):
+                a = None
+            if a is None or a.ndim != 2 or a.shape[1] != 3 or len(a) < 3:
+                r.fail(p, f"expected a list of [x, y, z] points (at least 3), got {show(v)}")
+            if not np.all(np.isfinite(a)):
+                r.fail(p, "expected finite coordinates, found NaN or Inf")
+            args[p] = a
+        elif ptype == "faces":
+            v = r.table.get(p)
+            try:
+                a = np.asarray(v)
+            except (TypeError, ValueError):
+                a = None
+            if a is None or a.ndim != 2 or a.shape[1] != 3 or len(a) < 1 or a.dtype.kind not in "iu":
+                r.fail(p, f"expected a list of [i, j, k] integer vertex indices, got {show(v)}")
+            args[p] = a.astype(np.int64)
+    return builder(**args)
+
+
+def _load_mesh_file(source: str, field_name: str, path: Path):
+    """The file's parts and materials (meshio.MeshFile); its errors name the scene field too."""
+    try:
+        return read_mesh_file(path)
+    except SceneError as e:
+        raise SceneError(source, field_name, str(e)) from None
+    except Exception as e:  # a reader's own failure on a damaged file
+        raise SceneError(source, field_name, f"{path}: cannot read mesh file: {' '.join(str(e).split())}") from None
+
+
+def read_object(source: str, base: Path, t: dict, i: int, materials: dict) -> list[SceneObject]:
+    """An [[objects]] table: one SceneObject, or one per material for a file with several."""
+    r = _Reader(source, t, f"objects[{i}]")
+    if ("mesh" in t) == ("shape" in t):
+        r.fail(None, "expected exactly one of 'mesh' (a file) or 'shape' (" + ", ".join(shapes.SHAPES) + ")")
+    mesh = None
+    if "mesh" in t:
+        r.check_keys(_OBJECT_KEYS)
+        path = base / r.string("mesh")
+        mesh = _load_mesh_file(source, f"objects[{i}].mesh", path)
+        vertices, faces, face_material, part_starts = mesh.concatenated()
+        default_name = path.stem
+    else:
+        kind = r.string("shape")
+        if kind not in shapes.SHAPES:
+            close = difflib.get_close_matches(kind, list(shapes.SHAPES), n=1)
+            hint = f" (did you mean '{close[0]}'?)" if close else ""
+            r.fail("shape", f"unknown shape '{kind}'{hint}; expected one of: {', '.join(shapes.SHAPES)}")
+        vertices, faces = _shape_geometry(r, kind)
+        default_name = kind
+    material = r.string("material", "default")
+    if material not in materials:
+        close = difflib.get_close_matches(material, list(materials), n=1)
+        hint = f" (did you mean '{close[0]}'?)" if close else f" (defined: {', '.join(materials) or 'none'})"
+        r.fail("material", f"no material named '{material}'{hint}")
+    scale = np.asarray(r.vector("scale", 1.0, allow_scalar=True))
+    if np.any(scale == 0.0):
+        r.fail("scale", f"expected non-zero scale factors, got {list(scale)}")
+    rot = rotation(r.vector("rotate", (0.0, 0.0, 0.0)))
+    translate = np.asarray(r.vector("translate", (0.0, 0.0, 0.0)))
+    if len(faces) == 0:
+        r.fail("mesh" if "mesh" in t else "shape", "the mesh has no triangles")
+    if faces.min() < 0 or faces.max() >= len(vertices):
+        r.fail("faces" if "shape" in t else "mesh", f"vertex index out of range [0, {len(vertices) - 1}]")
+    world = (vertices * scale) @ rot.T + translate
+    if np.linalg.det(np.diag(scale)) < 0:  # a mirroring scale flips the winding; keep faces outward
+        faces = faces[:, ::-1]
+    name, smooth = r.string("name", default_name), r.boolean("smooth", False)
+    world, faces = np.ascontiguousarray(world, np.float64), np.ascontiguousarray(faces, np.int64)
+    if mesh is not None and "material" not in t and mesh.materials:
+        # The file's own materials, unless the scene file names one for the object.
+        return split_by_material(name, world, faces, face_material, mesh.materials, materials,
+                                 material, smooth, part_starts)
+    return [SceneObject(name=name, vertices=world, faces=faces, material=material, smooth=smooth)]
+
+
+def scene_from_dict(data: dict, source: str = "<scene>", base: Path | None = None) -> Scene:
+    """Build and validate a Scene from a parsed TOML document."""
+    base = Path(base) if base is not None else Path(".")
+    for key in data:
+        if key not in SECTIONS:
+            close = difflib.get_close_matches(key, sorted(SECTIONS), n=1)
+            hint = f" (did you mean '{close[0]}'?)" if close else f" (expected: {', '.join(sorted(SECTIONS))})"
+            raise SceneError(source, key, f"unknown section{hint}")
+    camera = read_camera(source, _table(source, data, "camera"))
+    render = read_render(source, _table(source, data, "render"))
+    lights = [read_light(source, t, i) for i, t in enumerate(_array_of_tables(source, data, "lights"))]
+    materials = {"default": DEFAULT_MATERIAL}
+    for name, t in _table(source, data, "materials").items():
+        materials[name] = read_material(source, name, t)
+    objects = [o for i, t in enumerate(_array_of_tables(source, data, "objects"))
+               for o in read_object(source, base, t, i, materials)]
+    scene = Scene(camera, render, lights, materials, objects, source)
+    validate_scene(scene)  # what needs the whole scene: reach from the eye, float32 overflow
+    return scene
+
+

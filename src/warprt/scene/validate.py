@@ -1,0 +1,144 @@
+"""The checks render() relies on, for scenes read from files and built in Python alike: values in
+range, geometry within float32 reach of the eye, an image that cannot overflow. Each failure is a
+SceneError naming the field in the file's vocabulary, raised before any kernel runs."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..errors import SceneError, show
+from .model import Camera, Scene
+
+MAX_IMAGE_SIDE = 16384
+
+# The integer settings and their ranges; a square spp (k*k stratified samples) on top.
+SETTING_RANGES = {"camera.width": (1, MAX_IMAGE_SIDE), "camera.height": (1, MAX_IMAGE_SIDE),
+                  "render.spp": (1, 4096), "render.max_depth": (1, 1024)}
+
+# Warp's float32 ray-triangle test multiplies three coordinate differences (its T = U Az): for
+# geometry 1e14 from the eye that overflows and triangles silently vanish (measured: a sphere of
+# radius 1e13 seen from 5e13 renders, radius 1e14 from 5e14 does not). Scenes must stay within
+# this reach of the eye.
+MAX_REACH = 1e12
+FLOAT32_MAX = float(np.finfo(np.float32).max)
+
+
+def check_setting(source: str, field: str, key: str, v) -> int:
+    """One integer setting of SETTING_RANGES (``key``, e.g. "render.spp"), reported as ``field``
+    (the file's key, or the command-line flag that set it)."""
+    lo, hi = SETTING_RANGES[key]
+    if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or not lo <= v <= hi:
+        raise SceneError(source, field, f"expected an integer in [{lo}, {hi}], got {show(v)}")
+    if key == "render.spp" and math.isqrt(v) ** 2 != v:
+        raise SceneError(source, field, f"expected a square number of samples (k*k stratified: 1, 4, 9, 16, ...), got {v}")
+    return int(v)
+
+
+def _is_real(v) -> bool:
+    return isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool)
+
+
+def _num(v) -> str:
+    return f"{v:g}" if _is_real(v) else show(v)
+
+
+def validate_camera(cam: Camera, source: str = "camera"):
+    """The checks that need more than one field: a view direction, and an up not parallel to it."""
+    eye, center, up = (np.asarray(v, np.float64) for v in (cam.eye, cam.center, cam.up))
+    for name, v in (("eye", eye), ("center", center), ("up", up)):
+        if v.shape != (3,) or not np.all(np.isfinite(v)):
+            raise SceneError(source, f"camera.{name}", f"expected 3 finite numbers, got {list(v)}")
+    if not _is_real(cam.fovy) or not (0.0 < cam.fovy < 180.0) or not math.isfinite(cam.fovy):
+        raise SceneError(source, "camera.fovy", f"expected a number in (0, 180) degrees, got {_num(cam.fovy)}")
+    if not _is_real(cam.near) or not (cam.near > 0.0) or not math.isfinite(cam.near):
+        raise SceneError(source, "camera.near", f"expected a number > 0, got {_num(cam.near)}")
+    for name in ("width", "height"):
+        check_setting(source, f"camera.{name}", f"camera.{name}", getattr(cam, name))
+    # The kernels build ray directions from d_f = near and the image plane's h, w in float32 and
+    # normalize them: their squares must neither underflow nor overflow.
+    h = 2.0 * cam.near * math.tan(math.radians(cam.fovy) / 2.0)
+    if not (1e-18 <= cam.near and h <= 1e18 and h * cam.width / cam.height <= 1e18):
+        raise SceneError(source, "camera.near", f"near {cam.near:g} puts the image plane (height 2 near tan(fovy/2) = "
+                                                f"{h:.3g}) outside the float32 range of ray directions [1e-18, 1e18]")
+    view = eye - center
+    # Relative to the coordinates' size: a scene 1e-12 across is fine, eye and center a rounding apart are not.
+    if np.linalg.norm(view) <= 1e-12 * np.abs(np.concatenate([eye, center])).max():
+        raise SceneError(source, "camera.center", "must differ from camera.eye (no viewing direction)")
+    z = view / np.linalg.norm(view)
+    if np.linalg.norm(up) == 0.0:
+        raise SceneError(source, "camera.up", "must not be the zero vector")
+    if np.linalg.norm(np.cross(up / np.linalg.norm(up), z)) < 1e-6:
+        raise SceneError(source, "camera.up", "is parallel to the viewing direction (eye - center)")
+
+
+def _check_vector(source, field_name, v, nonneg=False):
+    a = np.asarray(v, np.float64) if v is not None else None
+    if a is None or a.shape != (3,) or not np.all(np.isfinite(a)) or (nonneg and np.any(a < 0)):
+        what = "3 finite non-negative numbers" if nonneg else "3 finite numbers"
+        raise SceneError(source, field_name, f"expected {what}, got {show(v)}")
+    return a
+
+
+def _check_number(source, field_name, v, lo=0.0):
+    if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)) or not math.isfinite(v) or v < lo:
+        raise SceneError(source, field_name, f"expected a finite number >= {lo:g}, got {show(v)}")
+
+
+def validate_scene(scene: Scene):
+    """Everything render() relies on: finite values in range, geometry within float32 reach of the
+    eye, and an image that cannot overflow."""
+    src = scene.source
+    cam = scene.camera
+    validate_camera(cam, src)
+    eye = np.asarray(cam.eye, np.float64)
+    r = scene.render
+    ambient = _check_vector(src, "render.ambient", r.ambient, nonneg=True)
+    background = _check_vector(src, "render.background", r.background, nonneg=True)
+    for key in ("render.max_depth", "render.spp"):
+        check_setting(src, key, key, getattr(r, key.split(".")[1]))
+    light_max = np.zeros(3)
+    for i, light in enumerate(scene.lights):
+        position = _check_vector(src, f"lights[{i}].position", light.position)
+        light_max = light_max + _check_vector(src, f"lights[{i}].color", light.color, nonneg=True)
+        if np.abs(position - eye).max() > MAX_REACH:
+            raise SceneError(src, f"lights[{i}].position", f"is more than {MAX_REACH:g} from camera.eye; "
+                                                           "float32 ray tests cannot reach it")
+    lit_max, kr_max, coef_max = np.zeros(3), 0.0, 0.0
+    for name, m in scene.materials.items():
+        for key in ("kd", "ks", "reflectivity", "ka"):
+            _check_vector(src, f"materials.{name}.{key}", getattr(m, key), nonneg=True)
+        _check_number(src, f"materials.{name}.shininess", m.shininess)
+        lit = ambient * np.asarray(m.ka) + light_max * (np.asarray(m.kd) + np.asarray(m.ks))
+        lit_max = np.maximum(lit_max, lit)
+        kr_max = max(kr_max, float(np.max(m.reflectivity)))
+        coef_max = max(coef_max, float(np.max(np.asarray(m.kd) + np.asarray(m.ks))), float(np.max(m.ka)))
+    for i, obj in enumerate(scene.objects):
+        where = f"objects[{i}]"
+        v = np.asarray(obj.vertices)
+        f = np.asarray(obj.faces)
+        if v.ndim != 2 or v.shape[1:] != (3,) or not np.all(np.isfinite(v)):
+            raise SceneError(src, f"{where}.vertices", f"expected (N, 3) finite coordinates ('{obj.name}')")
+        if f.ndim != 2 or f.shape[1:] != (3,) or f.dtype.kind not in "iu" or len(f) == 0 or f.min() < 0 or f.max() >= len(v):
+            raise SceneError(src, f"{where}.faces", f"expected (M, 3) vertex indices in [0, {len(v) - 1}] ('{obj.name}')")
+        if obj.material not in scene.materials:
+            raise SceneError(src, f"{where}.material", f"no material named '{obj.material}'")
+        if len(v) and np.abs(v - eye).max() > MAX_REACH:
+            raise SceneError(src, where, f"'{obj.name}' reaches more than {MAX_REACH:g} from "
+                                                       "camera.eye; float32 ray tests cannot reach it")
+    # The brightest possible pixel: every level of the mirror series fully lit, then the background.
+    depth = r.max_depth
+    grows = kr_max > 1.0 and depth * math.log(kr_max) > 700.0  # kr^depth beyond float64
+    if grows:
+        bound = math.inf
+    else:
+        series = float(depth) if kr_max == 1.0 else (kr_max**depth - 1.0) / (kr_max - 1.0)
+        bound = float(np.max(lit_max)) * series + float(np.max(background)) * kr_max ** (depth - 1)
+    if not bound < FLOAT32_MAX / 16:
+        if kr_max > 1.0:
+            raise SceneError(src, "render.max_depth", f"with reflectivity up to {kr_max:g} (> 1) light grows by that "
+                                                      f"factor per bounce and {depth} levels overflow float32")
+        field_name = "lights" if float(np.max(light_max)) >= coef_max else "materials"
+        raise SceneError(src, field_name, f"colours and light intensities this large (a pixel could reach "
+                                          f"{bound:.3g}) overflow float32")
