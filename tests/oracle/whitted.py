@@ -1,0 +1,198 @@
+"""Brute-force Whitted tracers in float64 on the shared ray-triangle test and Phong model: a
+per-pixel tracer with decision margins (the accuracy suite's tie-breaker), and a one-level one.
+
+Whitted tests every triangle with Moller-Trumbore in float64 (no BVH, no float32), so where it
+agrees with a renderer the renderer's decisions are the exact ones for the offsets it chose.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .camera import pinhole, ray_directions
+from .geometry import face_normals, nearest_triangle, ray_triangle, vertex_normals
+from .shading import TERMS, light_direction, light_source, phong
+
+# Mitsuba (include/mitsuba/render/interaction.h, offset_p and spawn_ray_to): (1 + max|p|) RayEpsilon
+# along the geometric normal, RayEpsilon = 1500 * 2^-24; shadow rays stop ShadowEpsilon short.
+MITSUBA_RAY_EPSILON = 1500.0 * 2.0**-24
+MITSUBA_SHADOW_EPSILON = 10.0 * MITSUBA_RAY_EPSILON
+# warprt's offset is a float32 error bound (src/warprt/kernels/interaction.py) that its authors tune; the oracle
+# does not copy it. It tries offsets of (1 + max|p|) times each of these instead, from next to
+# nothing up to Mitsuba's: a renderer whose value one of them reproduces decided as the exact model
+# does for an origin that close to the surface.
+OFFSET_SWEEP = (2.0**-20, 2.0**-23, 2.0**-17, 2.0**-26, 2.0**-14, 2.0**-34)  # likeliest first
+
+
+@dataclass
+class PixelTrace:
+    color: np.ndarray  # linear RGB, the average over the pixel's k*k samples
+    margin: float  # smallest decision margin met on any ray of any sample (see Whitted._query)
+
+
+class Whitted:
+    """The scene's triangles in float64 world space and the Whitted model of reference.Switches:
+    I = local Phong + k_r I(reflected ray), up to max_depth ray levels, shadows by shadow rays."""
+
+    def __init__(self, scene, switches):
+        self.scene, self.sw = scene, switches
+        names = list(scene.materials)
+        verts, faces, mat, smooth, normals, base = [], [], [], [], [], 0
+        for obj in scene.objects:
+            verts.append(obj.vertices)
+            faces.append(obj.faces + base)
+            mat += [names.index(obj.material)] * len(obj.faces)
+            use_smooth = obj.smooth and switches.smooth
+            smooth += [use_smooth] * len(obj.faces)
+            normals.append(vertex_normals(obj.vertices, obj.faces) if use_smooth else np.zeros_like(obj.vertices))
+            base += len(obj.vertices)
+        self.V = np.concatenate(verts)
+        self.F = np.concatenate(faces)
+        self.N = np.concatenate(normals)
+        self.mat = np.asarray(mat)
+        self.smooth = np.asarray(smooth)
+        self.p0, self.p1, self.p2 = (self.V[self.F[:, k]] for k in range(3))
+        # Bounding spheres, a little enlarged: a ray that misses one is far from every decision
+        # about its triangle, so only the others are tested (a large mesh stays quick).
+        self.centre = (self.p0 + self.p1 + self.p2) / 3.0
+        radius = np.max([np.linalg.norm(q - self.centre, axis=1) for q in (self.p0, self.p1, self.p2)], axis=0)
+        self.radius2 = (radius * 1.01 + 1e-9) ** 2
+        self.n_hat = face_normals(np.stack([self.p0, self.p1, self.p2], 1))
+        # Altitudes over the edges opposite p0, p1, p2: barycentric b_k times h_k is the distance
+        # to that edge's line, so decision margins can be measured in world units.
+        area2 = np.linalg.norm(np.cross(self.p1 - self.p0, self.p2 - self.p0), axis=1)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            self.h = np.stack([area2 / np.linalg.norm(self.p2 - self.p1, axis=1),
+                               area2 / np.linalg.norm(self.p2 - self.p0, axis=1),
+                               area2 / np.linalg.norm(self.p1 - self.p0, axis=1)], 1)
+        self.materials = [scene.materials[n] for n in names]
+
+    def _query(self, o, d, tmax):
+        """Nearest hit (face, t, b1, b2) or None, and the query's decision margin, relative to the
+        coordinates' magnitude (1 + max|p|), as float32 rounding is: how far the ray passes from an
+        edge of any triangle whose plane it crosses before the hit, and the gap to a second
+        triangle hit at (nearly) the same distance."""
+        oc = self.centre - o
+        tc = oc @ d
+        near = np.nonzero(np.einsum("ij,ij->i", oc, oc) - tc * tc <= self.radius2)[0]
+        if len(near) == 0:
+            return None, math.inf
+        q = ray_triangle(o, d, self.p0[near], self.p1[near], self.p2[near])
+        b1, b2, t, h = q.u, q.v, q.t, self.h[near]
+        cos = np.abs(self.n_hat[near] @ d)
+        with np.errstate(invalid="ignore"):
+            # Signed distance in the plane to the nearest edge line (exact inside, and outside next to
+            # an edge), times |n.d|: how far the ray must move sideways to cross that edge, which
+            # for a grazing ray is much less than the distance in the plane.
+            edge_distance = np.minimum(np.minimum((1.0 - b1 - b2) * h[:, 0], b1 * h[:, 1]), b2 * h[:, 2]) * cos
+            scale = 1.0 + np.abs(o + t[:, None] * d).max(axis=1)
+        in_range = np.isfinite(t) & (t > 0.0) & (t < tmax)
+        hit = in_range & (q.margin >= 0.0)
+        tt = np.where(hit, t, np.inf)
+        f = int(np.argmin(tt))
+        t_hit = tt[f]
+        before = in_range & (t <= (t_hit * (1 + 1e-6) if np.isfinite(t_hit) else tmax))
+        margin = float(np.nanmin(np.abs(edge_distance[before]) / scale[before])) if before.any() else math.inf
+        if np.isfinite(t_hit):
+            others = hit & (np.arange(len(t)) != f)
+            if others.any():
+                margin = min(margin, float((tt[others].min() - t_hit) / scale[f]))
+            return (int(near[f]), t_hit, b1[f], b2[f]), margin
+        return None, margin
+
+    @staticmethod
+    def _offset(offset, p, ng, w):
+        """The origin of a ray leaving the surface point p in direction w: pushed along the
+        geometric normal ng, to the side w leaves to, by (1 + max|p|) times the relative offset
+        (Mitsuba's RayEpsilon for offset="mitsuba")."""
+        rel = MITSUBA_RAY_EPSILON if offset == "mitsuba" else float(offset)
+        mag = (1.0 + float(np.abs(p).max())) * rel
+        return p + ng * (mag if ng @ w > 0 else -mag)
+
+    def _sample(self, offset, o, d):
+        sw, scene = self.sw, self.scene
+        terms = [t for t, on in zip(TERMS, (sw.ambient, sw.diffuse, sw.specular)) if on]
+        color, weight, margin = np.zeros(3), np.ones(3), math.inf
+        for depth in range(sw.max_depth):
+            hit, m = self._query(o, d, math.inf)
+            margin = min(margin, m)
+            if hit is None:
+                return color + weight * np.asarray(scene.render.background), margin
+            f, t, b1, b2 = hit
+            b = (1.0 - b1 - b2, b1, b2)
+            p = self.p0[f] * b[0] + self.p1[f] * b[1] + self.p2[f] * b[2]
+            side = -1.0 if self.n_hat[f] @ d > 0 else 1.0  # two-sided: turn the normals towards the ray
+            ng = self.n_hat[f] * side
+            n = ng
+            if self.smooth[f]:
+                ns = sum(self.N[self.F[f, k]] * b[k] for k in range(3))
+                n = ns / np.linalg.norm(ns) * side
+            mat = self.materials[self.mat[f]]
+            visible = None
+            if sw.diffuse or sw.specular:
+                visible = np.zeros(len(scene.lights), bool)
+                for i, light in enumerate(scene.lights):
+                    L, n_dot_l = light_direction(p, n, light)
+                    margin = min(margin, abs(float(n_dot_l)))
+                    if not n_dot_l > 0.0:
+                        continue
+                    visible[i] = True
+                    if sw.shadows:
+                        so = self._offset(offset, p, ng, L)
+                        to_light = light_source(light)[0] - so
+                        dist = float(np.linalg.norm(to_light))
+                        tmax = dist * (1.0 - MITSUBA_SHADOW_EPSILON) if offset == "mitsuba" else dist
+                        blocker, m = self._query(so, to_light / dist, tmax)
+                        margin = min(margin, m)
+                        visible[i] = blocker is None
+            local = phong(p, n, -d, scene.lights, mat, scene.render.ambient, visible, terms)
+            color = color + weight * local
+            kr = np.asarray(mat.reflectivity, np.float64)
+            if depth + 1 >= sw.max_depth or kr.max() <= 0.0:
+                break
+            weight = weight * kr
+            d = d - 2.0 * (d @ n) * n
+            d /= np.linalg.norm(d)
+            o = self._offset(offset, p, ng, d)
+        return color, margin
+
+    def pixel(self, x: int, row: int, offset="mitsuba") -> PixelTrace:
+        """Pixel (x, row), row 0 at the top, averaged over k*k samples at the stratum centres, with
+        secondary rays offset as Mitsuba does (offset="mitsuba") or by (1 + max|p|) * offset."""
+        k = math.isqrt(self.sw.spp)
+        cam = pinhole(self.scene.camera)
+        total, margin = np.zeros(3), math.inf
+        for j in range(k):
+            for i in range(k):
+                d = ray_directions(cam, x, row, (i + 0.5) / k, (j + 0.5) / k)
+                c, m = self._sample(offset, cam.eye.copy(), d / np.linalg.norm(d))
+                total += c
+                margin = min(margin, m)
+        return PixelTrace(total / (k * k), margin)
+
+
+def shade_triangles(o, d, tris, face_mats, materials, lights, c_amb, background):
+    """The seed's model on a flat triangle scene, one ray level with shadows, vectorized over rays
+    (o, d: (..., 3)): each ray's colour is the Phong value of its nearest face (normal turned to face
+    the ray: two-sided), with a light counted where a shadow ray from just off the hit point reaches
+    it unblocked. Returns colour, face (-1: the background), edge margin (see nearest_triangle)."""
+    t, face, margin = nearest_triangle(o, d, tris)
+    p = o + np.where(np.isfinite(t), t, 0.0)[..., None] * d
+    out = np.broadcast_to(np.asarray(background, float), p.shape).copy()
+    n = face_normals(tris)[face]
+    n *= -np.sign(np.sum(n * d, -1))[..., None]
+    visible = np.ones(p.shape[:-1] + (len(lights),), bool)
+    for i, light in enumerate(lights):
+        position, _ = light_source(light)
+        to_light = position - p
+        dist = np.linalg.norm(to_light, axis=-1)
+        start = p + n * 1e-9 * (1.0 + np.abs(p).max(-1, keepdims=True))
+        tl, _, _ = nearest_triangle(start, to_light / dist[..., None], tris)
+        visible[..., i] = tl >= dist
+    for m, mat in enumerate(materials):
+        here = (np.asarray(face_mats)[face] == m) & (face >= 0)
+        out[here] = phong(p[here], n[here], -d[here], lights, mat, c_amb, visible[here])
+    return out, face, margin
