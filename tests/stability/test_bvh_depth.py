@@ -7,30 +7,19 @@ nested triangles and a million triangles, half of them packed in an exponential 
 import numpy as np
 import pytest
 
+from oracle import ray_triangle
 from warprt.geometry import Geometry
 
 from stability.probes import cast, mesh_scene, record
 
 
 def nearest(o, d, tri, candidates):
-    """Moller-Trumbore in float64 over the candidate triangles of one ray: (t, margin) of the nearest."""
-    a, b, c = tri[candidates, 0], tri[candidates, 1], tri[candidates, 2]
-    e1, e2 = b - a, c - a
-    p = np.cross(d, e2)
-    det = np.einsum("ij,ij->i", p, e1)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        inv = 1.0 / det
-        s = o - a
-        u = np.einsum("ij,ij->i", s, p) * inv
-        q = np.cross(s, e1)
-        v = (q @ d) * inv
-        t = np.einsum("ij,ij->i", q, e2) * inv
-    margin = np.minimum(np.minimum(u, v), 1 - u - v)
-    hit = (margin >= 0) & (t > 0)
-    if not hit.any():
-        return np.inf, np.abs(margin).min() if len(margin) else np.inf
-    k = np.argmin(np.where(hit, t, np.inf))
-    return t[k], np.abs(margin[np.isfinite(t) & (t > 0)]).min()
+    """The float64 ray-triangle test over the candidate triangles of one ray: (t, margin) of the nearest."""
+    h = ray_triangle(o, d, tri[candidates, 0], tri[candidates, 1], tri[candidates, 2])
+    if not h.hit.any():
+        return np.inf, np.abs(h.margin).min() if len(h.margin) else np.inf
+    k = np.argmin(np.where(h.hit, h.t, np.inf))
+    return h.t[k], np.abs(h.margin[np.isfinite(h.t) & (h.t > 0)]).min()
 
 
 def compare(name, vertices, faces, origins, dirs, constructor):

@@ -6,11 +6,10 @@ shading normal faces the incoming ray whatever the winding, so back faces shade 
 import numpy as np
 
 import warprt
+from oracle import camera_rays, nearest_triangle, shade_triangles
 from scenekit import make_scene
-from core.geometry_oracle import camera_rays
 from warprt.scene import shapes
 
-from stability.oracle import shade_triangles, trace_triangles
 from stability.probes import record
 
 MATS = {"a": {"ka": [0.3, 0.2, 0.1], "kd": [0.6, 0.5, 0.3], "ks": [0.4, 0.4, 0.4], "shininess": 12.0},
@@ -50,7 +49,7 @@ def world_triangles(scene):
     for obj in scene.objects:
         tris.append(obj.vertices[obj.faces])
         mats += [names.index(obj.material)] * len(obj.faces)
-    return np.concatenate(tris), np.asarray(mats), [dict(scene.materials[n].__dict__, ka=scene.materials[n].ka) for n in names]
+    return np.concatenate(tris), np.asarray(mats), [scene.materials[n] for n in names]
 
 
 def render_checked(scene):
@@ -65,7 +64,7 @@ def render_checked(scene):
 
 def closed_form(scene):
     tris, face_mat, mats = world_triangles(scene)
-    lights = [(l.position, l.color) for l in scene.lights]
+    lights = scene.lights
     o, d = camera_rays(scene.camera)
     return shade_triangles(o, d, tris, face_mat, mats, lights, C_AMB, BACKGROUND), tris, face_mat, mats, lights, (o, d)
 
@@ -80,7 +79,7 @@ def test_degenerate_triangles_duplicates_overlaps_and_inverted_normals():
     ok = np.abs(image - expect).max(-1) < 2e-4
     # The last two faces: coplanar, overlapping, materials a and b. Where both are under the ray
     # either may win (the model does not order coplanar surfaces); each colour is closed form.
-    both = np.isfinite(trace_triangles(o, d, tris[-2:-1])[0]) & np.isfinite(trace_triangles(o, d, tris[-1:])[0])
+    both = np.isfinite(nearest_triangle(o, d, tris[-2:-1])[0]) & np.isfinite(nearest_triangle(o, d, tris[-1:])[0])
     for m in face_mat[-2:]:
         as_m = face_mat.copy()
         as_m[-2:] = m

@@ -5,8 +5,8 @@ wall time: every pixel spawns exactly max_depth - 1 reflection rays and max_dept
 import numpy as np
 
 import warprt
+from oracle import camera_rays, phong
 from scenekit import make_scene
-from core.geometry_oracle import camera_rays
 
 from stability.probes import record
 
@@ -35,14 +35,7 @@ def mirror_series(depth: int) -> np.ndarray:
         dk[..., 2] *= (-1) ** k
         n = np.zeros_like(d)
         n[..., 2] = -np.sign(dk[..., 2])  # facing the incoming ray
-        L = LIGHT - p
-        L /= np.linalg.norm(L, axis=-1, keepdims=True)
-        n_dot_l = np.sum(n * L, -1)
-        r_dot_v = np.maximum(np.sum((2 * n_dot_l[..., None] * n - L) * -dk, -1), 0)
-        local = np.asarray(C_AMB) * MIRROR["ka"] + np.asarray(C_L) * (
-            np.asarray(MIRROR["kd"]) * np.maximum(n_dot_l, 0)[..., None]
-            + np.asarray(MIRROR["ks"]) * (r_dot_v ** MIRROR["shininess"])[..., None])
-        total += weight * local
+        total += weight * phong(p, n, -dk, [(LIGHT, C_L)], MIRROR, C_AMB)
         weight = weight * kr
     return total
 

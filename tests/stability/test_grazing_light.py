@@ -7,10 +7,9 @@ import pytest
 
 import warprt
 from scenekit import make_scene
+from oracle import camera_rays, face_normals, phong, rotation
 from warprt.geometry import Geometry
-from core.geometry_oracle import camera_rays
 
-from stability.oracle import grid, phong, rotation
 from stability.probes import record
 
 HALF = 4.0
@@ -22,14 +21,23 @@ C_AMB, C_L = [0.1, 0.1, 0.1], [20.0, 20.0, 20.0]  # a bright light: the grazing 
 N_CELLS = 16
 
 
+def grid(n: int, half: float):
+    """A square of side 2 half in y = 0 facing +y, as n x n quads split along their diagonals."""
+    s = np.linspace(-half, half, n + 1)
+    x, z = np.meshgrid(s, s, indexing="ij")
+    vertices = np.stack([x, np.zeros_like(x), z], -1).reshape(-1, 3)
+    i = np.arange(n)[:, None] * (n + 1) + np.arange(n)[None, :]
+    a, b, c, d = i, i + 1, i + n + 2, i + n + 1
+    faces = np.concatenate([np.stack([a, b, c], -1).reshape(-1, 3), np.stack([a, c, d], -1).reshape(-1, 3)])
+    return vertices, faces
+
+
 def float32_normals(scene, vertices, faces):
     """Unit normals of the triangles the renderer holds (float32, camera-relative), in float64.
     At 89 degrees n.L moves one for one with the normal's tilt, so the closed form is evaluated
     on these triangles, not on the exact plane their float32 vertices approximate."""
     points = Geometry(scene).points_np[: len(vertices)].astype(np.float64)
-    p = points[faces]
-    n = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
-    return n / np.linalg.norm(n, axis=1, keepdims=True)
+    return face_normals(points[faces])
 
 
 def triangle_at(u, w):
