@@ -31,7 +31,7 @@ from reference.compare import OFF_THRESHOLD
 from reference.mitsuba_whitted import Switches
 from warprt.scene import resolve_effects
 
-from accuracy.oracle import OFFSET_SWEEP, Oracle
+from oracle import OFFSET_SWEEP, Whitted
 
 ROOT = Path(__file__).resolve().parents[2]
 SCENES = sorted((ROOT / "scenes").glob("*.toml"))
@@ -67,7 +67,7 @@ def unexplained(scene, switches, result) -> list[str]:
     off = np.argwhere(result.off_mask)
     if len(off) > MAX_TRACED:
         return [f"{len(off)} pixels differ (more than {MAX_TRACED}: not traced)"]
-    oracle = Oracle(scene, switches)
+    oracle = Whitted(scene, switches)
     same = lambda a, b: np.abs(np.clip(a, 0.0, 1.0) - np.clip(b, 0.0, 1.0)).max() <= OFF_THRESHOLD
     bad = []
     for row, x in off:

@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from core.geometry_oracle import camera_rays, ray_plane
+from oracle import camera_rays, phong_terms, ray_plane
 from reference.mitsuba_whitted import MitsubaScene, Switches, mitsuba
 from scenekit import make_scene
 from warprt.scene import vertex_normals
@@ -47,20 +47,12 @@ def test_phong_terms_on_a_plane_match_the_closed_form():
     scene = make_scene([WALL], {"wall": WALL_MATERIAL}, [LIGHT], ambient=AMBIENT)
     image = render(scene, max_depth=1)
     eye, d, p = wall_points(scene)
-    n = np.array([0.0, 0.0, 1.0])
-    L = np.asarray(LIGHT["position"]) - p
-    L /= np.linalg.norm(L, axis=-1, keepdims=True)
-    n_dot_l = L @ n
-    r = 2.0 * n_dot_l[..., None] * n - L
-    r_dot_v = np.maximum(np.einsum("ijk,ijk->ij", r, -d), 0.0)
-    m = WALL_MATERIAL
-    expected = np.asarray(AMBIENT) * m["ka"] + np.asarray(LIGHT["color"]) * (
-        np.asarray(m["kd"]) * n_dot_l[..., None] + np.asarray(m["ks"]) * (r_dot_v**m["shininess"])[..., None])
+    terms = phong_terms(p, np.array([0.0, 0.0, 1.0]), -d, [LIGHT], WALL_MATERIAL, AMBIENT)
+    expected = terms["ambient"] + terms["diffuse"] + terms["specular"]
     assert np.abs(image - expected).max() < 2e-5
     # Switching a term off removes exactly that term.
     no_spec = render(scene, specular=False, max_depth=1)
-    assert np.abs(no_spec - (expected - np.asarray(LIGHT["color"]) * np.asarray(m["ks"])
-                             * (r_dot_v**m["shininess"])[..., None])).max() < 2e-5
+    assert np.abs(no_spec - (expected - terms["specular"])).max() < 2e-5
 
 
 def test_light_behind_the_surface_gives_no_light():
