@@ -17,7 +17,7 @@ import numpy as np
 from skimage.metrics import structural_similarity
 
 import warprt
-from warprt.scene import camera_basis
+from oracle import ray_directions, ray_triangle
 from warprt.geometry import Geometry
 from warprt.image import render_zbuffer, traced_faces
 
@@ -53,34 +53,19 @@ def ssim(a: np.ndarray, b: np.ndarray) -> float:
 
 
 def sample_rays(scene, rows, cols, samples_idx, k: int, samples: int) -> np.ndarray:
-    """Float64 directions of the given samples: d = -d_f z_e + h((y+sy)/h_p - 1/2) y_e + w((x+sx)/w_p - 1/2) x_e."""
-    b = camera_basis(scene.camera)
+    """Float64 directions of the given samples, through the centres of a k x k pixel's strata."""
     if samples > 1:
         sx, sy = (samples_idx % k + 0.5) / k, (samples_idx // k + 0.5) / k
     else:
         sx = sy = np.full(len(rows), 0.5)
-    y = (b.height - 1 - rows) + sy
-    x = cols + sx
-    return (-b.d_f * b.z_e + (b.h * (y / b.height - 0.5))[:, None] * b.y_e
-            + (b.w * (x / b.width - 0.5))[:, None] * b.x_e)
+    return ray_directions(scene.camera, cols, rows, sx, sy)
 
 
 def intersect(d: np.ndarray, tri: np.ndarray):
     """Rays from the origin along d (n, 3) against triangles (n, 3, 3): distance along d and the
-    smallest barycentric coordinate (negative outside), in float64 (Cramer's rule)."""
-    e1, e2 = tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]
-    p = np.cross(d, e2)
-    det = np.einsum("ij,ij->i", e1, p)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        inv = 1.0 / det
-        s = -tri[:, 0]
-        u = np.einsum("ij,ij->i", s, p) * inv
-        q = np.cross(s, e1)
-        v = np.einsum("ij,ij->i", d, q) * inv
-        t = np.einsum("ij,ij->i", e2, q) * inv
-    bmin = np.minimum(np.minimum(u, v), 1.0 - u - v)
-    bmin[~np.isfinite(bmin)] = -np.inf  # seen edge-on
-    return t, bmin
+    smallest barycentric coordinate (negative outside, -inf where the ray is in the plane), in float64."""
+    h = ray_triangle(np.zeros(3), d, tri[:, 0], tri[:, 1], tri[:, 2])
+    return h.t, np.where(np.isfinite(h.margin), h.margin, -np.inf)
 
 
 def classify_ties(scene, geometry: Geometry, zb_faces, rt_faces, k: int) -> np.ndarray:

@@ -3,10 +3,10 @@ computed here in closed form (two planar triangles, float64), independently of b
 
 import numpy as np
 
+from oracle import pinhole, pixel_directions, ray_triangle
 from tests.scenekit import make_scene
 from tests.zbuffer.test_agreement import FLOOR, LIGHTS, MATERIALS, WALL
 from warprt.image import render_zbuffer
-from warprt.scene import camera_basis, pixel_ray_directions
 
 MARGIN = 1e-4  # pixels whose ray passes this close (barycentric) to an edge are left out of the oracle
 
@@ -14,21 +14,14 @@ MARGIN = 1e-4  # pixels whose ray passes this close (barycentric) to an edge are
 def closed_form_faces(scene, triangles):
     """The nearest of the given world-space triangles along each pixel-centre ray, (H, W); -1 for
     none, -2 where the ray passes within MARGIN of an edge (either answer would be right)."""
-    b = camera_basis(scene.camera)
-    d = pixel_ray_directions(b).reshape(-1, 3)
+    b = pinhole(scene.camera)
+    d = pixel_directions(b).reshape(-1, 3)
     best_t = np.full(len(d), np.inf)
     best = np.full(len(d), -1)
     unsure = np.zeros(len(d), bool)
     for i, tri in enumerate(np.asarray(triangles, np.float64)):
-        e1, e2 = tri[1] - tri[0], tri[2] - tri[0]
-        p = np.cross(d, e2)
-        det = p @ e1
-        s = b.eye - tri[0]
-        u = (p @ s) / det
-        q = np.cross(s, e1)
-        v = (d @ q) / det
-        t = (q @ e2) / det
-        m = np.minimum(np.minimum(u, v), 1 - u - v)
+        h = ray_triangle(b.eye, d, *tri)
+        t, m = h.t, h.margin
         hit = (m > -MARGIN) & (t > 0)
         unsure |= hit & (np.abs(m) <= MARGIN)
         nearer = hit & (m > 0) & (t < best_t)
@@ -71,8 +64,8 @@ def test_no_cracks_around_a_vertex_on_a_pixel_centre():
     # Odd sizes put the image centre on a pixel centre; square pixels put the diagonals through pixel centres too.
     scene = make_scene([fan], MATERIALS, LIGHTS, camera={"width": 65, "height": 65, "fovy": 90.0})
     _, faces_seen = render_zbuffer(scene, return_faces=True)
-    b = camera_basis(scene.camera)
-    d = pixel_ray_directions(b)
+    b = pinhole(scene.camera)
+    d = pixel_directions(b)
     hit = b.eye + d * (5.0 / b.d_f)  # every ray meets z = 0 at depth 5
     inside = (np.abs(hit[..., 0]) < 1 - MARGIN) & (np.abs(hit[..., 1]) < 1 - MARGIN)
     outside = (np.abs(hit[..., 0]) > 1 + MARGIN) | (np.abs(hit[..., 1]) > 1 + MARGIN)
