@@ -1,20 +1,13 @@
-"""The camera: basis and ray directions against the seed's formulas, computed here from scratch."""
-
-import math
+"""The camera: warprt's basis, ray directions and kernel rays against the seed's formulas
+(tests/oracle/camera.py, written from them, not from warprt's code)."""
 
 import numpy as np
 import pytest
 import warp as wp
 
+from oracle import camera_rays, pinhole, pixel_directions, ray_directions
 from warprt.kernels import CameraData, camera_data, camera_ray, init_warp
 from warprt.scene import Camera, camera_basis, pixel_ray_directions
-
-
-def seed_basis(eye, center, up):
-    eye, center, up = map(np.asarray, (eye, center, up))
-    z = (eye - center) / math.dist(eye, center)
-    x = np.cross(up, z) / np.linalg.norm(np.cross(up, z))
-    return z, x, np.cross(z, x)
 
 
 CAMERAS = [
@@ -26,13 +19,13 @@ CAMERAS = [
 
 @pytest.mark.parametrize("cam", CAMERAS)
 def test_basis_is_the_seeds(cam):
-    b = camera_basis(cam)
-    z, x, y = seed_basis(cam.eye, cam.center, cam.up)
-    np.testing.assert_allclose(b.z_e, z, atol=1e-15)
-    np.testing.assert_allclose(b.x_e, x, atol=1e-15)
-    np.testing.assert_allclose(b.y_e, y, atol=1e-15)
-    assert b.h == pytest.approx(2 * cam.near * math.tan(math.radians(cam.fovy) / 2), rel=1e-15)
-    assert b.w == pytest.approx(b.h * cam.width / cam.height, rel=1e-15)
+    b, seed = camera_basis(cam), pinhole(cam)
+    np.testing.assert_allclose(b.z_e, seed.z_e, atol=1e-15)
+    np.testing.assert_allclose(b.x_e, seed.x_e, atol=1e-15)
+    np.testing.assert_allclose(b.y_e, seed.y_e, atol=1e-15)
+    assert b.d_f == seed.d_f and np.array_equal(b.eye, seed.eye)
+    assert b.h == pytest.approx(seed.h, rel=1e-15)
+    assert b.w == pytest.approx(seed.w, rel=1e-15)
     # Orthonormal and right-handed, whatever the up vector was.
     np.testing.assert_allclose(np.stack([b.x_e, b.y_e, b.z_e]) @ np.stack([b.x_e, b.y_e, b.z_e]).T, np.eye(3), atol=1e-14)
 
@@ -40,16 +33,20 @@ def test_basis_is_the_seeds(cam):
 @pytest.mark.parametrize("cam", CAMERAS)
 def test_pixel_directions(cam):
     """d = -d_f z_e + h(y/h_p - 1/2) y_e + w(x/w_p - 1/2) x_e at pixel centres, y from the bottom."""
-    z, x, y = seed_basis(cam.eye, cam.center, cam.up)
-    h = 2 * cam.near * math.tan(math.radians(cam.fovy) / 2)
-    w = h * cam.width / cam.height
+    y, x = pinhole(cam).y_e, pinhole(cam).x_e
     d = pixel_ray_directions(camera_basis(cam))
     for row, col in [(0, 0), (cam.height - 1, cam.width - 1), (cam.height // 2, 3), (7, cam.width - 5)]:
-        yb = cam.height - 1 - row
-        expect = -cam.near * z + h * ((yb + 0.5) / cam.height - 0.5) * y + w * ((col + 0.5) / cam.width - 0.5) * x
-        np.testing.assert_allclose(d[row, col], expect, atol=1e-14)
+        np.testing.assert_allclose(d[row, col], ray_directions(cam, col, row), atol=1e-14)
     # Row 0 is the top of the image: its rays point further along y_e than the bottom row's.
     assert d[0, 0] @ y > d[-1, 0] @ y and d[0, 0] @ x < d[0, -1] @ x
+
+
+@pytest.mark.parametrize("cam", CAMERAS)
+@pytest.mark.parametrize("sx, sy", [(1 / 6, 1 / 6), (5 / 6, 1 / 2), (0.25, 0.75)])
+def test_sub_pixel_directions(cam, sx, sy):
+    """The stratified samples' rays: the same formula at (x + sx, y + sy), for every pixel."""
+    d = pixel_ray_directions(camera_basis(cam), sx, sy)
+    np.testing.assert_allclose(d, pixel_directions(cam, sx, sy), atol=1e-14)
 
 
 @wp.kernel
@@ -67,6 +64,5 @@ def test_kernel_rays_match_the_formula(cam):
     rows = rng.integers(0, cam.height, 50)
     out = wp.empty(50, dtype=wp.vec3, device="cpu")
     wp.launch(_kernel_rays, 50, inputs=[camera_data(camera_basis(cam)), wp.array(cols, dtype=int), wp.array(rows, dtype=int), out])
-    d = pixel_ray_directions(camera_basis(cam))[rows, cols]
-    d /= np.linalg.norm(d, axis=1, keepdims=True)
-    np.testing.assert_allclose(out.numpy(), d, atol=2e-7)
+    _, d = camera_rays(cam)
+    np.testing.assert_allclose(out.numpy(), d[rows, cols], atol=2e-7)

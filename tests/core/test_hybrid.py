@@ -6,14 +6,14 @@ import pytest
 
 import warprt
 from warprt.image import raster_is_cheaper
-from core.test_shading import phong_terms, wall_scene
+from core.test_shading import wall_scene, wall_terms
 
 
 def test_hybrid_gives_the_closed_form_phong_terms():
     scene = wall_scene(shadows=False)
     image, stats = warprt.render(scene, primary="zbuffer")
     assert stats.primary == "zbuffer" and stats.variant.endswith("_zprimary")
-    expect = sum(phong_terms(scene).values())
+    expect = sum(wall_terms(scene).values())
     np.testing.assert_allclose(image, expect, rtol=2e-4, atol=2e-6)
 
 

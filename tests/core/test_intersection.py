@@ -7,7 +7,7 @@ import numpy as np
 
 import warprt
 from scenekit import MARKER, make_scene
-from core.geometry_oracle import camera_rays, ray_sphere_distance, ray_triangle
+from oracle import camera_rays, ray_sphere_distance, ray_triangle
 
 ONE = [1.0, 1.0, 1.0]
 
@@ -24,10 +24,10 @@ def test_single_triangle():
                        {"m": MARKER}, ambient=ONE)
     hit = mask(scene)
     o, d = camera_rays(scene.camera)
-    t, margin = ray_triangle(o, d, *map(np.asarray, tri))
-    clear = np.abs(margin) > 1e-4  # pixels whose centre ray is not within float noise of an edge
+    h = ray_triangle(o, d, *tri)
+    clear = np.abs(h.margin) > 1e-4  # pixels whose centre ray is not within float noise of an edge
     assert clear.mean() > 0.99
-    np.testing.assert_array_equal(hit[clear], np.isfinite(t)[clear])
+    np.testing.assert_array_equal(hit[clear], h.hit[clear])
     assert 0.03 < hit.mean() < 0.6  # the oracle has something to say on both sides
 
 
@@ -38,9 +38,9 @@ def test_quad_both_triangles_and_no_gap():
     hit = mask(scene)
     o, d = camera_rays(scene.camera)
     a, b, c, e = (np.array(p, float) for p in ([-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]))
-    t1, m1 = ray_triangle(o, d, a, b, c)
-    t2, m2 = ray_triangle(o, d, a, c, e)
-    inside = np.isfinite(t1) | np.isfinite(t2)
+    h1, h2 = ray_triangle(o, d, a, b, c), ray_triangle(o, d, a, c, e)
+    m1, m2 = h1.margin, h2.margin
+    inside = h1.hit | h2.hit
     # Only the outer boundary is uncertain: the shared diagonal must never leak.
     outer = np.maximum(np.minimum(m1, 1), np.minimum(m2, 1))
     clear = (np.abs(outer) > 1e-4) | ((m1 > -1e-4) & (m2 > -1e-4))
@@ -70,8 +70,8 @@ def test_nearest_hit_wins():
     for order in ([near, far], [far, near]):
         image, _ = warprt.render(make_scene(order, mats, ambient=ONE))
         o, d = camera_rays(make_scene(order, mats).camera)
-        t, m = ray_triangle(o, d, np.array([-0.5, -0.5, 1.0]), np.array([0.5, -0.5, 1.0]), np.array([0.5, 0.5, 1.0]))
-        t2, m2 = ray_triangle(o, d, np.array([-0.5, -0.5, 1.0]), np.array([0.5, 0.5, 1.0]), np.array([-0.5, 0.5, 1.0]))
+        m = ray_triangle(o, d, [-0.5, -0.5, 1.0], [0.5, -0.5, 1.0], [0.5, 0.5, 1.0]).margin
+        m2 = ray_triangle(o, d, [-0.5, -0.5, 1.0], [0.5, 0.5, 1.0], [-0.5, 0.5, 1.0]).margin
         in_near = (np.minimum(m, 1) > 1e-4) | (np.minimum(m2, 1) > 1e-4)
         assert in_near.sum() > 20
         np.testing.assert_array_equal(image[in_near], np.tile([1.0, 0.0, 0.0], (in_near.sum(), 1)))

@@ -5,7 +5,7 @@ import pytest
 
 import warprt
 from scenekit import MARKER, make_scene
-from core.geometry_oracle import camera_rays, ray_plane, ray_sphere_distance
+from oracle import camera_rays, phong_terms, ray_plane, ray_sphere_distance
 
 C_AMB = np.array([0.1, 0.2, 0.3])
 C_L = np.array([0.9, 0.8, 0.7])
@@ -19,29 +19,19 @@ def wall_scene(**render):
                       ambient=C_AMB.tolist(), **render)
 
 
-def phong_terms(scene):
+def wall_terms(scene):
     """The seed's model at every pixel's hit on the plane z = 0, in float64."""
     o, d = camera_rays(scene.camera)
-    t = ray_plane(o, d, [0, 0, 0], np.array([0.0, 0.0, 1.0]))
+    t = ray_plane(o, d, [0, 0, 0], [0.0, 0.0, 1.0])
     p = o + t[..., None] * d
-    n = np.array([0.0, 0.0, 1.0])
-    L = LIGHT - p
-    L /= np.linalg.norm(L, axis=-1, keepdims=True)
-    v = -d
-    n_dot_l = L @ n
-    r = 2 * n_dot_l[..., None] * n - L
-    r_dot_v = np.maximum(np.sum(r * v, -1), 0)
-    ambient = np.broadcast_to(C_AMB * MAT["ka"], p.shape)
-    diffuse = C_L * np.asarray(MAT["kd"]) * np.maximum(n_dot_l, 0)[..., None]
-    specular = C_L * np.asarray(MAT["ks"]) * (r_dot_v ** MAT["shininess"])[..., None] * (n_dot_l > 0)[..., None]
-    return {"ambient": ambient, "diffuse": diffuse, "specular": specular}
+    return phong_terms(p, np.array([0.0, 0.0, 1.0]), -d, [(LIGHT, C_L)], MAT, C_AMB)
 
 
 @pytest.mark.parametrize("terms", [["ambient"], ["diffuse"], ["specular"], ["ambient", "diffuse", "specular"]])
 def test_phong_terms_closed_form(terms):
     scene = wall_scene(shadows=False)
     image, _ = warprt.render(scene, effects=terms)
-    expect = sum(phong_terms(scene)[t] for t in terms)
+    expect = sum(wall_terms(scene)[t] for t in terms)
     # float32 geometry and arithmetic against float64: relative 1e-4 covers it, a wrong term does not pass.
     np.testing.assert_allclose(image, expect, rtol=2e-4, atol=2e-6)
     assert expect.max() > 0.01
@@ -51,7 +41,7 @@ def test_specular_highlight_is_where_r_meets_v():
     """The brightest specular pixel is the mirror point of the light as seen from the eye."""
     scene = wall_scene(shadows=False)
     image, _ = warprt.render(scene, effects=["specular"])
-    expect = phong_terms(scene)["specular"]
+    expect = wall_terms(scene)["specular"]
     assert np.unravel_index(image[..., 0].argmax(), image.shape[:2]) == np.unravel_index(expect[..., 0].argmax(), expect.shape[:2])
 
 

@@ -5,7 +5,7 @@ import pytest
 
 import warprt
 from scenekit import make_scene
-from core.geometry_oracle import camera_rays, ray_plane
+from oracle import camera_rays, ray_plane
 
 W, H = 24, 16
 CAM = {"eye": [0.0, 0.0, 5.0], "center": [0.0, 0.0, 0.0], "fovy": 40.0, "width": W, "height": H}

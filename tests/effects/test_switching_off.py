@@ -7,7 +7,7 @@ import numpy as np
 import warprt
 from warprt.scene import Material, RenderSettings
 from scenekit import make_scene
-from core.geometry_oracle import camera_rays, ray_plane
+from oracle import camera_rays, ray_plane
 
 MAT = {"ka": [0.2, 0.1, 0.05], "kd": [0.5, 0.6, 0.7], "ks": [0.3, 0.4, 0.5], "shininess": 20.0}
 LIGHT = np.array([0.0, 0.0, 4.0])
