@@ -8,13 +8,13 @@ import re
 import select
 import subprocess
 import sys
-import textwrap
 import time
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from scenekit import write_scene
 from warprt.image import read_image
 
 SRC = str(Path(__file__).resolve().parents[2] / "src")
@@ -74,39 +74,19 @@ def test_version():
     assert r.returncode == 0 and r.stdout.strip() == f"warprt {warprt.__version__}"
 
 
-SCENE = textwrap.dedent("""
-    [camera]
-    eye = [0.0, 0.0, 6.0]
-    center = [0.0, 0.0, 0.0]
-    width = 48
-    height = 32
-
-    [render]
-    max_depth = 2
-
-    [[lights]]
-    position = [3.0, 4.0, 5.0]
-
-    [materials.red]
-    kd = [0.8, 0.1, 0.1]
-    reflectivity = 0.3
-
-    [[objects]]
-    shape = "sphere"
-    subdivisions = 2
-    material = "red"
-
-    [[objects]]
-    shape = "box"
-    size = [1.0, 1.0, 1.0]
-    translate = [2.5, 0.0, -1.0]
-    """)
+SCENE = {
+    "camera": {"eye": [0.0, 0.0, 6.0], "center": [0.0, 0.0, 0.0], "width": 48, "height": 32},
+    "render": {"max_depth": 2},
+    "lights": [{"position": [3.0, 4.0, 5.0]}],
+    "materials": {"red": {"kd": [0.8, 0.1, 0.1], "reflectivity": 0.3}},
+    "objects": [{"shape": "sphere", "subdivisions": 2, "material": "red"},
+                {"shape": "box", "size": [1.0, 1.0, 1.0], "translate": [2.5, 0.0, -1.0]}],
+}
 
 
 @pytest.fixture
 def scene_file(tmp_path):
-    (tmp_path / "s.toml").write_text(SCENE)
-    return tmp_path / "s.toml"
+    return write_scene(tmp_path, SCENE, "s.toml")
 
 
 def test_flags_reach_the_render(scene_file, tmp_path):

@@ -10,7 +10,7 @@ import pytest
 import warp as wp
 
 import warprt
-from scenekit import make_scene
+from scenekit import make_scene, write_scene
 from warprt.kernels import init_warp, make_trace_kernel
 from warprt.scene import EFFECTS, EffectSet, resolve_effects, scene_effects
 
@@ -62,30 +62,16 @@ def test_users_can_switch_effects_off_but_never_on():
 
 
 def test_scene_file_effects_setting_and_cli_flags(tmp_path):
-    doc = textwrap.dedent("""
-        [camera]
-        eye = [0, 0, 5]
-        center = [0, 0, 0]
-        width = 16
-        height = 12
-        [render]
-        effects = ["ambient", "diffuse", "reflection"]
-        max_depth = 3
-        [[lights]]
-        position = [0, 3, 4]
-        [materials.m]
-        kd = [0.5, 0.5, 0.5]
-        ks = [0.5, 0.5, 0.5]
-        reflectivity = 0.5
-        [[objects]]
-        shape = "plane"
-        rotate = [90, 0, 0]
-        material = "m"
-    """)
-    (tmp_path / "s.toml").write_text(doc)
-    scene = warprt.load_scene(tmp_path / "s.toml")
+    path = write_scene(tmp_path, {
+        "camera": {"eye": [0, 0, 5], "center": [0, 0, 0], "width": 16, "height": 12},
+        "render": {"effects": ["ambient", "diffuse", "reflection"], "max_depth": 3},
+        "lights": [{"position": [0, 3, 4]}],
+        "materials": {"m": {"kd": [0.5, 0.5, 0.5], "ks": [0.5, 0.5, 0.5], "reflectivity": 0.5}},
+        "objects": [{"shape": "plane", "rotate": [90, 0, 0], "material": "m"}],
+    }, "s.toml")
+    scene = warprt.load_scene(path)
     assert str(resolve_effects(scene)) == "ambient,diffuse,reflection"
-    r = subprocess.run([sys.executable, "-m", "warprt", "render", str(tmp_path / "s.toml"), "-o", str(tmp_path / "o.png"),
+    r = subprocess.run([sys.executable, "-m", "warprt", "render", str(path), "-o", str(tmp_path / "o.png"),
                         "--stats", "--effects", "ambient,diffuse,specular", "--max-depth", "1"],
                        capture_output=True, text=True)
     assert r.returncode == 0, r.stderr

@@ -4,52 +4,28 @@ exactly (values above 1 too), .png holds its sRGB encoding in 8 bits; a failed w
 import os
 import subprocess
 import sys
-import textwrap
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from scenekit import write_scene
 from warprt.image import read_image, write_image
 
 SRC = str(Path(__file__).resolve().parents[2] / "src")
 
 # Two squares seen face-on, shown by their ambient term only (C_amb = 2): the left one's pixels are
 # 2 * ka, above 1 in red, the right one's are small enough for the sRGB curve's linear segment.
-SCENE = textwrap.dedent("""
-    [camera]
-    eye = [0.0, 0.0, 5.0]
-    center = [0.0, 0.0, 0.0]
-    fovy = 60.0
-    width = 40
-    height = 20
-
-    [render]
-    ambient = [2.0, 2.0, 2.0]
-    background = [0.25, 0.5, 0.75]
-
-    [materials.hot]
-    ka = [0.9, 0.3, 0.05]
-    kd = [0.0, 0.0, 0.0]
-
-    [materials.dim]
-    ka = [0.001, 0.0015, 0.2]
-    kd = [0.0, 0.0, 0.0]
-
-    [[objects]]
-    shape = "plane"
-    size = [1.0, 1.0]
-    rotate = [90.0, 0.0, 0.0]
-    translate = [-1.5, 0.0, 0.0]
-    material = "hot"
-
-    [[objects]]
-    shape = "plane"
-    size = [1.0, 1.0]
-    rotate = [90.0, 0.0, 0.0]
-    translate = [1.5, 0.0, 0.0]
-    material = "dim"
-    """)
+SCENE = {
+    "camera": {"eye": [0.0, 0.0, 5.0], "center": [0.0, 0.0, 0.0], "fovy": 60.0, "width": 40, "height": 20},
+    "render": {"ambient": [2.0, 2.0, 2.0], "background": [0.25, 0.5, 0.75]},
+    "materials": {"hot": {"ka": [0.9, 0.3, 0.05], "kd": [0.0, 0.0, 0.0]},
+                  "dim": {"ka": [0.001, 0.0015, 0.2], "kd": [0.0, 0.0, 0.0]}},
+    "objects": [{"shape": "plane", "size": [1.0, 1.0], "rotate": [90.0, 0.0, 0.0], "translate": [-1.5, 0.0, 0.0],
+                 "material": "hot"},
+                {"shape": "plane", "size": [1.0, 1.0], "rotate": [90.0, 0.0, 0.0], "translate": [1.5, 0.0, 0.0],
+                 "material": "dim"}],
+}
 
 
 def srgb8(linear):
@@ -62,7 +38,7 @@ def srgb8(linear):
 @pytest.fixture(scope="module")
 def outputs(tmp_path_factory):
     folder = tmp_path_factory.mktemp("images")
-    (folder / "s.toml").write_text(SCENE)
+    write_scene(folder, SCENE, "s.toml")
     env = {**os.environ, "PYTHONPATH": SRC + os.pathsep + os.environ.get("PYTHONPATH", "")}
     for ext in ("npy", "exr", "png"):
         r = subprocess.run([sys.executable, "-m", "warprt", "render", "s.toml", "-o", f"out.{ext}", "-q"],

@@ -14,6 +14,8 @@ from pathlib import Path
 
 import numpy as np
 
+from scenekit import write_scene
+
 SRC = str(Path(__file__).resolve().parents[2] / "src")
 N = 1000  # N x N quads: 2,000,000 triangles
 
@@ -39,19 +41,8 @@ def write_heightfield_ply(path: Path, n: int) -> int:
 
 def test_two_million_triangles_render_and_report_memory(tmp_path):
     n_tri = write_heightfield_ply(tmp_path / "field.ply", N)
-    (tmp_path / "s.toml").write_text("""
-[camera]
-eye = [0.0, 2.0, 2.5]
-center = [0.0, 0.0, 0.0]
-width = 64
-height = 48
-
-[[lights]]
-position = [2.0, 4.0, 3.0]
-
-[[objects]]
-mesh = "field.ply"
-""")
+    write_scene(tmp_path, {"camera": {"eye": [0.0, 2.0, 2.5], "center": [0.0, 0.0, 0.0], "width": 64, "height": 48},
+                           "lights": [{"position": [2.0, 4.0, 3.0]}], "objects": [{"mesh": "field.ply"}]}, "s.toml")
     env = {**os.environ, "PYTHONPATH": SRC + os.pathsep + os.environ.get("PYTHONPATH", "")}
     r = subprocess.run([sys.executable, "-m", "warprt", "render", "s.toml", "-o", "f.png", "-q", "--stats-file", "st.json"],
                        cwd=tmp_path, env=env, capture_output=True, text=True, timeout=600)

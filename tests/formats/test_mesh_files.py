@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 import warprt
+from scenekit import write_scene
 from warprt.scene import read_mesh_file
 from warprt.scene import Material
 
@@ -33,16 +34,11 @@ def mesh_triangles(mesh):
     return triangles(v, f)
 
 
-def scene_toml(tmp_path, objects: str, materials: str = "") -> "warprt.Scene":
-    text = textwrap.dedent("""
-        [camera]
-        eye = [0.0, 0.0, 10.0]
-        center = [0.0, 0.0, 0.0]
-        width = 16
-        height = 12
-        """) + textwrap.dedent(materials) + textwrap.dedent(objects)
-    (tmp_path / "scene.toml").write_text(text)
-    return warprt.load_scene(tmp_path / "scene.toml")
+def scene_file(tmp_path, objects, materials=None, render=None) -> "warprt.Scene":
+    """A scene file beside the mesh files, its objects naming them, loaded as the command would."""
+    doc = {"camera": {"eye": [0.0, 0.0, 10.0], "center": [0.0, 0.0, 0.0], "width": 16, "height": 12},
+           **({"render": render} if render else {}), **({"materials": materials} if materials else {}), "objects": objects}
+    return warprt.load_scene(write_scene(tmp_path, doc))
 
 
 # --- OBJ + MTL ----------------------------------------------------------------------------------
@@ -114,10 +110,7 @@ def test_mtl_values_become_phong_materials(obj_file):
 
 
 def test_obj_materials_join_the_scene_per_face(obj_file, tmp_path):
-    scene = scene_toml(tmp_path, """
-        [[objects]]
-        mesh = "thing.obj"
-        """)
+    scene = scene_file(tmp_path, [{"mesh": "thing.obj"}])
     by_name = {o.name: o for o in scene.objects}
     assert set(by_name) == {"thing/red", "thing/mirror"}
     assert by_name["thing/mirror"].material == "thing/mirror"
@@ -126,14 +119,7 @@ def test_obj_materials_join_the_scene_per_face(obj_file, tmp_path):
 
 
 def test_scene_material_overrides_the_files(obj_file, tmp_path):
-    scene = scene_toml(tmp_path, """
-        [[objects]]
-        mesh = "thing.obj"
-        material = "chalk"
-        """, """
-        [materials.chalk]
-        kd = [0.9, 0.9, 0.9]
-        """)
+    scene = scene_file(tmp_path, [{"mesh": "thing.obj", "material": "chalk"}], {"chalk": {"kd": [0.9, 0.9, 0.9]}})
     assert [(o.name, o.material, len(o.faces)) for o in scene.objects] == [("thing", "chalk", 4)]
     assert not any(name.startswith("thing/") for name in scene.materials)
 
@@ -141,11 +127,7 @@ def test_scene_material_overrides_the_files(obj_file, tmp_path):
 def test_split_smooth_mesh_keeps_shared_normals(obj_file, tmp_path):
     """The two material parts meet along the edge x = 1; their vertex normals there are the same
     (the flat sheet's +z), not each part's own."""
-    scene = scene_toml(tmp_path, """
-        [[objects]]
-        mesh = "thing.obj"
-        smooth = true
-        """)
+    scene = scene_file(tmp_path, [{"mesh": "thing.obj", "smooth": True}])
     for o in scene.objects:
         np.testing.assert_allclose(o.normals, np.tile([0.0, 0.0, 1.0], (len(o.vertices), 1)), atol=1e-12)
 
@@ -154,12 +136,7 @@ def test_file_material_reaches_the_pixels(tmp_path):
     """A face-on quad whose MTL gives Ka, with C_amb = 1 and no lights: the pixel is Ka."""
     (tmp_path / "q.obj").write_text("mtllib q.mtl\nv -3 -3 0\nv 3 -3 0\nv 3 3 0\nv -3 3 0\nusemtl k\nf 1 2 3 4\n")
     (tmp_path / "q.mtl").write_text("newmtl k\nKa 0.25 0.5 0.75\nKd 0.1 0.1 0.1\n")
-    scene = scene_toml(tmp_path, """
-        [render]
-        ambient = [1.0, 1.0, 1.0]
-        [[objects]]
-        mesh = "q.obj"
-        """)
+    scene = scene_file(tmp_path, [{"mesh": "q.obj"}], render={"ambient": [1.0, 1.0, 1.0]})
     image, _ = warprt.render(scene)
     np.testing.assert_allclose(image[6, 8], [0.25, 0.5, 0.75], atol=1e-6)
 
@@ -280,11 +257,7 @@ def test_glb_base_colours_are_kd(glb_file):
 
 
 def test_glb_as_scene_objects(glb_file, tmp_path):
-    scene = scene_toml(tmp_path, """
-        [[objects]]
-        mesh = "pair.glb"
-        name = "yard"
-        """)
+    scene = scene_file(tmp_path, [{"mesh": "pair.glb", "name": "yard"}])
     assert {(o.name, o.material, len(o.faces)) for o in scene.objects} == {("yard/clay", "yard/clay", 12),
                                                                            ("yard/leaf", "yard/leaf", 1)}
 

@@ -12,6 +12,7 @@ import pytest
 import warp as wp
 
 import warprt
+from scenekit import write_scene
 from warprt import Camera, SceneError
 from warprt.scene import load_scene, scene_from_dict
 
@@ -91,9 +92,7 @@ def test_the_good_scene_is_good():
 @pytest.mark.parametrize("case,key,value,field", CASES, ids=[c[0] for c in CASES])
 def test_scene_file_names_the_field(tmp_path, no_kernels, case, key, value, field):
     """Through a real TOML file (tomllib reads nan and inf), as the CLI does."""
-    doc = with_value(key, value)
-    path = tmp_path / "bad.toml"
-    path.write_text(toml(doc))
+    path = write_scene(tmp_path, with_value(key, value), "bad.toml")
     with pytest.raises(SceneError) as e:
         load_scene(path)
     assert e.value.field == field and str(e.value).startswith(f"{path}: {field}: ")
@@ -142,29 +141,3 @@ def test_python_api_checks_objects_and_render_settings(no_kernels):
     with pytest.raises(SceneError) as e:
         warprt.render(replace(scene, camera=cam))
     assert e.value.field == "camera.center"
-
-
-def toml(doc) -> str:
-    """A minimal TOML writer for the test documents (tomllib only reads)."""
-    def value(v):
-        if isinstance(v, bool):
-            return "true" if v else "false"
-        if isinstance(v, (int, float)):
-            return "nan" if v != v else ("inf" if v == INF else "-inf" if v == -INF else repr(v))
-        if isinstance(v, str):
-            return f'"{v}"'
-        return "[" + ", ".join(value(x) for x in v) + "]"
-    lines = []
-    for section in ("camera", "render"):
-        lines.append(f"[{section}]")
-        lines += [f"{k} = {value(v)}" for k, v in doc[section].items()]
-    for light in doc["lights"]:
-        lines.append("[[lights]]")
-        lines += [f"{k} = {value(v)}" for k, v in light.items()]
-    for name, mat in doc["materials"].items():
-        lines.append(f"[materials.{name}]")
-        lines += [f"{k} = {value(v)}" for k, v in mat.items()]
-    for obj in doc["objects"]:
-        lines.append("[[objects]]")
-        lines += [f"{k} = {value(v)}" for k, v in obj.items()]
-    return "\n".join(lines) + "\n"
