@@ -1,4 +1,5 @@
-"""The scene file: the documented example parses to the documented values and defaults."""
+"""The scene file: the documented example parses to the documented values and defaults; rotate and
+smooth normals are the README's, as the oracle derives them."""
 
 
 import numpy as np
@@ -6,6 +7,7 @@ import pytest
 import trimesh
 
 import warprt
+from oracle import rotation, vertex_normals
 
 EXAMPLE = """
 [camera]
@@ -84,3 +86,34 @@ def test_rotation_order(rotate, point, expect):
     scene = warprt.scene.scene_from_dict({"objects": [{"shape": "triangles", "vertices": [point, [0, 0, 0], [0, 0, 0]],
                                                          "faces": [[0, 1, 2]], "rotate": rotate}]})
     np.testing.assert_allclose(scene.objects[0].vertices[0], expect, atol=1e-12)
+
+
+def test_rotate_is_rz_ry_rx_of_the_readme():
+    """Any angles: each vertex becomes R p with R = Rz Ry Rx (tests/oracle/transform.py, from
+    Rodrigues' formula), then the translation is added."""
+    rng = np.random.default_rng(7)
+    points = rng.normal(size=(3, 3))
+    for degrees in rng.uniform(-360, 360, (6, 3)):
+        scene = warprt.scene.scene_from_dict({"objects": [{"shape": "triangles", "vertices": points.tolist(), "faces": [[0, 1, 2]],
+                                                             "rotate": degrees.tolist(), "translate": [1.0, -2.0, 0.5]}]})
+        np.testing.assert_allclose(scene.objects[0].vertices, points @ rotation(degrees).T + [1.0, -2.0, 0.5], atol=1e-12)
+
+
+def split_sphere():
+    """An icosphere whose eastern faces index a copy of its vertices: a seam along x = 0 that only
+    sharing normals by position closes."""
+    obj = warprt.scene.scene_from_dict({"objects": [{"shape": "sphere", "subdivisions": 2}]}).objects[0]
+    east = obj.vertices[obj.faces].mean(axis=1)[:, 0] > 0
+    faces = np.where(east[:, None], obj.faces + len(obj.vertices), obj.faces)
+    return {"shape": "triangles", "vertices": np.concatenate([obj.vertices, obj.vertices]).tolist(), "faces": faces.tolist()}
+
+
+@pytest.mark.parametrize("shape", [{"shape": "sphere", "subdivisions": 2, "scale": [1.0, 0.6, 1.3]},
+                                   {"shape": "box", "size": [1.0, 2.0, 3.0], "rotate": [10.0, 20.0, 30.0]},
+                                   split_sphere()], ids=["squashed sphere", "box", "sphere split at a seam"])
+def test_smooth_normals_are_angle_weighted(shape):
+    """The smooth normals the renderer and the Mitsuba reference shade with (warprt.scene.vertex_normals)
+    are the oracle's angle-weighted ones, shared across seams."""
+    obj = warprt.scene.scene_from_dict({"objects": [{**shape, "smooth": True}]}).objects[0]
+    np.testing.assert_allclose(warprt.scene.vertex_normals(obj.vertices, obj.faces), vertex_normals(obj.vertices, obj.faces),
+                               atol=1e-12)
