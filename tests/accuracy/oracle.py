@@ -2,7 +2,9 @@
 and Mitsuba differ, run with Mitsuba's ray-origin offsets or chosen ones, with its decision margins.
 
 It tests every triangle with Moller-Trumbore in float64 (no BVH, no float32), so where it agrees
-with a renderer the renderer's decisions are the exact ones for the offsets it chose.
+with a renderer the renderer's decisions are the exact ones for the offsets it chose. Textures are
+sampled in float64 (bilinear, repeat, written here from the convention, not from either renderer),
+uvs and vertex colours interpolated with its own barycentrics.
 """
 
 from __future__ import annotations
@@ -37,18 +39,25 @@ class Oracle:
     def __init__(self, scene, switches):
         self.scene, self.sw = scene, switches
         names = list(scene.materials)
-        verts, faces, mat, smooth, normals, base = [], [], [], [], [], 0
+        verts, faces, mat, smooth, normals, uvs, colors, base = [], [], [], [], [], [], [], 0
         for obj in scene.objects:
             verts.append(obj.vertices)
             faces.append(obj.faces + base)
             mat += [names.index(obj.material)] * len(obj.faces)
             use_smooth = obj.smooth and switches.smooth
             smooth += [use_smooth] * len(obj.faces)
-            normals.append(vertex_normals(obj.vertices, obj.faces) if use_smooth else np.zeros_like(obj.vertices))
+            given = getattr(obj, "normals", None)
+            normals.append((given if given is not None else vertex_normals(obj.vertices, obj.faces)) if use_smooth
+                           else np.zeros_like(obj.vertices))
+            uvs.append(obj.uv if getattr(obj, "uv", None) is not None else np.zeros((len(obj.vertices), 2)))
+            colors.append(obj.colors if getattr(obj, "colors", None) is not None and switches.vertex_color
+                          else np.ones((len(obj.vertices), 3)))
             base += len(obj.vertices)
         self.V = np.concatenate(verts)
         self.F = np.concatenate(faces)
         self.N = np.concatenate(normals)
+        self.UV = np.concatenate(uvs).astype(np.float64)
+        self.C = np.concatenate(colors).astype(np.float64)
         self.mat = np.asarray(mat)
         self.smooth = np.asarray(smooth)
         self.p0, self.p1, self.p2 = (self.V[self.F[:, k]] for k in range(3))
@@ -141,7 +150,11 @@ class Oracle:
                 ns = sum(self.N[self.F[f, k]] * b[k] for k in range(3))
                 n = ns / np.linalg.norm(ns) * side
             mat = self.materials[self.mat[f]]
-            local = C_amb * np.asarray(mat.ka) if sw.ambient else np.zeros(3)
+            uv = sum(self.UV[self.F[f, k]] * b[k] for k in range(3))
+            vertex_color = sum(self.C[self.F[f, k]] * b[k] for k in range(3))
+            (ka, kd, ks), m = self._coefficients(mat, uv, vertex_color)
+            margin = min(margin, m)
+            local = C_amb * ka if sw.ambient else np.zeros(3)
             if sw.diffuse or sw.specular:
                 for light in scene.lights:
                     pos = np.asarray(light.position, np.float64)
@@ -161,11 +174,11 @@ class Oracle:
                             continue
                     term = np.zeros(3)
                     if sw.diffuse:
-                        term += np.asarray(mat.kd) * n_dot_l
+                        term += kd * n_dot_l
                     if sw.specular:
                         r_dot_v = float((2.0 * n_dot_l * n - L) @ -d)
                         if r_dot_v > 0.0:
-                            term += np.asarray(mat.ks) * r_dot_v**mat.shininess
+                            term += ks * r_dot_v**mat.shininess
                     local += np.asarray(light.color) * term
             color = color + weight * local
             kr = np.asarray(mat.reflectivity, np.float64)
@@ -176,6 +189,19 @@ class Oracle:
             d /= np.linalg.norm(d)
             o = self._offset(offset, p, ng, d)
         return color, margin
+
+    def _coefficients(self, mat, uv, color):
+        """(ka, kd, ks) at a hit of texture coordinates uv and vertex colour color, and the decision
+        margin of any checker there (how far the mapped uv is from a check's edge, relative to it)."""
+        out, margin = [], math.inf
+        for key in ("ka", "kd", "ks"):
+            k = np.asarray(getattr(mat, key), np.float64)
+            t = getattr(mat, f"{key}_texture", None)
+            if t is not None and self.sw.texture:
+                value, m = texture_value(t, uv)
+                k, margin = k * value, min(margin, m)
+            out.append(k * color if key != "ks" else k)
+        return out, margin
 
     def pixel(self, x: int, row: int, offset="mitsuba") -> PixelTrace:
         """Pixel (x, row), row 0 at the top, averaged over k*k samples at the stratum centres, with
@@ -190,3 +216,24 @@ class Oracle:
                 total += c
                 margin = min(margin, m)
         return PixelTrace(total / (k * k), margin)
+
+
+def texture_value(t, uv) -> tuple[np.ndarray, float]:
+    """A warprt Texture at surface coordinates uv, in float64: the uv map, then repeat wrap and bilinear
+    filtering between the texel centres ((i + 0.5) / W, (j + 0.5) / H), image row 0 at v = 0; or the
+    checker, c0 where floor(u') + floor(v') is even. Returns the value and the checker's decision margin
+    (the distance of u' or v' to the nearest integer, relative to 1 + |uv'|; inf for images)."""
+    a = t.uv_transform
+    q = np.array([a[0] * uv[0] + a[1] * uv[1] + a[2], a[3] * uv[0] + a[4] * uv[1] + a[5]])
+    if t.checker is not None:
+        parity = int(np.floor(q[0]) + np.floor(q[1])) % 2
+        edge = float(np.min(np.abs(q - np.round(q))))
+        return np.asarray(t.checker[parity], np.float64), edge / (1.0 + float(np.abs(q).max()))
+    image = np.asarray(t.image, np.float64)
+    h, w = image.shape[:2]
+    x, y = np.mod(q[0], 1.0) * w - 0.5, np.mod(q[1], 1.0) * h - 0.5
+    x0, y0 = int(np.floor(x)), int(np.floor(y))
+    fx, fy = x - x0, y - y0
+    c = lambda i, j: image[j % h, i % w]
+    return ((c(x0, y0) * (1 - fx) + c(x0 + 1, y0) * fx) * (1 - fy)
+            + (c(x0, y0 + 1) * (1 - fx) + c(x0 + 1, y0 + 1) * fx) * fy), math.inf

@@ -136,8 +136,8 @@ class _Document:
         if source is None and "EXT_texture_webp" in t.get("extensions", {}):
             source = t["extensions"]["EXT_texture_webp"].get("source")
         if source is None:
-            warn(self.src, where, f"texture {index} is in a format not read here ({', '.join(t.get('extensions', {})) "
-                                  "or 'no image'}); the material is untextured")
+            formats = ", ".join(t.get("extensions", {})) or "no image"
+            warn(self.src, where, f"texture {index} is in a format not read here ({formats}); the material is untextured")
             return None
         sampler = self.doc.get("samplers", [{}])[t["sampler"]] if "sampler" in t else {}
         for axis in ("wrapS", "wrapT"):
