@@ -136,7 +136,7 @@ CASES = [
      "ok.toml: lights[7].color: there is no lights[7]"),
     ("--effects unknown", ["render", "ok.toml", "--effects", "glow"],
      "command line: --effects: unknown effect 'glow'; expected some of: ambient, diffuse, specular, shadows, "
-     "reflection, supersampling, smooth"),
+     "reflection, supersampling, smooth, texture, vertex_color"),
     # Output paths: checked before anything renders.
     ("output .jpg", ["render", "ok.toml", "-o", "out.jpg"],
      "out.jpg: --output: unknown image extension '.jpg'; expected one of: .png, .npy, .exr"),
