@@ -101,7 +101,7 @@ CASES = [
     ("unknown mesh format", ["render", "unknown_mesh_format.toml"],
      f"unknown_mesh_format.toml: objects[0].mesh: meshes/model.fbx: unknown mesh format '.fbx'; expected one of: {EXTS}"),
     ("negative Kd in the MTL", ["render", "bad_mtl.toml"],
-     "bad_mtl.toml: objects[0].mesh: meshes/bad_mtl.obj: newmtl paint: Kd: expected 3 non-negative numbers, "
+     "bad_mtl.toml: objects[0].mesh: meshes/bad_mtl.mtl: newmtl paint: Kd: expected 3 non-negative numbers, "
      "got [-1.0, 0.5, 0.5]"),
     # A bare file on the command line.
     ("bare mesh not a PLY", ["render", "meshes/junk.ply"], "meshes/junk.ply: not a PLY file (it does not start with 'ply')"),
