@@ -78,6 +78,19 @@ CASES = [
      f"unknown_shape.toml: objects[0].shape: unknown shape 'sphre' (did you mean 'sphere'?); expected one of: {SHAPES}"),
     ("face index out of range", ["render", "faces_out_of_range.toml"],
      "faces_out_of_range.toml: objects[0].faces: vertex index out of range [0, 2]"),
+    # Textures and shading.
+    ("texture file missing", ["render", "missing_texture.toml"],
+     "missing_texture.toml: materials.wood.kd_texture: textures/nothere.png: texture file not found"),
+    ("texture not an image", ["render", "texture_not_image.toml"],
+     "texture_not_image.toml: materials.tiles.kd_texture.image: notes.txt: not an image file read here (PNG, "
+     "JPEG, TIFF, BMP, TGA, WebP, ... through Pillow; EXR)"),
+    ("checker of one colour", ["render", "bad_checker.toml"],
+     "bad_checker.toml: materials.tiles.kd_texture.checker: expected two colours [[r, g, b], [r, g, b]], "
+     "got [[1, 1, 1]]"),
+    ("smooth not a mode", ["render", "bad_smooth.toml"],
+     "bad_smooth.toml: objects[0].smooth: expected true, false, \"auto\" or a crease angle in degrees, got 'yes'"),
+    ("up not an axis", ["render", "bad_up.toml"],
+     "bad_up.toml: objects[0].up: expected one of 'x', 'y', 'z', '-x', '-y', '-z', got 'w'"),
     # Mesh files named by a scene.
     ("mesh file missing", ["render", "missing_mesh.toml"],
      "missing_mesh.toml: objects[0].mesh: meshes/nothere.obj: mesh file not found"),

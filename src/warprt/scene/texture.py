@@ -111,8 +111,11 @@ def _decode(data: bytes, srgb: bool | None, name: str, field) -> np.ndarray:
         try:
             im = Image.open(io.BytesIO(data))
             im.load()
-        except (UnidentifiedImageError, OSError, ValueError) as e:
-            raise SceneError(name, field, f"cannot read image: {' '.join(str(e).split()) or 'unknown format'}") from None
+        except UnidentifiedImageError:
+            raise SceneError(name, field, "not an image file read here (PNG, JPEG, TIFF, BMP, TGA, WebP, ... "
+                                          "through Pillow; EXR)") from None
+        except (OSError, ValueError) as e:
+            raise SceneError(name, field, f"cannot read image: {' '.join(str(e).split()) or 'damaged file'}") from None
         if im.mode in ("I;16", "I;16B", "I;16L", "I;16N", "I"):
             # 16-bit grey (Pillow keeps 16 bits only for grey images); 'I' PNGs hold 16-bit values too
             rgb = np.repeat((np.asarray(im, np.float64) / 65535.0)[..., None], 3, -1)
