@@ -281,3 +281,28 @@ def test_warnings_are_one_line_each_and_silenced_by_q(tmp_path):
     assert len(warnings) == len(expected)
     quiet = run("render", "w.obj", "-o", "w.png", "-q", cwd=tmp_path)
     assert quiet.returncode == 0 and quiet.stderr == ""
+
+
+def test_usd_diagnostics_become_one_warning_line(tmp_path):
+    """pxr prints its C++ diagnostics straight to stderr, several lines each: they arrive as one
+    warprt warning, and the stage still loads."""
+    pytest.importorskip("pxr")
+    (tmp_path / "r.usda").write_text(textwrap.dedent("""\
+        #usda 1.0
+        def Xform "root" (
+            references = @./nothere.usda@
+        )
+        {
+            def Mesh "tri"
+            {
+                int[] faceVertexCounts = [3]
+                int[] faceVertexIndices = [0, 1, 2]
+                point3f[] points = [(0, 0, 0), (1, 0, 0), (0, 1, 0)]
+            }
+        }
+        """))
+    r = run("info", "r.usda", cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    lines = r.stderr.splitlines()
+    assert len(lines) == 1 and lines[0].startswith("warprt: warning: r.usda: In </root>: Could not open asset")
+    assert "0x" not in lines[0] and "stage.cpp" not in lines[0]

@@ -9,7 +9,6 @@ Conventions, shared with the kernels and the Mitsuba reference: uv as OBJ, USD a
 from __future__ import annotations
 
 import io
-import math
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -164,15 +163,3 @@ def _read_exr(data: bytes, name: str, field) -> np.ndarray:
 def affine(scale=(1.0, 1.0), offset=(0.0, 0.0)) -> tuple:
     """The uv map uv' = uv * scale + offset (per axis), as a 6-tuple."""
     return (float(scale[0]), 0.0, float(offset[0]), 0.0, float(scale[1]), float(offset[1]))
-
-
-def compose(outer: tuple, inner: tuple) -> tuple:
-    """The uv map ``outer`` after ``inner``."""
-    a = np.array([[*outer[:3]], [*outer[3:]], [0.0, 0.0, 1.0]])
-    b = np.array([[*inner[:3]], [*inner[3:]], [0.0, 0.0, 1.0]])
-    m = a @ b
-    return tuple(float(x) for x in (*m[0], *m[1]))
-
-
-def is_finite_map(t: tuple) -> bool:
-    return len(t) == 6 and all(isinstance(x, float) and math.isfinite(x) for x in t)

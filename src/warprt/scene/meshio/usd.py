@@ -55,13 +55,14 @@ def _usd_diagnostics(src: str):
 def _plain(message: str) -> str:
     """A pxr message without its C++ namespaces and quoting."""
     message = re.sub(r"pxrInternal_[A-Za-z0-9_]*::", "", message)
+    message = re.sub(r"\s*<0x[0-9a-fA-F]+>", "", message)  # object addresses: noise, and never the same twice
     return " ".join(message.split())
 
 
 def read_usd(path: Path) -> MeshFile:
     src = str(path)
     try:
-        from pxr import Usd, UsdGeom
+        from pxr import Usd
     except ImportError:
         raise SceneError(src, None, "reading USD needs the usd-core package (pip install usd-core)") from None
     with _usd_diagnostics(src):
