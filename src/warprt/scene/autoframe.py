@@ -29,10 +29,9 @@ def scene_for_mesh(path: Path, camera: dict | None = None, up: str | None = None
     axis = (up or mesh.up_axis or "y").lower()
     # The framing below is written for a y-up file: turned so that the camera's up is the file's up.
     to_up = up_rotation(axis).T
-    objects_materials = {"mesh": Material(kd=(0.75, 0.72, 0.68), ka=(0.75, 0.72, 0.68), ks=(0.25, 0.25, 0.25),
-                                          shininess=48.0)}
+    materials = {"mesh": Material(kd=(0.75, 0.72, 0.68), ka=(0.75, 0.72, 0.68), ks=(0.25, 0.25, 0.25), shininess=48.0)}
     # The file's own materials where it has them; "mesh" for faces without one.
-    objects = file_objects(Path(path).stem, mesh, objects_materials, "mesh", "auto")
+    objects = file_objects(Path(path).stem, mesh, materials, "mesh", "auto")
     vertices = np.concatenate([o.vertices for o in objects])
     warn_if_tiny(source, None, vertices)
     lo, hi = vertices.min(0), vertices.max(0)
@@ -48,7 +47,7 @@ def scene_for_mesh(path: Path, camera: dict | None = None, up: str | None = None
     # Primary rays only, unless the file has mirrors (MTL illum 3): then two reflection levels.
     mirrors = any(max(m.reflectivity) > 0 for _, m in mesh.materials)
     return Scene(camera, RenderSettings(ambient=(0.15, 0.15, 0.15), max_depth=3 if mirrors else 1), lights,
-                 objects_materials, objects, source)
+                 materials, objects, source)
 
 
 def _framed(given: dict, center, radius: float, to_up) -> dict:
