@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import SceneError
-from .meshio import file_objects, read_mesh_file, warn_if_tiny
+from .meshio import file_objects, read_mesh_file, warn_if_tiny, warn_if_unmapped
 from .model import Light, Material, RenderSettings, Scene
 from .reader import UP_AXES, read_camera, up_rotation
 
@@ -34,6 +34,7 @@ def scene_for_mesh(path: Path, camera: dict | None = None, up: str | None = None
     objects = file_objects(Path(path).stem, mesh, materials, "mesh", "auto")
     vertices = np.concatenate([o.vertices for o in objects])
     warn_if_tiny(source, None, vertices)
+    warn_if_unmapped(source, None, objects, materials)
     lo, hi = vertices.min(0), vertices.max(0)
     center = 0.5 * (lo + hi)
     radius = 0.5 * float(np.linalg.norm(hi - lo))

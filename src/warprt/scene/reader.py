@@ -9,10 +9,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..diagnostics import warn
 from ..errors import SceneError, show
 from . import shapes
-from .meshio import file_objects, read_mesh_file, warn_if_tiny
+from .meshio import file_objects, read_mesh_file, warn_if_tiny, warn_if_unmapped
 from .model import DEFAULT_MATERIAL, Camera, Light, Material, RenderSettings, Scene, SceneObject
 from .normals import resolve_normals
 from .texture import affine, checker_texture, image_texture
@@ -391,11 +390,8 @@ def read_object(source: str, base: Path, t: dict, i: int, materials: dict) -> li
                                smooth=shading.smooth, normals=shading.normals, uv=take(uv), colors=take(colors))]
     for o in objects:
         warn_if_tiny(source, f"objects[{i}]", o.vertices)
-        if materials[o.material].textures and o.uv is None:
-            warn(source, f"objects[{i}]", f"material '{o.material}' has a texture but '{o.name}' has no texture "
-                                          f"coordinates; it is sampled at uv (0, 0)"
-                                          + (f" (shapes with them: {', '.join(shapes.WITH_UV)}, triangles with uv)"
-                                             if mesh is None else ""))
+    warn_if_unmapped(source, f"objects[{i}]", objects, materials,
+                     f" (shapes with them: {', '.join(shapes.WITH_UV)}, triangles with uv)" if mesh is None else "")
     return objects
 
 

@@ -319,3 +319,11 @@ def warn_if_tiny(source: str, field: str | None, vertices: np.ndarray):
     if 0.0 < extent < TINY_EXTENT:
         warn(source, field, f"the mesh is only {extent:.3g} across; float32 ray tests miss triangles under about "
                             "3e-13, so it may not show (scale it up)")
+
+
+def warn_if_unmapped(source: str, field: str | None, objects, materials: dict, hint: str = ""):
+    """A textured material on an object without texture coordinates shows one texel: say so."""
+    for o in objects:
+        if materials[o.material].textures and o.uv is None:
+            warn(source, field, f"material '{o.material}' has a texture but '{o.name}' has no texture coordinates; "
+                                f"it is sampled at uv (0, 0){hint}")
