@@ -172,6 +172,24 @@ def test_up_z_frames_a_bare_stl_along_z(tmp_path):
     assert np.ptp(rows) > 1.5 * np.ptp(cols)  # upright (upside down): taller than wide
 
 
+def test_a_z_up_usd_stage_stands_upright_in_a_scene_unless_told(tmp_path):
+    """A stage authoring upAxis Z is turned z -> y by default; up = "y" keeps it as placed."""
+    pytest.importorskip("pxr")
+    from pxr import Usd, UsdGeom
+
+    stage = Usd.Stage.CreateNew(str(tmp_path / "z.usda"))
+    UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z)
+    m = UsdGeom.Mesh.Define(stage, "/post")
+    m.CreatePointsAttr([(0, 0, 0), (0.1, 0, 0), (0, 0, 2.0)])
+    m.CreateFaceVertexCountsAttr([3])
+    m.CreateFaceVertexIndicesAttr([0, 1, 2])
+    stage.GetRootLayer().Save()
+    (o,) = load(tmp_path, '[[objects]]\nmesh = "z.usda"\n').objects
+    np.testing.assert_allclose(np.ptp(o.vertices, axis=0), [0.1, 2.0, 0.0], atol=1e-12)
+    (o,) = load(tmp_path, '[[objects]]\nmesh = "z.usda"\nup = "y"\n').objects
+    np.testing.assert_allclose(np.ptp(o.vertices, axis=0), [0.1, 0.0, 2.0], atol=1e-12)
+
+
 def test_up_on_a_scene_file_is_refused(tmp_path):
     (tmp_path / "s.toml").write_text("")
     r = run("info", "s.toml", "--up", "z", cwd=tmp_path)

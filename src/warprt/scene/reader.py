@@ -325,8 +325,8 @@ def read_smooth(r: _Reader, key: str = "smooth", default=False):
     r.fail(key, f"expected true, false, \"auto\" or a crease angle in degrees, got {show(v)}")
 
 
-def read_up(r: _Reader, key: str = "up"):
-    v = r.table.get(key, "y")
+def read_up(r: _Reader, key: str = "up", default: str = "y"):
+    v = r.table.get(key, default)
     if not isinstance(v, str) or v.lower() not in UP_AXES:
         r.fail(key, f"expected one of {', '.join(repr(a) for a in UP_AXES)}, got {show(v)}")
     return v.lower()
@@ -361,7 +361,8 @@ def read_object(source: str, base: Path, t: dict, i: int, materials: dict) -> li
         r.fail("scale", f"expected non-zero scale factors, got {list(scale)}")
     rot = rotation(r.vector("rotate", (0.0, 0.0, 0.0)))
     translate = np.asarray(r.vector("translate", (0.0, 0.0, 0.0)))
-    up = up_rotation(read_up(r))
+    # By default the file's own up axis (a USD stage's upAxis, glTF's y), else y: as placed in the file.
+    up = up_rotation(read_up(r, default=(mesh.up_axis or "y") if mesh is not None else "y"))
     name, smooth = r.string("name", default_name), read_smooth(r)
     turn = None if up is _UP_TO_Y["y"] else up
 
