@@ -117,13 +117,16 @@ def corner_normals(vertices: np.ndarray, faces: np.ndarray, crease_degrees: floa
 def weld_corner_normals(faces: np.ndarray, normals: np.ndarray):
     """Per-corner normals (M, 3, 3) to per-vertex ones: a vertex whose corners carry different normals
     is split. Returns (keep: which old vertex each new one is, new faces, normals per new vertex)."""
-    faces = np.asarray(faces, np.int64)
-    n = np.ascontiguousarray(normals, np.float64).reshape(-1, 3) + 0.0
-    _, normal_id = np.unique(n.view(np.dtype((np.void, 24))).ravel(), return_inverse=True)
-    keys = np.stack([faces.reshape(-1), normal_id.reshape(-1)], 1)
-    keys = np.ascontiguousarray(keys).view(np.dtype((np.void, 16))).ravel()
-    _, first, inverse = np.unique(keys, return_index=True, return_inverse=True)
-    return faces.reshape(-1)[first], inverse.reshape(-1, 3).astype(np.int64), n[first]
+    vertex = np.asarray(faces, np.int64).reshape(-1)
+    n = np.ascontiguousarray(normals, np.float64).reshape(-1, 3) + 0.0  # -0.0 == 0.0
+    # Sorted by vertex, then normal (exact comparisons: a lexicographic sort, not a hash).
+    order = np.lexsort((n[:, 2], n[:, 1], n[:, 0], vertex))
+    sv, sn = vertex[order], n[order]
+    first_of_run = np.r_[True, (sv[1:] != sv[:-1]) | (sn[1:] != sn[:-1]).any(1)] if len(order) else np.zeros(0, bool)
+    inverse = np.empty(len(order), np.int64)
+    inverse[order] = np.cumsum(first_of_run) - 1
+    first = order[first_of_run]
+    return vertex[first], inverse.reshape(-1, 3), n[first]
 
 
 @dataclass

@@ -140,14 +140,13 @@ def read_obj(path: Path) -> MeshFile:
                 if name not in by_name:
                     by_name[name] = len(materials)
                     materials.append((name, m))
-    names = _at_lines(usemtl, tri_line, None)
-    missing = sorted({n for n in set(names) if n is not None and n not in by_name})
+    missing = sorted({n for n in usemtl[1] if n not in by_name})
     if missing:
         warn(src, "usemtl", f"no material named {', '.join(repr(n) for n in missing[:3])}"
                             f"{f' and {len(missing) - 3} more' if len(missing) > 3 else ''} in the MTL files; "
                             "those faces get the default material")
-    face_material = np.array([by_name.get(n, -1) if n is not None else -1 for n in names], np.int64)
-    smoothing = np.asarray(_at_lines(groups, tri_line, 0), np.int64) if groups else None
+    face_material = _at_lines((usemtl[0], [by_name.get(n, -1) for n in usemtl[1]]), tri_line, -1)
+    smoothing = _at_lines(groups, tri_line, 0) if groups else None
 
     cv, ct, cn = tv[corner], tt[corner], tn[corner]
     keys, has_uv, has_normals = [cv], len(vt) > 0 and (ct >= 0).any(), len(vn) > 0 and (cn >= 0).all()
@@ -239,13 +238,13 @@ def _statements(src: str, lines: list[str], other: np.ndarray):
     return mtllibs, usemtl, (groups if groups[0] else None)
 
 
-def _at_lines(state, tri_line: np.ndarray, default) -> list:
-    """The value of a state statement (usemtl, s) in force at each triangle's line."""
-    if state is None or not state[0]:
-        return [default] * len(tri_line)
-    j = np.searchsorted(np.asarray(state[0]), tri_line, side="right") - 1
-    values = state[1]
-    return [values[k] if k >= 0 else default for k in j.tolist()]
+def _at_lines(state, tri_line: np.ndarray, default: int) -> np.ndarray:
+    """The integer value of a state statement (usemtl's material, s) in force at each triangle's line."""
+    lines, values = state
+    if not lines:
+        return np.full(len(tri_line), default, np.int64)
+    j = np.searchsorted(np.asarray(lines), tri_line, side="right") - 1
+    return np.asarray(list(values) + [default], np.int64)[np.where(j >= 0, j, len(values))]
 
 
 def _mtl_files(folder: Path, spec: str) -> list[Path]:
