@@ -4,6 +4,8 @@ film, Embree intersection and ray spawning, sharing no tracing code with src/war
 Model (the seed's Figure 3, as warprt defines it), per colour channel, two-sided surfaces:
     I = C_amb ka + sum_l vis_l C_l (kd max(0, n.L) + ks max(0, r.v)^n) + k_r I(reflected),
 vis_l = 0 when n.L <= 0 or the shadow ray is blocked; a miss returns the background; max_depth ray levels.
+ka, kd and ks at a hit are the material's times its textures (Mitsuba's bilinear, repeating bitmap
+or its checkerboard, at the mesh's own uv) and, for ka and kd, the mesh's vertex colour attribute.
 """
 
 from __future__ import annotations
@@ -20,6 +22,7 @@ from warprt.scene import ObjectCache
 # Dr.Jit 1.5 needs an LLVM it can drive; Debian 12's libLLVM 15 crashes it ("Cannot select: fminimum").
 LLVM_PATH = "/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1"
 INTEGRATOR = "warprt_whitted"
+ATTRIBUTES = "warprt_attributes"
 
 _modules = None  # (mi, dr) once imported and the variant is set
 # Module globals rather than closure variables: @dr.syntax recompiles sample() against the
@@ -71,13 +74,16 @@ class Switches:
     max_depth: int = 3  # ray levels; 1 = primary rays only
     spp: int = 1  # k*k stratified samples at the stratum centres
     smooth: bool = True  # interpolated vertex normals on objects marked smooth
+    texture: bool = True  # materials' textures multiply their colours
+    vertex_color: bool = True  # meshes' vertex colours multiply ka and kd
 
     @classmethod
     def for_effects(cls, fx, settings) -> "Switches":
         """The switches that match warprt rendering ``settings`` (a RenderSettings) with EffectSet ``fx``."""
         return cls(ambient=fx.ambient, diffuse=fx.diffuse, specular=fx.specular, shadows=fx.shadows,
                    max_depth=settings.max_depth if fx.reflection else 1,
-                   spp=settings.spp if fx.supersampling else 1, smooth=fx.smooth)
+                   spp=settings.spp if fx.supersampling else 1, smooth=fx.smooth, texture=fx.texture,
+                   vertex_color=fx.vertex_color)
 
 
 def _register_integrator(mi, dr):
@@ -90,17 +96,29 @@ def _register_integrator(mi, dr):
             self.tables = None  # _Tables of the scene being rendered, set by MitsubaScene
 
         def material(self, si, active):
-            """(ka, kd, ks, k_r, shininess) of the hit shape, from tables keyed by the shape."""
-            t = self.tables
+            """(ka, kd, ks, k_r, shininess) at the hit: the shape's material, from tables keyed by the
+            shape, times its textures and vertex colours (the shape's Attributes BSDF) where on."""
+            t, s = self.tables, self.switches
             if t.jit:
                 # A ShapePtr in a JIT variant is the shape's index in Dr.Jit's instance registry.
                 idx = dr.reinterpret_array(mi.UInt32, si.shape)
-                return (dr.gather(mi.Color3f, t.ka, idx, active), dr.gather(mi.Color3f, t.kd, idx, active),
-                        dr.gather(mi.Color3f, t.ks, idx, active), dr.gather(mi.Color3f, t.kr, idx, active),
-                        dr.gather(mi.Float, t.shininess, idx, active))
-            if not active or si.shape is None:
+                ka, kd, ks, kr, shininess = (
+                    dr.gather(mi.Color3f, t.ka, idx, active), dr.gather(mi.Color3f, t.kd, idx, active),
+                    dr.gather(mi.Color3f, t.ks, idx, active), dr.gather(mi.Color3f, t.kr, idx, active),
+                    dr.gather(mi.Float, t.shininess, idx, active))
+            elif not active or si.shape is None:
                 return t.zero_material
-            return t.by_id[si.shape.id()]
+            else:
+                ka, kd, ks, kr, shininess = t.by_id[si.shape.id()]
+            if t.attributes and s.texture:
+                bsdf = si.bsdf()
+                ka = ka * bsdf.eval_attribute_3("ka", si, active)
+                kd = kd * bsdf.eval_attribute_3("kd", si, active)
+                ks = ks * bsdf.eval_attribute_3("ks", si, active)
+            if t.attributes and s.vertex_color:
+                color = si.bsdf().eval_attribute_3("vertex_color", si, active)
+                ka, kd = ka * color, kd * color
+            return ka, kd, ks, kr, shininess
 
         def local(self, scene, si, mat, n, v, active):
             """C_amb ka + sum_l vis_l C_l (kd max(0, n.L) + ks max(0, r.v)^n) at si, normal n, towards v."""
@@ -137,9 +155,12 @@ def _register_integrator(mi, dr):
             weight = mi.Color3f(1.0)
             color = mi.Color3f(0.0)
             depth = mi.UInt32(0)
+            # Without the UV flag, si.uv holds the triangle's barycentrics, not the mesh's texture coordinates.
+            flags = mi.RayFlags.Minimal | mi.RayFlags.ShadingFrame
+            if t.attributes:
+                flags = flags | mi.RayFlags.UV
             while active:
-                si = scene.ray_intersect(ray, ray_flags=mi.RayFlags.Minimal | mi.RayFlags.ShadingFrame,
-                                         coherent=depth == 0, active=active)
+                si = scene.ray_intersect(ray, ray_flags=flags, coherent=depth == 0, active=active)
                 hit = si.is_valid()
                 color = dr.select(active & ~hit, color + weight * t.background, color)
                 active &= hit
@@ -164,12 +185,65 @@ def _register_integrator(mi, dr):
 
     mi.register_integrator(INTEGRATOR, lambda props: WhittedIntegrator(props))
 
+    class Attributes(mi.BSDF):
+        """Not a scattering model: what one shape's material and mesh add to its Phong colours, read
+        at a hit by eval_attribute_3: "ka", "kd", "ks" their texture's value (1 where untextured),
+        "vertex_color" the mesh's colour attribute (1 where it has none)."""
+
+        def __init__(self, props):
+            mi.BSDF.__init__(self, props)
+            self.textures = {k: props.get(k) for k in ("ka", "kd", "ks")}
+            self.colored = bool(props.get("colored", False))
+            self.m_flags = mi.BSDFFlags.DiffuseReflection | mi.BSDFFlags.FrontSide
+
+        def eval_attribute_3(self, name, si, active=True):
+            if name == "vertex_color":
+                return si.shape.eval_attribute_3("vertex_color", si, active) if self.colored else mi.Color3f(1.0)
+            return self.textures[name].eval(si, active)
+
+        def sample(self, ctx, si, sample1, sample2, active=True):  # the integrator never scatters
+            return mi.BSDFSample3f(), mi.Color3f(0.0)
+
+        def eval(self, ctx, si, wo, active=True):
+            return mi.Color3f(0.0)
+
+        def pdf(self, ctx, si, wo, active=True):
+            return mi.Float(0.0)
+
+        def eval_pdf(self, ctx, si, wo, active=True):
+            return mi.Color3f(0.0), mi.Float(0.0)
+
+        def traverse(self, callback):
+            pass
+
+        def to_string(self):
+            return "Attributes[]"
+
+    mi.register_bsdf(ATTRIBUTES, lambda props: Attributes(props))
+
+
+def _texture(mi, t):
+    """A warprt Texture as Mitsuba's: a bilinear, repeating bitmap of the same linear texels (row 0 at
+    v = 0, as Mitsuba's bitmaps are), or its checkerboard, whose 2 x 2 checks per unit uv become one
+    per unit by halving the uv map; constant 1 where there is none."""
+    if t is None:
+        return mi.load_dict({"type": "rgb", "value": [1.0, 1.0, 1.0]})
+    a = t.uv_transform
+    to_uv = mi.ScalarTransform4f([[a[0], a[1], 0.0, a[2]], [a[3], a[4], 0.0, a[5]], [0, 0, 1, 0], [0, 0, 0, 1]])
+    if t.checker is not None:
+        return mi.load_dict({"type": "checkerboard", "to_uv": mi.ScalarTransform4f().scale([0.5, 0.5, 1.0]) @ to_uv,
+                             "color0": {"type": "rgb", "value": list(map(float, t.checker[0]))},
+                             "color1": {"type": "rgb", "value": list(map(float, t.checker[1]))}})
+    return mi.load_dict({"type": "bitmap", "bitmap": mi.Bitmap(np.array(t.image, np.float32)),  # a writable copy
+                         "filter_type": "bilinear", "wrap_mode": "repeat", "raw": True, "to_uv": to_uv})
+
 
 class _Tables:
     """Per-scene constants the integrator reads: materials keyed by shape, lights, C_amb, background."""
 
-    def __init__(self, mi, dr, mi_scene, scene, object_of_shape: dict):
+    def __init__(self, mi, dr, mi_scene, scene, object_of_shape: dict, attributes: bool):
         self.jit = dr.is_jit_v(mi.Float)
+        self.attributes = attributes  # whether the shapes carry Attributes BSDFs (textures, vertex colours)
         lights = [(np.asarray(l.position, np.float64), np.asarray(l.color, np.float64)) for l in scene.lights]
         mats = {sid: scene.materials[scene.objects[i].material] for sid, i in object_of_shape.items()}
         if self.jit:
@@ -204,19 +278,29 @@ class _Tables:
             self.zero_material = (col((0, 0, 0)),) * 4 + (mi.Float(0.0),)
 
 
-def _mesh(mi, name: str, vertices: np.ndarray, faces: np.ndarray, normals: np.ndarray | None):
-    """A mi.Mesh from world-space float64 arrays (cast to Mitsuba's float32 storage)."""
-    mesh = mi.Mesh(name, len(vertices), len(faces), has_vertex_normals=normals is not None)
+def _mesh(mi, name: str, vertices: np.ndarray, faces: np.ndarray, normals: np.ndarray | None,
+          uv: np.ndarray | None = None, colors: np.ndarray | None = None, bsdf=None):
+    """A mi.Mesh from world-space float64 arrays (cast to Mitsuba's float32 storage), with its texture
+    coordinates and its vertex colours as the attribute "vertex_color"."""
+    props = mi.Properties()
+    if bsdf is not None:
+        props["bsdf"] = bsdf
+    mesh = mi.Mesh(name, len(vertices), len(faces), props=props, has_vertex_normals=normals is not None,
+                   has_vertex_texcoords=uv is not None)
     params = mi.traverse(mesh)
     # The mesh's own buffer types (JIT arrays, or dynamic arrays in the scalar variants).
     buffer = lambda key, a, dtype: type(params[key])(np.ascontiguousarray(a, dtype).ravel())
     params["vertex_positions"] = buffer("vertex_positions", vertices, np.float32)
     params["faces"] = buffer("faces", faces, np.uint32)
+    if uv is not None:
+        params["vertex_texcoords"] = buffer("vertex_texcoords", uv, np.float32)
     params.update()
     if normals is not None:
         # Set after the positions: an update that names vertex_positions recomputes the normals.
         params["vertex_normals"] = buffer("vertex_normals", normals, np.float32)
         params.update()
+    if colors is not None:
+        mesh.add_attribute("vertex_color", 3, type(params["vertex_positions"])(np.ascontiguousarray(colors, np.float32).ravel()))
     return mesh
 
 
@@ -231,15 +315,32 @@ class MitsubaScene:
         mi, dr = self.mi, self.dr = mitsuba()
         self.scene = scene
         self.smooth = smooth
-        shapes, object_of_shape = {}, {}
+        # Textures and vertex colours ride on a per-shape BSDF, only where the scene has any.
+        attributes = any(m.textures for m in scene.materials.values()) or any(
+            getattr(o, "colors", None) is not None for o in scene.objects)
+        shapes, object_of_shape, textures = {}, {}, {}
         for i, obj in enumerate(scene.objects):
             key = f"object_{i:05d}"
-            normals = vertex_normals(obj.vertices, obj.faces) if (smooth and obj.smooth) else None
-            shapes[key] = _mesh(mi, key, obj.vertices, obj.faces, normals)
+            normals = None
+            if smooth and obj.smooth:  # the scene's own normals (the file's, crease-split) where it has them
+                normals = obj.normals if getattr(obj, "normals", None) is not None else vertex_normals(obj.vertices, obj.faces)
+            uv, colors, bsdf = getattr(obj, "uv", None), getattr(obj, "colors", None), None
+            if attributes:
+                m = scene.materials[obj.material]
+                if m.textures and uv is None:
+                    uv = np.zeros((len(obj.vertices), 2))  # as warprt samples a mesh without uv: at (0, 0)
+                maps = {}
+                for k in ("ka", "kd", "ks"):
+                    t = getattr(m, f"{k}_texture")
+                    if id(t) not in textures:  # one Mitsuba texture per warprt one
+                        textures[id(t)] = _texture(mi, t)
+                    maps[k] = textures[id(t)]
+                bsdf = mi.load_dict({"type": ATTRIBUTES, "colored": colors is not None, **maps})
+            shapes[key] = _mesh(mi, key, obj.vertices, obj.faces, normals, uv, colors, bsdf)
             object_of_shape[key] = i
         self.mi_scene = mi.load_dict({"type": "scene", **shapes})
         self.integrator = mi.load_dict({"type": INTEGRATOR})
-        self.integrator.tables = _Tables(mi, dr, self.mi_scene, scene, object_of_shape)
+        self.integrator.tables = _Tables(mi, dr, self.mi_scene, scene, object_of_shape, attributes)
         self._sensors = {}
         lo, hi = scene.bounds()
         self._extent = float(max(np.abs(hi - lo).max(), 1e-6))

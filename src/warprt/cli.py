@@ -15,13 +15,16 @@ import tomllib
 from pathlib import Path
 
 from . import __version__
+from .diagnostics import set_quiet
 from .errors import SceneError
 
 EXAMPLES = """examples:
   warprt render                               the built-in default scene -> warprt.png
   warprt render scenes/cornell.toml -o c.png  a scene file
-  warprt render bunny.obj -o bunny.png        a mesh file, framed automatically, with its own materials:
-                                              .obj (+.mtl) .ply .stl .off .glb .gltf .usd .usda .usdc .usdz
+  warprt render bunny.obj -o bunny.png        a mesh file, framed automatically, with its own materials,
+                                              textures and colours: .obj (+.mtl) .ply .stl .off .glb .gltf
+                                              .usd .usda .usdc .usdz
+  warprt render part.stl --up z               a z-up mesh (most CAD and robotics files); --up=-y for -y
   warprt render s.toml -o s.exr --stats-file s.json -q
                                               linear float EXR (or .npy), statistics as JSON, nothing on stderr
   warprt render s.toml --spp 16 --max-depth 5 --width 1024 --height 768
@@ -67,6 +70,8 @@ def _add_scene_options(p: argparse.ArgumentParser):
     p.add_argument("--spp", type=int, metavar="N", help="samples per pixel (a square: 1, 4, 9, 16, ...)")
     p.add_argument("--max-depth", type=int, metavar="N", help="ray levels: 1 = primary rays only, 2 = one reflection, ...")
     p.add_argument("--no-shadows", action="store_true", help="switch shadow rays off")
+    p.add_argument("--up", metavar="AXIS", help="a mesh file's up axis: x, y, z, -x, -y or -z (write --up=-z); "
+                                               "default: what the file says (USD, glTF), else y")
 
 
 def _load(args):
@@ -81,7 +86,7 @@ def _load(args):
             overrides[key] = check_setting("command line", "--" + flag.replace("_", "-"), key, v)
     if args.no_shadows:
         overrides["render.shadows"] = False
-    return load_scene(args.scene, overrides)
+    return load_scene(args.scene, overrides, up=args.up)
 
 
 def _check_device(device: str):
@@ -107,6 +112,8 @@ def cmd_render(args) -> int:
         check_text_path(args.stats_file, "--stats-file")
     if args.threads is not None and args.threads < 1:
         raise SceneError("command line", "--threads", f"expected an integer >= 1, got {args.threads}")
+    if args.quiet:
+        set_quiet()
     scene = _load(args)
     _check_device(args.device)
     effects = args.effects.split(",") if args.effects else None
@@ -143,10 +150,15 @@ def cmd_info(args) -> int:
     print(f"camera     eye {list(cam.eye)} center {list(cam.center)} up {list(cam.up)} fovy {cam.fovy:g} near {cam.near:g}")
     print(f"objects    {len(scene.objects)}")
     for o in scene.objects:
-        print(f"  {o.name:<16} {len(o.faces):>10,} triangles  material {o.material}{'  smooth' if o.smooth else ''}")
+        extras = [w for w, on in (("smooth", o.smooth),
+                                  ("uv", o.uv is not None), ("vertex colours", o.colors is not None)) if on]
+        print(f"  {o.name:<16} {len(o.faces):>10,} triangles  material {o.material}" + "".join(f"  {w}" for w in extras))
     print(f"triangles  {scene.triangle_count:,}")
     used = {o.material for o in scene.objects}
     print(f"materials  {', '.join(m for m in scene.materials if m in used)}")
+    for name in (m for m in scene.materials if m in used):
+        for key, t in scene.materials[name].textures.items():
+            print(f"  {name:<16} {key} x {t.describe()}")
     print(f"lights     {len(scene.lights)}")
     print(f"bounds     {[round(float(x), 6) for x in lo]} .. {[round(float(x), 6) for x in hi]}")
     print(f"effects    {scene_effects(scene)}")
@@ -214,7 +226,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("-o", "--output", default="warprt.png", help="output image: .png (sRGB 8-bit), .exr or .npy (linear float)")
     p.add_argument("--threads", type=int, metavar="N", help="worker threads (default: all cores)")
     p.add_argument("--device", default="cpu", choices=["cpu", "cuda"], help="Warp device (default: cpu)")
-    p.add_argument("--effects", help="comma-separated effects to keep: ambient,diffuse,specular,shadows,reflection,supersampling,smooth")
+    p.add_argument("--effects", help="comma-separated effects to keep: ambient,diffuse,specular,shadows,reflection,supersampling,smooth,"
+                        "texture,vertex_color")
     p.add_argument("--algorithm", default="raytrace", choices=["raytrace", "zbuffer"],
                    help="raytrace (default), or zbuffer: rasterized, same local shading, no shadows or reflections")
     p.add_argument("--primary", default="auto", choices=["auto", "raytrace", "zbuffer"],
@@ -236,7 +249,8 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("compare", help="render with warprt and with Mitsuba 3 (the reference): SSIM, PSNR, side-by-side image")
     _add_scene_options(p)
     p.add_argument("-o", "--output", default="compare.png", help="side-by-side image: warprt | Mitsuba | |difference| x 10")
-    p.add_argument("--effects", help="comma-separated effects to keep, on both sides: ambient,diffuse,specular,shadows,reflection,supersampling,smooth")
+    p.add_argument("--effects", help="comma-separated effects to keep, on both sides: ambient,diffuse,specular,shadows,reflection,"
+                        "supersampling,smooth,texture,vertex_color")
     p.add_argument("--threads", type=int, metavar="N", help="warprt worker threads (default: all cores)")
     p.add_argument("--debug", action="store_true", help="show tracebacks")
     p.set_defaults(func=cmd_compare)

@@ -1,5 +1,6 @@
-"""The accuracy check can fail: a warprt image with a real error (its shadows left out, or its
-mirror weights wrong) is rejected, and the message names a folder with both images and the difference."""
+"""The accuracy check can fail: a warprt image with a real error (its shadows left out, a highlight too
+wide, a texture upside down, vertex colours left out) is rejected, and the message names a folder with
+both images and the difference."""
 
 import re
 from pathlib import Path
@@ -65,3 +66,28 @@ def test_a_small_error_within_the_thresholds_is_caught_pixel_by_pixel(tmp_path, 
     off = float(re.search(r"pixels off by > 2/255: ([0-9.]+)%", message).group(1)) / 100
     assert ssim >= harness.SSIM_MIN and psnr >= harness.PSNR_MIN and off <= harness.OFF_MAX
     assert "float64 with Mitsuba's offsets" in message
+
+
+def test_a_texture_read_upside_down_is_caught(tmp_path, monkeypatch):
+    """warprt with the globe's image flipped (v read from the wrong edge, the classic uv slip) against
+    Mitsuba and the float64 oracle reading it the right way up."""
+    from dataclasses import replace
+
+    from warprt.scene import Texture
+
+    def flipped(scene):
+        mats = dict(scene.materials)
+        t = mats["globe"].kd_texture
+        mats["globe"] = replace(mats["globe"], kd_texture=Texture(np.ascontiguousarray(t.image[::-1]), None,
+                                                                  t.uv_transform, t.source))
+        return replace(scene, materials=mats)
+
+    broken_render(monkeypatch, scene=flipped)
+    message = failure(tmp_path, monkeypatch, "texture_flipped", harness.small(harness.ROOT / "scenes" / "textured.toml"))
+    assert "(allowed 0.20%)" in message or "float64 with Mitsuba's offsets" in message
+
+
+def test_vertex_colours_left_out_are_caught(tmp_path, monkeypatch):
+    broken_render(monkeypatch, disable=["vertex_color"])
+    message = failure(tmp_path, monkeypatch, "no_vertex_colors", harness.small(harness.ROOT / "scenes" / "vertex_colors.toml"))
+    assert "(allowed 0.20%)" in message

@@ -78,6 +78,19 @@ CASES = [
      f"unknown_shape.toml: objects[0].shape: unknown shape 'sphre' (did you mean 'sphere'?); expected one of: {SHAPES}"),
     ("face index out of range", ["render", "faces_out_of_range.toml"],
      "faces_out_of_range.toml: objects[0].faces: vertex index out of range [0, 2]"),
+    # Textures and shading.
+    ("texture file missing", ["render", "missing_texture.toml"],
+     "missing_texture.toml: materials.wood.kd_texture: textures/nothere.png: texture file not found"),
+    ("texture not an image", ["render", "texture_not_image.toml"],
+     "texture_not_image.toml: materials.tiles.kd_texture.image: notes.txt: not an image file read here (PNG, "
+     "JPEG, TIFF, BMP, TGA, WebP, ... through Pillow; EXR)"),
+    ("checker of one colour", ["render", "bad_checker.toml"],
+     "bad_checker.toml: materials.tiles.kd_texture.checker: expected two colours [[r, g, b], [r, g, b]], "
+     "got [[1, 1, 1]]"),
+    ("smooth not a mode", ["render", "bad_smooth.toml"],
+     "bad_smooth.toml: objects[0].smooth: expected true, false, \"auto\" or a crease angle in degrees, got 'yes'"),
+    ("up not an axis", ["render", "bad_up.toml"],
+     "bad_up.toml: objects[0].up: expected one of 'x', 'y', 'z', '-x', '-y', '-z', got 'w'"),
     # Mesh files named by a scene.
     ("mesh file missing", ["render", "missing_mesh.toml"],
      "missing_mesh.toml: objects[0].mesh: meshes/nothere.obj: mesh file not found"),
@@ -101,7 +114,7 @@ CASES = [
     ("unknown mesh format", ["render", "unknown_mesh_format.toml"],
      f"unknown_mesh_format.toml: objects[0].mesh: meshes/model.fbx: unknown mesh format '.fbx'; expected one of: {EXTS}"),
     ("negative Kd in the MTL", ["render", "bad_mtl.toml"],
-     "bad_mtl.toml: objects[0].mesh: meshes/bad_mtl.obj: newmtl paint: Kd: expected 3 non-negative numbers, "
+     "bad_mtl.toml: objects[0].mesh: meshes/bad_mtl.mtl: newmtl paint: Kd: expected 3 non-negative numbers, "
      "got [-1.0, 0.5, 0.5]"),
     # A bare file on the command line.
     ("bare mesh not a PLY", ["render", "meshes/junk.ply"], "meshes/junk.ply: not a PLY file (it does not start with 'ply')"),
@@ -136,7 +149,7 @@ CASES = [
      "ok.toml: lights[7].color: there is no lights[7]"),
     ("--effects unknown", ["render", "ok.toml", "--effects", "glow"],
      "command line: --effects: unknown effect 'glow'; expected some of: ambient, diffuse, specular, shadows, "
-     "reflection, supersampling, smooth"),
+     "reflection, supersampling, smooth, texture, vertex_color"),
     # Output paths: checked before anything renders.
     ("output .jpg", ["render", "ok.toml", "-o", "out.jpg"],
      "out.jpg: --output: unknown image extension '.jpg'; expected one of: .png, .npy, .exr"),

@@ -41,12 +41,19 @@ def test_each_effect_appears_only_where_the_scene_calls_for_it():
     assert not fx_of().reflection                                           # k_r = 0 everywhere
     assert fx_of(spp=4).supersampling and not fx_of(spp=1).supersampling
     assert fx_of(objects=[{**WALL, "smooth": True}]).smooth and not fx_of().smooth
+    checker = {"kd_texture": {"checker": [[1, 1, 1], [0, 0, 0]]}}
+    assert fx_of(checker).texture and not fx_of().texture
+    assert fx_of({"kd": [0.5] * 3, "ks_texture": {"checker": [[1, 1, 1], [0, 0, 0]]}}).texture  # any textured colour
+    colored = {"shape": "triangles", "vertices": [[0, 0, 0], [1, 0, 0], [0, 1, 0]], "faces": [[0, 1, 2]],
+               "colors": [[1, 0, 0], [0, 1, 0], [0, 0, 1]], "material": "m"}
+    assert fx_of(objects=[WALL, colored]).vertex_color and not fx_of().vertex_color
 
 
 def test_unused_materials_do_not_switch_effects_on():
-    scene = make_scene([WALL], {"m": PLAIN, "mirror": {"reflectivity": 1.0, "ks": [1.0] * 3}}, [LIGHT], max_depth=4)
+    scene = make_scene([WALL], {"m": PLAIN, "mirror": {"reflectivity": 1.0, "ks": [1.0] * 3},
+                                "tiles": {"kd_texture": {"checker": [[1, 1, 1], [0, 0, 0]]}}}, [LIGHT], max_depth=4)
     fx = scene_effects(scene)
-    assert not fx.reflection and not fx.specular
+    assert not fx.reflection and not fx.specular and not fx.texture
 
 
 def test_users_can_switch_effects_off_but_never_on():
@@ -93,19 +100,21 @@ def _generated_source(fx) -> str:
 
 # A line of each effect's Python source, as Warp's code generator quotes it in the C++ it compiles.
 MARKERS = {
-    "ambient": "out.color = wp.cw_mul(s.ambient, s.ka[m])",
-    "diffuse": "phong_diffuse(s.kd[m], n_dot_l)",
-    "specular": "phong_specular(s.ks[m], s.shininess[m], n, L, v, n_dot_l)",
+    "ambient": "out.color = wp.cw_mul(s.ambient, k.ka)",
+    "diffuse": "phong_diffuse(k.kd, n_dot_l)",
+    "specular": "phong_specular(k.ks, s.shininess[m], n, L, v, n_dot_l)",
     "shadows": "wp::mesh_query_ray_anyhit(",
     "reflection": "kr = s.kr[hit.material]",
     "supersampling": "sx = (float(sample % k) + 0.5) / float(k)",
     "smooth": "ns = s.normals[i0] * u",
+    "texture": "c.kd = wp.cw_mul(c.kd, texel(s.textures, s.kd_map[m], hit.uv))",
+    "vertex_color": "out.color = s.colors[j0] * u",
 }
 
 
 @pytest.mark.parametrize("off", EFFECTS)
 def test_disabled_effect_code_is_absent_from_the_compiled_variant(off):
-    full = EffectSet(supersampling=True, smooth=True)
+    full = EffectSet(supersampling=True, smooth=True, texture=True, vertex_color=True)
     assert all(m in _generated_source(full) for m in MARKERS.values())
     source = _generated_source(EffectSet(**{**{e: getattr(full, e) for e in EFFECTS}, off: False}))
     assert MARKERS[off] not in source

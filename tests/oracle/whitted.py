@@ -2,7 +2,9 @@
 per-pixel tracer with decision margins (the accuracy suite's tie-breaker), and a one-level one.
 
 Whitted tests every triangle with Moller-Trumbore in float64 (no BVH, no float32), so where it
-agrees with a renderer the renderer's decisions are the exact ones for the offsets it chose.
+agrees with a renderer the renderer's decisions are the exact ones for the offsets it chose. Textures are
+sampled in float64 (bilinear, repeat, written here from the convention, not from either renderer),
+uvs and vertex colours interpolated with its own barycentrics.
 """
 
 from __future__ import annotations
@@ -40,18 +42,25 @@ class Whitted:
     def __init__(self, scene, switches):
         self.scene, self.sw = scene, switches
         names = list(scene.materials)
-        verts, faces, mat, smooth, normals, base = [], [], [], [], [], 0
+        verts, faces, mat, smooth, normals, uvs, colors, base = [], [], [], [], [], [], [], 0
         for obj in scene.objects:
             verts.append(obj.vertices)
             faces.append(obj.faces + base)
             mat += [names.index(obj.material)] * len(obj.faces)
             use_smooth = obj.smooth and switches.smooth
             smooth += [use_smooth] * len(obj.faces)
-            normals.append(vertex_normals(obj.vertices, obj.faces) if use_smooth else np.zeros_like(obj.vertices))
+            given = getattr(obj, "normals", None)  # the file's own, or split at a crease, as the scene gives them
+            normals.append((given if given is not None else vertex_normals(obj.vertices, obj.faces)) if use_smooth
+                           else np.zeros_like(obj.vertices))
+            uvs.append(obj.uv if getattr(obj, "uv", None) is not None else np.zeros((len(obj.vertices), 2)))
+            colors.append(obj.colors if getattr(obj, "colors", None) is not None and switches.vertex_color
+                          else np.ones((len(obj.vertices), 3)))
             base += len(obj.vertices)
         self.V = np.concatenate(verts)
         self.F = np.concatenate(faces)
         self.N = np.concatenate(normals)
+        self.UV = np.concatenate(uvs).astype(np.float64)
+        self.C = np.concatenate(colors).astype(np.float64)
         self.mat = np.asarray(mat)
         self.smooth = np.asarray(smooth)
         self.p0, self.p1, self.p2 = (self.V[self.F[:, k]] for k in range(3))
@@ -131,6 +140,10 @@ class Whitted:
                 ns = sum(self.N[self.F[f, k]] * b[k] for k in range(3))
                 n = ns / np.linalg.norm(ns) * side
             mat = self.materials[self.mat[f]]
+            uv = sum(self.UV[self.F[f, k]] * b[k] for k in range(3))
+            vertex_color = sum(self.C[self.F[f, k]] * b[k] for k in range(3))
+            (ka, kd, ks), m = self._coefficients(mat, uv, vertex_color)
+            margin = min(margin, m)
             visible = None
             if sw.diffuse or sw.specular:
                 visible = np.zeros(len(scene.lights), bool)
@@ -148,7 +161,8 @@ class Whitted:
                         blocker, m = self._query(so, to_light / dist, tmax)
                         margin = min(margin, m)
                         visible[i] = blocker is None
-            local = phong(p, n, -d, scene.lights, mat, scene.render.ambient, visible, terms)
+            local = phong(p, n, -d, scene.lights, {"ka": ka, "kd": kd, "ks": ks, "shininess": mat.shininess},
+                          scene.render.ambient, visible, terms)
             color = color + weight * local
             kr = np.asarray(mat.reflectivity, np.float64)
             if depth + 1 >= sw.max_depth or kr.max() <= 0.0:
@@ -158,6 +172,19 @@ class Whitted:
             d /= np.linalg.norm(d)
             o = self._offset(offset, p, ng, d)
         return color, margin
+
+    def _coefficients(self, mat, uv, color):
+        """(ka, kd, ks) at a hit of texture coordinates uv and vertex colour color, and the decision
+        margin of any checker there (how far the mapped uv is from a check's edge, relative to it)."""
+        out, margin = [], math.inf
+        for key in ("ka", "kd", "ks"):
+            k = np.asarray(getattr(mat, key), np.float64)
+            t = getattr(mat, f"{key}_texture", None)
+            if t is not None and self.sw.texture:
+                value, m = texture_value(t, uv)
+                k, margin = k * value, min(margin, m)
+            out.append(k * color if key != "ks" else k)
+        return out, margin
 
     def pixel(self, x: int, row: int, offset="mitsuba") -> PixelTrace:
         """Pixel (x, row), row 0 at the top, averaged over k*k samples at the stratum centres, with
@@ -172,6 +199,27 @@ class Whitted:
                 total += c
                 margin = min(margin, m)
         return PixelTrace(total / (k * k), margin)
+
+
+def texture_value(t, uv) -> tuple[np.ndarray, float]:
+    """A warprt Texture at surface coordinates uv, in float64: the uv map, then repeat wrap and bilinear
+    filtering between the texel centres ((i + 0.5) / W, (j + 0.5) / H), image row 0 at v = 0; or the
+    checker, c0 where floor(u') + floor(v') is even. Returns the value and the checker's decision margin
+    (the distance of u' or v' to the nearest integer, relative to 1 + |uv'|; inf for images)."""
+    a = t.uv_transform
+    q = np.array([a[0] * uv[0] + a[1] * uv[1] + a[2], a[3] * uv[0] + a[4] * uv[1] + a[5]])
+    if t.checker is not None:
+        parity = int(np.floor(q[0]) + np.floor(q[1])) % 2
+        edge = float(np.min(np.abs(q - np.round(q))))
+        return np.asarray(t.checker[parity], np.float64), edge / (1.0 + float(np.abs(q).max()))
+    image = np.asarray(t.image, np.float64)
+    h, w = image.shape[:2]
+    x, y = np.mod(q[0], 1.0) * w - 0.5, np.mod(q[1], 1.0) * h - 0.5
+    x0, y0 = int(np.floor(x)), int(np.floor(y))
+    fx, fy = x - x0, y - y0
+    c = lambda i, j: image[j % h, i % w]
+    return ((c(x0, y0) * (1 - fx) + c(x0 + 1, y0) * fx) * (1 - fy)
+            + (c(x0, y0 + 1) * (1 - fx) + c(x0 + 1, y0 + 1) * fx) * fy), math.inf
 
 
 def shade_triangles(o, d, tris, face_mats, materials, lights, c_amb, background):

@@ -1,5 +1,6 @@
 """The scene flattened for the kernels: one triangle set in camera-relative float32, with a
-per-triangle material index, vertex normals for smooth objects, and material and light tables.
+per-triangle material index, vertex normals for smooth objects, uvs and colours per vertex where the
+scene has them, material tables with their texture slots, the textures, and the light table.
 
 Coordinates are made relative to the eye in float64 before the cast to float32, so a scene far
 from the origin keeps the precision it has near it (the camera ray origin is exactly 0).
@@ -11,6 +12,21 @@ import numpy as np
 from .._warp import wp
 from ..scene import vertex_normals
 from .bvh import build_mesh
+
+CHECKER = -1  # TextureSlot.image: the procedural checker instead of an image
+
+
+@wp.struct
+class TextureSlot:
+    """How one material colour (ka, kd or ks) is textured: ``image`` indexes SceneData.textures (0:
+    untextured, the colour as it is; CHECKER: c0 and c1 on alternate unit squares), and the uv map
+    u' = u_map . (u, v, 1), v' = v_map . (u, v, 1)."""
+
+    image: int
+    u_map: wp.vec3
+    v_map: wp.vec3
+    c0: wp.vec3
+    c1: wp.vec3
 
 
 @wp.struct
@@ -26,6 +42,12 @@ class SceneData:
     ks: wp.array(dtype=wp.vec3)
     kr: wp.array(dtype=wp.vec3)
     shininess: wp.array(dtype=float)
+    uvs: wp.array(dtype=wp.vec2)  # per vertex, where the scene has textures; (0, 0) for objects without
+    colors: wp.array(dtype=wp.vec3)  # per vertex, where the scene has vertex colours; white elsewhere
+    ka_map: wp.array(dtype=TextureSlot)  # per material
+    kd_map: wp.array(dtype=TextureSlot)
+    ks_map: wp.array(dtype=TextureSlot)
+    textures: wp.array(dtype=wp.Texture2D)  # bilinear, repeat; slot 0 a 1x1 white one
     light_pos: wp.array(dtype=wp.vec3)  # camera-relative
     light_color: wp.array(dtype=wp.vec3)
     num_lights: int
@@ -91,9 +113,49 @@ class Geometry:
         s.ks = vec([x.ks for x in m])
         s.kr = vec([x.reflectivity for x in m])
         s.shininess = wp.array(np.asarray([x.shininess for x in m], np.float32), dtype=float, device=d)
+        self._attributes(s, scene.objects, m, d)
         s.light_pos = vec([np.asarray(l.position) - self.origin for l in lights] or [[0, 0, 0]])
         s.light_color = vec([l.color for l in lights] or [[0, 0, 0]])
         s.num_lights = len(lights)
         s.ambient = wp.vec3(*scene.render.ambient)
         s.background = wp.vec3(*scene.render.background)
         self.data = s
+
+    def _attributes(self, s: SceneData, objects, materials, device):
+        """uvs, colours, texture slots and textures; one-element stand-ins where the scene has none
+        (the kernels read them only under the texture and vertex_color switches)."""
+        textured = any(mat.textures for mat in materials)
+        coloured = any(getattr(o, "colors", None) is not None for o in objects)
+        uv = [o.uv if getattr(o, "uv", None) is not None else np.zeros((len(o.vertices), 2)) for o in objects]
+        rgb = [o.colors if getattr(o, "colors", None) is not None else np.ones((len(o.vertices), 3)) for o in objects]
+        s.uvs = wp.array(np.concatenate(uv).astype(np.float32) if textured and uv else np.zeros((1, 2), np.float32),
+                         dtype=wp.vec2, device=device)
+        s.colors = wp.array(np.concatenate(rgb).astype(np.float32) if coloured and rgb else np.ones((1, 3), np.float32),
+                            dtype=wp.vec3, device=device)
+        images, index = [np.ones((1, 1, 3), np.float32)], {}  # slot 0: white
+        slots = {"ka": [], "kd": [], "ks": []}
+        for mat in materials:
+            for key, rows in slots.items():
+                t = getattr(mat, f"{key}_texture", None)
+                slot = TextureSlot()
+                slot.image, slot.u_map, slot.v_map = 0, wp.vec3(1.0, 0.0, 0.0), wp.vec3(0.0, 1.0, 0.0)
+                slot.c0, slot.c1 = wp.vec3(1.0), wp.vec3(1.0)
+                if t is not None:
+                    a = t.uv_transform
+                    slot.u_map, slot.v_map = wp.vec3(*a[:3]), wp.vec3(*a[3:])
+                    if t.checker is not None:
+                        slot.image, slot.c0, slot.c1 = CHECKER, wp.vec3(*t.checker[0]), wp.vec3(*t.checker[1])
+                    else:
+                        if id(t.image) not in index:  # an image several materials share is held once
+                            index[id(t.image)] = len(images)
+                            images.append(t.image)
+                        slot.image = index[id(t.image)]
+                rows.append(slot)
+        s.ka_map, s.kd_map, s.ks_map = (wp.array(slots[k], dtype=TextureSlot, device=device) for k in ("ka", "kd", "ks"))
+        # Warp's textures hold 1, 2 or 4 channels: RGB is padded to RGBA.
+        self.texture_objects = [wp.Texture2D(np.ascontiguousarray(np.concatenate([a, np.ones(a.shape[:2] + (1,), np.float32)], -1)),
+                                             filter_mode=wp.TextureFilterMode.LINEAR,
+                                             address_mode=wp.TextureAddressMode.WRAP, normalized_coords=True,
+                                             device=device) for a in images]
+        s.textures = wp.array(self.texture_objects, dtype=wp.Texture2D, device=device)  # the objects kept alive with it
+        self.texture_bytes = int(sum(a.shape[0] * a.shape[1] * 16 for a in images))

@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import SceneError
+from ..scene import srgb_to_linear
 
 FORMATS = (".png", ".npy", ".exr")
 
@@ -18,11 +19,6 @@ def linear_to_srgb(x: np.ndarray) -> np.ndarray:
     """IEC 61966-2-1 encoding of linear values clamped to [0, 1]."""
     x = np.clip(x, 0.0, 1.0)
     return np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1.0 / 2.4) - 0.055)
-
-
-def srgb_to_linear(x: np.ndarray) -> np.ndarray:
-    x = np.asarray(x, np.float64)
-    return np.where(x <= 0.04045, x / 12.92, np.power((x + 0.055) / 1.055, 2.4))
 
 
 def to_srgb8(image: np.ndarray) -> np.ndarray:

@@ -35,6 +35,8 @@ class Surface:
     ng: wp.vec3  # geometric normal, turned to face the incoming ray
     n: wp.vec3  # shading normal, on the same side
     material: int
+    uv: wp.vec2  # texture coordinates, interpolated as p is (only with the texture effect)
+    color: wp.vec3  # vertex colour, likewise (only with the vertex_color effect)
 
 
 @wp.func
@@ -67,9 +69,10 @@ def reflect(d: wp.vec3, n: wp.vec3) -> wp.vec3:
 
 
 @functools.cache
-def make_surface(smooth: bool):
+def make_surface(smooth: bool, texture: bool = False, vertex_color: bool = False):
     """The hit record for face f at barycentrics (u, v), seen along direction d; with ``smooth``,
-    interpolated vertex normals where the face's object is smooth."""
+    interpolated vertex normals where the face's object is smooth; with ``texture`` and
+    ``vertex_color``, the interpolated uv and colour."""
 
     @wp.func
     def surface(s: SceneData, f: int, u: float, v: float, face_normal: wp.vec3, d: wp.vec3) -> Surface:
@@ -95,6 +98,15 @@ def make_surface(smooth: bool):
                 ns = s.normals[i0] * u + s.normals[i1] * v + s.normals[i2] * w
                 if wp.length(ns) > 0.0:
                     out.n = wp.normalize(ns) * side
+        if wp.static(texture or vertex_color):
+            # Warp's barycentrics, as for p: weight u on the face's first vertex, v on its second.
+            j0 = s.indices[f * 3 + 0]
+            j1 = s.indices[f * 3 + 1]
+            j2 = s.indices[f * 3 + 2]
+            if wp.static(texture):
+                out.uv = s.uvs[j0] * u + s.uvs[j1] * v + s.uvs[j2] * w
+            if wp.static(vertex_color):
+                out.color = s.colors[j0] * u + s.colors[j1] * v + s.colors[j2] * w
         out.material = s.tri_material[f]
         return out
 

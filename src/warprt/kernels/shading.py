@@ -1,5 +1,7 @@
 """Phong shading, the seed's Figure 3, per colour channel and light l, shared by every renderer:
     I = C_amb ka + sum_l vis_l C_l (kd max(0, n.L) + ks max(0, r.v)^n),   r = L mirrored about n
+with ka, kd and ks read at the hit by one function (coefficients): the material's, times its
+textures and the vertex colour where the scene has them.
 """
 
 from __future__ import annotations
@@ -8,7 +10,8 @@ import functools
 
 from .._warp import wp
 from ..geometry import SceneData
-from .interaction import offset_ray_origin, reflect
+from .interaction import Surface, offset_ray_origin, reflect
+from .texture import texel
 
 
 @wp.func
@@ -33,22 +36,64 @@ class ShadeResult:
     shadow_rays: int
 
 
-def make_shade(fx):
-    """The local shading function for one effect set (its ambient, diffuse, specular and shadow
-    switches): ambient + the lit terms of every light, with shadow rays when fx.shadows."""
-    return _make_shade(fx.ambient, fx.diffuse, fx.specular, fx.shadows)
+@wp.struct
+class Coefficients:
+    """The Phong coefficients at one hit."""
+
+    ka: wp.vec3
+    kd: wp.vec3
+    ks: wp.vec3
 
 
 @functools.cache
-def _make_shade(AMBIENT: bool, DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool):
+def make_coefficients(TEXTURE: bool, VERTEX_COLOR: bool):
+    """ka, kd and ks at a hit: the material's, times its texture at the hit's uv (TEXTURE) and, for
+    ka and kd, the hit's vertex colour (VERTEX_COLOR)."""
+
+    @wp.func
+    def coefficients(s: SceneData, hit: Surface) -> Coefficients:
+        m = hit.material
+        c = Coefficients()
+        c.ka = s.ka[m]
+        c.kd = s.kd[m]
+        c.ks = s.ks[m]
+        if wp.static(TEXTURE):
+            c.ka = wp.cw_mul(c.ka, texel(s.textures, s.ka_map[m], hit.uv))
+            c.kd = wp.cw_mul(c.kd, texel(s.textures, s.kd_map[m], hit.uv))
+            c.ks = wp.cw_mul(c.ks, texel(s.textures, s.ks_map[m], hit.uv))
+        if wp.static(VERTEX_COLOR):
+            c.ka = wp.cw_mul(c.ka, hit.color)
+            c.kd = wp.cw_mul(c.kd, hit.color)
+        return c
+
+    return coefficients
+
+
+def make_shade(fx):
+    """The local shading function for one effect set (its ambient, diffuse, specular and shadow
+    switches, and how ka, kd and ks are read): ambient + the lit terms of every light, with shadow
+    rays when fx.shadows."""
+    return _make_shade(fx.ambient, fx.diffuse, fx.specular, fx.shadows, fx.texture, fx.vertex_color)
+
+
+@functools.cache
+def _make_shade(AMBIENT: bool, DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool, TEXTURE: bool, VERTEX_COLOR: bool):
+    coefficients = make_coefficients(TEXTURE, VERTEX_COLOR)
+
     # Disabled terms are absent from the generated code (wp.static).
     @wp.func
-    def shade(s: SceneData, m: int, p: wp.vec3, err: wp.vec3, ng: wp.vec3, n: wp.vec3, v: wp.vec3) -> ShadeResult:
+    def shade(s: SceneData, hit: Surface, v: wp.vec3) -> ShadeResult:
         out = ShadeResult()
         out.color = wp.vec3(0.0)
         out.shadow_rays = 0
+        k = coefficients(s, hit)
+        m = hit.material
+        p = hit.p
+        err = hit.err
+        ng = hit.ng
+        n = hit.n
         if wp.static(AMBIENT):
-            out.color = wp.cw_mul(s.ambient, s.ka[m])
+            out.color = wp.cw_mul(s.ambient, k.ka)
         if wp.static(DIFFUSE or SPECULAR):
             for l in range(s.num_lights):
                 to_light = s.light_pos[l] - p
@@ -65,9 +110,9 @@ def _make_shade(AMBIENT: bool, DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool):
                     if visible:
                         lit = wp.vec3(0.0)
                         if wp.static(DIFFUSE):
-                            lit = lit + phong_diffuse(s.kd[m], n_dot_l)
+                            lit = lit + phong_diffuse(k.kd, n_dot_l)
                         if wp.static(SPECULAR):
-                            lit = lit + phong_specular(s.ks[m], s.shininess[m], n, L, v, n_dot_l)
+                            lit = lit + phong_specular(k.ks, s.shininess[m], n, L, v, n_dot_l)
                         out.color = out.color + wp.cw_mul(s.light_color[l], lit)
         return out
 

@@ -42,7 +42,7 @@ def make_trace_kernel(fx, raster_primary: bool = False):
     tracer's (hybrid.uncertain); every other sample is traced. The image is the traced image, to the
     bit; shadows and reflections are traced as always."""
     shade = make_shade(fx)
-    surface = make_surface(fx.smooth)
+    surface = make_surface(fx.smooth, fx.texture, fx.vertex_color)
     REFLECTION, SUPERSAMPLING, RASTER = fx.reflection, fx.supersampling, raster_primary
 
     @wp.kernel(module="unique", enable_backward=False)
@@ -100,7 +100,7 @@ def make_trace_kernel(fx, raster_primary: bool = False):
                     color = color + wp.cw_mul(weight, s.background)
                     break
                 hit = surface(s, f, u, v, face_normal, d)
-                r = shade(s, hit.material, hit.p, hit.err, hit.ng, hit.n, -d)
+                r = shade(s, hit, -d)
                 color = color + wp.cw_mul(weight, r.color)
                 shadow_rays += r.shadow_rays
                 depth += 1

@@ -18,7 +18,7 @@ from .triangle import query_normal, triangle
 def make_shade_kernel(fx):
     """The shading kernel for one EffectSet (shadows and reflection are ignored: a Z-buffer has neither)."""
     shade = make_shade(fx)
-    surface = make_surface(fx.smooth)
+    surface = make_surface(fx.smooth, fx.texture, fx.vertex_color)
     SUPERSAMPLING = fx.supersampling
 
     @wp.kernel(module="unique", enable_backward=False)
@@ -46,7 +46,7 @@ def make_shade_kernel(fx):
             # side as in the tracer.
             uv = frags.uv[i]
             hit = surface(s, f, uv[0], uv[1], query_normal(p0, p1, p2), d)
-            r = shade(s, hit.material, hit.p, hit.err, hit.ng, hit.n, -d)
+            r = shade(s, hit, -d)
             total = total + r.color
         image[pixel] = total / float(samples)
 

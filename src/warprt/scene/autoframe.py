@@ -1,4 +1,5 @@
-"""A scene for a bare mesh file: the mesh, a default material, two lights and a camera that frames it."""
+"""A scene for a bare mesh file: the mesh with its own materials (a default one elsewhere), shaded
+"auto", two lights and a camera that frames it for the final image size, along the file's up axis."""
 
 from __future__ import annotations
 
@@ -8,44 +9,73 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import SceneError
-from .meshio import read_mesh_file, split_by_material
-from .model import Camera, Light, Material, RenderSettings, Scene
+from .meshio import file_objects, read_mesh_file, warn_if_tiny, warn_if_unmapped
+from .model import Light, Material, RenderSettings, Scene
+from .reader import UP_AXES, read_camera, up_rotation
+
+DEFAULT_SIZE = (640, 480)
+DEFAULT_FOVY = 40.0
+MARGIN = 1.1  # the bounding sphere fills the narrower field of view to 1 / MARGIN
 
 
-# The framing below is written for a y-up file; a z-up one (a USD stage may say so) turns it
-# by +90 degrees about x, so that the camera's up is the file's up.
-_TO_UP = {"Y": np.eye(3), "Z": np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])}
-
-
-def scene_for_mesh(path: Path, width: int = 640, height: int = 480) -> Scene:
+def scene_for_mesh(path: Path, camera: dict | None = None, up: str | None = None) -> Scene:
+    """The framed scene. ``camera``: the camera fields the user set (TOML values, checked here), the
+    rest framed for them; ``up``: the file's up axis ("x", "-z", ...), else the one the file declares
+    (USD's upAxis, glTF's y), else y."""
+    source = str(path)
     mesh = read_mesh_file(path)
-    vertices, faces, face_material, part_starts = mesh.concatenated()
-    to_up = _TO_UP.get(mesh.up_axis, _TO_UP["Y"])
+    if up is not None and up.lower() not in UP_AXES:
+        raise SceneError("command line", "--up", f"expected one of {', '.join(UP_AXES)}, got '{up}'")
+    axis = (up or mesh.up_axis or "y").lower()
+    # The framing below is written for a y-up file: turned so that the camera's up is the file's up.
+    to_up = up_rotation(axis).T
+    materials = {"mesh": Material(kd=(0.75, 0.72, 0.68), ka=(0.75, 0.72, 0.68), ks=(0.25, 0.25, 0.25), shininess=48.0)}
+    # The file's own materials where it has them; "mesh" for faces without one.
+    objects = file_objects(Path(path).stem, mesh, materials, "mesh", "auto")
+    vertices = np.concatenate([o.vertices for o in objects])
+    warn_if_tiny(source, None, vertices)
+    warn_if_unmapped(source, None, objects, materials)
     lo, hi = vertices.min(0), vertices.max(0)
     center = 0.5 * (lo + hi)
     radius = 0.5 * float(np.linalg.norm(hi - lo))
     if not radius > 0.0:
-        raise SceneError(str(path), "mesh", "the mesh has zero extent")
-    fovy = 40.0
-    # Distance at which the bounding sphere fills the vertical field of view, with a margin.
-    dist = 1.1 * radius / math.sin(math.radians(fovy) / 2)
-    view = to_up @ np.array([0.5, 0.35, 1.0])
-    view /= np.linalg.norm(view)
-    eye = center + dist * view
-    camera = Camera(eye=_floats(eye), center=_floats(center), up=_floats(to_up @ [0.0, 1.0, 0.0]), fovy=fovy,
-                    near=1.0, width=width, height=height)
+        raise SceneError(source, "mesh", "the mesh has zero extent")
+    camera = read_camera(source, _framed(dict(camera or {}), center, radius, to_up))
     lights = [
         Light(position=_floats(center + radius * (to_up @ [4.0, 6.0, 4.0])), color=(0.8, 0.8, 0.8)),
         Light(position=_floats(center + radius * (to_up @ [-5.0, 3.0, 2.0])), color=(0.3, 0.3, 0.35)),
     ]
-    materials = {"mesh": Material(kd=(0.75, 0.72, 0.68), ka=(0.75, 0.72, 0.68), ks=(0.25, 0.25, 0.25), shininess=48.0)}
-    # The file's own materials where it has them; "mesh" for faces without one.
-    objects = split_by_material(Path(path).stem, vertices, faces, face_material, mesh.materials, materials,
-                                "mesh", True, part_starts)
     # Primary rays only, unless the file has mirrors (MTL illum 3): then two reflection levels.
     mirrors = any(max(m.reflectivity) > 0 for _, m in mesh.materials)
     return Scene(camera, RenderSettings(ambient=(0.15, 0.15, 0.15), max_depth=3 if mirrors else 1), lights,
-                 materials, objects, str(path))
+                 materials, objects, source)
+
+
+def _framed(given: dict, center, radius: float, to_up) -> dict:
+    """The camera table: the user's fields as given, the others chosen so that the mesh's bounding
+    sphere fits both fields of view of the final image, seen from the front, a little above."""
+    def number(key, default, ok):
+        v = given.get(key, default)
+        return v if isinstance(v, (int, float)) and not isinstance(v, bool) and ok(v) else default
+
+    width = number("width", DEFAULT_SIZE[0], lambda v: v >= 1)
+    height = number("height", DEFAULT_SIZE[1], lambda v: v >= 1)
+    fovy = number("fovy", DEFAULT_FOVY, lambda v: 0 < v < 180)
+    half_v = math.radians(fovy) / 2
+    half_h = math.atan(math.tan(half_v) * width / height)
+    dist = MARGIN * radius / math.sin(min(half_v, half_h))
+    view = to_up @ np.array([0.5, 0.35, 1.0])
+    view /= np.linalg.norm(view)
+    out = {"center": _floats(center), "up": _floats(to_up @ [0.0, 1.0, 0.0]), "fovy": DEFAULT_FOVY,
+           "near": 1.0, "width": DEFAULT_SIZE[0], "height": DEFAULT_SIZE[1]}
+    if "center" in given:
+        try:
+            center = np.asarray(given["center"], np.float64).reshape(3)
+        except (TypeError, ValueError):
+            pass  # read_camera reports it
+    out["eye"] = _floats(center + dist * view)
+    out.update(given)
+    return {k: list(v) if isinstance(v, tuple) else v for k, v in out.items()}
 
 
 def _floats(v) -> tuple:

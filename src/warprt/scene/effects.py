@@ -11,7 +11,8 @@ import numpy as np
 
 from ..errors import SceneError
 
-EFFECTS = ("ambient", "diffuse", "specular", "shadows", "reflection", "supersampling", "smooth")
+EFFECTS = ("ambient", "diffuse", "specular", "shadows", "reflection", "supersampling", "smooth", "texture",
+           "vertex_color")
 
 
 @dataclass(frozen=True)
@@ -23,6 +24,8 @@ class EffectSet:
     reflection: bool = True
     supersampling: bool = False
     smooth: bool = False
+    texture: bool = False
+    vertex_color: bool = False
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -32,7 +35,7 @@ class EffectSet:
     def variant(self) -> str:
         """A short stable name for the compiled kernel variant, e.g. 'trace_adsS_r'."""
         letters = {"ambient": "a", "diffuse": "d", "specular": "s", "shadows": "S",
-                   "reflection": "r", "supersampling": "x", "smooth": "n"}
+                   "reflection": "r", "supersampling": "x", "smooth": "n", "texture": "t", "vertex_color": "c"}
         return "".join(letters[n] for n in self.names) or "none"
 
     def __str__(self) -> str:
@@ -45,14 +48,18 @@ def scene_effects(scene) -> EffectSet:
     mats = [scene.materials[m] for m in used]
     amb = np.asarray(scene.render.ambient)
     lit = any(max(l.color) > 0 for l in scene.lights)
+    kd = any(max(m.peak("kd")) > 0 for m in mats)
+    ks = any(max(m.peak("ks")) > 0 for m in mats)
     return EffectSet(
-        ambient=any(np.any(amb * np.asarray(m.ka) > 0) for m in mats),
-        diffuse=lit and any(max(m.kd) > 0 for m in mats),
-        specular=lit and any(max(m.ks) > 0 for m in mats),
-        shadows=lit and scene.render.shadows and any(max(m.kd) > 0 or max(m.ks) > 0 for m in mats),
+        ambient=any(np.any(amb * m.peak("ka") > 0) for m in mats),
+        diffuse=lit and kd,
+        specular=lit and ks,
+        shadows=lit and scene.render.shadows and (kd or ks),
         reflection=scene.render.max_depth > 1 and any(max(m.reflectivity) > 0 for m in mats),
         supersampling=scene.render.spp > 1,
         smooth=any(o.smooth for o in scene.objects),
+        texture=any(m.textures for m in mats),
+        vertex_color=any(getattr(o, "colors", None) is not None for o in scene.objects),
     )
 
 

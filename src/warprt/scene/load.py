@@ -11,15 +11,16 @@ from pathlib import Path
 from ..errors import SceneError
 from .autoframe import scene_for_mesh
 from .meshio import FORMATS, is_mesh_path
-from .model import Scene
+from .model import Camera, Scene
 from .reader import read_camera, read_render, scene_from_dict
 
 
-def load_scene(path=None, overrides: dict | None = None) -> Scene:
-    """Read a scene: a TOML scene file, any mesh file trimesh reads (framed automatically; only
-    camera.* and render.* can be overridden), or None for the built-in default scene."""
+def load_scene(path=None, overrides: dict | None = None, up: str | None = None) -> Scene:
+    """Read a scene: a TOML scene file, any mesh file trimesh reads (framed automatically for the
+    overridden camera and image size; only camera.* and render.* can be overridden; ``up``: the
+    file's up axis), or None for the built-in default scene."""
     t = time.perf_counter()
-    scene = _load_scene(path, overrides)
+    scene = _load_scene(path, overrides, up)
     scene.load_seconds = time.perf_counter() - t
     return scene
 
@@ -58,13 +59,16 @@ def apply_overrides(data: dict, overrides: dict, source: str) -> dict:
     return data
 
 
-def _load_scene(path, overrides) -> Scene:
+def _load_scene(path, overrides, up) -> Scene:
     if path is None:
         path = default_scene_path()
     path = Path(path)
     source = str(path)
     if path.suffix.lower() != ".toml":
-        return _load_mesh_scene(path, overrides)
+        return _load_mesh_scene(path, overrides, up)
+    if up is not None:
+        raise SceneError("command line", "--up", "applies to a mesh file; in a scene file, give the object "
+                                                 "up = \"z\" (or x, y, -x, -y, -z)")
     try:
         text = path.read_text(encoding="utf-8")
     except FileNotFoundError:
@@ -86,22 +90,24 @@ def _load_scene(path, overrides) -> Scene:
     return scene_from_dict(data, source, path.parent)
 
 
-def _load_mesh_scene(path: Path, overrides) -> Scene:
-    """A bare mesh: the framed default scene, then the overrides through the file reader's checks."""
+def _load_mesh_scene(path: Path, overrides, up) -> Scene:
+    """A bare mesh: the overrides through the file reader's checks, then the mesh framed for them."""
     source = str(path)
     if path.is_dir():
         raise SceneError(source, None, "is a folder; expected a scene file (.toml) or a mesh file")
     if not is_mesh_path(path):
         raise SceneError(source, None, f"unknown file type '{path.suffix or '(none)'}'; expected a scene file "
                                        f"(.toml) or a mesh file ({', '.join(FORMATS)})")
-    scene = scene_for_mesh(path)
+    doc = {"camera": {}, "render": {}}
+    for k in overrides or {}:
+        if k.split(".")[0] not in ("camera", "render"):
+            raise SceneError(source, k, "only camera.* and render.* can be set for a mesh file")
     if overrides:
-        for k in overrides:
-            if k.split(".")[0] not in ("camera", "render"):
-                raise SceneError(source, k, "only camera.* and render.* can be set for a mesh file")
-        doc = {"camera": asdict(scene.camera), "render": {k: v for k, v in asdict(scene.render).items() if v is not None}}
         doc = apply_overrides(doc, overrides, source)
-        doc = {section: {k: list(v) if isinstance(v, tuple) else v for k, v in table.items()} for section, table in doc.items()}
-        scene.camera = read_camera(source, doc["camera"])
-        scene.render = read_render(source, doc["render"])
+    if doc["camera"]:
+        read_camera(source, {**asdict(Camera()), **{k: v for k, v in doc["camera"].items() if k not in ("eye", "center", "up")}})
+    scene = scene_for_mesh(path, doc["camera"], up)
+    if doc["render"]:
+        base = {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(scene.render).items() if v is not None}
+        scene.render = read_render(source, {**base, **doc["render"]})
     return scene

@@ -7,6 +7,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from .texture import Texture
+
 
 @dataclass(frozen=True)
 class Camera:
@@ -41,31 +43,52 @@ class Light:
 
 @dataclass(frozen=True)
 class Material:
-    """Phong coefficients ka, kd, ks, the exponent n (shininess) and the mirror weight k_r."""
+    """Phong coefficients ka, kd, ks, the exponent n (shininess) and the mirror weight k_r. A colour
+    with a texture is the texture's value times the coefficient (glTF's factor times texture), and
+    an object's vertex colours multiply ka and kd."""
 
     kd: tuple = (0.7, 0.7, 0.7)
-    ka: tuple | None = None  # None: the same as kd
+    ka: tuple | None = None  # None: the same as kd, with kd's texture
     ks: tuple = (0.0, 0.0, 0.0)
     shininess: float = 32.0
     reflectivity: tuple = (0.0, 0.0, 0.0)  # k_r
+    kd_texture: Texture | None = None
+    ka_texture: Texture | None = None
+    ks_texture: Texture | None = None
 
     def __post_init__(self):
         if self.ka is None:
             object.__setattr__(self, "ka", self.kd)
+            if self.ka_texture is None:
+                object.__setattr__(self, "ka_texture", self.kd_texture)
+
+    @property
+    def textures(self) -> dict:
+        """The textured colours: {"ka" | "kd" | "ks": Texture}."""
+        return {k: t for k, t in (("ka", self.ka_texture), ("kd", self.kd_texture), ("ks", self.ks_texture)) if t}
+
+    def peak(self, key: str) -> np.ndarray:
+        """The largest value colour ``key`` (ka, kd, ks) takes anywhere, per channel, before vertex colours."""
+        t = getattr(self, f"{key}_texture")
+        return np.asarray(getattr(self, key), np.float64) * (t.peak if t is not None else 1.0)
 
 
 @dataclass
 class SceneObject:
-    """One object: its triangles in world space (float64) and the name of its material."""
+    """One object: its triangles in world space (float64), the name of its material, and what it
+    has per vertex besides its position."""
 
     name: str
     vertices: np.ndarray  # (N, 3) float64, world space
     faces: np.ndarray  # (M, 3) int64
     material: str
     smooth: bool = False
-    # Vertex normals (N, 3) when the object is part of a larger smooth mesh (a file split by
-    # material): computed over the whole mesh, so the split leaves no crease.
+    # Vertex normals (N, 3) for smooth shading, when they are not the ones computed from the
+    # triangles alone: the file's own, split at creases, or computed over a whole mesh that was
+    # then split by material (so the split leaves no crease).
     normals: np.ndarray | None = None
+    uv: np.ndarray | None = None  # (N, 2) texture coordinates, v = 0 at an image's bottom row
+    colors: np.ndarray | None = None  # (N, 3) linear RGB, multiplying ka and kd
 
 
 @dataclass

@@ -11,16 +11,20 @@ import numpy as np
 
 from ..errors import SceneError, show
 from . import shapes
-from .meshio import read_mesh_file, split_by_material
+from .meshio import file_objects, read_mesh_file, warn_if_tiny, warn_if_unmapped
 from .model import DEFAULT_MATERIAL, Camera, Light, Material, RenderSettings, Scene, SceneObject
+from .normals import resolve_normals
+from .texture import affine, checker_texture, image_texture
 from .validate import check_setting, validate_camera, validate_scene
 
 SECTIONS = {"camera", "render", "lights", "materials", "objects"}
 _CAMERA_KEYS = {"eye", "center", "up", "fovy", "near", "width", "height"}
 _RENDER_KEYS = {"ambient", "background", "max_depth", "shadows", "spp", "effects"}
 _LIGHT_KEYS = {"position", "color"}
-_MATERIAL_KEYS = {"ka", "kd", "ks", "shininess", "reflectivity"}
-_OBJECT_KEYS = {"name", "mesh", "shape", "material", "scale", "rotate", "translate", "smooth"}
+_MATERIAL_KEYS = {"ka", "kd", "ks", "shininess", "reflectivity", "ka_texture", "kd_texture", "ks_texture"}
+_TEXTURE_KEYS = {"image", "checker", "scale", "offset", "srgb"}
+_OBJECT_KEYS = {"name", "mesh", "shape", "material", "scale", "rotate", "translate", "smooth", "up"}
+UP_AXES = ("x", "y", "z", "-x", "-y", "-z")
 
 
 class _Reader:
@@ -156,19 +160,62 @@ def read_light(source: str, t: dict, i: int) -> Light:
     return Light(position=r.vector("position"), color=r.vector("color", (1.0, 1.0, 1.0), nonneg=True))
 
 
-def read_material(source: str, name: str, t) -> Material:
+def read_material(source: str, name: str, t, base: Path = Path(".")) -> Material:
+    """A [materials.name] table. A colour with a texture is the texture times the colour, which then
+    defaults to 1; ka defaults to kd, with kd's texture."""
     if not isinstance(t, dict):
         raise SceneError(source, f"materials.{name}", f"expected a table, got {show(t)}")
     r = _Reader(source, t, f"materials.{name}")
     r.check_keys(_MATERIAL_KEYS)
-    kd = r.vector("kd", DEFAULT_MATERIAL.kd, nonneg=True)
+    tex = {k: read_texture(source, f"materials.{name}.{k}_texture", t[f"{k}_texture"], base)
+           for k in ("ka", "kd", "ks") if f"{k}_texture" in t}
+    white = (1.0, 1.0, 1.0)
+    kd = r.vector("kd", white if "kd" in tex else DEFAULT_MATERIAL.kd, nonneg=True)
+    if "ka" in t or "ka" in tex:
+        ka, ka_texture = r.vector("ka", white, nonneg=True), tex.get("ka")
+    else:
+        ka, ka_texture = kd, tex.get("kd")
     return Material(
         kd=kd,
-        ka=r.vector("ka", kd, nonneg=True),
-        ks=r.vector("ks", (0.0, 0.0, 0.0), nonneg=True),
+        ka=ka,
+        ks=r.vector("ks", white if "ks" in tex else (0.0, 0.0, 0.0), nonneg=True),
         shininess=r.number("shininess", 32.0, lo=0.0),
         reflectivity=r.vector("reflectivity", (0.0, 0.0, 0.0), nonneg=True, allow_scalar=True),
+        kd_texture=tex.get("kd"), ka_texture=ka_texture, ks_texture=tex.get("ks"),
     )
+
+
+def read_texture(source: str, field: str, value, base: Path):
+    """``"file.png"``, ``{image = "file.png", scale = ..., offset = [u, v], srgb = ...}`` or
+    ``{checker = [[r, g, b], [r, g, b]], scale = ...}``: the uv map is uv * scale + offset; an image
+    repeats once per unit of mapped uv, a checker has one check per unit."""
+    given_as_name = isinstance(value, str)
+    if given_as_name:
+        value = {"image": value}
+    if not isinstance(value, dict):
+        raise SceneError(source, field, f"expected an image file name or a table with 'image' or 'checker', got {show(value)}")
+    r = _Reader(source, value, field)
+    r.check_keys(_TEXTURE_KEYS)
+    if ("image" in value) == ("checker" in value):
+        r.fail(None, "expected exactly one of 'image' (a file) or 'checker' (two colours)")
+    scale = r.vector("scale", 1.0, n=2, allow_scalar=True)
+    if 0.0 in scale:
+        r.fail("scale", f"expected non-zero scale factors, got {list(scale)}")
+    offset = r.vector("offset", (0.0, 0.0), n=2)
+    if "checker" in value:
+        c = value["checker"]
+        if "srgb" in value:
+            r.fail("srgb", "applies to an image, not to a checker")
+        if not (isinstance(c, list) and len(c) == 2):
+            r.fail("checker", f"expected two colours [[r, g, b], [r, g, b]], got {show(c)}")
+        colours = [_Reader(source, {"checker": x}, field).vector("checker", nonneg=True) for x in c]
+        return checker_texture(colours[0], colours[1], scale, offset)
+    srgb = r.boolean("srgb", True) if "srgb" in value else None
+    name = r.string("image")
+    try:
+        return image_texture(base / name, srgb=srgb, source=name, uv_transform=affine(scale, offset))
+    except SceneError as e:
+        raise SceneError(source, field if given_as_name else f"{field}.image", str(e)) from None
 
 
 def rotation(degrees) -> np.ndarray:
@@ -181,7 +228,8 @@ def rotation(degrees) -> np.ndarray:
     return rz @ ry @ rx
 
 
-def _shape_geometry(r: _Reader, kind: str):
+def _shape_geometry(r: _Reader, kind: str, with_uv: bool):
+    """The shape's vertices, faces and, where it has them, uv (for a textured material) and colours."""
     builder, params = shapes.SHAPES[kind]
     r.check_keys(_OBJECT_KEYS | set(params))
     args = {}
@@ -202,16 +250,23 @@ def _shape_geometry(r: _Reader, kind: str):
             if min(v) <= 0:
                 r.fail(p, f"expected positive sizes, got {list(v)}")
             args[p] = v
-        elif ptype == "points":
+        elif ptype in ("points", "uv", "colors"):
+            if p not in r.table and ptype != "points":
+                continue
+            width = 2 if ptype == "uv" else 3
             v = r.table.get(p)
             try:
                 a = np.asarray(v, np.float64)
             except (TypeError, ValueError):
                 a = None
-            if a is None or a.ndim != 2 or a.shape[1] != 3 or len(a) < 3:
-                r.fail(p, f"expected a list of [x, y, z] points (at least 3), got {show(v)}")
+            what = {"points": "[x, y, z] points (at least 3)", "uv": "[u, v] per vertex",
+                    "colors": "[r, g, b] per vertex"}[ptype]
+            if a is None or a.ndim != 2 or a.shape[1] != width or len(a) < (3 if ptype == "points" else 1):
+                r.fail(p, f"expected a list of {what}, got {show(v)}")
             if not np.all(np.isfinite(a)):
-                r.fail(p, "expected finite coordinates, found NaN or Inf")
+                r.fail(p, "expected finite numbers, found NaN or Inf")
+            if ptype == "colors" and (a < 0).any():
+                r.fail(p, "expected non-negative colours")
             args[p] = a
         elif ptype == "faces":
             v = r.table.get(p)
@@ -222,7 +277,17 @@ def _shape_geometry(r: _Reader, kind: str):
             if a is None or a.ndim != 2 or a.shape[1] != 3 or len(a) < 1 or a.dtype.kind not in "iu":
                 r.fail(p, f"expected a list of [i, j, k] integer vertex indices, got {show(v)}")
             args[p] = a.astype(np.int64)
-    return builder(**args)
+    uv = colors = None
+    if kind == "triangles":
+        n = len(args["vertices"])
+        for key in ("uv", "colors"):
+            if key in args and len(args[key]) != n:
+                r.fail(key, f"expected one per vertex ({n}), got {len(args[key])}")
+        uv, colors = args.pop("uv", None), args.pop("colors", None)
+    elif with_uv and kind in shapes.WITH_UV:
+        return (*shapes.WITH_UV[kind](**args), None)
+    vertices, faces = builder(**args)
+    return vertices, faces, uv, colors
 
 
 def _load_mesh_file(source: str, field_name: str, path: Path):
@@ -235,17 +300,53 @@ def _load_mesh_file(source: str, field_name: str, path: Path):
         raise SceneError(source, field_name, f"{path}: cannot read mesh file: {' '.join(str(e).split())}") from None
 
 
+def up_rotation(axis: str) -> np.ndarray:
+    """The rotation (det +1) that turns a file's up direction ("x", "-z", ...) to +y, warprt's up."""
+    return _UP_TO_Y[axis.lower()]
+
+
+_UP_TO_Y = {
+    "y": np.eye(3),
+    "-y": np.array([[1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, -1.0]]),  # 180 degrees about x
+    "z": np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0]]),  # -90 about x: z -> y, y -> -z
+    "-z": np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]]),  # +90 about x
+    "x": np.array([[0.0, 1.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]),  # +90 about z: x -> y, y -> -x
+    "-x": np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]),  # -90 about z
+}
+
+
+def read_smooth(r: _Reader, key: str = "smooth", default=False):
+    """true, false, "auto" or a crease angle in degrees (0 to 180)."""
+    v = r.table.get(key, default)
+    if isinstance(v, bool) or v == "auto":
+        return v
+    if isinstance(v, (int, float)):
+        return r.number(key, lo=0.0, hi=180.0)
+    r.fail(key, f"expected true, false, \"auto\" or a crease angle in degrees, got {show(v)}")
+
+
+def read_up(r: _Reader, key: str = "up", default: str = "y"):
+    v = r.table.get(key, default)
+    if not isinstance(v, str) or v.lower() not in UP_AXES:
+        r.fail(key, f"expected one of {', '.join(repr(a) for a in UP_AXES)}, got {show(v)}")
+    return v.lower()
+
+
 def read_object(source: str, base: Path, t: dict, i: int, materials: dict) -> list[SceneObject]:
     """An [[objects]] table: one SceneObject, or one per material for a file with several."""
     r = _Reader(source, t, f"objects[{i}]")
     if ("mesh" in t) == ("shape" in t):
         r.fail(None, "expected exactly one of 'mesh' (a file) or 'shape' (" + ", ".join(shapes.SHAPES) + ")")
+    material = r.string("material", "default")
+    if material not in materials:
+        close = difflib.get_close_matches(material, list(materials), n=1)
+        hint = f" (did you mean '{close[0]}'?)" if close else f" (defined: {', '.join(materials) or 'none'})"
+        r.fail("material", f"no material named '{material}'{hint}")
     mesh = None
     if "mesh" in t:
         r.check_keys(_OBJECT_KEYS)
         path = base / r.string("mesh")
         mesh = _load_mesh_file(source, f"objects[{i}].mesh", path)
-        vertices, faces, face_material, part_starts = mesh.concatenated()
         default_name = path.stem
     else:
         kind = r.string("shape")
@@ -253,32 +354,46 @@ def read_object(source: str, base: Path, t: dict, i: int, materials: dict) -> li
             close = difflib.get_close_matches(kind, list(shapes.SHAPES), n=1)
             hint = f" (did you mean '{close[0]}'?)" if close else ""
             r.fail("shape", f"unknown shape '{kind}'{hint}; expected one of: {', '.join(shapes.SHAPES)}")
-        vertices, faces = _shape_geometry(r, kind)
+        vertices, faces, uv, colors = _shape_geometry(r, kind, bool(materials[material].textures))
         default_name = kind
-    material = r.string("material", "default")
-    if material not in materials:
-        close = difflib.get_close_matches(material, list(materials), n=1)
-        hint = f" (did you mean '{close[0]}'?)" if close else f" (defined: {', '.join(materials) or 'none'})"
-        r.fail("material", f"no material named '{material}'{hint}")
     scale = np.asarray(r.vector("scale", 1.0, allow_scalar=True))
     if np.any(scale == 0.0):
         r.fail("scale", f"expected non-zero scale factors, got {list(scale)}")
     rot = rotation(r.vector("rotate", (0.0, 0.0, 0.0)))
     translate = np.asarray(r.vector("translate", (0.0, 0.0, 0.0)))
-    if len(faces) == 0:
-        r.fail("mesh" if "mesh" in t else "shape", "the mesh has no triangles")
-    if faces.min() < 0 or faces.max() >= len(vertices):
-        r.fail("faces" if "shape" in t else "mesh", f"vertex index out of range [0, {len(vertices) - 1}]")
-    world = (vertices * scale) @ rot.T + translate
-    if np.linalg.det(np.diag(scale)) < 0:  # a mirroring scale flips the winding; keep faces outward
-        faces = faces[:, ::-1]
-    name, smooth = r.string("name", default_name), r.boolean("smooth", False)
-    world, faces = np.ascontiguousarray(world, np.float64), np.ascontiguousarray(faces, np.int64)
-    if mesh is not None and "material" not in t and mesh.materials:
+    # By default the file's own up axis (a USD stage's upAxis, glTF's y), else y: as placed in the file.
+    up = up_rotation(read_up(r, default=(mesh.up_axis or "y") if mesh is not None else "y"))
+    name, smooth = r.string("name", default_name), read_smooth(r)
+    turn = None if up is _UP_TO_Y["y"] else up
+
+    def place(v):
+        v = v if turn is None else v @ turn.T
+        return np.ascontiguousarray((v * scale) @ rot.T + translate, np.float64)
+
+    linear = rot @ np.diag(scale) @ (np.eye(3) if turn is None else turn)
+    if mesh is not None:
         # The file's own materials, unless the scene file names one for the object.
-        return split_by_material(name, world, faces, face_material, mesh.materials, materials,
-                                 material, smooth, part_starts)
-    return [SceneObject(name=name, vertices=world, faces=faces, material=material, smooth=smooth)]
+        objects = file_objects(name, mesh, materials, material, smooth, place, linear,
+                               use_file_materials="material" not in t)
+    else:
+        if len(faces) == 0:
+            r.fail("shape", "the mesh has no triangles")
+        if faces.min() < 0 or faces.max() >= len(vertices):
+            r.fail("faces", f"vertex index out of range [0, {len(vertices) - 1}]")
+        world = place(vertices)
+        if np.linalg.det(np.diag(scale)) < 0:  # a mirroring scale flips the winding; keep faces outward
+            faces = faces[:, ::-1]
+        faces = np.ascontiguousarray(faces, np.int64)
+        shading = resolve_normals(world, faces, smooth)
+        keep = shading.keep
+        take = (lambda a: a if a is None or keep is None else np.ascontiguousarray(a[keep]))
+        objects = [SceneObject(name=name, vertices=take(world), faces=shading.faces, material=material,
+                               smooth=shading.smooth, normals=shading.normals, uv=take(uv), colors=take(colors))]
+    for o in objects:
+        warn_if_tiny(source, f"objects[{i}]", o.vertices)
+    warn_if_unmapped(source, f"objects[{i}]", objects, materials,
+                     f" (shapes with them: {', '.join(shapes.WITH_UV)}, triangles with uv)" if mesh is None else "")
+    return objects
 
 
 def scene_from_dict(data: dict, source: str = "<scene>", base: Path | None = None) -> Scene:
@@ -294,7 +409,7 @@ def scene_from_dict(data: dict, source: str = "<scene>", base: Path | None = Non
     lights = [read_light(source, t, i) for i, t in enumerate(_array_of_tables(source, data, "lights"))]
     materials = {"default": DEFAULT_MATERIAL}
     for name, t in _table(source, data, "materials").items():
-        materials[name] = read_material(source, name, t)
+        materials[name] = read_material(source, name, t, base)
     objects = [o for i, t in enumerate(_array_of_tables(source, data, "objects"))
                for o in read_object(source, base, t, i, materials)]
     scene = Scene(camera, render, lights, materials, objects, source)

@@ -2,6 +2,7 @@
 
 Each builder returns float64 vertices (N, 3) and int64 faces (M, 3), counter-clockwise seen from
 outside, in the object's own space (centred at the origin; the plane lies in y = 0 facing +y).
+Where a textured material needs them, WITH_UV builds the same triangles with texture coordinates.
 """
 
 from __future__ import annotations
@@ -122,9 +123,61 @@ def torus_knot(p: int = 2, q: int = 3, radius: float = 1.0, tube: float = 0.15, 
     return v.reshape(-1, 3), faces.astype(np.int64)
 
 
-def triangles(vertices, faces):
-    """Explicit vertices and faces, as given."""
+def triangles(vertices, faces, uv=None, colors=None):
+    """Explicit vertices and faces, as given (uv and colours per vertex are read by the scene reader)."""
     return np.asarray(vertices, np.float64).reshape(-1, 3), np.asarray(faces, np.int64).reshape(-1, 3)
+
+
+# --- the same triangles with texture coordinates (v = 0 at an image's bottom row) ---------------------
+
+
+def plane_uv(size=(10.0, 10.0)):
+    """The plane with the whole texture on it, upright seen from +z: u along +x, v along -z."""
+    v, f = plane(size)
+    sx, sz = np.broadcast_to(np.asarray(size, np.float64), (2,)) * 0.5
+    return v, f, np.stack([(v[:, 0] + sx) / (2 * sx), (sz - v[:, 2]) / (2 * sz)], 1)
+
+
+def box_uv(size=(1.0, 1.0, 1.0)):
+    """The box with the whole texture on each side, upright seen from outside (the top side's up is
+    -z, the bottom's +z): its 8 corners split into 4 per side, the same 12 triangles."""
+    corners, faces = box(size)
+    half = np.broadcast_to(np.asarray(size, np.float64), (3,)) * 0.5
+    vertices, uv = corners[faces].reshape(-1, 3), np.zeros((3 * len(faces), 2))
+    p = vertices.reshape(-1, 3, 3)
+    n = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
+    n /= np.linalg.norm(n, axis=1, keepdims=True)
+    up = np.where(np.abs(n[:, 1:2]) > 0.5, np.array([[0.0, 0.0, -1.0]]) * np.sign(n[:, 1:2]), [[0.0, 1.0, 0.0]])
+    right = np.cross(up, n)
+    for k in range(3):  # positions relative to the centre, over the side's extent along each axis
+        uv[k::3, 0] = 0.5 + np.einsum("ij,ij->i", p[:, k], right) / (2 * np.abs(right) @ half)
+        uv[k::3, 1] = 0.5 + np.einsum("ij,ij->i", p[:, k], up) / (2 * np.abs(up) @ half)
+    return _welded(vertices, np.arange(len(vertices), dtype=np.int64).reshape(-1, 3), uv)
+
+
+def uv_sphere_uv(radius: float = 1.0, segments=(32, 64)):
+    """The latitude-longitude sphere with u = longitude / 360 degrees (from +x towards -z) and v = 1 at
+    the north pole: its seam and pole vertices split where their uv differ, the same triangles."""
+    v, f = uv_sphere(radius, segments)
+    rings, sectors = int(segments[0]), int(segments[1])
+    # Each corner's latitude index (0: north pole .. rings: south pole) and longitude index, counted
+    # past the seam (sectors, not 0) and mid-sector at a pole, in uv_sphere's face order.
+    s = np.arange(sectors, dtype=np.float64)
+    caps_ring = np.tile([[0, 1, 1], [rings, rings - 1, rings - 1]], (sectors, 1))
+    caps_col = np.stack([np.stack([s + 0.5, s, s + 1], 1), np.stack([s + 0.5, s + 1, s], 1)], 1).reshape(-1, 3)
+    r, s2 = (a.ravel().astype(np.float64) for a in np.meshgrid(np.arange(rings - 2), s, indexing="ij"))
+    body_ring = np.stack([np.stack([r + 1, r + 2, r + 2], 1), np.stack([r + 1, r + 2, r + 1], 1)], 1).reshape(-1, 3)
+    body_col = np.stack([np.stack([s2, s2, s2 + 1], 1), np.stack([s2, s2 + 1, s2 + 1], 1)], 1).reshape(-1, 3)
+    ring, col = np.concatenate([caps_ring, body_ring]), np.concatenate([caps_col, body_col])
+    return _welded(v[f.reshape(-1)], np.arange(f.size, dtype=np.int64).reshape(-1, 3),
+                   np.stack([col / sectors, 1.0 - ring / rings], -1).reshape(-1, 2))
+
+
+def _welded(vertices, faces, uv):
+    """One vertex per distinct (position, uv)."""
+    keys = np.ascontiguousarray(np.concatenate([vertices, uv], 1) + 0.0)
+    _, first, inverse = np.unique(keys.view(np.dtype((np.void, 40))).ravel(), return_index=True, return_inverse=True)
+    return vertices[first], inverse.reshape(-1)[faces].astype(np.int64), uv[first]
 
 
 # name -> (builder, {parameter: (kind, default)}); kinds are checked by the scene reader.
@@ -136,5 +189,9 @@ SHAPES = {
     "cylinder": (cylinder, {"radius": ("positive", 0.5), "height": ("positive", 1.0), "sections": ("int3", 64)}),
     "torus_knot": (torus_knot, {"p": ("int1", 2), "q": ("int1", 3), "radius": ("positive", 1.0), "tube": ("positive", 0.15),
                                 "segments": ("int2", [1024, 64])}),
-    "triangles": (triangles, {"vertices": ("points", None), "faces": ("faces", None)}),
+    "triangles": (triangles, {"vertices": ("points", None), "faces": ("faces", None), "uv": ("uv", None),
+                              "colors": ("colors", None)}),
 }
+
+# The shapes whose texture coordinates are defined, and their builders with uv.
+WITH_UV = {"plane": plane_uv, "box": box_uv, "uv_sphere": uv_sphere_uv}

@@ -5,11 +5,13 @@ SceneError naming the field in the file's vocabulary, raised before any kernel r
 from __future__ import annotations
 
 import math
+import weakref
 
 import numpy as np
 
 from ..errors import SceneError, show
 from .model import Camera, Scene
+from .texture import Texture
 
 MAX_IMAGE_SIDE = 16384
 
@@ -86,6 +88,26 @@ def _check_number(source, field_name, v, lo=0.0):
         raise SceneError(source, field_name, f"expected a finite number >= {lo:g}, got {show(v)}")
 
 
+_checked_textures = weakref.WeakSet()  # a texture's image is checked once, not at every frame
+
+
+def _check_texture(source, field_name, t):
+    if t is None or t in _checked_textures:
+        return
+    if not isinstance(t, Texture):
+        raise SceneError(source, field_name, f"expected a Texture, got {show(t)}")
+    uv_map = np.asarray(t.uv_transform, np.float64)
+    if uv_map.shape != (6,) or not np.all(np.isfinite(uv_map)):
+        raise SceneError(source, field_name, f"expected a uv map of 6 finite numbers, got {show(t.uv_transform)}")
+    if t.checker is not None:
+        for c in t.checker:
+            _check_vector(source, f"{field_name}.checker", c, nonneg=True)
+    elif not (isinstance(t.image, np.ndarray) and t.image.ndim == 3 and t.image.shape[2] == 3 and t.image.size
+              and np.all(np.isfinite(t.image)) and t.image.min() >= 0):
+        raise SceneError(source, field_name, "expected an (H, W, 3) image of finite non-negative linear values")
+    _checked_textures.add(t)
+
+
 def validate_scene(scene: Scene):
     """Everything render() relies on: finite values in range, geometry within float32 reach of the
     eye, and an image that cannot overflow."""
@@ -105,15 +127,21 @@ def validate_scene(scene: Scene):
         if np.abs(position - eye).max() > MAX_REACH:
             raise SceneError(src, f"lights[{i}].position", f"is more than {MAX_REACH:g} from camera.eye; "
                                                            "float32 ray tests cannot reach it")
+    # Vertex colours multiply ka and kd: the brightest of them scales what a material can reflect.
+    color_max = max([1.0] + [float(np.max(o.colors, initial=0.0)) for o in scene.objects
+                             if getattr(o, "colors", None) is not None and np.all(np.isfinite(o.colors))])
     lit_max, kr_max, coef_max = np.zeros(3), 0.0, 0.0
     for name, m in scene.materials.items():
         for key in ("kd", "ks", "reflectivity", "ka"):
             _check_vector(src, f"materials.{name}.{key}", getattr(m, key), nonneg=True)
         _check_number(src, f"materials.{name}.shininess", m.shininess)
-        lit = ambient * np.asarray(m.ka) + light_max * (np.asarray(m.kd) + np.asarray(m.ks))
+        for key in ("ka", "kd", "ks"):
+            _check_texture(src, f"materials.{name}.{key}_texture", getattr(m, f"{key}_texture", None))
+        ka, kd, ks = (m.peak(k) for k in ("ka", "kd", "ks"))
+        lit = (ambient * ka + light_max * kd) * color_max + light_max * ks
         lit_max = np.maximum(lit_max, lit)
         kr_max = max(kr_max, float(np.max(m.reflectivity)))
-        coef_max = max(coef_max, float(np.max(np.asarray(m.kd) + np.asarray(m.ks))), float(np.max(m.ka)))
+        coef_max = max(coef_max, float(np.max(kd * color_max + ks)), float(np.max(ka)) * color_max)
     for i, obj in enumerate(scene.objects):
         where = f"objects[{i}]"
         v = np.asarray(obj.vertices)
@@ -124,6 +152,15 @@ def validate_scene(scene: Scene):
             raise SceneError(src, f"{where}.faces", f"expected (M, 3) vertex indices in [0, {len(v) - 1}] ('{obj.name}')")
         if obj.material not in scene.materials:
             raise SceneError(src, f"{where}.material", f"no material named '{obj.material}'")
+        for key, width, nonneg in (("normals", 3, False), ("uv", 2, False), ("colors", 3, True)):
+            a = getattr(obj, key, None)
+            if a is None:
+                continue
+            a = np.asarray(a)
+            if a.shape != (len(v), width) or a.dtype.kind not in "fiu" or not np.all(np.isfinite(a)) or (nonneg and (a < 0).any()):
+                what = "non-negative " if nonneg else ""
+                raise SceneError(src, f"{where}.{key}", f"expected ({len(v)}, {width}) finite {what}values, one per "
+                                                        f"vertex ('{obj.name}')")
         if len(v) and np.abs(v - eye).max() > MAX_REACH:
             raise SceneError(src, where, f"'{obj.name}' reaches more than {MAX_REACH:g} from "
                                                        "camera.eye; float32 ray tests cannot reach it")

@@ -1,0 +1,388 @@
+"""USD stages through pxr (usd-core): every visible Mesh prim in world space, PointInstancer copies,
+UsdPreviewSurface materials and the primvars that colour and shade them.
+
+What is read: points, faceVertexCounts/Indices, holeIndices (polygons fanned as Hydra does),
+orientation, the prim's world transform; the st primvar a bound UsdUVTexture reads (through its
+UsdPrimvarReader), normals (primvars:normals before the normals attribute) and displayColor, each of
+any interpolation, indexed or not; diffuseColor (a value, or a UsdUVTexture with its scale and
+bias), per prim and per GeomSubset; metersPerUnit and upAxis where the stage authors them.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import sys
+import tempfile
+from contextlib import contextmanager
+from pathlib import Path
+
+import numpy as np
+
+from ...diagnostics import warn
+from ...errors import SceneError
+from ..model import Material
+from ..texture import Texture, image_texture
+from . import MeshFile, MeshPart, dedupe, fan_corners, unique_name, unit_rows, weld_corners
+
+_USD_GREY = (0.18, 0.18, 0.18)  # UsdPreviewSurface's diffuseColor when not authored
+
+
+@contextmanager
+def _usd_diagnostics(src: str):
+    """pxr prints its C++ diagnostics, several lines each, straight to the process's stderr: catch them
+    there and pass on the first line of each as one warning."""
+    sys.stderr.flush()
+    saved = os.dup(2)
+    captured = tempfile.TemporaryFile()
+    os.dup2(captured.fileno(), 2)
+    try:
+        yield
+    finally:
+        sys.stderr.flush()
+        os.dup2(saved, 2)
+        os.close(saved)
+        captured.seek(0)
+        text = captured.read().decode(errors="replace")
+        captured.close()
+        for line in text.splitlines():  # warprt's own warnings, given while the stream was caught
+            if line.startswith("warprt: "):
+                print(line, file=sys.stderr)
+        for message in re.findall(r"(?:Warning|Error|Coding Error)[^:]*: (?:in [^:]* at line \d+ of [^-]*-- )?([^\n]+)", text):
+            warn(src, None, _plain(message))
+
+
+def _plain(message: str) -> str:
+    """A pxr message without its C++ namespaces and quoting."""
+    message = re.sub(r"pxrInternal_[A-Za-z0-9_]*::", "", message)
+    message = re.sub(r"\s*<0x[0-9a-fA-F]+>", "", message)  # object addresses: noise, and never the same twice
+    return " ".join(message.split())
+
+
+def read_usd(path: Path) -> MeshFile:
+    src = str(path)
+    try:
+        from pxr import Usd
+    except ImportError:
+        raise SceneError(src, None, "reading USD needs the usd-core package (pip install usd-core)") from None
+    with _usd_diagnostics(src):
+        try:
+            stage = Usd.Stage.Open(src)
+        except Exception as e:
+            raise SceneError(src, None, f"cannot open USD stage: {_pxr_message(e)}") from None
+        if stage is None:
+            raise SceneError(src, None, "cannot open USD stage")
+        return _Stage(path, stage).mesh_file()
+
+
+def _pxr_message(e: Exception) -> str:
+    """The first quoted reason in a pxr error, without its C++ namespaces."""
+    text = str(e)
+    found = re.findall(r": '(.*?)'\s*(?:\n|$)", text, flags=re.S)
+    return _plain(found[0] if found else text)
+
+
+class _Stage:
+    def __init__(self, path: Path, stage):
+        from pxr import Usd, UsdGeom
+
+        self.path, self.src, self.stage = path, str(path), stage
+        # The earliest time sample: a stage animated from frame 1 has no value at the default time.
+        self.time = Usd.TimeCode.EarliestTime()
+        self.xforms = UsdGeom.XformCache(self.time)
+        # pxr answers 0.01 (centimetres) and Y for a stage that says nothing: only what is authored counts.
+        self.meters = float(UsdGeom.GetStageMetersPerUnit(stage)) if stage.HasAuthoredMetadata("metersPerUnit") else 1.0
+        self.up = str(UsdGeom.GetStageUpAxis(stage)) if stage.HasAuthoredMetadata("upAxis") else None
+        self.materials: list[tuple[str, Material]] = []
+        self.uv_names: list[str | None] = []  # the primvar each material's texture reads
+        self._index: dict[str, int] = {}
+
+    def mesh_file(self) -> MeshFile:
+        from pxr import Usd, UsdGeom
+
+        prototypes, instancers = set(), []
+        for prim in self.stage.Traverse(Usd.TraverseInstanceProxies()):
+            if prim.IsA(UsdGeom.PointInstancer):
+                targets = [str(t) for t in UsdGeom.PointInstancer(prim).GetPrototypesRel().GetTargets()]
+                prototypes.update(targets)
+                instancers.append((UsdGeom.PointInstancer(prim), targets))
+
+        def is_prototype(prim) -> bool:  # drawn only where its instancer places it
+            while prim and not prim.IsPseudoRoot():
+                if str(prim.GetPath()) in prototypes:
+                    return True
+                prim = prim.GetParent()
+            return False
+
+        parts = []
+        for prim in self.stage.Traverse(Usd.TraverseInstanceProxies()):
+            if prim.IsA(UsdGeom.Mesh) and not is_prototype(prim) and self._drawn(prim):
+                part = self._mesh(prim, np.asarray(self.xforms.GetLocalToWorldTransform(prim), np.float64),
+                                  str(prim.GetPath()))
+                if part is not None:
+                    parts.append(part)
+        for instancer, targets in instancers:
+            if not self._drawn(instancer.GetPrim()) or is_prototype(instancer.GetPrim().GetParent()):
+                continue
+            world = np.asarray(self.xforms.GetLocalToWorldTransform(instancer.GetPrim()), np.float64)
+            proto_index, placements = self._instances(instancer)
+            for t, target in enumerate(targets):
+                root = self.stage.GetPrimAtPath(target)
+                if not root:
+                    continue
+                for prim in Usd.PrimRange(root, Usd.TraverseInstanceProxies()):
+                    if not prim.IsA(UsdGeom.Mesh) or not self._drawn(prim, under=root):
+                        continue
+                    # The mesh in its prototype, the prototype root's own transform included.
+                    local, _ = self.xforms.ComputeRelativeTransform(prim, root.GetParent())
+                    local = np.asarray(local, np.float64)
+                    for k in np.nonzero(proto_index == t)[0]:
+                        part = self._mesh(prim, local @ placements[k] @ world, f"{prim.GetPath()}[{k}]")
+                        if part is not None:
+                            parts.append(part)
+        return MeshFile(self.path, parts, self.materials, up_axis=self.up)
+
+    def _drawn(self, prim, under=None) -> bool:
+        from pxr import UsdGeom
+
+        image = UsdGeom.Imageable(prim)
+        if under is None and image.ComputeVisibility(self.time) == UsdGeom.Tokens.invisible:
+            return False
+        if under is not None and image.GetVisibilityAttr().Get(self.time) == UsdGeom.Tokens.invisible:
+            return False
+        return image.ComputePurpose() not in (UsdGeom.Tokens.guide, UsdGeom.Tokens.proxy)
+
+    def _instances(self, instancer) -> tuple[np.ndarray, np.ndarray]:
+        """Per visible instance: its prototype's index and its transform in the instancer's space (row
+        vectors), computed in float64 from normalised quaternions (orientations are half precision, and
+        pxr does not normalise them: a scale of 2 would come out 1.9996)."""
+        t = self.time
+        proto_index = np.asarray(instancer.GetProtoIndicesAttr().Get(t) or [], np.int64)
+        n = len(proto_index)
+        positions = instancer.GetPositionsAttr().Get(t)
+        orientations = instancer.GetOrientationsAttr().Get(t)
+        scales = instancer.GetScalesAttr().Get(t)
+        m = np.tile(np.eye(4), (n, 1, 1))
+        if scales is not None and len(scales) == n:
+            m[:, :3, :3] = np.asarray(scales, np.float64)[:, :, None] * np.eye(3)
+        if orientations is not None and len(orientations) == n:
+            q = np.array([[float(o.GetReal()), *(float(c) for c in o.GetImaginary())] for o in orientations])
+            m[:, :3, :3] = m[:, :3, :3] @ _rotation_rows(q / np.linalg.norm(q, axis=1, keepdims=True))
+        if positions is not None and len(positions) == n:
+            m[:, 3, :3] = np.asarray(positions, np.float64)
+        visible = np.ones(n, bool)
+        invisible = instancer.GetInvisibleIdsAttr().Get(t)
+        if invisible:
+            ids = instancer.GetIdsAttr().Get(t)
+            ids = np.asarray(ids, np.int64) if ids else np.arange(n)
+            visible &= ~np.isin(ids, np.asarray(invisible, np.int64))
+        return proto_index[visible], m[visible]
+
+    def _mesh(self, prim, to_world: np.ndarray, name: str) -> MeshPart | None:
+        from pxr import UsdGeom, UsdShade
+
+        t = self.time
+        mesh = UsdGeom.Mesh(prim)
+        points = mesh.GetPointsAttr().Get(t)
+        counts = mesh.GetFaceVertexCountsAttr().Get(t)
+        indices = mesh.GetFaceVertexIndicesAttr().Get(t)
+        if points is None or counts is None or indices is None or len(counts) == 0:
+            return None
+        points = np.asarray(points, np.float64).reshape(-1, 3)
+        counts = np.asarray(counts, np.int64)
+        indices = np.asarray(indices, np.int64)
+        if counts.sum() != len(indices) or (counts < 0).any():
+            raise SceneError(self.src, name, f"faceVertexCounts add up to {counts.sum()} but there are "
+                                             f"{len(indices)} faceVertexIndices")
+        if len(indices) and (indices.min() < 0 or indices.max() >= len(points)):
+            raise SceneError(self.src, name, f"a face refers to a vertex that does not exist (the prim has {len(points)})")
+        corner, polygon = fan_corners(counts, mesh.GetHoleIndicesAttr().Get(t) or [])
+        position = indices[corner]
+
+        per_polygon = np.full(len(counts), self._bound(prim), np.int64)
+        for subset in UsdShade.MaterialBindingAPI(prim).GetMaterialBindSubsets():
+            k = self._bound(subset.GetPrim())
+            ids = np.asarray(subset.GetIndicesAttr().Get(t) or [], np.int64)
+            if k >= 0 and len(ids):
+                per_polygon[ids[(ids >= 0) & (ids < len(counts))]] = k
+
+        primvars = UsdGeom.PrimvarsAPI(prim)
+        uv_name = next((self.uv_names[k] for k in np.unique(per_polygon) if k >= 0 and self.uv_names[k]), "st")
+        uv, uv_key = self._primvar(primvars.GetPrimvar(uv_name), name, corner, polygon, position, 2)
+        colors, color_key = self._primvar(mesh.GetDisplayColorPrimvar(), name, corner, polygon, position, 3)
+        if colors is not None and len(colors) == 1 and mesh.GetDisplayColorPrimvar().GetInterpolation() == "constant":
+            colors = None  # one colour for the whole prim: a material, where nothing else is bound
+            if (per_polygon < 0).any():
+                kd = tuple(max(0.0, float(x)) for x in mesh.GetDisplayColorPrimvar().Get(t)[0])
+                k = self._material(name + ".displayColor", f"{prim.GetName()}.displayColor",
+                                   lambda: Material(kd=kd, ka=kd, ks=(0.0, 0.0, 0.0)))
+                per_polygon[per_polygon < 0] = k
+        normals = self._normals(mesh, primvars, name, corner, polygon, position)
+
+        keys = [position] + [key for a, key in ((uv, uv_key), (colors, color_key)) if a is not None]
+        faces, rows = weld_corners(keys, len(points))
+        rows = iter(rows)
+        a = to_world[:3, :3]
+        vertices = (points[next(rows)] @ a + to_world[3, :3]) * self.meters
+        part = MeshPart(name, vertices, faces, per_polygon[polygon])
+        if uv is not None:
+            part.uv = uv[next(rows)]
+        if colors is not None:
+            part.colors = np.clip(colors[next(rows)], 0.0, None)
+        if normals is not None:
+            part.normals = unit_rows(normals @ np.linalg.inv(a).T)
+        left = mesh.GetOrientationAttr().Get(t) == UsdGeom.Tokens.leftHanded
+        if left != (np.linalg.det(a) < 0):  # clockwise front faces, or mirrored by the transform
+            part.faces = np.ascontiguousarray(part.faces[:, ::-1])
+            part.normals = None if part.normals is None else np.ascontiguousarray(part.normals[:, ::-1])
+        return part
+
+    def _primvar(self, pv, name, corner, polygon, position, width):
+        """A primvar's values and, per triangle corner, the index of its value there; (None, None) if
+        the prim has none or too few values for its interpolation (warned)."""
+        if not pv or not pv.HasValue():
+            return None, None
+        values = pv.ComputeFlattened(self.time)  # primvars:<name>:indices applied
+        if values is None or len(values) == 0:
+            return None, None
+        values = np.asarray(values, np.float64).reshape(len(values), -1)[:, :width]
+        interpolation = str(pv.GetInterpolation())
+        index = {"constant": np.zeros_like(corner), "uniform": np.repeat(polygon[:, None], 3, 1),
+                 "vertex": position, "varying": position, "faceVarying": corner}.get(interpolation)
+        if index is None or values.shape[1] != width or (index.size and index.max() >= len(values)):
+            warn(self.src, f"{name}: {pv.GetName()}", f"{len(values)} values do not fit interpolation "
+                                                     f"'{interpolation}'; not read")
+            return None, None
+        if interpolation in ("faceVarying", "uniform"):
+            values, index = dedupe(values, index)  # else every corner would become its own vertex
+        return values, index
+
+    def _normals(self, mesh, primvars, name, corner, polygon, position):
+        """The prim's own normals at each triangle corner (M, 3, 3), in its local space, or None."""
+        pv = primvars.GetPrimvar("normals")
+        if pv and pv.HasValue():
+            values, index = self._primvar(pv, name, corner, polygon, position, 3)
+        else:
+            values = mesh.GetNormalsAttr().Get(self.time)
+            if values is None or len(values) == 0:
+                return None
+            values = np.asarray(values, np.float64).reshape(-1, 3)
+            interpolation = str(mesh.GetNormalsInterpolation())
+            index = {"constant": np.zeros_like(corner), "uniform": np.repeat(polygon[:, None], 3, 1),
+                     "faceVarying": corner}.get(interpolation, position)
+            if index.size and index.max() >= len(values):
+                warn(self.src, f"{name}: normals", f"{len(values)} values do not fit interpolation '{interpolation}'; "
+                                                   "normals are computed instead")
+                return None
+        return None if values is None else values[index]
+
+    def _material(self, key: str, name: str, make, uv_name: str | None = None) -> int:
+        if key not in self._index:
+            self._index[key] = len(self.materials)
+            self.materials.append((unique_name(name, [n for n, _ in self.materials]), make()))
+            self.uv_names.append(uv_name)
+        return self._index[key]
+
+    def _bound(self, prim) -> int:
+        from pxr import UsdShade
+
+        mat, _ = UsdShade.MaterialBindingAPI(prim).ComputeBoundMaterial()
+        if not mat:
+            return -1
+        key = str(mat.GetPath())
+        if key not in self._index:
+            phong, uv_name = self._phong(mat)
+            return self._material(key, mat.GetPrim().GetName(), lambda: phong, uv_name)
+        return self._index[key]
+
+    def _phong(self, mat) -> tuple[Material, str | None]:
+        """UsdPreviewSurface's diffuseColor as kd (= ka), a value or a UsdUVTexture; and the primvar
+        the texture reads its st from."""
+        where = str(mat.GetPath())
+        shader = mat.ComputeSurfaceSource()[0]
+        if not shader or shader.GetIdAttr().Get() != "UsdPreviewSurface":
+            return Material(kd=_USD_GREY, ka=_USD_GREY, ks=(0.0, 0.0, 0.0)), None
+        for inp, what, idle in (("opacity", "transparency (opacity)", 1.0), ("emissiveColor", "emission", (0, 0, 0))):
+            value = _value(shader, inp)
+            if value is not None and (np.asarray(value, np.float64) != np.asarray(idle)).any():
+                warn(self.src, where, f"{what} is not rendered")
+        inp = shader.GetInput("diffuseColor")
+        source, output, last = _source(inp) if inp else (None, None, None)
+        if source is None:
+            value = last.Get() if last else None
+            kd = tuple(max(0.0, float(x)) for x in value) if value is not None else _USD_GREY
+            return Material(kd=kd, ka=kd, ks=(0.0, 0.0, 0.0)), None
+        if source.GetIdAttr().Get() != "UsdUVTexture":
+            warn(self.src, where, f"diffuseColor comes from a {source.GetIdAttr().Get()} shader, which is not read")
+            return Material(kd=_USD_GREY, ka=_USD_GREY, ks=(0.0, 0.0, 0.0)), None
+        texture, uv_name = self._uv_texture(source, output, where)
+        white = (1.0, 1.0, 1.0)
+        if texture is None:
+            return Material(kd=_USD_GREY, ka=_USD_GREY, ks=(0.0, 0.0, 0.0)), None
+        return Material(kd=white, ka=white, ks=(0.0, 0.0, 0.0), kd_texture=texture, ka_texture=texture), uv_name
+
+    def _uv_texture(self, shader, output, where):
+        """A UsdUVTexture as a Texture (its scale and bias applied to the texels), and its st primvar."""
+        asset = _value(shader, "file")
+        if asset is None:
+            warn(self.src, where, "UsdUVTexture without a file; the material is untextured")
+            return None, None
+        path = asset.resolvedPath or str(Path(self.src).parent / asset.path)
+        space = str(_value(shader, "sourceColorSpace") or "auto")
+        try:
+            texture = image_texture(path, srgb={"sRGB": True, "raw": False}.get(space), source=path)
+        except SceneError as e:
+            warn(self.src, where, f"{e}; the material is untextured")
+            return None, None
+        for axis in ("wrapS", "wrapT"):
+            mode = str(_value(shader, axis) or "useMetadata")
+            if mode not in ("repeat", "useMetadata"):
+                warn(self.src, where, f"texture {axis} '{mode}' is sampled as repeat")
+        if output not in (None, "rgb"):
+            warn(self.src, where, f"diffuseColor reads the texture's '{output}' output; its rgb is used")
+        scale, bias = _value(shader, "scale"), _value(shader, "bias")
+        if scale is not None or bias is not None:
+            s = np.asarray(scale if scale is not None else (1, 1, 1, 1), np.float64)[:3]
+            b = np.asarray(bias if bias is not None else (0, 0, 0, 0), np.float64)[:3]
+            # An affine map per texel commutes with bilinear filtering: applied once, here.
+            image = np.ascontiguousarray(np.maximum(texture.image * s + b, 0.0), np.float32)
+            texture = Texture(image=image, source=texture.source)
+        uv_name = "st"
+        st = shader.GetInput("st")
+        if st:
+            reader, _, _ = _source(st)
+            if reader and str(reader.GetIdAttr().Get()).startswith("UsdPrimvarReader"):
+                uv_name = str(_value(reader, "varname") or "st")
+        return texture, uv_name
+
+
+def _source(inp):
+    """The shader (and its output) an input is connected to, through Material interface inputs; or
+    (None, None, the last input) where the chain ends in a value."""
+    from pxr import UsdShade
+
+    for _ in range(16):
+        if not inp or not inp.HasConnectedSource():
+            return None, None, inp
+        source, name, kind = inp.GetConnectedSource()
+        if kind == UsdShade.AttributeType.Output:
+            return UsdShade.Shader(source.GetPrim()), str(name), None
+        inp = source.GetInput(name)
+    return None, None, inp
+
+
+def _value(shader, name):
+    inp = shader.GetInput(name)
+    if not inp:
+        return None
+    source, _, last = _source(inp)
+    return last.Get() if source is None and last else None
+
+
+def _rotation_rows(q: np.ndarray) -> np.ndarray:
+    """Unit quaternions (w, x, y, z) as rotation matrices acting on row vectors (p' = p R)."""
+    w, x, y, z = q.T
+    return np.stack([
+        np.stack([1 - 2 * (y * y + z * z), 2 * (x * y + w * z), 2 * (x * z - w * y)], -1),
+        np.stack([2 * (x * y - w * z), 1 - 2 * (x * x + z * z), 2 * (y * z + w * x)], -1),
+        np.stack([2 * (x * z + w * y), 2 * (y * z - w * x), 1 - 2 * (x * x + y * y)], -1)], 1)
