@@ -1,5 +1,6 @@
 """The scene flattened for the kernels: one triangle set in camera-relative float32, with a
-per-triangle material index, vertex normals for smooth objects, and material and light tables.
+per-triangle material index, vertex normals for smooth objects, material tables (Phong, and the
+dielectrics' ior, k_t and sigma), light tables, and the medium the eye is in.
 
 Coordinates are made relative to the eye in float64 before the cast to float32, so a scene far
 from the origin keeps the precision it has near it (the camera ray origin is exactly 0).
@@ -9,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 from .._warp import wp
-from ..scene import vertex_normals
+from ..scene import eye_medium, vertex_normals
 from .bvh import build_mesh
 
 
@@ -26,6 +27,10 @@ class SceneData:
     ks: wp.array(dtype=wp.vec3)
     kr: wp.array(dtype=wp.vec3)
     shininess: wp.array(dtype=float)
+    ior: wp.array(dtype=float)  # eta of a dielectric, 0 for an opaque material
+    transmittance: wp.array(dtype=wp.vec3)  # k_t
+    absorption: wp.array(dtype=wp.vec3)  # sigma per scene unit
+    eye_medium: int  # the dielectric material holding the eye, -1: air
     light_pos: wp.array(dtype=wp.vec3)  # camera-relative
     light_color: wp.array(dtype=wp.vec3)
     num_lights: int
@@ -91,6 +96,12 @@ class Geometry:
         s.ks = vec([x.ks for x in m])
         s.kr = vec([x.reflectivity for x in m])
         s.shininess = wp.array(np.asarray([x.shininess for x in m], np.float32), dtype=float, device=d)
+        s.ior = wp.array(np.asarray([x.ior or 0.0 for x in m], np.float32), dtype=float, device=d)
+        s.transmittance = vec([x.transmittance for x in m])
+        s.absorption = vec([x.absorption for x in m])
+        # Only the tracer follows rays into a medium (the Z-buffer's geometry has no BVH).
+        medium = eye_medium(scene) if build_bvh and any(x.dielectric for x in m) else None
+        s.eye_medium = names.index(medium) if medium is not None else -1
         s.light_pos = vec([np.asarray(l.position) - self.origin for l in lights] or [[0, 0, 0]])
         s.light_color = vec([l.color for l in lights] or [[0, 0, 0]])
         s.num_lights = len(lights)

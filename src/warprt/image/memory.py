@@ -30,7 +30,8 @@ def geometry_memory(geom) -> dict:
         "indices": size(geom.indices),  # int32, 3 per triangle
         "normals": size(d.normals),
         "per_triangle": size(d.tri_material, d.tri_smooth),
-        "materials_lights": size(d.ka, d.kd, d.ks, d.kr, d.shininess, d.light_pos, d.light_color),
+        "materials_lights": size(d.ka, d.kd, d.ks, d.kr, d.shininess, d.ior, d.transmittance, d.absorption,
+                                 d.light_pos, d.light_color),
         "bvh": bvh_bytes(geom.triangle_count) if getattr(geom, "mesh", None) is not None else 0,
     }
     out["total"] = sum(out.values())

@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import SceneError
+from .dielectric import warn_unclosed
 from .meshio import read_mesh_file, split_by_material
 from .model import Camera, Light, Material, RenderSettings, Scene
 
@@ -42,10 +43,14 @@ def scene_for_mesh(path: Path, width: int = 640, height: int = 480) -> Scene:
     # The file's own materials where it has them; "mesh" for faces without one.
     objects = split_by_material(Path(path).stem, vertices, faces, face_material, mesh.materials, materials,
                                 "mesh", True, part_starts)
-    # Primary rays only, unless the file has mirrors (MTL illum 3): then two reflection levels.
+    # Primary rays only, unless the file has mirrors (MTL illum 3): then two reflection levels; or
+    # glass, whose ray tree needs at least two levels per crossing.
     mirrors = any(max(m.reflectivity) > 0 for _, m in mesh.materials)
-    return Scene(camera, RenderSettings(ambient=(0.15, 0.15, 0.15), max_depth=3 if mirrors else 1), lights,
-                 materials, objects, str(path))
+    glass = any(m.dielectric for _, m in mesh.materials)
+    scene = Scene(camera, RenderSettings(ambient=(0.15, 0.15, 0.15), max_depth=6 if glass else 3 if mirrors else 1),
+                  lights, materials, objects, str(path))
+    warn_unclosed(scene)
+    return scene
 
 
 def _floats(v) -> tuple:

@@ -11,7 +11,8 @@ import numpy as np
 
 from ..errors import SceneError
 
-EFFECTS = ("ambient", "diffuse", "specular", "shadows", "reflection", "supersampling", "smooth")
+EFFECTS = ("ambient", "diffuse", "specular", "shadows", "reflection", "supersampling", "smooth", "refraction",
+           "absorption")
 
 
 @dataclass(frozen=True)
@@ -23,6 +24,8 @@ class EffectSet:
     reflection: bool = True
     supersampling: bool = False
     smooth: bool = False
+    refraction: bool = False
+    absorption: bool = False
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -32,7 +35,7 @@ class EffectSet:
     def variant(self) -> str:
         """A short stable name for the compiled kernel variant, e.g. 'trace_adsS_r'."""
         letters = {"ambient": "a", "diffuse": "d", "specular": "s", "shadows": "S",
-                   "reflection": "r", "supersampling": "x", "smooth": "n"}
+                   "reflection": "r", "supersampling": "x", "smooth": "n", "refraction": "t", "absorption": "b"}
         return "".join(letters[n] for n in self.names) or "none"
 
     def __str__(self) -> str:
@@ -53,6 +56,10 @@ def scene_effects(scene) -> EffectSet:
         reflection=scene.render.max_depth > 1 and any(max(m.reflectivity) > 0 for m in mats),
         supersampling=scene.render.spp > 1,
         smooth=any(o.smooth for o in scene.objects),
+        # A dielectric's ray tree needs a second ray level; Beer's law can act on the first (an eye
+        # inside absorbing glass).
+        refraction=scene.render.max_depth > 1 and any(m.dielectric for m in mats),
+        absorption=any(m.dielectric and max(m.absorption) > 0 for m in mats),
     )
 
 
@@ -83,5 +90,6 @@ def resolve_effects(scene, allow=None, disable=()) -> EffectSet:
 
 
 def zbuffer_effects(scene, effects=None, disable=()) -> EffectSet:
-    """The scene's effect set without what a Z-buffer cannot simulate: shadows and reflections."""
-    return replace(resolve_effects(scene, effects, disable), shadows=False, reflection=False)
+    """The scene's effect set without what a Z-buffer cannot simulate: shadows, reflections, refraction."""
+    return replace(resolve_effects(scene, effects, disable), shadows=False, reflection=False, refraction=False,
+                   absorption=False)

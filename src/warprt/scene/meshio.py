@@ -10,12 +10,13 @@ import json
 import math
 import re
 import struct
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import SceneError, show
+from .dielectric_formats import dielectric_from_gltf, dielectric_from_mtl, dielectric_from_usd
 from .model import Material, SceneObject
 from .normals import vertex_normals
 
@@ -180,7 +181,7 @@ def _load_trimesh(path: Path) -> MeshFile:
     if not isinstance(loaded, trimesh.Scene):
         raise SceneError(src, None, "the mesh has no triangles")
 
-    exact = _gltf_base_colors(path) if ext in (".glb", ".gltf") else {}
+    exact = _gltf_materials(path) if ext in (".glb", ".gltf") else {}
     materials: list[tuple[str, Material]] = []
     index_of: dict[int, int] = {}  # id(trimesh material) -> index in materials
 
@@ -233,13 +234,16 @@ def _phong_from_trimesh(src: str, m, exact: dict) -> Material | None:
         # glTF: the base colour is the diffuse colour; metallic-roughness has no Phong term here.
         rgba = m.baseColorFactor
         key = (m.name, None if rgba is None else tuple(int(x) for x in rgba))
-        if key in exact:
-            kd = exact[key]
+        written = exact.get(key, {})
+        factor = (written.get("pbrMetallicRoughness") or {}).get("baseColorFactor")
+        if factor is not None:
+            kd = tuple(float(x) for x in factor[:3])
         elif rgba is None:
             kd = (1.0, 1.0, 1.0)  # the glTF default
         else:
             kd = tuple(float(x) / 255.0 for x in np.asarray(rgba)[:3])
-        return Material(kd=kd, ka=kd, ks=(0.0, 0.0, 0.0))
+        return replace(Material(kd=kd, ka=kd, ks=(0.0, 0.0, 0.0)),
+                       **dielectric_from_gltf(written, src, f"materials['{m.name}']"))
     # trimesh keeps an MTL's statements as they were written in the material's kwargs
     # (its own diffuse/ambient/specular are 8-bit copies).
     raw = getattr(m, "kwargs", None) or {}
@@ -250,7 +254,8 @@ def _phong_from_trimesh(src: str, m, exact: dict) -> Material | None:
 
 def _phong_from_mtl(src: str, name: str, raw: dict) -> Material:
     """MTL statements to Phong: Ka, Kd, Ks, Ns as they are; illum 0 and 1 have no highlight and
-    illum 3 adds a mirror reflection weighted by Ks (the MTL specification's illumination models)."""
+    illum 3 adds a mirror reflection weighted by Ks (the MTL specification's illumination models);
+    illum 4, 6 and 7 make a dielectric (dielectric_from_mtl)."""
 
     def rgb(key, default):
         v = raw.get(key)
@@ -285,12 +290,13 @@ def _phong_from_mtl(src: str, name: str, raw: dict) -> Material:
     kr = ks if illum == 3 else (0.0, 0.0, 0.0)
     if illum in (0, 1):
         ks = (0.0, 0.0, 0.0)
-    return Material(kd=kd, ka=ka, ks=ks, shininess=ns, reflectivity=kr)
+    return replace(Material(kd=kd, ka=ka, ks=ks, shininess=ns, reflectivity=kr), **dielectric_from_mtl(raw, src, name))
 
 
-def _gltf_base_colors(path: Path) -> dict:
-    """Exact base colours from the glTF JSON, keyed the way trimesh shows the material (name,
-    8-bit RGBA): trimesh keeps them only as 8-bit values. Ambiguous keys are left out."""
+def _gltf_materials(path: Path) -> dict:
+    """The glTF JSON of each material, keyed the way trimesh shows the material (name, 8-bit RGBA
+    or None): trimesh keeps base colours only as 8-bit values, and no extensions. Ambiguous keys
+    are left out."""
     try:
         data = path.read_bytes()
         if data[:4] == b"glTF":
@@ -302,19 +308,24 @@ def _gltf_base_colors(path: Path) -> dict:
         return {}
     out, seen = {}, set()
     for m in header.get("materials", []) if isinstance(header, dict) else []:
-        pbr = m.get("pbrMetallicRoughness", {}) if isinstance(m, dict) else {}
-        rgba = pbr.get("baseColorFactor")
-        if not (isinstance(rgba, list) and len(rgba) == 4):
+        if not isinstance(m, dict):
             continue
+        pbr = m.get("pbrMetallicRoughness", {})
+        rgba = pbr.get("baseColorFactor") if isinstance(pbr, dict) else None
         try:
-            key = (m.get("name"), tuple(int(x) for x in np.round(np.clip(np.asarray(rgba, np.float64), 0, 1) * 255)))
+            if rgba is None:
+                key = (m.get("name"), None)
+            elif isinstance(rgba, list) and len(rgba) == 4:
+                key = (m.get("name"), tuple(int(x) for x in np.round(np.clip(np.asarray(rgba, np.float64), 0, 1) * 255)))
+            else:
+                continue
         except (TypeError, ValueError):
             continue
         if key in seen:
             out.pop(key, None)
         else:
             seen.add(key)
-            out[key] = tuple(float(x) for x in rgba[:3])
+            out[key] = m
     return out
 
 
@@ -416,15 +427,18 @@ def fan_triangulate(counts: np.ndarray, indices: np.ndarray, holes=()) -> tuple[
 
 
 def _phong_from_usd(mat) -> Material:
-    """UsdPreviewSurface's diffuseColor is the diffuse colour (0.18 grey when not authored)."""
+    """UsdPreviewSurface's diffuseColor is the diffuse colour (0.18 grey when not authored); an
+    opacity below 1 makes a dielectric (dielectric_from_usd)."""
     kd = (0.18, 0.18, 0.18)
     shader = mat.ComputeSurfaceSource()[0]
+    glass = {}
     if shader and shader.GetIdAttr().Get() == "UsdPreviewSurface":
         inp = shader.GetInput("diffuseColor")
         value = inp.Get() if inp else None
         if value is not None:
             kd = tuple(max(0.0, float(x)) for x in value)
-    return Material(kd=kd, ka=kd, ks=(0.0, 0.0, 0.0))
+        glass = dielectric_from_usd(shader)
+    return replace(Material(kd=kd, ka=kd, ks=(0.0, 0.0, 0.0)), **glass)
 
 
 def _display_color(mesh, time):

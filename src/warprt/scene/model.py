@@ -41,17 +41,26 @@ class Light:
 
 @dataclass(frozen=True)
 class Material:
-    """Phong coefficients ka, kd, ks, the exponent n (shininess) and the mirror weight k_r."""
+    """Phong coefficients ka, kd, ks, the exponent n (shininess) and the mirror weight k_r; with an
+    index of refraction, a dielectric: the interface between its inside (index ior) and air, whose
+    transmitted ray is weighted by k_t (transmittance) and, inside, by exp(-absorption * distance)."""
 
     kd: tuple = (0.7, 0.7, 0.7)
     ka: tuple | None = None  # None: the same as kd
     ks: tuple = (0.0, 0.0, 0.0)
     shininess: float = 32.0
     reflectivity: tuple = (0.0, 0.0, 0.0)  # k_r
+    ior: float | None = None  # eta > 0: a dielectric; None: opaque
+    transmittance: tuple = (1.0, 1.0, 1.0)  # k_t, only with ior
+    absorption: tuple = (0.0, 0.0, 0.0)  # sigma per scene unit (Beer's law), only with ior
 
     def __post_init__(self):
         if self.ka is None:
             object.__setattr__(self, "ka", self.kd)
+
+    @property
+    def dielectric(self) -> bool:
+        return self.ior is not None
 
 
 @dataclass

@@ -11,6 +11,7 @@ import numpy as np
 
 from ..errors import SceneError, show
 from . import shapes
+from .dielectric import warn_unclosed
 from .meshio import read_mesh_file, split_by_material
 from .model import DEFAULT_MATERIAL, Camera, Light, Material, RenderSettings, Scene, SceneObject
 from .validate import check_setting, validate_camera, validate_scene
@@ -19,7 +20,8 @@ SECTIONS = {"camera", "render", "lights", "materials", "objects"}
 _CAMERA_KEYS = {"eye", "center", "up", "fovy", "near", "width", "height"}
 _RENDER_KEYS = {"ambient", "background", "max_depth", "shadows", "spp", "effects"}
 _LIGHT_KEYS = {"position", "color"}
-_MATERIAL_KEYS = {"ka", "kd", "ks", "shininess", "reflectivity"}
+_MATERIAL_KEYS = {"ka", "kd", "ks", "shininess", "reflectivity", "ior", "transmittance", "absorption"}
+_DIELECTRIC_KEYS = ("transmittance", "absorption")  # meaningful only with an ior
 _OBJECT_KEYS = {"name", "mesh", "shape", "material", "scale", "rotate", "translate", "smooth"}
 
 
@@ -162,12 +164,29 @@ def read_material(source: str, name: str, t) -> Material:
     r = _Reader(source, t, f"materials.{name}")
     r.check_keys(_MATERIAL_KEYS)
     kd = r.vector("kd", DEFAULT_MATERIAL.kd, nonneg=True)
+    reflectivity = r.vector("reflectivity", (0.0, 0.0, 0.0), nonneg=True, allow_scalar=True)
+    ior, dielectric = None, {}
+    if "ior" in t:
+        ior = r.number("ior", lo=0.0, lo_open=True)
+        if max(reflectivity) > 0.0:
+            r.fail("reflectivity", "a dielectric (ior) reflects by its Fresnel term; reflectivity must be 0")
+        transmittance = r.vector("transmittance", (1.0, 1.0, 1.0), nonneg=True, allow_scalar=True)
+        if max(transmittance) > 1.0:
+            r.fail("transmittance", f"expected values in [0, 1], got {list(transmittance)}")
+        dielectric = {"transmittance": transmittance,
+                      "absorption": r.vector("absorption", (0.0, 0.0, 0.0), nonneg=True, allow_scalar=True)}
+    else:
+        for key in _DIELECTRIC_KEYS:
+            if key in t:
+                r.fail(key, "only a dielectric has it: give the material an ior")
     return Material(
         kd=kd,
         ka=r.vector("ka", kd, nonneg=True),
         ks=r.vector("ks", (0.0, 0.0, 0.0), nonneg=True),
         shininess=r.number("shininess", 32.0, lo=0.0),
-        reflectivity=r.vector("reflectivity", (0.0, 0.0, 0.0), nonneg=True, allow_scalar=True),
+        reflectivity=reflectivity,
+        ior=ior,
+        **dielectric,
     )
 
 
@@ -299,6 +318,7 @@ def scene_from_dict(data: dict, source: str = "<scene>", base: Path | None = Non
                for o in read_object(source, base, t, i, materials)]
     scene = Scene(camera, render, lights, materials, objects, source)
     validate_scene(scene)  # what needs the whole scene: reach from the eye, float32 overflow
+    warn_unclosed(scene)
     return scene
 
 

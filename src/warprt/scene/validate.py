@@ -86,6 +86,26 @@ def _check_number(source, field_name, v, lo=0.0):
         raise SceneError(source, field_name, f"expected a finite number >= {lo:g}, got {show(v)}")
 
 
+def _check_dielectric(source, where, m):
+    """ior > 0 makes a dielectric, whose reflection is its Fresnel term; k_t in [0, 1] and sigma >= 0
+    belong to a dielectric only."""
+    if m.ior is None:
+        if tuple(m.transmittance) != (1.0, 1.0, 1.0):
+            raise SceneError(source, f"{where}.transmittance", "only a dielectric has it: give the material an ior")
+        if np.any(np.asarray(m.absorption, np.float64) != 0.0):
+            raise SceneError(source, f"{where}.absorption", "only a dielectric has it: give the material an ior")
+        return
+    if not _is_real(m.ior) or not math.isfinite(m.ior) or not m.ior > 0.0:
+        raise SceneError(source, f"{where}.ior", f"expected a finite number > 0, got {_num(m.ior)}")
+    if np.max(m.reflectivity) > 0.0:
+        raise SceneError(source, f"{where}.reflectivity", "a dielectric (ior) reflects by its Fresnel term; "
+                                                          "reflectivity must be 0")
+    kt = _check_vector(source, f"{where}.transmittance", m.transmittance, nonneg=True)
+    if kt.max() > 1.0:
+        raise SceneError(source, f"{where}.transmittance", f"expected values in [0, 1], got {list(kt)}")
+    _check_vector(source, f"{where}.absorption", m.absorption, nonneg=True)
+
+
 def validate_scene(scene: Scene):
     """Everything render() relies on: finite values in range, geometry within float32 reach of the
     eye, and an image that cannot overflow."""
@@ -110,9 +130,11 @@ def validate_scene(scene: Scene):
         for key in ("kd", "ks", "reflectivity", "ka"):
             _check_vector(src, f"materials.{name}.{key}", getattr(m, key), nonneg=True)
         _check_number(src, f"materials.{name}.shininess", m.shininess)
+        _check_dielectric(src, f"materials.{name}", m)
         lit = ambient * np.asarray(m.ka) + light_max * (np.asarray(m.kd) + np.asarray(m.ks))
         lit_max = np.maximum(lit_max, lit)
-        kr_max = max(kr_max, float(np.max(m.reflectivity)))
+        # A dielectric splits a ray's weight w into F w and (1 - F) k_t w: at most w in all.
+        kr_max = max(kr_max, float(np.max(m.reflectivity)), 1.0 if m.dielectric else 0.0)
         coef_max = max(coef_max, float(np.max(np.asarray(m.kd) + np.asarray(m.ks))), float(np.max(m.ka)))
     for i, obj in enumerate(scene.objects):
         where = f"objects[{i}]"
