@@ -200,3 +200,30 @@ def test_progress_silent_off_terminal_and_with_quiet(tmp_path, where):
     # The same render on a terminal does show it: the two cases above are silent for their reason.
     code, err, _ = run_on_terminal(*args, env=env)
     assert code == 0 and "tiles" in err
+
+
+def test_an_open_glass_mesh_is_one_warning_line_and_the_render_goes_on(tmp_path):
+    """A dielectric must be closed for its inside to be known; an open one still renders (each crossing
+    switches the medium by the winding), with one line on stderr saying so."""
+    (tmp_path / "s.toml").write_text(textwrap.dedent("""
+        [camera]
+        eye = [0.0, 1.0, 5.0]
+        center = [0.0, 0.0, 0.0]
+        width = 16
+        height = 12
+        [render]
+        max_depth = 3
+        [materials.glass]
+        ior = 1.5
+        [[objects]]
+        name = "pane"
+        shape = "plane"
+        material = "glass"
+    """))
+    r = run("render", "s.toml", "-o", "out.png", "-q", "--stats", cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    assert r.stderr == ("warprt: warning: s.toml: objects[0]: 'pane' has ior but is not closed (4 open or "
+                        "inconsistently wound edges): rays leaving through them stay inside\n")
+    assert (tmp_path / "out.png").exists()
+    rays = json.loads(r.stdout)["rays"]
+    assert rays["refraction"] > 0 and rays["total"] == sum(v for k, v in rays.items() if k != "total")
