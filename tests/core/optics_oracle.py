@@ -99,49 +99,65 @@ class Face:
         self.c = np.asarray(corners, np.float64)
         n = np.cross(self.c[1] - self.c[0], self.c[2] - self.c[0]) if normal is None else np.asarray(normal, float)
         self.n = n / np.linalg.norm(n)
+        edges = np.roll(self.c, -1, axis=0) - self.c
+        inward = np.cross(self.n, edges)
+        self._inward = inward / np.linalg.norm(inward, axis=1, keepdims=True)
 
     def hit(self, o, d):
-        """(t, p, edge distance) of the ray on the face's plane; edge distance < 0 outside the polygon."""
-        den = float(d @ self.n)
-        if den == 0.0:
-            return math.inf, None, -math.inf
-        t = float((self.c[0] - o) @ self.n) / den
-        p = o + t * d
-        m = math.inf
-        for a, b in zip(self.c, np.roll(self.c, -1, axis=0)):
-            e = b - a
-            inward = np.cross(self.n, e)
-            inward /= np.linalg.norm(inward)
-            m = min(m, float((p - a) @ inward))
-        return t, p, m
+        """(t, p, edge distance) of rays o + t d, one (3,) or many (N, 3), on the face's plane; the
+        edge distance is < 0 outside the polygon, t is inf for a ray parallel to the plane."""
+        o, d = np.asarray(o, np.float64), np.asarray(d, np.float64)
+        den = d @ self.n
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t = np.where(den != 0.0, ((self.c[0] - o) @ self.n) / np.where(den != 0.0, den, 1.0), np.inf)
+            p = o + t[..., None] * d
+            m = np.min(np.einsum("...ij,ij->...i", p[..., None, :] - self.c, self._inward), axis=-1)
+        m = np.where(np.isfinite(t), m, -np.inf)
+        return (float(t), p, float(m)) if t.ndim == 0 else (t, p, m)
+
+
+def plane_paths(o, d, steps, eta, kt, sigma):
+    """Follow rays o + t d, many at once ((N, 3), or one origin for all), through a known sequence of
+    faces, each ("T") refracted or ("R") reflected at, in float64. Absorption applies between
+    consecutive faces of the sequence, inside the glass. Returns (weights (N, 3), final origins, final
+    directions, smallest edge distances, valid): not valid where the sequence is impossible (a
+    refraction past the critical angle, or a face behind the ray)."""
+    d = np.atleast_2d(np.asarray(d, np.float64))
+    o = np.broadcast_to(np.asarray(o, np.float64), d.shape).copy()
+    kt, sigma = np.asarray(kt, float), np.asarray(sigma, float)
+    n_rays = len(d)
+    w, margin = np.ones((n_rays, 3)), np.full(n_rays, np.inf)
+    valid, inside = np.ones(n_rays, bool), np.zeros(n_rays, bool)
+    for face, action in steps:
+        t, p, m = face.hit(o, d)
+        valid &= np.isfinite(t) & (t > 0)
+        margin = np.minimum(margin, m)
+        w = np.where(inside[:, None], w * np.exp(-sigma * np.where(valid, t, 0.0)[:, None]), w)
+        cos = d @ face.n
+        entering = cos < 0.0
+        nn = np.where(entering[:, None], face.n, -face.n)  # the normal on the incident side
+        e_i, e_t = np.where(entering, 1.0, eta), np.where(entering, eta, 1.0)
+        c = np.abs(cos)
+        F = fresnel(c, e_i, e_t)
+        if action == "T":
+            r = e_i / e_t
+            k = 1.0 - r**2 * (1.0 - c**2)
+            valid &= k > 0.0
+            tdir = r[:, None] * d + (r * c - np.sqrt(np.maximum(k, 0.0)))[:, None] * nn
+            w = w * (1.0 - F)[:, None] * kt
+            d = tdir / np.linalg.norm(tdir, axis=1, keepdims=True)
+            inside = entering
+        else:
+            w = w * F[:, None]
+            r = d - 2.0 * cos[:, None] * face.n
+            d = r / np.linalg.norm(r, axis=1, keepdims=True)
+            inside = ~entering
+        o = np.where(valid[:, None], p, o)
+    return w, o, d, margin, valid
 
 
 def plane_path(o, d, steps, eta, kt, sigma):
-    """Follow the ray o + t d through a known sequence of faces, each ("T") refracted or ("R") reflected
-    at, in float64. Absorption applies between consecutive faces of the sequence (inside the glass).
-    Returns (weight RGB, final origin, final direction, smallest edge distance) or None where the
-    sequence is impossible (a refraction under TIR, or a hit behind the ray)."""
-    kt, sigma = np.asarray(kt, float), np.asarray(sigma, float)
-    w = np.ones(3)
-    margin = math.inf
-    inside = False
-    for face, action in steps:
-        t, p, m = face.hit(o, d)
-        if not (t > 0 and math.isfinite(t)):
-            return None
-        margin = min(margin, m)
-        if inside:
-            w = w * np.exp(-sigma * t)
-        tdir, F, entering = refract_dir(d, face.n, eta)
-        if action == "T":
-            if tdir is None:
-                return None
-            w = w * (1.0 - F) * kt
-            d = tdir
-            inside = entering
-        else:
-            w = w * F
-            d = reflect_dir(d, face.n)
-            inside = not entering
-        o = p
-    return w, o, d, margin
+    """plane_paths for one ray: (weight RGB, final origin, final direction, smallest edge distance), or
+    None where the sequence is impossible."""
+    w, o, d, margin, valid = plane_paths(o, d, steps, eta, kt, sigma)
+    return (w[0], o[0], d[0], float(margin[0])) if valid[0] else None
