@@ -188,7 +188,7 @@ def test_absorbing_cube_follows_beers_law_along_each_chord():
         doc["render"].update(ambient=[0.0] * 3, background=background.tolist(), max_depth=3)
 
     scene = edited("glass_cube", 100, edit)
-    glass, cube = scene.materials["glass"], scene.objects[0]
+    glass = scene.materials["glass"]
     R, centre, half = rotation([20.0, 35.0, 0.0]), np.array([0.0, 1.2, 0.0]), 0.6
     eye, dirs = camera_rays(scene.camera)
     o = R.T @ (eye - centre)  # the eye in the cube's frame
