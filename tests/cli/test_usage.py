@@ -118,7 +118,7 @@ def test_flags_reach_the_render(scene_file, tmp_path):
     assert (stats["width"], stats["height"], stats["spp"], stats["max_depth"], stats["threads"]) == (20, 10, 4, 1, 1)
     assert "shadows" not in stats["effects"].split(",") and "reflection" not in stats["effects"].split(",")
     # spp 4: exactly 4 primary rays per pixel; no shadow or reflection rays.
-    assert stats["rays"] == {"primary": 20 * 10 * 4, "shadow": 0, "reflection": 0, "total": 800}
+    assert stats["rays"] == {"primary": 20 * 10 * 4, "shadow": 0, "reflection": 0, "refraction": 0, "total": 800}
     assert np.load(out).shape == (10, 20, 3)
 
 
