@@ -1,6 +1,7 @@
-"""The seed's three experiments as figures, timed: Figure 6 (effect progression), Figure 7 (Z-buffer
-against ray tracing, three views), Figure 8 (gallery of scenes/), and the cost growth of both
-algorithms from 10^2 to 10^6 triangles.
+"""The seed's three experiments as figures, timed: Figure 6 (effect progression, with a refraction
+level), Figure 7 (Z-buffer against ray tracing, three views), Figure 8 (gallery of scenes/, Whitted's
+classic scene among them, with ray counts), and the cost growth of both algorithms from 10^2 to 10^6
+triangles.
 
     python -m benchmarks.figures [--repeat 5] [--quick] [-o DIR]   -> benchmarks/figures/*.png and README.md
 
@@ -21,8 +22,8 @@ import warp
 from PIL import Image, ImageDraw, ImageFont
 
 import warprt
-from benchmarks.effects import FIG6
-from benchmarks.timing import NO_SHADOWS_OR_REFLECTIONS, TRACED, cpu_name, growth_runs, ms, timed
+from benchmarks.effects import FIG6, FIG6_REFRACTION, glass_sphere
+from benchmarks.timing import NO_SHADOWS_OR_REFLECTIONS, TRACED, cpu_name, growth_runs, ms, timed, timed_result
 from warprt.image import to_srgb8
 from warprt.geometry import Geometry
 
@@ -78,6 +79,11 @@ def figure6(out: Path, repeat: int, width: int, height: int) -> dict:
         image, t = timed(scene.with_render(max_depth=depth), geometry, repeat, effects=effects)
         cells.append((image, [label, ms(t)]))
         rows.append({"label": label, "seconds": t})
+    label, effects, depth = FIG6_REFRACTION
+    glass = glass_sphere(scene).with_render(max_depth=depth)
+    result, t = timed_result(glass, Geometry(glass), repeat, effects=effects)
+    cells.append((result.image, [label, f"{ms(t)}, {result.stats.rays['refraction']:,} refracted rays"]))
+    rows.append({"label": label, "seconds": t, "rays": result.stats.rays})
     grid(cells, 3, out / "fig6_effects.png", header="Figure 6: ray tracing, one effect at a time (scenes/seed.toml)",
          text_lines=2)
     return {"scene": "scenes/seed.toml", "size": [width, height], "panels": rows}
@@ -113,7 +119,7 @@ def figure7(out: Path, repeat: int, width: int, height: int) -> dict:
 
 # --- Figure 8: gallery -----------------------------------------------------------------------------
 
-GALLERY_FIRST = ["seed", "cornell", "mirrors", "bunny", "knot"]
+GALLERY_FIRST = ["seed", "whitted", "cornell", "mirrors", "bunny", "knot"]
 # The last row: files rendered bare, as `warprt render file` frames them, with their own textures,
 # vertex colours and normals (written by scenes/assets.py).
 GALLERY_MODELS = ["meshes/tile.glb", "meshes/painted.ply", "meshes/cube_flat.usda"]
@@ -130,25 +136,35 @@ def figure8(out: Path, repeat: int, width: int, height: int) -> dict:
         scene = scene.with_camera(width=max(1, round(scene.camera.width * scale)),
                                   height=max(1, round(scene.camera.height * scale)))
         geometry = Geometry(scene)
-        image, t = timed(scene, geometry, max(1, repeat // 2))
+        result, t = timed_result(scene, geometry, max(1, repeat // 2))
+        image, rays = result.image, result.stats.rays
         cell = np.ones((height, width, 3), np.float32)
         y0, x0 = (height - image.shape[0]) // 2, (width - image.shape[1]) // 2
         cell[y0:y0 + image.shape[0], x0:x0 + image.shape[1]] = image
+        kinds = [f"{count(rays[k])} {label}" for k, label in (("shadow", "shadow"), ("reflection", "reflected"),
+                                                                   ("refraction", "refracted")) if rays[k]]
         cells.append((cell, [f"{path.name}: {geometry.triangle_count:,} triangles",
-                             f"max_depth {scene.render.max_depth}, {ms(t)}"]))
-        rows.append({"scene": f"scenes/{path.name}", "triangles": geometry.triangle_count, "seconds": t})
+                             f"max_depth {scene.render.max_depth}, {ms(t)}, {rays['total']:,} rays", ", ".join(kinds)]))
+        rows.append({"scene": f"scenes/{path.name}", "triangles": geometry.triangle_count, "seconds": t, "rays": rays})
     cols = 3
     cells += [(np.ones((height, width, 3), np.float32), [])] * (-len(cells) % cols)  # the models start a row
     for name in GALLERY_MODELS:
         scene = warprt.load_scene(SCENES / name, {"camera.width": width, "camera.height": height})
         geometry = Geometry(scene)
-        image, t = timed(scene, geometry, max(1, repeat // 2))
-        cells.append((image, [f"{Path(name).name} (bare): {geometry.triangle_count:,} triangles", ms(t)]))
-        rows.append({"scene": f"scenes/{name}", "triangles": geometry.triangle_count, "seconds": t})
+        result, t = timed_result(scene, geometry, max(1, repeat // 2))
+        cells.append((result.image, [f"{Path(name).name} (bare): {geometry.triangle_count:,} triangles",
+                                     f"{ms(t)}, {result.stats.rays['total']:,} rays"]))
+        rows.append({"scene": f"scenes/{name}", "triangles": geometry.triangle_count, "seconds": t,
+                     "rays": result.stats.rays})
     grid(cells, cols, out / "fig8_gallery.png",
-         header="Figure 8: scenes/, full ray tracing (shadows, every reflection level the scene asks for); last row: "
-                "textured and vertex-coloured files rendered bare", text_lines=2)
+         header="Figure 8: scenes/, full ray tracing (shadows, every reflection and refraction level the scene asks "
+                "for); last row: textured and vertex-coloured files rendered bare", text_lines=3)
     return {"size": [width, height], "scenes": rows}
+
+
+def count(n: int) -> str:
+    """A ray count short enough for a caption: 950, 77k, 1.2M."""
+    return f"{n / 1e6:.1f}M" if n >= 999_500 else f"{n / 1e3:.0f}k" if n >= 1000 else str(n)
 
 
 # --- Cost growth -----------------------------------------------------------------------------------
@@ -266,9 +282,10 @@ def write_readme(out: Path, results: dict, seconds: float):
         "",
         "![Figure 8](fig8_gallery.png)",
         "",
-        "| scene | triangles | time |",
-        "|---|---:|---:|",
-        *[f"| {s['scene']} | {s['triangles']:,} | {ms(s['seconds'])} |" for s in f8["scenes"]],
+        "| scene | triangles | time | rays (primary, shadow, reflection, refraction) |",
+        "|---|---:|---:|---:|",
+        *[f"| {s['scene']} | {s['triangles']:,} | {ms(s['seconds'])} | {s['rays']['total']:,} ({s['rays']['primary']:,}, "
+          f"{s['rays']['shadow']:,}, {s['rays']['reflection']:,}, {s['rays']['refraction']:,}) |" for s in f8["scenes"]],
         "",
         "## Cost growth: Z-buffer and ray tracing from 10^2 to 10^6 triangles",
         "",

@@ -7,5 +7,7 @@ and the comparison (SSIM, PSNR, share of pixels off) that the accuracy suite and
 
 from .compare import CompareResult, compare, side_by_side
 from .mitsuba_whitted import MitsubaScene, Switches, mitsuba_variant, render_mitsuba
+from .ray_tree import TreeResult, path_name, render_tree
 
-__all__ = ["CompareResult", "MitsubaScene", "Switches", "compare", "mitsuba_variant", "render_mitsuba", "side_by_side"]
+__all__ = ["CompareResult", "MitsubaScene", "Switches", "TreeResult", "compare", "mitsuba_variant", "path_name",
+           "render_mitsuba", "render_tree", "side_by_side"]

@@ -6,6 +6,8 @@ Model (the seed's Figure 3, as warprt defines it), per colour channel, two-sided
 vis_l = 0 when n.L <= 0 or the shadow ray is blocked; a miss returns the background; max_depth ray levels.
 ka, kd and ks at a hit are the material's times its textures (Mitsuba's bilinear, repeating bitmap
 or its checkerboard, at the mesh's own uv) and, for ka and kd, the mesh's vertex colour attribute.
+With glass, + F I(reflected) + (1 - F) k_t I(refracted) at a dielectric, each segment inside weighted
+by exp(-sigma d): the ray tree of ray_tree.py, level by level, which mi.render cannot branch into.
 """
 
 from __future__ import annotations
@@ -76,14 +78,23 @@ class Switches:
     smooth: bool = True  # interpolated vertex normals on objects marked smooth
     texture: bool = True  # materials' textures multiply their colours
     vertex_color: bool = True  # meshes' vertex colours multiply ka and kd
+    reflection: bool = True  # mirrors (k_r) spawn reflected rays
+    refraction: bool = False  # dielectrics (ior) spawn reflected and refracted rays: the ray tree
+    absorption: bool = False  # Beer's law inside dielectrics
 
     @classmethod
     def for_effects(cls, fx, settings) -> "Switches":
         """The switches that match warprt rendering ``settings`` (a RenderSettings) with EffectSet ``fx``."""
         return cls(ambient=fx.ambient, diffuse=fx.diffuse, specular=fx.specular, shadows=fx.shadows,
-                   max_depth=settings.max_depth if fx.reflection else 1,
+                   max_depth=settings.max_depth if fx.reflection or fx.refraction else 1,
                    spp=settings.spp if fx.supersampling else 1, smooth=fx.smooth, texture=fx.texture,
-                   vertex_color=fx.vertex_color)
+                   vertex_color=fx.vertex_color, reflection=fx.reflection, refraction=fx.refraction,
+                   absorption=fx.absorption)
+
+    @property
+    def tree(self) -> bool:
+        """Whether the render needs the ray tree (ray_tree.py) rather than mi.render's single path."""
+        return self.refraction or self.absorption
 
 
 def _register_integrator(mi, dr):
@@ -149,7 +160,7 @@ def _register_integrator(mi, dr):
         @dr.syntax
         def sample(self, scene, sampler, ray, medium=None, active=True):
             t = self.tables
-            max_depth = self.switches.max_depth
+            max_depth = self.switches.max_depth if self.switches.reflection else 1
             ray = mi.Ray3f(ray)
             active = mi.Bool(active)
             weight = mi.Color3f(1.0)
@@ -244,6 +255,7 @@ class _Tables:
     def __init__(self, mi, dr, mi_scene, scene, object_of_shape: dict, attributes: bool):
         self.jit = dr.is_jit_v(mi.Float)
         self.attributes = attributes  # whether the shapes carry Attributes BSDFs (textures, vertex colours)
+        self.row_of_object = {}  # scene object index -> table row (its shape's registry index; row 0: a miss)
         lights = [(np.asarray(l.position, np.float64), np.asarray(l.color, np.float64)) for l in scene.lights]
         mats = {sid: scene.materials[scene.objects[i].material] for sid, i in object_of_shape.items()}
         if self.jit:
@@ -259,15 +271,21 @@ class _Tables:
             for shape in mi_scene.shapes():
                 ids[shape.id()] = int(dr.reinterpret_array(mi.UInt32, mi.ShapePtr(shape))[0])
             rows = max(ids.values(), default=0) + 1  # row 0: no shape (a miss)
-            table = {k: np.zeros((rows, 3)) for k in ("ka", "kd", "ks", "kr")}
+            table = {k: np.zeros((rows, 3)) for k in ("ka", "kd", "ks", "kr", "kt", "sigma")}
             shininess = np.zeros(rows)
+            eta = np.zeros(rows)  # 0: not a dielectric
             for sid, m in mats.items():
                 r = ids[sid]
                 table["ka"][r], table["kd"][r], table["ks"][r] = m.ka, m.kd, m.ks
                 table["kr"][r], shininess[r] = m.reflectivity, m.shininess
+                if m.ior is not None:
+                    eta[r], table["kt"][r], table["sigma"][r] = m.ior, m.transmittance, m.absorption
+                self.row_of_object[object_of_shape[sid]] = r
             for k, v in table.items():
                 setattr(self, k, mi.Float(v.astype(np.float32).ravel()))
             self.shininess = mi.Float(shininess.astype(np.float32))
+            self.eta = mi.Float(eta.astype(np.float32))
+            self.dielectric_rows = {int(r) for r in np.nonzero(eta > 0)[0]}
         else:
             self.lights = [(mi.Point3f(*map(float, p)), mi.Color3f(*map(float, c))) for p, c in lights]
             self.ambient = mi.Color3f(*map(float, scene.render.ambient))
@@ -379,6 +397,10 @@ class MitsubaScene:
         if switches.smooth != self.smooth and any(o.smooth for o in self.scene.objects):
             raise ValueError("this MitsubaScene was built with smooth=%s" % self.smooth)
         camera = camera or self.scene.camera
+        if switches.tree:
+            from .ray_tree import render_tree
+
+            return render_tree(self, switches, camera).image
         self.integrator.switches = switches
         image = mi.render(self.mi_scene, sensor=self.sensor(camera, switches.spp), integrator=self.integrator,
                           spp=switches.spp, seed=0)

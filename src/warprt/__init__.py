@@ -7,13 +7,13 @@ The data flows one way, and so do the imports: scene/ (file -> Scene) -> geometr
 float32 triangles, BVH) -> kernels/ (Warp functions) -> image/ (a frame on the host) -> cli.py.
 """
 
-from .errors import SceneError
+from .errors import SceneError, SceneWarning
 from .scene import Camera, EffectSet, Light, Material, RenderSettings, Scene, SceneObject, load_scene
 
 __version__ = "0.1.0"
 
 __all__ = ["Camera", "EffectSet", "Light", "Material", "RenderResult", "RenderSettings", "RenderStats",
-           "Scene", "SceneError", "SceneObject", "load_scene", "render", "__version__"]
+           "Scene", "SceneError", "SceneObject", "SceneWarning", "load_scene", "render", "__version__"]
 
 _RENDERER_NAMES = ("render", "RenderResult", "RenderStats")
 

@@ -12,11 +12,13 @@ import os
 import sys
 import time
 import tomllib
+import warnings
 from pathlib import Path
 
 from . import __version__
-from .diagnostics import set_quiet
+from .diagnostics import one_line_warning, set_quiet
 from .errors import SceneError
+from .scene import EFFECTS
 
 EXAMPLES = """examples:
   warprt render                               the built-in default scene -> warprt.png
@@ -226,8 +228,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("-o", "--output", default="warprt.png", help="output image: .png (sRGB 8-bit), .exr or .npy (linear float)")
     p.add_argument("--threads", type=int, metavar="N", help="worker threads (default: all cores)")
     p.add_argument("--device", default="cpu", choices=["cpu", "cuda"], help="Warp device (default: cpu)")
-    p.add_argument("--effects", help="comma-separated effects to keep: ambient,diffuse,specular,shadows,reflection,supersampling,smooth,"
-                        "texture,vertex_color")
+    p.add_argument("--effects", help=f"comma-separated effects to keep: {','.join(EFFECTS)}")
     p.add_argument("--algorithm", default="raytrace", choices=["raytrace", "zbuffer"],
                    help="raytrace (default), or zbuffer: rasterized, same local shading, no shadows or reflections")
     p.add_argument("--primary", default="auto", choices=["auto", "raytrace", "zbuffer"],
@@ -249,8 +250,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("compare", help="render with warprt and with Mitsuba 3 (the reference): SSIM, PSNR, side-by-side image")
     _add_scene_options(p)
     p.add_argument("-o", "--output", default="compare.png", help="side-by-side image: warprt | Mitsuba | |difference| x 10")
-    p.add_argument("--effects", help="comma-separated effects to keep, on both sides: ambient,diffuse,specular,shadows,reflection,"
-                        "supersampling,smooth,texture,vertex_color")
+    p.add_argument("--effects", help=f"comma-separated effects to keep, on both sides: {','.join(EFFECTS)}")
     p.add_argument("--threads", type=int, metavar="N", help="warprt worker threads (default: all cores)")
     p.add_argument("--debug", action="store_true", help="show tracebacks")
     p.set_defaults(func=cmd_compare)
@@ -258,6 +258,16 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv=None) -> int:
+    # A scene's warning is one line on stderr; -q's filter and this format last for the command only.
+    with warnings.catch_warnings():
+        saved, warnings.formatwarning = warnings.formatwarning, one_line_warning
+        try:
+            return _main(argv)
+        finally:
+            warnings.formatwarning = saved
+
+
+def _main(argv) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     if args.command is None:

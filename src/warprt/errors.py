@@ -22,3 +22,8 @@ def show(v) -> str:
     """A value as an error message quotes it: its repr, cut to 60 characters."""
     s = repr(v)
     return s if len(s) <= 60 else s[:57] + "..."
+
+
+class SceneWarning(UserWarning):
+    """Input that renders, but not as its author may expect (a missing texture, an open glass mesh, an
+    MTL statement that is not read): diagnostics.warn() issues it, the command line prints it as one line."""

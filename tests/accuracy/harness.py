@@ -15,6 +15,9 @@ Where the two renderers legitimately differ (each pixel class is checked, not as
   ray-triangle tests decides these (Embree's even by which rays share its packet: mi.render and a
   direct call of the integrator on the same rays disagree on 2 bunny pixels at 640x480); the
   oracle reports such a decision margin below TIE_MARGIN.
+With glass, the oracle walks the whole ray tree (both branches at each dielectric), so the same two
+classes cover the refracted and the Fresnel-reflected rays, and a failing pixel is described ray by
+ray (path, object hit, contribution, margin).
 Any other differing pixel fails the case, however good its SSIM and PSNR.
 """
 
@@ -81,7 +84,7 @@ def unexplained(scene, switches, result) -> list[str]:
                 continue
         bad.append(f"pixel (row {row}, col {x}): warprt {np.round(ours, 4)}, Mitsuba {np.round(ref, 4)}; "
                    f"float64 with Mitsuba's offsets {np.round(m.color, 4)} (decision margin {m.margin:.1e}), "
-                   f"with none of the offsets tried equal to warprt's value")
+                   f"with none of the offsets tried equal to warprt's value; its largest rays: {m.explain(3)}")
     return bad
 
 

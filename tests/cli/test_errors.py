@@ -91,6 +91,20 @@ CASES = [
      "bad_smooth.toml: objects[0].smooth: expected true, false, \"auto\" or a crease angle in degrees, got 'yes'"),
     ("up not an axis", ["render", "bad_up.toml"],
      "bad_up.toml: objects[0].up: expected one of 'x', 'y', 'z', '-x', '-y', '-z', got 'w'"),
+    ("reflectivity on glass", ["render", "glass_reflectivity.toml"],
+     "glass_reflectivity.toml: materials.glass.reflectivity: a dielectric (ior) reflects by its Fresnel term; "
+     "reflectivity must be 0"),
+    ("transmittance without ior", ["render", "transmittance_without_ior.toml"],
+     "transmittance_without_ior.toml: materials.paint.transmittance: only a dielectric has it: give the material an ior"),
+    ("ior 0", ["render", "ior_zero.toml"], "ior_zero.toml: materials.glass.ior: expected a number > 0, got 0"),
+    ("transmittance over 1", ["render", "transmittance_over_one.toml"],
+     "transmittance_over_one.toml: materials.glass.transmittance: expected values in [0, 1], got [1.0, 1.5, 1.0]"),
+    ("eye inside nested glass", ["render", "nested_glass.toml"],
+     "nested_glass.toml: camera.eye: is inside more than one object with ior ('inner', 'outer'): nested media are "
+     "not modelled"),
+    ("glass deeper than the stack", ["render", "glass_ok.toml", "--max-depth", "100"],
+     "glass_ok.toml: render.max_depth: a scene with refraction traces at most 65 ray levels (up to 2^64 paths per "
+     "sample), got 100"),
     # Mesh files named by a scene.
     ("mesh file missing", ["render", "missing_mesh.toml"],
      "missing_mesh.toml: objects[0].mesh: meshes/nothere.obj: mesh file not found"),
@@ -116,6 +130,8 @@ CASES = [
     ("negative Kd in the MTL", ["render", "bad_mtl.toml"],
      "bad_mtl.toml: objects[0].mesh: meshes/bad_mtl.mtl: newmtl paint: Kd: expected 3 non-negative numbers, "
      "got [-1.0, 0.5, 0.5]"),
+    ("negative Ni in the MTL", ["render", "bad_ni.toml"],
+     "bad_ni.toml: objects[0].mesh: meshes/bad_ni.mtl: newmtl glass: Ni: expected a number > 0, got ['-1.5']"),
     # A bare file on the command line.
     ("bare mesh not a PLY", ["render", "meshes/junk.ply"], "meshes/junk.ply: not a PLY file (it does not start with 'ply')"),
     ("unknown file type", ["render", "notes.txt"],
@@ -149,7 +165,7 @@ CASES = [
      "ok.toml: lights[7].color: there is no lights[7]"),
     ("--effects unknown", ["render", "ok.toml", "--effects", "glow"],
      "command line: --effects: unknown effect 'glow'; expected some of: ambient, diffuse, specular, shadows, "
-     "reflection, supersampling, smooth, texture, vertex_color"),
+     "reflection, supersampling, smooth, texture, vertex_color, refraction, absorption"),
     # Output paths: checked before anything renders.
     ("output .jpg", ["render", "ok.toml", "-o", "out.jpg"],
      "out.jpg: --output: unknown image extension '.jpg'; expected one of: .png, .npy, .exr"),

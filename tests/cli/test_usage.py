@@ -98,7 +98,7 @@ def test_flags_reach_the_render(scene_file, tmp_path):
     assert (stats["width"], stats["height"], stats["spp"], stats["max_depth"], stats["threads"]) == (20, 10, 4, 1, 1)
     assert "shadows" not in stats["effects"].split(",") and "reflection" not in stats["effects"].split(",")
     # spp 4: exactly 4 primary rays per pixel; no shadow or reflection rays.
-    assert stats["rays"] == {"primary": 20 * 10 * 4, "shadow": 0, "reflection": 0, "total": 800}
+    assert stats["rays"] == {"primary": 20 * 10 * 4, "shadow": 0, "reflection": 0, "refraction": 0, "total": 800}
     assert np.load(out).shape == (10, 20, 3)
 
 
@@ -180,3 +180,18 @@ def test_progress_silent_off_terminal_and_with_quiet(tmp_path, where):
     # The same render on a terminal does show it: the two cases above are silent for their reason.
     code, err, _ = run_on_terminal(*args, env=env)
     assert code == 0 and "tiles" in err
+
+
+def test_an_open_glass_mesh_is_one_warning_line_and_the_render_goes_on(tmp_path):
+    """A dielectric must be closed for its inside to be known; an open one still renders (each crossing
+    switches the medium by the winding), with one line on stderr saying so."""
+    write_scene(tmp_path, {"camera": {"eye": [0.0, 1.0, 5.0], "center": [0.0, 0.0, 0.0], "width": 16, "height": 12},
+                           "render": {"max_depth": 3}, "materials": {"glass": {"ior": 1.5}},
+                           "objects": [{"name": "pane", "shape": "plane", "material": "glass"}]}, "s.toml")
+    r = run("render", "s.toml", "-o", "out.png", "--stats", cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    assert r.stderr == ("warprt: warning: s.toml: objects[0]: 'pane' has ior but is not closed (4 open or "
+                        "inconsistently wound edges): rays leaving through them stay inside\n")
+    assert (tmp_path / "out.png").exists()
+    rays = json.loads(r.stdout)["rays"]
+    assert rays["refraction"] > 0 and rays["total"] == sum(v for k, v in rays.items() if k != "total")

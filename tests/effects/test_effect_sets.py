@@ -11,7 +11,7 @@ import warp as wp
 
 import warprt
 from scenekit import make_scene, write_scene
-from warprt.kernels import init_warp, make_trace_kernel
+from warprt.kernels import init_warp, make_trace_kernel, stack_size
 from warprt.scene import EFFECTS, EffectSet, resolve_effects, scene_effects
 
 LIGHT = {"position": [0.0, 3.0, 4.0]}
@@ -64,8 +64,31 @@ def test_users_can_switch_effects_off_but_never_on():
     assert resolve_effects(scene, allow=list(EFFECTS)) == scene_effects(scene)
     # Shadows only dim lit terms: with neither diffuse nor specular, no shadow rays.
     assert not resolve_effects(scene, disable=["diffuse"]).shadows
-    with pytest.raises(warprt.SceneError, match="unknown effect 'refraction'"):
-        resolve_effects(scene, allow=["refraction"])
+    with pytest.raises(warprt.SceneError, match="unknown effect 'textures'"):
+        resolve_effects(scene, allow=["textures"])
+
+
+GLASS = {"ior": 1.5, "ka": [0.0] * 3, "kd": [0.0] * 3}
+BALL = {"shape": "sphere", "radius": 0.5, "subdivisions": 1, "translate": [0.0, 0.0, 1.0], "material": "glass"}
+
+
+def test_refraction_only_where_a_used_material_has_ior_and_there_is_a_second_ray_level():
+    def glass(max_depth=3, **material):
+        scene = make_scene([WALL, BALL], {"m": PLAIN, "glass": {**GLASS, **material}}, [LIGHT], max_depth=max_depth)
+        return scene_effects(scene)
+
+    assert glass().refraction and not glass().absorption
+    assert not glass(max_depth=1).refraction  # no secondary rays
+    assert glass(absorption=[0.0, 0.5, 0.0]).absorption
+    assert not scene_effects(make_scene([WALL], {"m": PLAIN, "glass": GLASS}, [LIGHT], max_depth=3)).refraction  # unused
+    assert not fx_of(max_depth=3).refraction and not fx_of(max_depth=3).absorption
+
+
+def test_absorption_acts_on_the_first_ray_level_too():
+    """An eye inside absorbing glass sees through it at max_depth 1: Beer's law needs no second level."""
+    scene = make_scene([WALL, BALL], {"m": PLAIN, "glass": {**GLASS, "absorption": 0.5}}, [LIGHT], max_depth=1)
+    fx = scene_effects(scene)
+    assert fx.absorption and not fx.refraction
 
 
 def test_scene_file_effects_setting_and_cli_flags(tmp_path):
@@ -87,12 +110,12 @@ def test_scene_file_effects_setting_and_cli_flags(tmp_path):
     stats = json.loads(r.stdout)
     assert stats["effects"] == "ambient,diffuse" and stats["variant"] == "trace_ad_zprimary"
     assert stats["primary"] == "zbuffer"  # the default: two triangles over 192 samples are rasterized
-    assert stats["rays"] == {"primary": 16 * 12, "shadow": 0, "reflection": 0, "total": 16 * 12}
+    assert stats["rays"] == {"primary": 16 * 12, "shadow": 0, "reflection": 0, "refraction": 0, "total": 16 * 12}
 
 
 def _generated_source(fx) -> str:
     init_warp()
-    kernel = make_trace_kernel(fx)
+    kernel = make_trace_kernel(fx, stack=stack_size(4) if fx.refraction else 0)
     wp.load_module(kernel.module, device="cpu")
     (module_exec,) = kernel.module.execs.values()
     return Path(module_exec.binary_path).with_suffix("").with_suffix(".cpp").read_text()
@@ -109,12 +132,14 @@ MARKERS = {
     "smooth": "ns = s.normals[i0] * u",
     "texture": "c.kd = wp.cw_mul(c.kd, texel(s.textures, s.kd_map[m], hit.uv))",
     "vertex_color": "out.color = s.colors[j0] * u",
+    "refraction": "t, transmits = refract(d, m, eta_rel)",
+    "absorption": "weight = beer(weight, s.absorption[medium], wp.length(hit.p - start))",
 }
 
 
 @pytest.mark.parametrize("off", EFFECTS)
 def test_disabled_effect_code_is_absent_from_the_compiled_variant(off):
-    full = EffectSet(supersampling=True, smooth=True, texture=True, vertex_color=True)
+    full = EffectSet(supersampling=True, smooth=True, texture=True, vertex_color=True, refraction=True, absorption=True)
     assert all(m in _generated_source(full) for m in MARKERS.values())
     source = _generated_source(EffectSet(**{**{e: getattr(full, e) for e in EFFECTS}, off: False}))
     assert MARKERS[off] not in source

@@ -1,6 +1,7 @@
 """Switching an effect off changes nothing else: the images differ only where that effect acts."""
 
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 
@@ -49,3 +50,20 @@ def test_reflection_off_changes_only_reflective_pixels():
     assert matte.sum() > 100 and (~matte).sum() > 100
     assert np.array_equal(on[matte], off[matte])
     assert not np.array_equal(on[~matte], off[~matte])
+
+
+def test_refraction_off_changes_only_pixels_that_see_glass():
+    """With refraction off a dielectric is an opaque surface: only pixels whose camera ray meets glass
+    change (the glass casts the same hard shadow either way)."""
+    scene = warprt.load_scene(Path(__file__).resolve().parents[2] / "scenes" / "glass_sphere.toml",
+                              {"camera.width": 64, "camera.height": 48})
+    on, s_on = warprt.render(scene)
+    off, s_off = warprt.render(scene, disable=["refraction"])
+    assert s_on.rays["refraction"] > 0 and s_off.rays["refraction"] == 0
+    markers = {name: Material(kd=(0, 0, 0), ka=(float(m.dielectric), 0, 0)) for name, m in scene.materials.items()}
+    glass, _ = warprt.render(replace(scene, lights=[], materials=markers,
+                                     render=RenderSettings(ambient=(1.0, 1.0, 1.0), max_depth=1)))
+    sees_glass = glass[..., 0] > 0
+    assert sees_glass.sum() > 100 and (~sees_glass).sum() > 100
+    assert np.array_equal(on[~sees_glass], off[~sees_glass])
+    assert not np.array_equal(on[sees_glass], off[sees_glass])

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 import warprt
-from core.geometry_oracle import camera_rays, ray_plane
+from oracle import camera_rays, ray_plane
 from warprt.scene import read_mesh_file
 
 SRC = str(Path(__file__).resolve().parents[2] / "src")

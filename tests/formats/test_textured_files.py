@@ -14,7 +14,7 @@ import pytest
 from PIL import Image
 
 import warprt
-from core.geometry_oracle import camera_rays, ray_plane
+from oracle import camera_rays, ray_plane
 
 S = 2.0  # the quad's half size: it spans [-2, 2]^2 in z = 0 and uv [0, 1]^2
 BLOCKS, TEXELS = 4, 8  # 4 x 4 blocks of 8 x 8 texels
@@ -247,9 +247,10 @@ def test_vertex_coloured_ply(tmp_path):
     np.testing.assert_allclose(image[inside], (w @ srgb(rgb8))[inside], atol=2e-6)
 
 
-def test_a_texture_without_uv_warns_and_samples_uv_zero(tmp_path, capsys):
+def test_a_texture_without_uv_warns_and_samples_uv_zero(tmp_path):
     write_png(tmp_path / "blocks.png")
-    scene = scene_file(tmp_path, """
+    with pytest.warns(warprt.SceneWarning) as caught:
+        scene = scene_file(tmp_path, """
         [[objects]]
         shape = "sphere"
         material = "tiles"
@@ -257,8 +258,8 @@ def test_a_texture_without_uv_warns_and_samples_uv_zero(tmp_path, capsys):
         [materials.tiles]
         kd_texture = "blocks.png"
         """)
-    err = capsys.readouterr().err
-    assert "objects[0]: material 'tiles' has a texture but 'sphere' has no texture coordinates" in err
+    assert any("objects[0]: material 'tiles' has a texture but 'sphere' has no texture coordinates" in str(w.message)
+               for w in caught)
     image, _ = warprt.render(scene)
     # uv (0, 0) is a corner shared by four texels once the image repeats: the bottom-left and
     # bottom-right blocks' outer texels and, wrapped around v, the top ones; bilinear weights 1/4 each.

@@ -3,17 +3,20 @@ and the textbooks' formulas. It imports nothing from warprt: it reads a Camera, 
 Scene by its fields, and never calls warprt's geometry or shading.
 
     camera.py (the seed's pinhole rays) -> geometry.py (ray-triangle, ray-plane, ray-sphere, normals),
-    transform.py (the scene file's rotate), shading.py (Phong) -> whitted.py (brute-force tracers)
+    transform.py (the scene file's rotate), shading.py (Phong), optics.py (Fresnel, Snell, the slab's
+    series, Beer) -> whitted.py (brute-force tracers, glass's ray tree included)
 """
 
 from .camera import Pinhole, camera_rays, pinhole, pixel_directions, ray_directions
 from .geometry import (TriangleHit, face_normals, nearest_triangle, ray_plane, ray_sphere_distance, ray_triangle,
-                       vertex_normals)
+                       vertex_normals, winding_number)
 from .shading import TERMS, light_direction, light_source, phong, phong_terms
 from .transform import axis_rotation, rotation
-from .whitted import MITSUBA_RAY_EPSILON, MITSUBA_SHADOW_EPSILON, OFFSET_SWEEP, PixelTrace, Whitted, shade_triangles
+from .whitted import (MITSUBA_RAY_EPSILON, MITSUBA_SHADOW_EPSILON, OFFSET_SWEEP, Branch, PixelTrace, Whitted,
+                      shade_triangles, texture_value)
 
-__all__ = ["MITSUBA_RAY_EPSILON", "MITSUBA_SHADOW_EPSILON", "OFFSET_SWEEP", "Pinhole", "PixelTrace", "TERMS",
+__all__ = ["Branch", "MITSUBA_RAY_EPSILON", "MITSUBA_SHADOW_EPSILON", "OFFSET_SWEEP", "Pinhole", "PixelTrace", "TERMS",
            "TriangleHit", "Whitted", "axis_rotation", "camera_rays", "face_normals", "light_direction", "light_source",
            "nearest_triangle", "phong", "phong_terms", "pinhole", "pixel_directions", "ray_directions", "ray_plane",
-           "ray_sphere_distance", "ray_triangle", "rotation", "shade_triangles", "vertex_normals"]
+           "ray_sphere_distance", "ray_triangle", "rotation", "shade_triangles", "texture_value", "vertex_normals",
+           "winding_number"]

@@ -113,3 +113,16 @@ def vertex_normals(vertices, faces) -> np.ndarray:
         np.add.at(total, position[faces[:, k]], angle[:, None] * n_face)
     length = np.linalg.norm(total, axis=-1, keepdims=True)
     return (total / np.maximum(length, 1e-300))[position]
+
+
+def winding_number(vertices, faces, q) -> float:
+    """The generalised winding number of point q: the solid angle the triangles subtend at q over
+    4 pi, each triangle's by Van Oosterom and Strackee's formula
+        tan(Omega / 2) = a.(b x c) / (|a||b||c| + (a.b)|c| + (b.c)|a| + (c.a)|b|),
+    a, b, c the corners relative to q. 1 inside a closed outward-wound mesh, 0 outside."""
+    v = np.asarray(vertices, np.float64) - np.asarray(q, np.float64)
+    a, b, c = (v[np.asarray(faces)[:, k]] for k in range(3))
+    la, lb, lc = (np.linalg.norm(x, axis=1) for x in (a, b, c))
+    num = _dot(a, np.cross(b, c))
+    den = la * lb * lc + _dot(a, b) * lc + _dot(b, c) * la + _dot(c, a) * lb
+    return float(np.arctan2(num, den).sum() / (2.0 * np.pi))

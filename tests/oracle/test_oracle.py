@@ -115,7 +115,8 @@ def test_whitted_traces_the_local_model_and_the_mirror_bounce():
     """Ambient only, a facing wall: C_amb ka. A mirror (k_r) facing the camera, nothing else: its
     reflected ray escapes, so the pixel is k_r times the background."""
     wall = {"shape": "plane", "size": [20.0, 20.0], "rotate": [90.0, 0.0, 0.0], "material": "m"}
-    sw = SimpleNamespace(ambient=True, diffuse=True, specular=True, shadows=True, smooth=True, max_depth=2, spp=4)
+    sw = SimpleNamespace(ambient=True, diffuse=True, specular=True, shadows=True, smooth=True, max_depth=2, spp=4,
+                         reflection=True, refraction=False, absorption=False, texture=False, vertex_color=False)
     scene = make_scene([wall], {"m": {"ka": [0.2, 0.4, 0.6], "kd": [0, 0, 0], "reflectivity": [0.5, 0.25, 0.1]}},
                        ambient=[0.5, 0.5, 0.5], background=[1.0, 2.0, 3.0])
     trace = Whitted(scene, sw).pixel(10, 20)

@@ -4,18 +4,21 @@ per-pixel tracer with decision margins (the accuracy suite's tie-breaker), and a
 Whitted tests every triangle with Moller-Trumbore in float64 (no BVH, no float32), so where it
 agrees with a renderer the renderer's decisions are the exact ones for the offsets it chose. Textures are
 sampled in float64 (bilinear, repeat, written here from the convention, not from either renderer),
-uvs and vertex colours interpolated with its own barycentrics.
+uvs and vertex colours interpolated with its own barycentrics. With glass it walks the whole ray tree
+(the rules of reference/ray_tree.py, written again in numpy: Fresnel and Snell from optics.py) and keeps
+every ray of it as a Branch, so a pixel where the renderers differ can be traced to the branch that differs.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from .camera import pinhole, ray_directions
-from .geometry import face_normals, nearest_triangle, ray_triangle, vertex_normals
+from .geometry import face_normals, nearest_triangle, ray_triangle, vertex_normals, winding_number
+from .optics import fresnel
 from .shading import TERMS, light_direction, light_source, phong
 
 # Mitsuba (include/mitsuba/render/interaction.h, offset_p and spawn_ray_to): (1 + max|p|) RayEpsilon
@@ -30,14 +33,38 @@ OFFSET_SWEEP = (2.0**-20, 2.0**-23, 2.0**-17, 2.0**-26, 2.0**-14, 2.0**-34)  # l
 
 
 @dataclass
+class Branch:
+    """One ray of a sample's tree: where it went and what it brought back."""
+
+    sample: int
+    path: int  # a leading 1, then a bit per level after the primary: 0 reflected, 1 refracted (path_name)
+    obj: int  # the object hit, -1 for a miss
+    t: float
+    weight: np.ndarray  # on arrival, after absorption
+    contribution: np.ndarray  # weight * (local terms, or the background)
+    margin: float  # the smallest decision margin of this ray: its query, n.L, side and normal choices
+
+
+@dataclass
 class PixelTrace:
     color: np.ndarray  # linear RGB, the average over the pixel's k*k samples
     margin: float  # smallest decision margin met on any ray of any sample (see Whitted._query)
+    truncated: np.ndarray = field(default_factory=lambda: np.zeros(3))  # weight of the rays max_depth cut off
+    branches: list = field(default_factory=list)
+
+    def explain(self, limit: int = 6) -> str:
+        """The pixel's largest contributions, ray by ray: path, object hit, distance, value, margin."""
+        from reference import path_name
+
+        top = sorted(self.branches, key=lambda b: -float(np.max(b.contribution)))[:limit]
+        return "; ".join(f"sample {b.sample} {path_name(b.path)} hits object {b.obj} at t {b.t:.6g} giving "
+                         f"{np.round(b.contribution, 4)} (margin {b.margin:.1e})" for b in top)
 
 
 class Whitted:
     """The scene's triangles in float64 world space and the Whitted model of reference.Switches:
-    I = local Phong + k_r I(reflected ray), up to max_depth ray levels, shadows by shadow rays."""
+    I = local Phong + k_r I(reflected ray), or F I(reflected) + (1 - F) k_t I(refracted) at a
+    dielectric, up to max_depth ray levels, shadows by shadow rays."""
 
     def __init__(self, scene, switches):
         self.scene, self.sw = scene, switches
@@ -78,6 +105,16 @@ class Whitted:
                                area2 / np.linalg.norm(self.p2 - self.p0, axis=1),
                                area2 / np.linalg.norm(self.p1 - self.p0, axis=1)], 1)
         self.materials = [scene.materials[n] for n in names]
+        self.obj = np.concatenate([np.full(len(o.faces), i) for i, o in enumerate(scene.objects)])
+        # Per object: the dielectric's eta (0: opaque), k_t and sigma as the switches let them act.
+        glass = [scene.materials[o.material] for o in scene.objects]
+        self.eta = np.array([m.ior if (m.dielectric and switches.refraction) else 0.0 for m in glass])
+        self.kt = np.array([m.transmittance for m in glass], np.float64).reshape(-1, 3)
+        self.sigma = np.array([m.absorption if switches.absorption else (0.0, 0.0, 0.0) for m in glass],
+                              np.float64).reshape(-1, 3)
+        # The medium the camera rays start in: the dielectric object whose inside holds the eye.
+        self.eye_object = next((i for i, (o, m) in enumerate(zip(scene.objects, glass)) if m.dielectric
+                                and winding_number(o.vertices, o.faces, scene.camera.eye) > 0.5), -1)
 
     def _query(self, o, d, tmax):
         """Nearest hit (face, t, b1, b2) or None, and the query's decision margin, relative to the
@@ -121,56 +158,118 @@ class Whitted:
         mag = (1.0 + float(np.abs(p).max())) * rel
         return p + ng * (mag if ng @ w > 0 else -mag)
 
-    def _sample(self, offset, o, d):
+    def _local(self, offset, p, ng, n, d, mat, uv, vertex_color):
+        """C_amb ka + sum_l vis_l C_l (kd n.L + ks (r.v)^n) at p, with ka, kd, ks at the hit, and the
+        margin of its decisions."""
         sw, scene = self.sw, self.scene
         terms = [t for t, on in zip(TERMS, (sw.ambient, sw.diffuse, sw.specular)) if on]
-        color, weight, margin = np.zeros(3), np.ones(3), math.inf
+        (ka, kd, ks), margin = self._coefficients(mat, uv, vertex_color)
+        visible = None
+        if sw.diffuse or sw.specular:
+            visible = np.zeros(len(scene.lights), bool)
+            for i, light in enumerate(scene.lights):
+                L, n_dot_l = light_direction(p, n, light)
+                margin = min(margin, abs(float(n_dot_l)))
+                if not n_dot_l > 0.0:
+                    continue
+                visible[i] = True
+                if sw.shadows:
+                    so = self._offset(offset, p, ng, L)
+                    to_light = light_source(light)[0] - so
+                    dist = float(np.linalg.norm(to_light))
+                    tmax = dist * (1.0 - MITSUBA_SHADOW_EPSILON) if offset == "mitsuba" else dist
+                    blocker, m = self._query(so, to_light / dist, tmax)
+                    margin = min(margin, m)
+                    visible[i] = blocker is None
+        local = phong(p, n, -d, scene.lights, {"ka": ka, "kd": kd, "ks": ks, "shininess": mat.shininess},
+                      scene.render.ambient, visible, terms)
+        return local, margin
+
+    def _children(self, d, w, medium, f, ng_raw, side, n, margin):
+        """The rays a hit on face f spawns: [(direction, weight, medium, path bit)] and the margin.
+        A mirror's reflected ray keeps the medium; at a dielectric the reflected (F) and refracted
+        ((1 - F) k_t) rays, each inside the glass where it leaves against the winding normal."""
+        obj = int(self.obj[f])
+        eta = self.eta[obj]
+        if eta <= 0.0:
+            kr = np.asarray(self.materials[self.mat[f]].reflectivity, np.float64)
+            if not self.sw.reflection or kr.max() <= 0.0:
+                return [], margin
+            r = d - 2.0 * (d @ n) * n
+            return [(r / np.linalg.norm(r), w * kr, medium, 0)], margin
+        sh = n * side  # the shading normal as the winding orients it
+        m_n = sh * (1.0 if sh @ ng_raw >= 0 else -1.0)  # ...turned to the winding normal's side
+        cos_w, cos_g = -float(d @ m_n), -float(d @ ng_raw)
+        margin = min(margin, abs(cos_g))  # which side the ray comes from
+        if self.smooth[f]:
+            margin = min(margin, abs(cos_w))  # where the shading normal gives way to the geometric one
+        if not cos_w * cos_g > 0.0:
+            m_n, cos_w = ng_raw, cos_g
+        entering = cos_w > 0.0
+        e_i, e_t = (1.0, eta) if entering else (eta, 1.0)
+        nn = m_n if entering else -m_n  # the normal on the incident side
+        ci = abs(cos_w)
+        F = float(fresnel(ci, e_i, e_t))
+        r = d + 2.0 * ci * nn
+        kids = [(r / np.linalg.norm(r), w * F)]
+        k2 = 1.0 - (e_i / e_t) ** 2 * (1.0 - ci * ci)
+        if F < 1.0 and k2 > 0.0:
+            t = (e_i / e_t) * d + ((e_i / e_t) * ci - math.sqrt(k2)) * nn
+            kids.append((t / np.linalg.norm(t), w * (1.0 - F) * self.kt[obj]))
+        out = []
+        for bit, (kd, kw) in enumerate(kids):  # bit 0: reflected, 1: refracted
+            margin = min(margin, abs(float(kd @ ng_raw)))  # the child's medium
+            out.append((kd, kw, obj if kd @ ng_raw < 0.0 else -1, bit))
+        return out, margin
+
+    def _sample(self, offset, o, d, sample: int = 0, out: PixelTrace | None = None):
+        """The tree of one camera ray, level by level as the reference traces it (the order does not
+        change the sums): its colour and smallest decision margin; rays and truncated weight go to out."""
+        out = out if out is not None else PixelTrace(np.zeros(3), math.inf)
+        sw, scene = self.sw, self.scene
+        background = np.asarray(scene.render.background, np.float64)
+        color, margin = np.zeros(3), math.inf
+        level_rays = [(o, d, np.ones(3), self.eye_object, 1, o)]  # ..., medium, path, segment start (not offset)
         for depth in range(sw.max_depth):
-            hit, m = self._query(o, d, math.inf)
-            margin = min(margin, m)
-            if hit is None:
-                return color + weight * np.asarray(scene.render.background), margin
-            f, t, b1, b2 = hit
-            b = (1.0 - b1 - b2, b1, b2)
-            p = self.p0[f] * b[0] + self.p1[f] * b[1] + self.p2[f] * b[2]
-            side = -1.0 if self.n_hat[f] @ d > 0 else 1.0  # two-sided: turn the normals towards the ray
-            ng = self.n_hat[f] * side
-            n = ng
-            if self.smooth[f]:
-                ns = sum(self.N[self.F[f, k]] * b[k] for k in range(3))
-                n = ns / np.linalg.norm(ns) * side
-            mat = self.materials[self.mat[f]]
-            uv = sum(self.UV[self.F[f, k]] * b[k] for k in range(3))
-            vertex_color = sum(self.C[self.F[f, k]] * b[k] for k in range(3))
-            (ka, kd, ks), m = self._coefficients(mat, uv, vertex_color)
-            margin = min(margin, m)
-            visible = None
-            if sw.diffuse or sw.specular:
-                visible = np.zeros(len(scene.lights), bool)
-                for i, light in enumerate(scene.lights):
-                    L, n_dot_l = light_direction(p, n, light)
-                    margin = min(margin, abs(float(n_dot_l)))
-                    if not n_dot_l > 0.0:
-                        continue
-                    visible[i] = True
-                    if sw.shadows:
-                        so = self._offset(offset, p, ng, L)
-                        to_light = light_source(light)[0] - so
-                        dist = float(np.linalg.norm(to_light))
-                        tmax = dist * (1.0 - MITSUBA_SHADOW_EPSILON) if offset == "mitsuba" else dist
-                        blocker, m = self._query(so, to_light / dist, tmax)
-                        margin = min(margin, m)
-                        visible[i] = blocker is None
-            local = phong(p, n, -d, scene.lights, {"ka": ka, "kd": kd, "ks": ks, "shininess": mat.shininess},
-                          scene.render.ambient, visible, terms)
-            color = color + weight * local
-            kr = np.asarray(mat.reflectivity, np.float64)
-            if depth + 1 >= sw.max_depth or kr.max() <= 0.0:
+            next_rays = []
+            for o, d, w, medium, path, start in level_rays:
+                hit, ray_margin = self._query(o, d, math.inf)
+                sigma = self.sigma[medium] if medium >= 0 else np.zeros(3)
+                if hit is None:
+                    w = np.where(sigma > 0.0, 0.0, w)  # exp(-sigma * infinity)
+                    color = color + w * background
+                    out.branches.append(Branch(sample, path, -1, math.inf, w, w * background, ray_margin))
+                    margin = min(margin, ray_margin)
+                    continue
+                f, t, b1, b2 = hit
+                b = (1.0 - b1 - b2, b1, b2)
+                p = self.p0[f] * b[0] + self.p1[f] * b[1] + self.p2[f] * b[2]
+                w = w * np.exp(-sigma * np.linalg.norm(p - start))  # from the parent's hit point
+                ng_raw = self.n_hat[f]
+                side = -1.0 if ng_raw @ d > 0 else 1.0  # two-sided: turn the normals towards the ray
+                ng = ng_raw * side
+                n = ng
+                if self.smooth[f]:
+                    ns = sum(self.N[self.F[f, k]] * b[k] for k in range(3))
+                    n = ns / np.linalg.norm(ns) * side
+                uv = sum(self.UV[self.F[f, k]] * b[k] for k in range(3))
+                vertex_color = sum(self.C[self.F[f, k]] * b[k] for k in range(3))
+                local, m = self._local(offset, p, ng, n, d, self.materials[self.mat[f]], uv, vertex_color)
+                ray_margin = min(ray_margin, m)
+                color = color + w * local
+                kids, ray_margin = self._children(d, w, medium, f, ng_raw, side, n, ray_margin)
+                kids = [kid for kid in kids if kid[1].max() > 0.0]
+                out.branches.append(Branch(sample, path, int(self.obj[f]), t, w, w * local, ray_margin))
+                margin = min(margin, ray_margin)
+                if depth + 1 >= sw.max_depth:
+                    for _, kw, _, _ in kids:
+                        out.truncated = out.truncated + kw
+                    continue
+                for kd, kw, km, bit in kids:
+                    next_rays.append((self._offset(offset, p, ng, kd), kd, kw, km, path * 2 + bit, p))
+            level_rays = next_rays
+            if not level_rays:
                 break
-            weight = weight * kr
-            d = d - 2.0 * (d @ n) * n
-            d /= np.linalg.norm(d)
-            o = self._offset(offset, p, ng, d)
         return color, margin
 
     def _coefficients(self, mat, uv, color):
@@ -191,14 +290,17 @@ class Whitted:
         secondary rays offset as Mitsuba does (offset="mitsuba") or by (1 + max|p|) * offset."""
         k = math.isqrt(self.sw.spp)
         cam = pinhole(self.scene.camera)
+        out = PixelTrace(np.zeros(3), math.inf)
         total, margin = np.zeros(3), math.inf
         for j in range(k):
             for i in range(k):
                 d = ray_directions(cam, x, row, (i + 0.5) / k, (j + 0.5) / k)
-                c, m = self._sample(offset, cam.eye.copy(), d / np.linalg.norm(d))
+                c, m = self._sample(offset, cam.eye.copy(), d / np.linalg.norm(d), j * k + i, out)
                 total += c
                 margin = min(margin, m)
-        return PixelTrace(total / (k * k), margin)
+        out.color, out.margin = total / (k * k), margin
+        out.truncated = out.truncated / (k * k)
+        return out
 
 
 def texture_value(t, uv) -> tuple[np.ndarray, float]:

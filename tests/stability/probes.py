@@ -12,7 +12,7 @@ import warp as wp
 
 from warprt.geometry import SceneData
 from warprt.scene import DEFAULT_MATERIAL, Camera, RenderSettings, Scene, SceneObject
-from warprt.kernels import OFFSET_SCALE, init_warp, make_surface, offset_ray_origin
+from warprt.kernels import OFFSET_SCALE, init_warp, make_surface, offset_ray_origin, refract, triangle, unit_normal
 
 init_warp()
 
@@ -118,4 +118,41 @@ def run_offset_probe(s: SceneData, origin, target, light, scale: float) -> np.nd
     out = wp.empty(n, dtype=wp.vec4i, device=DEVICE)
     arrays = [wp.array(np.ascontiguousarray(a, np.float32), dtype=wp.vec3, device=DEVICE) for a in (origin, target, light)]
     wp.launch(offset_probe, dim=n, inputs=[s, *arrays, scale / OFFSET_SCALE, out], device=DEVICE)
+    return out.numpy()
+
+
+@wp.kernel
+def refraction_probe(s: SceneData, origin: wp.array(dtype=wp.vec3), target: wp.array(dtype=wp.vec3), eta: float,
+                     err_scale: float, out: wp.array(dtype=wp.vec3i)):
+    """Triangle f alone in BVH group f, a dielectric of index eta on its winding's back side. A ray
+    from origin[f] towards target[f] hits it; from that hit, as the tracer does (surface(), the side
+    from the winding, refract(), offset_ray_origin()), spawn the refracted ray. out[f] = (hit, a
+    refracted ray exists, it re-hits f). err_scale multiplies the renderer's error bound."""
+    f = wp.tid()
+    root = wp.mesh_get_group_root(s.mesh, f)
+    d = wp.normalize(target[f] - origin[f])
+    q = wp.mesh_query_ray(s.mesh, origin[f], d, 1.0e30, root)
+    if not q.result:
+        out[f] = wp.vec3i(0, 0, 0)
+        return
+    hit = surface(s, q.face, q.u, q.v, q.normal, d)
+    p0, p1, p2 = triangle(s, q.face)
+    eta_rel = eta
+    if not (wp.dot(hit.ng, unit_normal(p0, p1, p2)) > 0.0):  # from inside: leaving the glass
+        eta_rel = 1.0 / eta
+    t, transmits = refract(d, hit.ng, eta_rel)
+    if not transmits:
+        out[f] = wp.vec3i(1, 0, 0)
+        return
+    t = wp.normalize(t)
+    q2 = wp.mesh_query_ray(s.mesh, offset_ray_origin(hit.p, hit.err * err_scale, hit.ng, t), t, 1.0e30, root)
+    out[f] = wp.vec3i(1, 1, wp.where(q2.result, 1, 0))
+
+
+def run_refraction_probe(s: SceneData, origin, target, eta: float, scale: float) -> np.ndarray:
+    """refraction_probe with the error bound at ``scale`` times its analytic value (OFFSET_SCALE as rendered)."""
+    n = len(origin)
+    out = wp.empty(n, dtype=wp.vec3i, device=DEVICE)
+    arrays = [wp.array(np.ascontiguousarray(a, np.float32), dtype=wp.vec3, device=DEVICE) for a in (origin, target)]
+    wp.launch(refraction_probe, dim=n, inputs=[s, *arrays, float(eta), scale / OFFSET_SCALE, out], device=DEVICE)
     return out.numpy()

@@ -37,9 +37,19 @@ SCENE = {
 }
 
 
-def transformed(scale: float, shift: float) -> dict:
+# Glass: a smooth ball refracting the floor and a mirror, an absorbing cube whose colour depends on the
+# path length inside (absorption is per scene unit, so it scales by 1 / scale), shadows through both.
+GLASS_SCENE = copy.deepcopy(SCENE)
+GLASS_SCENE["render"]["max_depth"] = 6
+GLASS_SCENE["materials"]["glass"] = {"ior": 1.5, "ka": [0.0] * 3, "kd": [0.0] * 3, "ks": [0.5] * 3, "shininess": 100.0}
+GLASS_SCENE["materials"]["tinted"] = {"ior": 1.4, "ka": [0.0] * 3, "kd": [0.0] * 3, "absorption": [1.5, 0.6, 0.1]}
+GLASS_SCENE["objects"][1]["material"] = "glass"
+GLASS_SCENE["objects"][2].update(material="tinted", translate=[1.2, 0.75, 0.9])  # its bottom face off the floor: no tie
+
+
+def transformed(scale: float, shift: float, base: dict = SCENE) -> dict:
     """The whole scene mapped by x -> scale x + shift (1, 1, 1): objects, camera and lights."""
-    doc = copy.deepcopy(SCENE)
+    doc = copy.deepcopy(base)
     move = lambda p: [scale * x + shift for x in p]
     for key in ("eye", "center"):
         doc["camera"][key] = move(doc["camera"][key])
@@ -50,6 +60,9 @@ def transformed(scale: float, shift: float) -> dict:
         s = obj.get("scale", 1.0)
         obj["scale"] = [scale * x for x in s] if isinstance(s, list) else scale * s
         obj["translate"] = move(obj.get("translate", [0.0, 0.0, 0.0]))
+    for material in doc["materials"].values():
+        if "absorption" in material:
+            material["absorption"] = [sigma / scale for sigma in material["absorption"]]
     return doc
 
 
@@ -74,4 +87,22 @@ def test_same_picture_at_any_scale_and_place(original, scale, shift):
     diff = np.abs(image - original)
     record(f"units_placement/scale {scale:g} translate {shift:g}",
            {"ssim": float(ssim), "one_minus_ssim": float(1.0 - ssim), "max_abs_diff": float(diff.max()), "pixels_off_1e-3": int((diff.max(-1) > 1e-3).sum())})
+    assert ssim >= 0.999
+
+
+@pytest.fixture(scope="module")
+def original_glass():
+    image, stats = render(transformed(1.0, 0.0, GLASS_SCENE))
+    assert stats.rays["refraction"] > 0 and stats.rays["shadow"] > 0
+    return image
+
+
+@pytest.mark.parametrize("scale,shift", [(1e-3, 0.0), (1e3, 0.0), (1.0, 1e5)], ids=["scale 1e-3", "scale 1e3", "translate 1e5"])
+def test_glass_renders_the_same_at_any_scale_and_place(original_glass, scale, shift):
+    image, _ = render(transformed(scale, shift, GLASS_SCENE))
+    ssim = structural_similarity(original_glass, image, data_range=1.0, channel_axis=-1)
+    diff = np.abs(image - original_glass)
+    record(f"units_placement/glass scale {scale:g} translate {shift:g}",
+           {"ssim": float(ssim), "one_minus_ssim": float(1.0 - ssim), "max_abs_diff": float(diff.max()),
+            "pixels_off_1e-3": int((diff.max(-1) > 1e-3).sum())})
     assert ssim >= 0.999

@@ -90,7 +90,7 @@ def classify_ties(scene, geometry: Geometry, zb_faces, rt_faces, k: int) -> np.n
 def compare(scene) -> Comparison:
     geometry = Geometry(scene)
     zb, zb_faces = render_zbuffer(scene, return_faces=True)
-    rt = warprt.render(scene, disable=["shadows", "reflection"], geometry=geometry)
+    rt = warprt.render(scene, disable=["shadows", "reflection", "refraction", "absorption"], geometry=geometry)
     rt_faces = traced_faces(scene, geometry=geometry)
     assert zb.stats.algorithm == "zbuffer" and rt.stats.algorithm == "raytrace"
     assert zb_faces.shape == rt_faces.shape

@@ -1,4 +1,4 @@
-"""The Z-buffer against the ray tracer with shadows and reflections off, on every scene: two
+"""The Z-buffer against the ray tracer with shadows, reflections and glass off, on every scene: two
 independent visibility algorithms (screen-space edge functions in float64 against Warp's watertight
 float32 ray-triangle test in a BVH) must see the same triangle, and then one shading function must
 give the same image.

@@ -1,6 +1,7 @@
 """The scene flattened for the kernels: one triangle set in camera-relative float32, with a
 per-triangle material index, vertex normals for smooth objects, uvs and colours per vertex where the
-scene has them, material tables with their texture slots, the textures, and the light table.
+scene has them, material tables (Phong with its texture slots, and the dielectrics' ior, k_t and sigma),
+the textures, the light table, and the medium the eye is in.
 
 Coordinates are made relative to the eye in float64 before the cast to float32, so a scene far
 from the origin keeps the precision it has near it (the camera ray origin is exactly 0).
@@ -10,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 from .._warp import wp
-from ..scene import vertex_normals
+from ..scene import eye_medium, vertex_normals
 from .bvh import build_mesh
 
 CHECKER = -1  # TextureSlot.image: the procedural checker instead of an image
@@ -48,6 +49,10 @@ class SceneData:
     kd_map: wp.array(dtype=TextureSlot)
     ks_map: wp.array(dtype=TextureSlot)
     textures: wp.array(dtype=wp.Texture2D)  # bilinear, repeat; slot 0 a 1x1 white one
+    ior: wp.array(dtype=float)  # eta of a dielectric, 0 for an opaque material
+    transmittance: wp.array(dtype=wp.vec3)  # k_t
+    absorption: wp.array(dtype=wp.vec3)  # sigma per scene unit
+    eye_medium: int  # the dielectric material holding the eye, -1: air
     light_pos: wp.array(dtype=wp.vec3)  # camera-relative
     light_color: wp.array(dtype=wp.vec3)
     num_lights: int
@@ -114,6 +119,12 @@ class Geometry:
         s.kr = vec([x.reflectivity for x in m])
         s.shininess = wp.array(np.asarray([x.shininess for x in m], np.float32), dtype=float, device=d)
         self._attributes(s, scene.objects, m, d)
+        s.ior = wp.array(np.asarray([x.ior or 0.0 for x in m], np.float32), dtype=float, device=d)
+        s.transmittance = vec([x.transmittance for x in m])
+        s.absorption = vec([x.absorption for x in m])
+        # Only the tracer follows rays into a medium (the Z-buffer's geometry has no BVH).
+        medium = eye_medium(scene) if build_bvh and any(x.dielectric for x in m) else None
+        s.eye_medium = names.index(medium) if medium is not None else -1
         s.light_pos = vec([np.asarray(l.position) - self.origin for l in lights] or [[0, 0, 0]])
         s.light_color = vec([l.color for l in lights] or [[0, 0, 0]])
         s.num_lights = len(lights)

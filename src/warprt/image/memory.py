@@ -31,8 +31,8 @@ def geometry_memory(geom) -> dict:
         "normals": size(d.normals),
         "per_triangle": size(d.tri_material, d.tri_smooth),
         "uv_colors": size(d.uvs, d.colors),
-        "materials_lights": size(d.ka, d.kd, d.ks, d.kr, d.shininess, d.ka_map, d.kd_map, d.ks_map, d.light_pos,
-                                 d.light_color),
+        "materials_lights": size(d.ka, d.kd, d.ks, d.kr, d.shininess, d.ka_map, d.kd_map, d.ks_map, d.ior,
+                                 d.transmittance, d.absorption, d.light_pos, d.light_color),
         "textures": int(getattr(geom, "texture_bytes", 0)),
         "bvh": bvh_bytes(geom.triangle_count) if getattr(geom, "mesh", None) is not None else 0,
     }

@@ -13,7 +13,7 @@ import numpy as np
 from .._warp import init_warp, wp
 from ..errors import SceneError
 from ..geometry import Geometry
-from ..kernels import camera_data, make_shade_kernel, make_trace_kernel, raster_kernel
+from ..kernels import camera_data, make_shade_kernel, make_trace_kernel, raster_kernel, stack_size
 from ..scene import EffectSet, ObjectCache, camera_basis, resolve_effects, validate_camera, validate_scene, zbuffer_effects
 from .launch import bands_of, launch_bands, launch_plan
 from .memory import frame_memory
@@ -92,13 +92,16 @@ def _check_choice(value: str, choices, flag: str, what: str):
 
 def render(scene, *, threads: int | None = None, device: str = "cpu", effects=None, disable=(),
            bands: int | None = None, geometry: Geometry | None = None, algorithm: str = "raytrace",
-           progress=None, tile: tuple[int, int] | None = None, primary: str | None = None) -> RenderResult:
+           progress=None, tile: tuple[int, int] | None = None, primary: str | None = None,
+           report_truncated: bool = False) -> RenderResult:
     """Render ``scene`` with the Whitted tracer (or, algorithm="zbuffer", by rasterization with the same
     local shading). ``effects`` (names) limits the effect set, ``disable`` removes effects; neither
     can add one the scene has nothing for. ``primary`` says where the tracer's first hits come from:
     "raytrace"; "zbuffer" (hybrid rendering: the Z-buffer's visible triangle wherever it is certain
     to be the traced one, the other samples traced; the image is the traced image to the bit); or
-    "auto", the default, which rasterizes where that is the cheaper of the two (raster_is_cheaper)."""
+    "auto", the default, which rasterizes where that is the cheaper of the two (raster_is_cheaper).
+    With ``report_truncated``, stats.truncated is the weight per pixel (H, W, 3) of the reflected and
+    refracted rays max_depth cut off: the share of their radiance the image is missing."""
     primary = DEFAULTS.primary if primary is None else primary
     _check_choice(primary, PRIMARY, "--primary", "primary visibility")
     _check_choice(algorithm, ALGORITHMS, "--algorithm", "algorithm")
@@ -113,7 +116,9 @@ def render(scene, *, threads: int | None = None, device: str = "cpu", effects=No
     basis = camera_basis(cam)
     fx: EffectSet = resolve_effects(scene, effects, disable)
     stats = RenderStats.begin(scene, fx, threads=threads, bands=bands, device=device, algorithm="raytrace",
-                              variant=f"trace_{fx.variant}", max_depth=scene.render.max_depth if fx.reflection else 1)
+                              variant=f"trace_{fx.variant}",
+                              max_depth=scene.render.max_depth if fx.reflection or fx.refraction else 1)
+    stack = stack_size(scene.render.max_depth, scene.source) if fx.refraction else 0
 
     with stats.phase("bvh"):
         geom = geometry or cached_geometry(scene, device)
@@ -123,7 +128,7 @@ def render(scene, *, threads: int | None = None, device: str = "cpu", effects=No
     stats.primary = "zbuffer" if raster else "raytrace"
 
     with stats.phase("compile"):
-        kernel = make_trace_kernel(fx, raster_primary=raster)
+        kernel = make_trace_kernel(fx, raster_primary=raster, stack=stack, report_truncated=report_truncated)
         wp.load_module(kernel.module, device=device)
         if raster:
             wp.load_module(raster_kernel.module, device=device)
@@ -137,17 +142,22 @@ def render(scene, *, threads: int | None = None, device: str = "cpu", effects=No
     frags = zb.fragments if zb is not None else empty_fragments(device)
 
     with stats.phase("trace"):
-        image = wp.empty(n_pixels, dtype=wp.vec3, device=device)
-        counts = wp.empty(n_pixels, dtype=wp.vec3i, device=device)
+        # With report_truncated the kernel writes the truncated weights after the image.
+        image = wp.empty(n_pixels * (2 if report_truncated else 1), dtype=wp.vec3, device=device)
+        counts = wp.empty(n_pixels, dtype=wp.vec4i if fx.refraction else wp.vec3i, device=device)
         c, k, max_depth, data = camera_data(basis), math.isqrt(scene.render.spp), stats.max_depth, geom.data
         tile_w, tile_h = tile or PIXEL_TILE
         inputs = lambda first: [data, c, max_depth, k, first, tile_w, tile_h, frags, image, counts]
         _launch_with_progress(kernel, inputs, n_pixels, threads, bands, device, counts, progress)
-        out = image.numpy().reshape(cam.height, cam.width, 3).copy()
+        pixels = image.numpy().reshape(-1, cam.height, cam.width, 3)
+        out = pixels[0].copy()
         per_kind = counts.numpy().astype(np.int64).sum(0)
     check_finite(out)
+    if report_truncated:
+        stats.truncated = pixels[1].copy()
 
-    stats.rays = {"primary": int(per_kind[0]), "shadow": int(per_kind[1]), "reflection": int(per_kind[2])}
+    stats.rays = {"primary": int(per_kind[0]), "shadow": int(per_kind[1]), "reflection": int(per_kind[2]),
+                  "refraction": int(per_kind[3]) if fx.refraction else 0}
     stats.rays["total"] = sum(stats.rays.values())
     stats.rays_per_second = stats.rays["total"] / max(stats.times["trace"], 1e-9)
     stats.times["total"] = time.perf_counter() - t_start
@@ -189,7 +199,7 @@ def render_zbuffer(scene, *, threads: int | None = None, device: str = "cpu", ef
     fx = zbuffer_effects(scene, effects, disable)
     stats = RenderStats.begin(scene, fx, threads=threads, bands=bands, device=device, algorithm="zbuffer",
                               variant=f"zbuffer_{fx.variant}", max_depth=1)
-    stats.rays = {"primary": 0, "shadow": 0, "reflection": 0, "total": 0}  # none: visibility is rasterized
+    stats.rays = {"primary": 0, "shadow": 0, "reflection": 0, "refraction": 0, "total": 0}  # none: visibility is rasterized
 
     with stats.phase("geometry"):
         geom = geometry or Geometry(scene, device=device, build_bvh=False)

@@ -25,13 +25,20 @@ class RenderStats:
     primary: str = "raytrace"  # where the first hits came from: "raytrace", or "zbuffer" (hybrid; same image)
     effects: str = ""
     variant: str = ""
-    rays: dict = field(default_factory=dict)  # primary, shadow, reflection, total
+    rays: dict = field(default_factory=dict)  # primary, shadow, reflection, refraction, total
     times: dict = field(default_factory=dict)  # seconds: load, bvh, compile, trace, write, total
     rays_per_second: float = 0.0
     memory: dict = field(default_factory=dict)  # bytes: geometry arrays and BVH by role, image, peak_rss
+    # render(report_truncated=True): per pixel (H, W, 3), the weight of the rays max_depth cut off.
+    truncated: np.ndarray | None = field(default=None, repr=False)
 
     def to_dict(self) -> dict:
-        return asdict(self)
+        """The stats as JSON values; the truncated weights, if reported, as their largest and mean value."""
+        out = asdict(self)
+        truncated = out.pop("truncated")
+        if truncated is not None:
+            out["truncated"] = {"max": float(truncated.max(initial=0.0)), "mean": float(truncated.mean())}
+        return out
 
     @classmethod
     def begin(cls, scene, fx, *, threads: int, bands: int, device, algorithm: str, variant: str,

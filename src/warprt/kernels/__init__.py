@@ -2,26 +2,28 @@
 
     camera.py (the tracer's and the rasterizer's cameras, sample positions), triangle.py (a face's
     vertices, normal and Woop test), interaction.py (the hit record, its error bound, the ray offset,
-    reflect), texture.py (a material colour's texture at a hit), shading.py (Phong), trace.py (the
-    Whitted kernel), clip.py and raster.py (the Z-buffer: Fragments), hybrid.py (where the Z-buffer's
-    first hit is the tracer's), zbuffer_shade.py.
+    reflect), texture.py (a material colour's texture at a hit), shading.py (Phong), dielectric.py
+    (Fresnel, Snell, Beer), trace.py (the Whitted kernel and its ray tree), clip.py and raster.py (the
+    Z-buffer: Fragments), hybrid.py (where the Z-buffer's first hit is the tracer's), zbuffer_shade.py.
 """
 
 from .._warp import init_warp, wp
 from .camera import CameraData, RasterCamera, camera_data, camera_ray, raster_camera, sample_offset
 from .clip import CLIP_SCALE
+from .dielectric import beer, beer_forever, fresnel_dielectric, refract
 from .hybrid import MARGIN_PX, TIE_REL, uncertain, uncertain_np
 from .interaction import OFFSET_SCALE, Surface, hit_point_error, make_surface, offset_ray_origin, reflect
 from .raster import Fragments, count_kernel, fill_kernel, project_kernel, raster_kernel
 from .shading import Coefficients, ShadeResult, make_coefficients, make_shade, phong_diffuse, phong_specular
 from .texture import texel
-from .trace import make_trace_kernel, primary_faces_kernel, tile_order_pixel
+from .trace import MAX_TREE_DEPTH, STACK_SIZES, make_trace_kernel, primary_faces_kernel, stack_size, tile_order_pixel
 from .triangle import query_normal, triangle, unit_normal, woop_hit
 from .zbuffer_shade import make_shade_kernel
 
-__all__ = ["CLIP_SCALE", "CameraData", "Coefficients", "Fragments", "MARGIN_PX", "OFFSET_SCALE", "RasterCamera", "ShadeResult", "Surface",
-           "TIE_REL", "camera_data", "camera_ray", "count_kernel", "fill_kernel", "hit_point_error", "init_warp",
-           "make_coefficients", "make_shade", "make_shade_kernel", "make_surface", "make_trace_kernel", "offset_ray_origin", "phong_diffuse",
-           "phong_specular", "primary_faces_kernel", "project_kernel", "query_normal", "raster_camera", "raster_kernel",
-           "reflect", "sample_offset", "texel", "tile_order_pixel", "triangle", "uncertain", "uncertain_np", "unit_normal",
-           "woop_hit", "wp"]
+__all__ = ["CLIP_SCALE", "CameraData", "Coefficients", "Fragments", "MARGIN_PX", "MAX_TREE_DEPTH", "OFFSET_SCALE",
+           "RasterCamera", "STACK_SIZES", "ShadeResult", "Surface", "TIE_REL", "beer", "beer_forever", "camera_data",
+           "camera_ray", "count_kernel", "fill_kernel", "fresnel_dielectric", "hit_point_error", "init_warp",
+           "make_coefficients", "make_shade", "make_shade_kernel", "make_surface", "make_trace_kernel",
+           "offset_ray_origin", "phong_diffuse", "phong_specular", "primary_faces_kernel", "project_kernel",
+           "query_normal", "raster_camera", "raster_kernel", "reflect", "refract", "sample_offset", "stack_size",
+           "texel", "tile_order_pixel", "triangle", "uncertain", "uncertain_np", "unit_normal", "woop_hit", "wp"]

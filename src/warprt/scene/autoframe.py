@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import SceneError
+from .dielectric import warn_unclosed
 from .meshio import file_objects, read_mesh_file, warn_if_tiny, warn_if_unmapped
 from .model import Light, Material, RenderSettings, Scene
 from .reader import UP_AXES, read_camera, up_rotation
@@ -45,10 +46,14 @@ def scene_for_mesh(path: Path, camera: dict | None = None, up: str | None = None
         Light(position=_floats(center + radius * (to_up @ [4.0, 6.0, 4.0])), color=(0.8, 0.8, 0.8)),
         Light(position=_floats(center + radius * (to_up @ [-5.0, 3.0, 2.0])), color=(0.3, 0.3, 0.35)),
     ]
-    # Primary rays only, unless the file has mirrors (MTL illum 3): then two reflection levels.
+    # Primary rays only, unless the file has mirrors (MTL illum 3): then two reflection levels; or
+    # glass, whose ray tree needs at least two levels per crossing.
     mirrors = any(max(m.reflectivity) > 0 for _, m in mesh.materials)
-    return Scene(camera, RenderSettings(ambient=(0.15, 0.15, 0.15), max_depth=3 if mirrors else 1), lights,
-                 materials, objects, source)
+    glass = any(m.dielectric for _, m in mesh.materials)
+    scene = Scene(camera, RenderSettings(ambient=(0.15, 0.15, 0.15), max_depth=6 if glass else 3 if mirrors else 1),
+                  lights, materials, objects, source)
+    warn_unclosed(scene)
+    return scene
 
 
 def _framed(given: dict, center, radius: float, to_up) -> dict:

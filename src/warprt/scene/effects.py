@@ -12,7 +12,7 @@ import numpy as np
 from ..errors import SceneError
 
 EFFECTS = ("ambient", "diffuse", "specular", "shadows", "reflection", "supersampling", "smooth", "texture",
-           "vertex_color")
+           "vertex_color", "refraction", "absorption")
 
 
 @dataclass(frozen=True)
@@ -26,6 +26,8 @@ class EffectSet:
     smooth: bool = False
     texture: bool = False
     vertex_color: bool = False
+    refraction: bool = False
+    absorption: bool = False
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -35,7 +37,8 @@ class EffectSet:
     def variant(self) -> str:
         """A short stable name for the compiled kernel variant, e.g. 'trace_adsS_r'."""
         letters = {"ambient": "a", "diffuse": "d", "specular": "s", "shadows": "S",
-                   "reflection": "r", "supersampling": "x", "smooth": "n", "texture": "t", "vertex_color": "c"}
+                   "reflection": "r", "supersampling": "x", "smooth": "n", "texture": "t", "vertex_color": "c",
+                   "refraction": "T", "absorption": "b"}
         return "".join(letters[n] for n in self.names) or "none"
 
     def __str__(self) -> str:
@@ -60,6 +63,10 @@ def scene_effects(scene) -> EffectSet:
         smooth=any(o.smooth for o in scene.objects),
         texture=any(m.textures for m in mats),
         vertex_color=any(getattr(o, "colors", None) is not None for o in scene.objects),
+        # A dielectric's ray tree needs a second ray level; Beer's law can act on the first (an eye
+        # inside absorbing glass).
+        refraction=scene.render.max_depth > 1 and any(m.dielectric for m in mats),
+        absorption=any(m.dielectric and max(m.absorption) > 0 for m in mats),
     )
 
 
@@ -90,5 +97,6 @@ def resolve_effects(scene, allow=None, disable=()) -> EffectSet:
 
 
 def zbuffer_effects(scene, effects=None, disable=()) -> EffectSet:
-    """The scene's effect set without what a Z-buffer cannot simulate: shadows and reflections."""
-    return replace(resolve_effects(scene, effects, disable), shadows=False, reflection=False)
+    """The scene's effect set without what a Z-buffer cannot simulate: shadows, reflections, refraction."""
+    return replace(resolve_effects(scene, effects, disable), shadows=False, reflection=False, refraction=False,
+                   absorption=False)

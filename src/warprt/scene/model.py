@@ -45,7 +45,9 @@ class Light:
 class Material:
     """Phong coefficients ka, kd, ks, the exponent n (shininess) and the mirror weight k_r. A colour
     with a texture is the texture's value times the coefficient (glTF's factor times texture), and
-    an object's vertex colours multiply ka and kd."""
+    an object's vertex colours multiply ka and kd. With an index of refraction, a dielectric: the
+    interface between its inside (index ior) and air, whose transmitted ray is weighted by k_t
+    (transmittance) and, inside, by exp(-absorption * distance)."""
 
     kd: tuple = (0.7, 0.7, 0.7)
     ka: tuple | None = None  # None: the same as kd, with kd's texture
@@ -55,6 +57,9 @@ class Material:
     kd_texture: Texture | None = None
     ka_texture: Texture | None = None
     ks_texture: Texture | None = None
+    ior: float | None = None  # eta > 0: a dielectric; None: opaque
+    transmittance: tuple = (1.0, 1.0, 1.0)  # k_t, only with ior
+    absorption: tuple = (0.0, 0.0, 0.0)  # sigma per scene unit (Beer's law), only with ior
 
     def __post_init__(self):
         if self.ka is None:
@@ -71,6 +76,10 @@ class Material:
         """The largest value colour ``key`` (ka, kd, ks) takes anywhere, per channel, before vertex colours."""
         t = getattr(self, f"{key}_texture")
         return np.asarray(getattr(self, key), np.float64) * (t.peak if t is not None else 1.0)
+
+    @property
+    def dielectric(self) -> bool:
+        return self.ior is not None
 
 
 @dataclass

@@ -11,6 +11,7 @@ import numpy as np
 
 from ..errors import SceneError, show
 from . import shapes
+from .dielectric import warn_unclosed
 from .meshio import file_objects, read_mesh_file, warn_if_tiny, warn_if_unmapped
 from .model import DEFAULT_MATERIAL, Camera, Light, Material, RenderSettings, Scene, SceneObject
 from .normals import resolve_normals
@@ -21,7 +22,9 @@ SECTIONS = {"camera", "render", "lights", "materials", "objects"}
 _CAMERA_KEYS = {"eye", "center", "up", "fovy", "near", "width", "height"}
 _RENDER_KEYS = {"ambient", "background", "max_depth", "shadows", "spp", "effects"}
 _LIGHT_KEYS = {"position", "color"}
-_MATERIAL_KEYS = {"ka", "kd", "ks", "shininess", "reflectivity", "ka_texture", "kd_texture", "ks_texture"}
+_MATERIAL_KEYS = {"ka", "kd", "ks", "shininess", "reflectivity", "ka_texture", "kd_texture", "ks_texture", "ior",
+                  "transmittance", "absorption"}
+_DIELECTRIC_KEYS = ("transmittance", "absorption")  # meaningful only with an ior
 _TEXTURE_KEYS = {"image", "checker", "scale", "offset", "srgb"}
 _OBJECT_KEYS = {"name", "mesh", "shape", "material", "scale", "rotate", "translate", "smooth", "up"}
 UP_AXES = ("x", "y", "z", "-x", "-y", "-z")
@@ -175,13 +178,30 @@ def read_material(source: str, name: str, t, base: Path = Path(".")) -> Material
         ka, ka_texture = r.vector("ka", white, nonneg=True), tex.get("ka")
     else:
         ka, ka_texture = kd, tex.get("kd")
+    reflectivity = r.vector("reflectivity", (0.0, 0.0, 0.0), nonneg=True, allow_scalar=True)
+    ior, dielectric = None, {}
+    if "ior" in t:
+        ior = r.number("ior", lo=0.0, lo_open=True)
+        if max(reflectivity) > 0.0:
+            r.fail("reflectivity", "a dielectric (ior) reflects by its Fresnel term; reflectivity must be 0")
+        transmittance = r.vector("transmittance", (1.0, 1.0, 1.0), nonneg=True, allow_scalar=True)
+        if max(transmittance) > 1.0:
+            r.fail("transmittance", f"expected values in [0, 1], got {list(transmittance)}")
+        dielectric = {"transmittance": transmittance,
+                      "absorption": r.vector("absorption", (0.0, 0.0, 0.0), nonneg=True, allow_scalar=True)}
+    else:
+        for key in _DIELECTRIC_KEYS:
+            if key in t:
+                r.fail(key, "only a dielectric has it: give the material an ior")
     return Material(
         kd=kd,
         ka=ka,
         ks=r.vector("ks", white if "ks" in tex else (0.0, 0.0, 0.0), nonneg=True),
         shininess=r.number("shininess", 32.0, lo=0.0),
-        reflectivity=r.vector("reflectivity", (0.0, 0.0, 0.0), nonneg=True, allow_scalar=True),
+        reflectivity=reflectivity,
         kd_texture=tex.get("kd"), ka_texture=ka_texture, ks_texture=tex.get("ks"),
+        ior=ior,
+        **dielectric,
     )
 
 
@@ -414,6 +434,7 @@ def scene_from_dict(data: dict, source: str = "<scene>", base: Path | None = Non
                for o in read_object(source, base, t, i, materials)]
     scene = Scene(camera, render, lights, materials, objects, source)
     validate_scene(scene)  # what needs the whole scene: reach from the eye, float32 overflow
+    warn_unclosed(scene)
     return scene
 
 

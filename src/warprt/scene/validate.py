@@ -106,6 +106,24 @@ def _check_texture(source, field_name, t):
               and np.all(np.isfinite(t.image)) and t.image.min() >= 0):
         raise SceneError(source, field_name, "expected an (H, W, 3) image of finite non-negative linear values")
     _checked_textures.add(t)
+def _check_dielectric(source, where, m):
+    """ior > 0 makes a dielectric, whose reflection is its Fresnel term; k_t in [0, 1] and sigma >= 0
+    belong to a dielectric only."""
+    if m.ior is None:
+        if tuple(m.transmittance) != (1.0, 1.0, 1.0):
+            raise SceneError(source, f"{where}.transmittance", "only a dielectric has it: give the material an ior")
+        if np.any(np.asarray(m.absorption, np.float64) != 0.0):
+            raise SceneError(source, f"{where}.absorption", "only a dielectric has it: give the material an ior")
+        return
+    if not _is_real(m.ior) or not math.isfinite(m.ior) or not m.ior > 0.0:
+        raise SceneError(source, f"{where}.ior", f"expected a finite number > 0, got {_num(m.ior)}")
+    if np.max(m.reflectivity) > 0.0:
+        raise SceneError(source, f"{where}.reflectivity", "a dielectric (ior) reflects by its Fresnel term; "
+                                                          "reflectivity must be 0")
+    kt = _check_vector(source, f"{where}.transmittance", m.transmittance, nonneg=True)
+    if kt.max() > 1.0:
+        raise SceneError(source, f"{where}.transmittance", f"expected values in [0, 1], got {list(kt)}")
+    _check_vector(source, f"{where}.absorption", m.absorption, nonneg=True)
 
 
 def validate_scene(scene: Scene):
@@ -137,10 +155,12 @@ def validate_scene(scene: Scene):
         _check_number(src, f"materials.{name}.shininess", m.shininess)
         for key in ("ka", "kd", "ks"):
             _check_texture(src, f"materials.{name}.{key}_texture", getattr(m, f"{key}_texture", None))
+        _check_dielectric(src, f"materials.{name}", m)
         ka, kd, ks = (m.peak(k) for k in ("ka", "kd", "ks"))
         lit = (ambient * ka + light_max * kd) * color_max + light_max * ks
         lit_max = np.maximum(lit_max, lit)
-        kr_max = max(kr_max, float(np.max(m.reflectivity)))
+        # A dielectric splits a ray's weight w into F w and (1 - F) k_t w: at most w in all.
+        kr_max = max(kr_max, float(np.max(m.reflectivity)), 1.0 if m.dielectric else 0.0)
         coef_max = max(coef_max, float(np.max(kd * color_max + ks)), float(np.max(ka)) * color_max)
     for i, obj in enumerate(scene.objects):
         where = f"objects[{i}]"

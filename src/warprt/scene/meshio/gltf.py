@@ -13,6 +13,7 @@ import base64
 import json
 import math
 import struct
+from dataclasses import replace
 from pathlib import Path
 from urllib.parse import unquote
 
@@ -20,6 +21,7 @@ import numpy as np
 
 from ...diagnostics import warn
 from ...errors import SceneError
+from ..dielectric_formats import dielectric_from_gltf
 from ..model import Material
 from ..texture import image_texture
 from . import MeshFile, MeshPart, one_line, unique_name, unit_rows, weld_corners
@@ -27,7 +29,7 @@ from . import MeshFile, MeshPart, one_line, unique_name, unit_rows, weld_corners
 _COMPONENT = {5120: np.int8, 5121: np.uint8, 5122: np.int16, 5123: np.uint16, 5125: np.uint32, 5126: np.float32}
 _WIDTH = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT2": 4, "MAT3": 9, "MAT4": 16}
 _WRAP = {10497: "repeat", 33071: "clamp to edge", 33648: "mirrored repeat"}
-_UNREAD_MATERIAL_EXTENSIONS = {"KHR_materials_transmission": "transmission", "KHR_materials_volume": "volume",
+_UNREAD_MATERIAL_EXTENSIONS = {"KHR_materials_volume": "volume",
                                "KHR_materials_clearcoat": "clearcoat", "KHR_materials_sheen": "sheen",
                                "KHR_materials_emissive_strength": "emission"}
 
@@ -183,7 +185,8 @@ class _Document:
             uv_map, tex_coord = _texture_transform(info)
             if texture is not None:
                 texture = texture.mapped(uv_map)
-        return Material(kd=kd, ka=kd, ks=(0.0, 0.0, 0.0), kd_texture=texture, ka_texture=texture), tex_coord
+        material = Material(kd=kd, ka=kd, ks=(0.0, 0.0, 0.0), kd_texture=texture, ka_texture=texture)
+        return replace(material, **dielectric_from_gltf(m, self.src, where)), tex_coord
 
     def mesh_file(self) -> MeshFile:
         doc = self.doc

@@ -11,12 +11,14 @@ from __future__ import annotations
 import codecs
 import math
 import warnings
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
 from ...diagnostics import warn
 from ...errors import SceneError, show
+from ..dielectric_formats import dielectric_from_mtl
 from ..model import Material
 from ..texture import affine, image_texture
 from . import MeshFile, MeshPart, fan_corners, unique_name, weld_corners
@@ -27,8 +29,8 @@ _OBJ_QUIET = {"o", "g", "vp", "l", "p", "cstype", "deg", "bmat", "step", "curv",
               "shadow_obj", "trace_obj", "ctech", "stech", "call", "csh"}
 # MTL statements for what Phong has no term for (refraction, PBR, bump and displacement): ignored
 # quietly; transparency and emission are warned about when a material has them.
-_MTL_QUIET = {"ni", "pr", "pm", "ps", "pc", "pcr", "aniso", "anisor", "sharpness", "map_ns", "map_bump", "bump",
-              "disp", "decal", "refl", "norm", "map_pr", "map_pm", "map_ps", "map_refl", "map_aat", "tf"}
+_MTL_QUIET = {"pr", "pm", "ps", "pc", "pcr", "aniso", "anisor", "sharpness", "map_ns", "map_bump", "bump",
+              "disp", "decal", "refl", "norm", "map_pr", "map_pm", "map_ps", "map_refl", "map_aat"}
 _MAP_OPTIONS = {"-blendu": 1, "-blendv": 1, "-bm": 1, "-boost": 1, "-cc": 1, "-clamp": 1, "-imfchan": 1,
                 "-texres": 1, "-type": 1, "-mm": 2, "-o": 3, "-s": 3, "-t": 3}
 _NUMERIC_OPTIONS = {"-o", "-s", "-t", "-mm", "-bm", "-boost", "-texres"}
@@ -334,6 +336,8 @@ def read_mtl(path: Path) -> list[tuple[str, Material]]:
             current["illum"] = int(_number(src, current["name"], words[0], rest))
         elif key in ("d", "tr"):
             current[key] = _number(src, current["name"], words[0], rest)
+        elif key in ("ni", "tf"):  # glass, with illum 4, 6 or 7 (dielectric_from_mtl reads and checks them)
+            current[key] = rest.split()
         elif key in ("map_ka", "map_kd", "map_ks"):
             texture = _map(src, path.parent, current["name"], words[0], rest)
             if texture is not None:
@@ -373,13 +377,14 @@ def _phong(src: str, e: dict) -> Material:
     kr = ks if illum == 3 else (0.0, 0.0, 0.0)
     if illum in (0, 1) or ns <= 0.0:  # Phong with n = 0 would add ks over every lit point
         ks, textures = (0.0, 0.0, 0.0), {k: t for k, t in textures.items() if k != "ks"}
-    if e.get("d", 1.0) < 1.0 or e.get("tr", 0.0) > 0.0 or e.get("ignored_map_d"):
+    glass = dielectric_from_mtl(e, src, e["name"])
+    if not glass and (e.get("d", 1.0) < 1.0 or e.get("tr", 0.0) > 0.0 or e.get("ignored_map_d")):
         warn(src, where, "transparency (d, Tr, map_d) is not rendered; the material is opaque")
     if max(e.get("ke", (0.0, 0.0, 0.0))) > 0.0 or e.get("ignored_map_ke"):
         warn(src, where, "emission (Ke, map_Ke) is not rendered")
     # No Ka: ka is kd with kd's map (Material's own default).
-    return Material(kd=kd, ka=ka, ks=ks, shininess=max(ns, 0.0), reflectivity=kr, kd_texture=textures.get("kd"),
-                    ka_texture=textures.get("ka"), ks_texture=textures.get("ks"))
+    return replace(Material(kd=kd, ka=ka, ks=ks, shininess=max(ns, 0.0), reflectivity=kr, kd_texture=textures.get("kd"),
+                            ka_texture=textures.get("ka"), ks_texture=textures.get("ks")), **glass)
 
 
 def _rgb(src: str, name: str, key: str, rest: str) -> tuple:

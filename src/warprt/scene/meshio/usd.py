@@ -15,12 +15,14 @@ import re
 import sys
 import tempfile
 from contextlib import contextmanager
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
 from ...diagnostics import warn
 from ...errors import SceneError
+from ..dielectric_formats import dielectric_from_usd
 from ..model import Material
 from ..texture import Texture, image_texture
 from . import MeshFile, MeshPart, dedupe, fan_corners, unique_name, unit_rows, weld_corners
@@ -296,30 +298,35 @@ class _Stage:
         return self._index[key]
 
     def _phong(self, mat) -> tuple[Material, str | None]:
-        """UsdPreviewSurface's diffuseColor as kd (= ka), a value or a UsdUVTexture; and the primvar
-        the texture reads its st from."""
+        """UsdPreviewSurface's diffuseColor as kd (= ka), a value or a UsdUVTexture; an opacity below 1
+        makes a dielectric (dielectric_from_usd); and the primvar the texture reads its st from."""
         where = str(mat.GetPath())
         shader = mat.ComputeSurfaceSource()[0]
         if not shader or shader.GetIdAttr().Get() != "UsdPreviewSurface":
             return Material(kd=_USD_GREY, ka=_USD_GREY, ks=(0.0, 0.0, 0.0)), None
+        glass = dielectric_from_usd(shader)
         for inp, what, idle in (("opacity", "transparency (opacity)", 1.0), ("emissiveColor", "emission", (0, 0, 0))):
             value = _value(shader, inp)
-            if value is not None and (np.asarray(value, np.float64) != np.asarray(idle)).any():
+            if value is not None and (np.asarray(value, np.float64) != np.asarray(idle)).any() and not (glass and inp == "opacity"):
                 warn(self.src, where, f"{what} is not rendered")
         inp = shader.GetInput("diffuseColor")
         source, output, last = _source(inp) if inp else (None, None, None)
+        grey = replace(Material(kd=_USD_GREY, ka=_USD_GREY, ks=(0.0, 0.0, 0.0)), **glass)
         if source is None:
             value = last.Get() if last else None
             kd = tuple(max(0.0, float(x)) for x in value) if value is not None else _USD_GREY
-            return Material(kd=kd, ka=kd, ks=(0.0, 0.0, 0.0)), None
+            opacity = 1.0 - glass["transmittance"][0] if glass else 1.0
+            kd = tuple(x * opacity for x in kd)  # a dielectric's diffuse part is weighted by its opacity
+            return replace(Material(kd=kd, ka=kd, ks=(0.0, 0.0, 0.0)), **{**glass, "kd": kd, "ka": kd}), None
         if source.GetIdAttr().Get() != "UsdUVTexture":
             warn(self.src, where, f"diffuseColor comes from a {source.GetIdAttr().Get()} shader, which is not read")
-            return Material(kd=_USD_GREY, ka=_USD_GREY, ks=(0.0, 0.0, 0.0)), None
+            return grey, None
         texture, uv_name = self._uv_texture(source, output, where)
-        white = (1.0, 1.0, 1.0)
         if texture is None:
-            return Material(kd=_USD_GREY, ka=_USD_GREY, ks=(0.0, 0.0, 0.0)), None
-        return Material(kd=white, ka=white, ks=(0.0, 0.0, 0.0), kd_texture=texture, ka_texture=texture), uv_name
+            return grey, None
+        white = (1.0 - glass["transmittance"][0],) * 3 if glass else (1.0, 1.0, 1.0)
+        return replace(Material(kd=white, ka=white, ks=(0.0, 0.0, 0.0), kd_texture=texture, ka_texture=texture),
+                       **{**glass, "kd": white, "ka": white}), uv_name
 
     def _uv_texture(self, shader, output, where):
         """A UsdUVTexture as a Texture (its scale and bias applied to the texels), and its st primvar."""

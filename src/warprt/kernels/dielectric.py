@@ -1,0 +1,58 @@
+"""A dielectric interface, Whitted's transmitted ray: the exact unpolarized Fresnel reflectance and
+Snell's law in vector form (pbrt-v4's FrDielectric and Refract), and Beer's law inside the medium.
+
+eta is always n_t / n_i, the index past the surface over the index before it. Both functions compute
+sin^2(theta_t) = (1 - cos_i^2) / eta^2 the same way, so they agree on total internal reflection.
+"""
+
+from __future__ import annotations
+
+from .._warp import wp
+
+
+@wp.func
+def fresnel_dielectric(cos_i: float, eta: float) -> float:
+    """F(cos_i, eta): the share of light reflected, (r_parallel^2 + r_perpendicular^2) / 2, for light
+    arriving at cos_i > 0 from the side the normal points to (n_t / n_i = eta), or at cos_i < 0 from
+    the other side (then 1 / eta); 1 past the critical angle (total internal reflection)."""
+    c = wp.clamp(cos_i, -1.0, 1.0)
+    e = eta
+    if c < 0.0:
+        e = 1.0 / eta
+        c = -c
+    sin2_t = (1.0 - c * c) / (e * e)
+    if sin2_t >= 1.0:
+        return 1.0
+    cos_t = wp.sqrt(1.0 - sin2_t)
+    r_parallel = (e * c - cos_t) / (e * c + cos_t)
+    r_perpendicular = (c - e * cos_t) / (c + e * cos_t)
+    return 0.5 * (r_parallel * r_parallel + r_perpendicular * r_perpendicular)
+
+
+@wp.func
+def refract(d: wp.vec3, n: wp.vec3, eta: float):
+    """Snell's law, eta_i sin(theta_i) = eta_t sin(theta_t): the direction d (unit, towards the
+    surface) takes past a surface of unit normal n on d's side (d.n <= 0) and relative index
+    eta = n_t / n_i, d / eta + (cos_i / eta - cos_t) n, and whether it exists (false past the
+    critical angle)."""
+    cos_i = -wp.dot(d, n)
+    sin2_t = (1.0 - cos_i * cos_i) / (eta * eta)
+    if sin2_t >= 1.0:
+        return d, False
+    cos_t = wp.sqrt(1.0 - sin2_t)
+    return d / eta + (cos_i / eta - cos_t) * n, True
+
+
+@wp.func
+def beer(weight: wp.vec3, sigma: wp.vec3, distance: float) -> wp.vec3:
+    """Beer's law: weight exp(-sigma distance) per channel."""
+    return wp.vec3(weight[0] * wp.exp(-sigma[0] * distance), weight[1] * wp.exp(-sigma[1] * distance),
+                   weight[2] * wp.exp(-sigma[2] * distance))
+
+
+@wp.func
+def beer_forever(weight: wp.vec3, sigma: wp.vec3) -> wp.vec3:
+    """Beer's law for a ray that leaves the scene inside the medium: exp(-sigma * infinity), 0 in
+    every channel that absorbs at all."""
+    return wp.vec3(wp.where(sigma[0] > 0.0, 0.0, weight[0]), wp.where(sigma[1] > 0.0, 0.0, weight[1]),
+                   wp.where(sigma[2] > 0.0, 0.0, weight[2]))
