@@ -8,6 +8,7 @@ import tomllib
 from dataclasses import asdict
 from pathlib import Path
 
+from ..diagnostics import collecting
 from ..errors import SceneError
 from .autoframe import scene_for_mesh
 from .meshio import FORMATS, is_mesh_path
@@ -19,7 +20,9 @@ def load_scene(path=None, overrides: dict | None = None) -> Scene:
     """Read a scene: a TOML scene file, any mesh file trimesh reads (framed automatically; only
     camera.* and render.* can be overridden), or None for the built-in default scene."""
     t = time.perf_counter()
-    scene = _load_scene(path, overrides)
+    with collecting(str(path) if path is not None else "default scene"):
+        scene = _load_scene(path, overrides)
+    scene.files = (Path(path if path is not None else default_scene_path()), *scene.files)
     scene.load_seconds = time.perf_counter() - t
     return scene
 
@@ -66,7 +69,8 @@ def _load_scene(path, overrides) -> Scene:
     if path.suffix.lower() != ".toml":
         return _load_mesh_scene(path, overrides)
     try:
-        text = path.read_text(encoding="utf-8")
+        # utf-8-sig: a byte-order mark, which Windows editors write, is not part of the TOML.
+        text = path.read_text(encoding="utf-8-sig")
     except FileNotFoundError:
         raise SceneError(source, None, "scene file not found") from None
     except IsADirectoryError:

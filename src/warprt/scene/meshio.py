@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..diagnostics import native_stderr, usd_messages, warn
 from ..errors import SceneError, show
 from .model import Material, SceneObject
 from .normals import vertex_normals
@@ -74,7 +75,17 @@ def read_mesh_file(path) -> MeshFile:
     if size == 0:
         raise SceneError(src, None, "the file is empty")
     _sniff(src, ext, head, size)
-    mesh = _load_usd(path) if ext in USD_FORMATS else _load_trimesh(path)
+    if ext in USD_FORMATS:
+        # USD reports on fd 2 in multi-line C++ diagnostics: each becomes one warprt warning.
+        native = None
+        try:
+            with native_stderr() as native:
+                mesh = _load_usd(path)
+        finally:
+            for message in usd_messages(native.text if native else ""):
+                warn(f"{src}: USD: {message}")
+    else:
+        mesh = _load_trimesh(path)
     _check(src, mesh)
     return mesh
 
@@ -173,7 +184,17 @@ def _load_trimesh(path: Path) -> MeshFile:
         # OBJ counts vertices from 1: trimesh's index 8 is the file's 'f ... 9'.
         which = f" (vertex {int(m[1]) + 1}; the file has {m[2]})" if m and ext == ".obj" and int(m[1]) >= 0 else ""
         raise SceneError(src, None, f"a face refers to a vertex that does not exist{which}") from None
+    except FileNotFoundError as e:
+        # trimesh names only the file it looked for: a glTF's buffer or image, or, for a .gltf that
+        # is not glTF JSON, the 'model.gltf' it then looks for inside it as if it were an archive.
+        if ext == ".gltf":
+            _check_gltf_json(path)
+        missing = e.filename or (e.args[0] if e.args else "?")
+        raise SceneError(src, None, f"cannot read {ext[1:].upper()} file: a file it refers to is missing: "
+                                    f"{missing} (looked for in {path.parent})") from None
     except Exception as e:
+        if ext == ".gltf":
+            _check_gltf_json(path)
         raise SceneError(src, None, f"cannot read {ext[1:].upper()} file: {_one_line(e)}") from None
     if isinstance(loaded, trimesh.Trimesh):
         loaded = trimesh.Scene(loaded)
@@ -216,6 +237,20 @@ def _load_trimesh(path: Path) -> MeshFile:
         # trimesh splits an OBJ by material; it is one object with a material per face.
         parts = [_merge(path.stem, parts)]
     return MeshFile(path, parts, materials)
+
+
+def _check_gltf_json(path: Path):
+    """A .gltf is JSON text: say so when it is not, rather than what trimesh then looked for."""
+    try:
+        json.loads(path.read_bytes())
+    except UnicodeDecodeError as e:
+        raise SceneError(str(path), None, f"not a glTF file (not UTF-8 JSON text: byte 0x{e.object[e.start]:02x} "
+                                          f"at offset {e.start})") from None
+    except json.JSONDecodeError as e:
+        raise SceneError(str(path), None, f"not a glTF file (not JSON: {e.msg} at line {e.lineno}, "
+                                          f"column {e.colno})") from None
+    except RecursionError:
+        raise SceneError(str(path), None, "not a glTF file (JSON nested too deeply to read)") from None
 
 
 def _merge(name: str, parts: list[MeshPart]) -> MeshPart:
