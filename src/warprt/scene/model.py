@@ -77,6 +77,7 @@ class Scene:
     objects: list[SceneObject]
     source: str = "<scene>"
     load_seconds: float | None = None  # time load_scene spent reading and validating
+    files: tuple = ()  # the files it was read from: the scene file, then the mesh files it names
 
     @property
     def triangle_count(self) -> int:

@@ -297,7 +297,8 @@ def scene_from_dict(data: dict, source: str = "<scene>", base: Path | None = Non
         materials[name] = read_material(source, name, t)
     objects = [o for i, t in enumerate(_array_of_tables(source, data, "objects"))
                for o in read_object(source, base, t, i, materials)]
-    scene = Scene(camera, render, lights, materials, objects, source)
+    meshes = tuple(base / t["mesh"] for t in _array_of_tables(source, data, "objects") if isinstance(t.get("mesh"), str))
+    scene = Scene(camera, render, lights, materials, objects, source, files=meshes)
     validate_scene(scene)  # what needs the whole scene: reach from the eye, float32 overflow
     return scene
 
