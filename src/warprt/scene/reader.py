@@ -269,8 +269,11 @@ def read_object(source: str, base: Path, t: dict, i: int, materials: dict) -> li
         r.fail("mesh" if "mesh" in t else "shape", "the mesh has no triangles")
     if faces.min() < 0 or faces.max() >= len(vertices):
         r.fail("faces" if "shape" in t else "mesh", f"vertex index out of range [0, {len(vertices) - 1}]")
-    world = (vertices * scale) @ rot.T + translate
-    if np.linalg.det(np.diag(scale)) < 0:  # a mirroring scale flips the winding; keep faces outward
+    with np.errstate(over="ignore", invalid="ignore"):  # an absurd scale is reported below, once
+        world = (vertices * scale) @ rot.T + translate
+    if not np.all(np.isfinite(world)):
+        r.fail("scale", f"scale {list(scale)}, rotate and translate take the mesh beyond the range of float64")
+    if np.prod(np.sign(scale)) < 0:  # a mirroring scale flips the winding; keep faces outward
         faces = faces[:, ::-1]
     name, smooth = r.string("name", default_name), r.boolean("smooth", False)
     world, faces = np.ascontiguousarray(world, np.float64), np.ascontiguousarray(faces, np.int64)
