@@ -5,7 +5,8 @@ from __future__ import annotations
 
 import functools
 import os
-from concurrent.futures import ThreadPoolExecutor
+import threading
+from concurrent.futures import FIRST_EXCEPTION, ThreadPoolExecutor, wait
 
 import numpy as np
 
@@ -43,20 +44,42 @@ def _pool(threads: int) -> ThreadPoolExecutor:
 def launch_bands(kernel, inputs_for, n_items: int, threads: int, bands: int, device: str, on_band=None):
     """Launch ``kernel`` over ranges of [0, n_items), with ``inputs_for(first)`` as its inputs; on the
     CPU ``threads`` bands run at once. ``on_band(first, count)`` is called when a band has finished,
-    on the worker thread that ran it."""
+    on the worker thread that ran it.
+
+    An exception, a KeyboardInterrupt (Ctrl-C in the main thread, or raised by ``on_band``) included,
+    cancels the bands not yet started and waits for the running ones before it propagates: a Warp
+    launch cannot be stopped, and the pool is shared, so the next render would otherwise queue
+    behind the interrupted one's bands (and they would write into buffers it has let go)."""
     ranges = bands_of(n_items, bands)
+    stop = threading.Event()
 
     def run(r):
+        if stop.is_set():  # taken by a worker just before the others were cancelled
+            return
         first, count = r
-        wp.launch(kernel, dim=count, inputs=inputs_for(first), device=device)
-        if on_band is not None:
-            if device != "cpu":  # a GPU launch returns before the band is done
-                wp.synchronize_device(device)
-            on_band(first, count)
+        try:
+            wp.launch(kernel, dim=count, inputs=inputs_for(first), device=device)
+            if on_band is not None:
+                if device != "cpu":  # a GPU launch returns before the band is done
+                    wp.synchronize_device(device)
+                on_band(first, count)
+        except BaseException:
+            stop.set()  # at once, not when the main thread gets to this band's result
+            raise
 
     if threads <= 1 or len(ranges) == 1 or device != "cpu":
         for r in ranges:
             run(r)
     else:
-        list(_pool(threads).map(run, ranges))
+        futures = [_pool(threads).submit(run, r) for r in ranges]
+        try:
+            wait(futures, return_when=FIRST_EXCEPTION)
+            for f in futures:
+                f.result()
+        except BaseException:
+            stop.set()
+            for f in futures:
+                f.cancel()
+            wait(futures)
+            raise
     wp.synchronize_device(device)
