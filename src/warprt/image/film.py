@@ -204,8 +204,12 @@ def write_image(path, image: np.ndarray, field: str = "output") -> Path:
 
             Image.fromarray(to_srgb8(image), "RGB").save(tmp, format="PNG")
         elif ext == ".npy":
+            a = np.ascontiguousarray(image, np.float32)
             with open(tmp, "wb") as f:
-                np.save(f, np.asarray(image, np.float32))
+                # np.save's own short-write error has no errno ("N requested and M written"); the
+                # file object's write reports the system's reason (a full disk), with no copy either.
+                np.lib.format.write_array_header_1_0(f, np.lib.format.header_data_from_array_1_0(a))
+                f.write(memoryview(a).cast("B"))
         elif ext == ".exr":
             _write_exr(tmp, image)
 
