@@ -262,7 +262,7 @@ def read_object(source: str, base: Path, t: dict, i: int, materials: dict) -> li
         r.fail("material", f"no material named '{material}'{hint}")
     scale = np.asarray(r.vector("scale", 1.0, allow_scalar=True))
     if np.any(scale == 0.0):
-        r.fail("scale", f"expected non-zero scale factors, got {list(scale)}")
+        r.fail("scale", f"expected non-zero scale factors, got {[float(x) for x in scale]}")
     rot = rotation(r.vector("rotate", (0.0, 0.0, 0.0)))
     translate = np.asarray(r.vector("translate", (0.0, 0.0, 0.0)))
     if len(faces) == 0:
@@ -272,7 +272,7 @@ def read_object(source: str, base: Path, t: dict, i: int, materials: dict) -> li
     with np.errstate(over="ignore", invalid="ignore"):  # an absurd scale is reported below, once
         world = (vertices * scale) @ rot.T + translate
     if not np.all(np.isfinite(world)):
-        r.fail("scale", f"scale {list(scale)}, rotate and translate take the mesh beyond the range of float64")
+        r.fail("scale", f"scale [{', '.join(f'{x:g}' for x in scale)}], rotate and translate take the mesh beyond the range of float64")
     if np.prod(np.sign(scale)) < 0:  # a mirroring scale flips the winding; keep faces outward
         faces = faces[:, ::-1]
     name, smooth = r.string("name", default_name), r.boolean("smooth", False)
