@@ -19,6 +19,7 @@ from ..diagnostics import native_stderr, usd_messages, warn
 from ..errors import SceneError, show
 from .model import Material, SceneObject
 from .normals import vertex_normals
+from .usdcrate import MAGIC as CRATE_MAGIC, check_crate
 
 TRIMESH_FORMATS = (".obj", ".ply", ".stl", ".off", ".glb", ".gltf")
 USD_FORMATS = (".usd", ".usda", ".usdc", ".usdz")
@@ -75,12 +76,19 @@ def read_mesh_file(path) -> MeshFile:
     if size == 0:
         raise SceneError(src, None, "the file is empty")
     _sniff(src, ext, head, size)
+    if ext in USD_FORMATS and head.startswith(CRATE_MAGIC):
+        check_crate(src, path, size)
     if ext in USD_FORMATS:
         # USD reports on fd 2 in multi-line C++ diagnostics: each becomes one warprt warning.
         native = None
         try:
             with native_stderr() as native:
                 mesh = _load_usd(path)
+        except Exception as e:
+            if not type(e).__module__.startswith("pxr"):
+                raise
+            # USD read the layer but a value in it is damaged (a corrupt crate value, a bad array).
+            raise SceneError(src, None, f"cannot read USD file: {_pxr_message(e)}") from None
         finally:
             for message in usd_messages(native.text if native else ""):
                 warn(f"{src}: USD: {message}")
@@ -215,7 +223,7 @@ def _load_trimesh(path: Path) -> MeshFile:
             if phong is None:
                 index_of[id(m)] = -1
             else:
-                name = _unique(getattr(m, "name", None) or f"material{len(materials)}", [n for n, _ in materials])
+                name = _unique(_name(m) or f"material{len(materials)}", [n for n, _ in materials])
                 index_of[id(m)] = len(materials)
                 materials.append((name, phong))
         return index_of[id(m)]
@@ -227,7 +235,13 @@ def _load_trimesh(path: Path) -> MeshFile:
         if not isinstance(g, trimesh.Trimesh) or len(g.faces) == 0:
             continue
         t = np.asarray(transform, np.float64)
-        vertices = np.asarray(g.vertices, np.float64) @ t[:3, :3].T + t[:3, 3]
+        vertices = np.asarray(g.vertices, np.float64)
+        if vertices.ndim != 2 or vertices.shape[1] != 3 or t.shape != (4, 4):
+            # trimesh passes on what a damaged file says: 'v 1 2' lines, a glTF accessor of VEC2
+            what = f"vertices of {vertices.shape[-1]} coordinates" if t.shape == (4, 4) else f"a {t.shape} node transform"
+            raise SceneError(src, None, f"cannot read {ext[1:].upper()} file: {what}; expected 3 (x, y, z)")
+        with np.errstate(over="ignore", invalid="ignore"):  # a transform beyond float64 is caught by _check
+            vertices = vertices @ t[:3, :3].T + t[:3, 3]
         faces = np.asarray(g.faces, np.int64).reshape(-1, 3)
         if np.linalg.det(t[:3, :3]) < 0:  # a mirroring node transform turns the winding over
             faces = faces[:, ::-1]
@@ -260,6 +274,12 @@ def _merge(name: str, parts: list[MeshPart]) -> MeshPart:
                     np.concatenate([p.face_material for p in parts]))
 
 
+def _name(m) -> str | None:
+    """A trimesh material's name, if the file gave it one that is a string (a damaged glTF may not)."""
+    name = getattr(m, "name", None)
+    return name if isinstance(name, str) else None
+
+
 def _phong_from_trimesh(src: str, m, exact: dict) -> Material | None:
     """A glTF material or an MTL one; None for trimesh's stand-in when the file has none."""
     from trimesh.visual.material import PBRMaterial
@@ -267,7 +287,7 @@ def _phong_from_trimesh(src: str, m, exact: dict) -> Material | None:
     if isinstance(m, PBRMaterial):
         # glTF: the base colour is the diffuse colour; metallic-roughness has no Phong term here.
         rgba = m.baseColorFactor
-        key = (m.name, None if rgba is None else tuple(int(x) for x in rgba))
+        key = (_name(m), None if rgba is None else tuple(int(x) for x in rgba))
         if key in exact:
             kd = exact[key]
         elif rgba is None:
@@ -279,7 +299,7 @@ def _phong_from_trimesh(src: str, m, exact: dict) -> Material | None:
     # (its own diffuse/ambient/specular are 8-bit copies).
     raw = getattr(m, "kwargs", None) or {}
     if any(k in raw for k in ("ka", "kd", "ks", "ns", "illum")):
-        return _phong_from_mtl(src, getattr(m, "name", None) or "?", raw)
+        return _phong_from_mtl(src, _name(m) or "?", raw)
     return None
 
 
@@ -315,7 +335,7 @@ def _phong_from_mtl(src: str, name: str, raw: dict) -> Material:
     illum = raw.get("illum")
     try:
         illum = int(float(np.atleast_1d(illum)[0])) if illum is not None else 2
-    except (TypeError, ValueError, IndexError):
+    except (TypeError, ValueError, IndexError, OverflowError):
         raise SceneError(src, f"newmtl {name}: illum", f"expected an integer, got {show(illum)}") from None
     kr = ks if illum == 3 else (0.0, 0.0, 0.0)
     if illum in (0, 1):
@@ -342,6 +362,8 @@ def _gltf_base_colors(path: Path) -> dict:
         if not (isinstance(rgba, list) and len(rgba) == 4):
             continue
         try:
+            if not isinstance(m.get("name"), (str, type(None))):
+                continue  # trimesh would not have kept such a name either
             key = (m.get("name"), tuple(int(x) for x in np.round(np.clip(np.asarray(rgba, np.float64), 0, 1) * 255)))
         except (TypeError, ValueError):
             continue
@@ -474,11 +496,21 @@ def _display_color(mesh, time):
 
 def _pxr_message(e: Exception) -> str:
     """The first quoted reason in a pxr error, without its C++ namespaces."""
-    text = str(e)
+    try:
+        text = str(e)
+    except UnicodeDecodeError:  # USD's message quotes the file's own bytes, and they are not UTF-8
+        text = "\n".join(_commentary(a) for a in e.args)
     found = re.findall(r": '(.*?)'\s*(?:\n|$)", text, flags=re.S)
     msg = found[0] if found else text
     msg = re.sub(r"pxrInternal_[A-Za-z0-9_]*::", "", msg)
     return " ".join(msg.split())
+
+
+def _commentary(error) -> str:
+    try:
+        return f": '{error.commentary}'"
+    except (UnicodeDecodeError, AttributeError):
+        return ": 'the file holds bytes that are not UTF-8 text where USD expects text'"
 
 
 def _one_line(e: Exception) -> str:
