@@ -14,6 +14,7 @@ from .autoframe import scene_for_mesh
 from .meshio import FORMATS, is_mesh_path
 from .model import Scene
 from .reader import read_camera, read_render, scene_from_dict
+from .validate import validate_scene
 
 
 def load_scene(path=None, overrides: dict | None = None) -> Scene:
@@ -108,4 +109,16 @@ def _load_mesh_scene(path: Path, overrides) -> Scene:
         doc = {section: {k: list(v) if isinstance(v, tuple) else v for k, v in table.items()} for section, table in doc.items()}
         scene.camera = read_camera(source, doc["camera"])
         scene.render = read_render(source, doc["render"])
+    # As a scene file is: everything render() relies on is checked here, while the load's warnings
+    # are still held (a mesh too far out to frame is then one error, not a warning and an error).
+    try:
+        validate_scene(scene)
+    except SceneError as e:
+        framed = e.field is not None and e.field.split("[")[0] in ("lights", "camera.eye", "camera.center", "camera.near")
+        if not framed or any(k.split("[")[0] == e.field.split("[")[0] for k in overrides or ()):
+            raise
+        # The file did not name that field: the framing made it, from a mesh too large or too far out.
+        lo, hi = scene.bounds()
+        raise SceneError(source, None, f"cannot frame the mesh, which spans {lo.tolist()} .. {hi.tolist()}: "
+                                       f"the framing's {e.field} {e.message}") from None
     return scene
