@@ -450,3 +450,88 @@ def test_a_sigint_during_a_render_stops_its_bands():
     at_raise, later = _interrupted(_Interrupting(interrupt))
     assert later == at_raise
     assert at_raise <= 3
+
+
+# --- What the fuzzing found (tests/cli/test_fuzz.py), each as its smallest file -------------------------
+
+
+def _box_gltf(**material) -> bytes:
+    import trimesh
+    from trimesh.exchange.gltf import export_gltf
+
+    box = trimesh.creation.box()
+    box.visual = trimesh.visual.TextureVisuals(material=trimesh.visual.material.PBRMaterial(
+        name="clay", baseColorFactor=[0.5, 0.4, 0.3, 1.0]))
+    doc = json.loads(export_gltf(trimesh.Scene(box), embed_buffers=True)["model.gltf"])
+    doc["materials"][0].update(material)
+    return json.dumps(doc).encode()
+
+
+def _crate_with_token_count(folder: Path, count: int) -> bytes:
+    """A real binary USD file (pxr's own), with the element count of its TOKENS section replaced."""
+    import struct
+
+    from pxr import Usd
+
+    (folder / "seed.usda").write_text(BROKEN_REFERENCE_USDA.replace(" (references = @missing.usda@)", ""))
+    Usd.Stage.Open(str(folder / "seed.usda")).Export(str(folder / "seed.usdc"))
+    data = bytearray((folder / "seed.usdc").read_bytes())
+    toc = struct.unpack("<q", data[16:24])[0]
+    for i in range(struct.unpack("<Q", data[toc:toc + 8])[0]):
+        entry = data[toc + 8 + 32 * i:toc + 40 + 32 * i]
+        if entry[:16].rstrip(b"\0") == b"TOKENS":
+            start, length = struct.unpack("<qq", entry[16:])
+            data[start:start + 8] = struct.pack("<Q", count)
+            return bytes(data), length
+    raise AssertionError("no TOKENS section")
+
+
+def test_obj_vertices_of_two_coordinates_are_refused(work, capfd):
+    (work / "two.obj").write_text("v 0 0\nv 1 0\nv 0 1\nf 1 2 3\n")
+    assert cli(capfd, "render", "two.obj", "-o", "x.png")[::2] == (
+        2, ["warprt: error: two.obj: cannot read OBJ file: vertices of 2 coordinates; expected 3 (x, y, z)"])
+
+
+def test_an_mtl_illum_of_inf_is_refused(work, capfd):
+    (work / "m.obj").write_text("mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl p\nf 1 2 3\n")
+    (work / "m.mtl").write_text("newmtl p\nKd 0.5 0.5 0.5\nillum inf\n")
+    assert cli(capfd, "render", "m.obj", "-o", "x.png")[::2] == (
+        2, ["warprt: error: m.obj: newmtl p: illum: expected an integer, got ['inf']"])
+
+
+def test_a_gltf_material_named_by_a_list_still_renders(work, capfd):
+    (work / "box.gltf").write_bytes(_box_gltf(name=[]))
+    code, _, err = cli(capfd, "render", "box.gltf", "-o", "x.png", "--width", "16", "--height", "12")
+    assert code == 0 and len(err) == 1 and err[0].startswith("wrote x.png (16x12")
+    assert_png(work / "x.png")
+
+
+def test_bytes_that_are_not_utf8_in_a_usda_are_one_line(work, capfd):
+    (work / "bad.usda").write_bytes(b'#usda 1.0\ndef Mesh "m\xdb\xff" {\n}\n')
+    assert cli(capfd, "render", "bad.usda", "-o", "x.png")[::2] == (
+        2, ["warprt: error: bad.usda: cannot open USD stage: the file holds bytes that are not UTF-8 text where USD "
+            "expects text"])
+
+
+def test_a_crate_file_claiming_a_billion_tokens_is_refused_before_usd_reads_it(work, capfd):
+    """USD would reserve memory for them first (55 s and 14 GB for the fuzzed file)."""
+    data, length = _crate_with_token_count(work, 1_761_607_723)
+    (work / "bad.usdc").write_bytes(data)
+    assert cli(capfd, "render", "bad.usdc", "-o", "x.png")[::2] == (
+        2, [f"warprt: error: bad.usdc: not a valid USD crate file (its TOKENS section claims 1761607723 entries in "
+            f"{length} bytes)"])
+
+
+def test_the_crate_check_passes_the_untouched_file(work, capfd):
+    """The negative control: the same file with its own token count renders."""
+    _crate_with_token_count(work, 0)  # writes seed.usdc, untouched
+    code, _, err = cli(capfd, "render", "seed.usdc", "-o", "x.png", "--width", "16", "--height", "12")
+    assert code == 0, err
+
+
+def test_a_bare_mesh_too_far_out_to_frame_says_so(work, capfd):
+    (work / "far.obj").write_text("v 0 0 0\nv 1e14 0 0\nv 0 1e14 0\nf 1 2 3\n")
+    assert cli(capfd, "render", "far.obj", "-o", "x.png")[::2] == (
+        2, ["warprt: error: far.obj: cannot frame the mesh, which spans [0.0, 0.0, 0.0] .. [100000000000000.0, "
+            "100000000000000.0, 0.0]: the framing's lights[0].position is more than 1e+12 from camera.eye; float32 ray "
+            "tests cannot reach it"])
