@@ -52,7 +52,9 @@ class _LogToWarnings(logging.Handler):
         self.source = source
 
     def emit(self, record):
-        warn(f"{self.source}: {record.name.split('.')[0]}: {record.getMessage()}")
+        # A record with exc_info would print a whole traceback: its last line is what it says.
+        why = f" ({record.exc_info[0].__name__}: {one_line(record.exc_info[1])})" if record.exc_info and record.exc_info[1] else ""
+        warn(f"{self.source}: {record.name.split('.')[0]}: {record.getMessage()}{why}")
 
 
 # Libraries whose log records at WARNING and above would reach stderr through logging's last-resort

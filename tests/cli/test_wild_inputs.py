@@ -301,6 +301,35 @@ def test_usd_diagnostics_become_one_warning_line(work, capfd):
     assert cli(capfd, "render", "ref.usda", "-o", "x.png", "-q", "--width", "16", "--height", "12")[::2] == (0, [])
 
 
+TEXTURED_PLY = """ply
+format ascii 1.0
+comment TextureFile missing.png
+element vertex 3
+property float x
+property float y
+property float z
+element face 1
+property list uchar int vertex_indices
+end_header
+0 0 0
+1 0 0
+0 1 0
+3 0 1 2
+"""
+
+
+def test_a_trimesh_log_warning_with_its_traceback_is_one_line(work):
+    """trimesh logs a PLY's missing texture with its traceback, which logging's last resort would
+    print whole (in a subprocess: pytest's own log capture would hide it)."""
+    (work / "tex.ply").write_text(TEXTURED_PLY)
+    r = run(["render", "tex.ply", "-o", "x.png", "--width", "16", "--height", "12"], work)
+    assert r.returncode == 0
+    lines = r.stderr.splitlines()
+    assert lines[0] == "warprt: warning: tex.ply: trimesh: unable to load image! (FileNotFoundError: missing.png)"
+    assert len(lines) == 2 and lines[1].startswith("wrote x.png (16x12")
+    assert run(["render", "tex.ply", "-o", "x.png", "-q"], work).stderr == ""
+
+
 def test_a_failing_usd_file_is_its_error_line_alone(work, capfd):
     """The diagnostics of a load that fails are dropped: the error says what went wrong, in one line."""
     (work / "empty_ref.usda").write_text('#usda 1.0\ndef Xform "x" (references = @missing.usda@)\n{\n}\n')
