@@ -1,7 +1,7 @@
 """The ``warprt`` command line: render, info (and compare, figures where those parts are present).
 
 Bad input is one line on stderr naming the file and field, exit status 2, no output file;
-a traceback only with --debug.
+a traceback only with --debug. Library warnings are one line each (diagnostics.py).
 """
 
 from __future__ import annotations
@@ -33,7 +33,8 @@ EXAMPLES = """examples:
   warprt compare s.toml -o cmp.png --width 320 --height 240
                                               warprt | Mitsuba 3 | |difference| x 10; prints SSIM, PSNR
 
-Bad input is one line on stderr naming the file and the field, exit status 2, and no output file.
+Bad input is one line on stderr naming the file and the field, exit status 2, and no output file
+(0 done, 130 interrupted, 1 internal error). Outputs are written whole, through symlinks, never onto an input.
 """
 
 
