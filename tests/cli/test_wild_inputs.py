@@ -240,6 +240,41 @@ def test_an_unwritable_home_renders_with_a_temporary_kernel_cache(work):
     assert [p.name for p in tmp.iterdir() if p.name.startswith("warprt-kernels-")] == []
 
 
+def test_ctrl_c_exits_130_and_writes_nothing(work):
+    """SIGINT once the progress line shows the trace has begun (stderr on a pseudo-terminal): exit 130,
+    'warprt: interrupted' as the last line, no image and no temporary file."""
+    import pty
+    import select
+    import time
+
+    scene = Path(__file__).parents[2] / "scenes" / "cornell.toml"
+    master, slave = pty.openpty()
+    p = subprocess.Popen([sys.executable, "-m", "warprt", "render", str(scene), "-o", "out.png", "--width", "1024",
+                          "--height", "768", "--spp", "16", "--primary", "raytrace"], cwd=work,
+                         env={**ENV, "WARPRT_PROGRESS_AFTER": "0"}, stdin=subprocess.DEVNULL,
+                         stdout=subprocess.DEVNULL, stderr=slave)
+    os.close(slave)
+    seen, sent, deadline = b"", False, time.monotonic() + 300
+    while time.monotonic() < deadline:
+        if select.select([master], [], [], 1.0)[0]:
+            try:
+                chunk = os.read(master, 65536)
+            except OSError:
+                break
+            if not chunk:
+                break
+            seen += chunk
+            if not sent and b"tiles" in seen:
+                p.send_signal(signal.SIGINT)
+                sent = True
+        elif p.poll() is not None:
+            break
+    os.close(master)
+    assert p.wait(timeout=120) == 130 and sent
+    assert seen.decode().replace("\r\x1b[K", "\n").splitlines()[-1] == "warprt: interrupted"
+    assert sorted(os.listdir(work)) == ["ok.toml", "tri.obj"]
+
+
 # --- Messages -----------------------------------------------------------------------------------------
 
 
