@@ -1,7 +1,7 @@
 """The ``warprt`` command line: render, info (and compare, figures where those parts are present).
 
 Bad input is one line on stderr naming the file and field, exit status 2, no output file;
-a traceback only with --debug.
+a traceback only with --debug. Library warnings are one line each (diagnostics.py).
 """
 
 from __future__ import annotations
@@ -9,14 +9,13 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import signal
 import sys
 import time
 import tomllib
-import warnings
 from pathlib import Path
 
-from . import __version__
-from .diagnostics import one_line_warning, set_quiet
+from . import __version__, diagnostics
 from .errors import SceneError
 from .scene import EFFECTS
 
@@ -37,7 +36,8 @@ EXAMPLES = """examples:
   warprt compare s.toml -o cmp.png --width 320 --height 240
                                               warprt | Mitsuba 3 | |difference| x 10; prints SSIM, PSNR
 
-Bad input is one line on stderr naming the file and the field, exit status 2, and no output file.
+Bad input is one line on stderr naming the file and the field, exit status 2, and no output file
+(0 done, 130 interrupted, 1 internal error). Outputs are written whole, through symlinks, never onto an input.
 """
 
 
@@ -103,34 +103,36 @@ def _check_device(device: str):
 
 def cmd_render(args) -> int:
     from .image import render
-    from .image.film import check_output_path, check_text_path, write_image, write_text
+    from .image.film import check_distinct, check_output_path, check_text_path, write_image, write_text
     from .image.memory import peak_rss
     from .image.progress import Progress
 
     # Everything that can be checked before the render is: a render whose result cannot be
     # saved, or that cannot start, should fail at once and leave nothing behind.
-    out = check_output_path(args.output, "--output")
+    outputs = {"--output": check_output_path(args.output, "--output")}
     if args.stats_file:
-        check_text_path(args.stats_file, "--stats-file")
+        outputs["--stats-file"] = check_text_path(args.stats_file, "--stats-file")
+    check_distinct(outputs)
     if args.threads is not None and args.threads < 1:
         raise SceneError("command line", "--threads", f"expected an integer >= 1, got {args.threads}")
-    if args.quiet:
-        set_quiet()
     scene = _load(args)
+    check_distinct(outputs, _inputs(scene))
     _check_device(args.device)
     effects = args.effects.split(",") if args.effects else None
     progress = None if args.quiet else Progress()
     result = render(scene, threads=args.threads, device=args.device, effects=effects, algorithm=args.algorithm,
                     progress=progress, primary=args.primary)
+    out = outputs["--output"]
     t = time.perf_counter()
     write_image(out, result.image, "--output")
     stats = result.stats
     stats.times["write"] = time.perf_counter() - t
     stats.memory["peak_rss"] = peak_rss()
-    if args.stats:
-        print(json.dumps(stats.to_dict(), indent=2))
+    # The file first: a reader of stdout that stops early (| head) must not cost the statistics file.
     if args.stats_file:
         write_text(args.stats_file, json.dumps(stats.to_dict(), indent=2) + "\n", "--stats-file")
+    if args.stats:
+        print(json.dumps(stats.to_dict(), indent=2))
     if not args.quiet and not args.stats and stats.algorithm == "zbuffer":
         print(f"wrote {out} ({stats.width}x{stats.height}, {stats.effects}; "
               f"{stats.triangles:,} triangles rasterized in {stats.times['render']:.3f} s)", file=sys.stderr)
@@ -139,6 +141,13 @@ def cmd_render(args) -> int:
         print(f"wrote {out} ({stats.width}x{stats.height}, {stats.effects}; "
               f"{r['total']:,} rays in {stats.times['trace']:.3f} s)", file=sys.stderr)
     return 0
+
+
+def _inputs(scene) -> list:
+    """The files a scene was read from, as check_distinct names them."""
+    files = list(scene.files)
+    return [("scene file" if i == 0 and Path(f).suffix.lower() == ".toml" else "mesh file", f)
+            for i, f in enumerate(files)]
 
 
 def cmd_info(args) -> int:
@@ -193,11 +202,12 @@ def _reference():
 
 
 def cmd_compare(args) -> int:
-    from .image.film import check_output_path
+    from .image.film import check_distinct, check_output_path
 
-    out = check_output_path(args.output)
+    out = check_output_path(args.output, "--output")
     reference = _reference()
     scene = _load(args)
+    check_distinct({"--output": out}, _inputs(scene))
     try:
         variant = reference.mitsuba_variant()
     except ImportError as e:
@@ -257,17 +267,12 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+# What a shell reports for a command that wrote to a pipe whose reader had gone (128 + SIGPIPE): cat and
+# git die of SIGPIPE there, silently, and so does warprt (`warprt info s.toml | head -1`).
+EXIT_BROKEN_PIPE = 128 + signal.SIGPIPE
+
+
 def main(argv=None) -> int:
-    # A scene's warning is one line on stderr; -q's filter and this format last for the command only.
-    with warnings.catch_warnings():
-        saved, warnings.formatwarning = warnings.formatwarning, one_line_warning
-        try:
-            return _main(argv)
-        finally:
-            warnings.formatwarning = saved
-
-
-def _main(argv) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     if args.command is None:
@@ -276,20 +281,45 @@ def _main(argv) -> int:
     # A subcommand's own --debug default would hide 'warprt --debug render ...'.
     args.debug = getattr(args, "debug", False) or "--debug" in (sys.argv[1:] if argv is None else argv)
     try:
-        return args.func(args)
+        with diagnostics.quiet(getattr(args, "quiet", False)), \
+                diagnostics.collecting(args.scene or "default scene", hold=False):
+            code = args.func(args)
+            sys.stdout.flush()  # a reader that has gone shows here, inside the handlers below
+        return code
+    except BrokenPipeError:
+        return _reader_gone()
     except SceneError as e:
         if args.debug:
             raise
-        print(f"warprt: error: {' '.join(str(e).split())}", file=sys.stderr)  # one line, always
-        return 2
+        return _fail(f"warprt: error: {diagnostics.one_line(e)}", 2)  # one line, always
     except KeyboardInterrupt:
-        print("warprt: interrupted", file=sys.stderr)
-        return 130
+        return _fail("warprt: interrupted", 130)
     except Exception as e:
         if args.debug:
             raise
-        print(f"warprt: internal error: {type(e).__name__}: {e} (run with --debug for a traceback)", file=sys.stderr)
-        return 1
+        return _fail(f"warprt: internal error: {type(e).__name__}: {diagnostics.one_line(e)} "
+                     "(run with --debug for a traceback)", 1)
+
+
+def _fail(line: str, code: int) -> int:
+    try:
+        print(line, file=sys.stderr)
+        sys.stderr.flush()
+    except BrokenPipeError:  # stderr's reader has gone too: the exit status is all that is left
+        pass
+    return code
+
+
+def _reader_gone() -> int:
+    """stdout's reader has gone: stop quietly. Later writes to stdout (the interpreter's own flush at
+    exit) go nowhere instead of failing again."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+    except (OSError, ValueError):  # stdout is not a file descriptor (captured in-process)
+        pass
+    return EXIT_BROKEN_PIPE
 
 
 def run():
@@ -303,8 +333,19 @@ def run():
         code = e.code if isinstance(e.code, int) else (0 if e.code is None else 1)
         if not isinstance(e.code, (int, type(None))):
             print(e.code, file=sys.stderr)
-    sys.stdout.flush()
-    sys.stderr.flush()
+    try:
+        sys.stdout.flush()
+    except BrokenPipeError:
+        code = _reader_gone()
+    try:
+        sys.stderr.flush()
+    except BrokenPipeError:
+        pass
+    if "warprt._warp" in sys.modules:  # a temporary kernel cache, made where the usual one is read-only
+        sys.modules["warprt._warp"].remove_fallback_cache()
+    if code == EXIT_BROKEN_PIPE:
+        signal.signal(signal.SIGPIPE, signal.SIG_DFL)
+        os.kill(os.getpid(), signal.SIGPIPE)
     os._exit(code)
 
 

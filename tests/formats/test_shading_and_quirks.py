@@ -320,5 +320,5 @@ def test_usd_diagnostics_become_one_warning_line(tmp_path):
     r = run("info", "r.usda", cwd=tmp_path)
     assert r.returncode == 0, r.stderr
     lines = r.stderr.splitlines()
-    assert len(lines) == 1 and lines[0].startswith("warprt: warning: r.usda: In </root>: Could not open asset")
+    assert len(lines) == 1 and lines[0].startswith("warprt: warning: r.usda: USD: In </root>: Could not open asset")
     assert "0x" not in lines[0] and "stage.cpp" not in lines[0]

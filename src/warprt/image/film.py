@@ -1,9 +1,12 @@
-"""Image output: the linear float image to PNG (sRGB 8-bit), OpenEXR or .npy (linear float32),
-written atomically so that a failed write never leaves a partial file behind."""
+"""Image output: the linear float image to PNG (sRGB 8-bit), OpenEXR or .npy (linear float32), and the
+output-path policy every file a command writes follows (atomic, through symlinks, never onto an input)."""
 
 from __future__ import annotations
 
+import errno
 import os
+import shutil
+import stat
 import tempfile
 from pathlib import Path
 
@@ -22,7 +25,13 @@ def linear_to_srgb(x: np.ndarray) -> np.ndarray:
 
 
 def to_srgb8(image: np.ndarray) -> np.ndarray:
-    return np.round(linear_to_srgb(image) * 255.0).astype(np.uint8)
+    """8-bit sRGB, a block of rows at a time: the float temporaries of the whole image would need
+    five times the image's own memory (measured: 63 bytes per pixel at the write instead of 36)."""
+    out = np.empty(image.shape, np.uint8)
+    rows = max(1, (1 << 20) // max(1, image[0].size)) if len(image) else 1  # about a million values a block
+    for r in range(0, len(image), rows):
+        out[r:r + rows] = np.round(linear_to_srgb(image[r:r + rows]) * 255.0).astype(np.uint8)
+    return out
 
 
 def check_output_path(path, field: str = "output") -> Path:
@@ -36,22 +45,42 @@ def check_output_path(path, field: str = "output") -> Path:
     return path
 
 
+# The output-path policy, one for every file a command writes (images, statistics):
+# - a symlink is written through: the file it leads to is replaced, the link stays (as cp, convert and
+#   a shell's '>' do); a device or pipe it leads to (/dev/null, /dev/full) is written in place;
+# - a regular file appears complete or not at all: a temporary file beside the target, flushed to
+#   the disk (fsync), then renamed onto it, so a full disk or a failed render leaves an earlier file
+#   as it was; an existing target keeps its permissions;
+# - an output may not be an input of the same command or another of its outputs (check_distinct).
+
+
+def target_of(path) -> Path:
+    """The file that writing ``path`` replaces: the path itself, or where its symlinks lead."""
+    return Path(os.path.realpath(path))
+
+
 def _check_writable(path: Path, field: str):
-    parent = path.parent if str(path.parent) else Path(".")
+    target = target_of(path)
+    through = f" (where the link {path} leads)" if path.is_symlink() else ""
+    parent = target.parent
     if not parent.exists():
-        raise SceneError(str(path), field, f"folder does not exist: {parent}")
+        shown = parent if through else (path.parent if str(path.parent) else Path("."))
+        raise SceneError(str(path), field, f"folder does not exist: {shown}{through}")
     if not parent.is_dir():
-        raise SceneError(str(path), field, f"not a folder: {parent}")
-    if path.is_dir():
-        raise SceneError(str(path), field, "is a folder, not a file")
+        raise SceneError(str(path), field, f"not a folder: {path.parent}")
+    if target.is_dir():
+        raise SceneError(str(path), field, f"is a folder, not a file{through}")
+    if target.exists() and not target.is_file():
+        return  # a device or a pipe: written in place, no temporary file beside it
     # Permission bits do not tell (root ignores them; a read-only mount does not show in them):
     # create and remove a file where the output will go.
     try:
-        fd, probe = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".probe", dir=parent)
+        fd, probe = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".probe", dir=parent)
         os.close(fd)
         os.unlink(probe)
     except OSError as e:
-        raise SceneError(str(path), field, f"cannot write to folder {parent}: {e.strerror or e}") from None
+        shown = parent if through else (path.parent if str(path.parent) else Path("."))
+        raise SceneError(str(path), field, f"cannot write to folder {shown}: {e.strerror or e}{through}") from None
 
 
 def check_text_path(path, field: str) -> Path:
@@ -61,19 +90,64 @@ def check_text_path(path, field: str) -> Path:
     return path
 
 
+def same_file(a, b) -> bool:
+    """Whether two paths name one file: the same inode where both exist (hard links too), else the
+    same place once symlinks are resolved."""
+    try:
+        return os.path.samefile(a, b)
+    except OSError:
+        return target_of(a) == target_of(b)
+
+
+def check_distinct(outputs: dict, inputs=()):
+    """Refuse, before anything runs, an output that is one of the command's inputs or that another of
+    its outputs also names. ``outputs`` maps each output's flag to its path, ``inputs`` is (what, path)
+    pairs ("scene file", "mesh file")."""
+    named = list(outputs.items())
+    for i, (field, path) in enumerate(named):
+        for other, other_path in named[:i]:
+            if same_file(path, other_path):
+                raise SceneError(str(path), field, f"is also the {other} file ({other_path}); each output needs a file of its own")
+        for what, input_path in inputs:
+            if same_file(path, input_path):
+                raise SceneError(str(path), field, f"is the {what} this command reads ({input_path}); "
+                                                   "writing there would destroy it")
+
+
 def _atomic(path: Path, write):
-    """Write through a temporary file in the target folder, then rename: the file appears complete
-    or not at all, and an earlier file of that name survives a failed write."""
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=path.suffix, dir=path.parent if str(path.parent) else ".")
+    """Write ``path`` by the output-path policy above; ``write(name)`` writes the whole file at ``name``."""
+    target = target_of(path)
+    in_place = target.exists() and not target.is_file()
+    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=target.suffix, dir=None if in_place else target.parent)
     os.close(fd)
     try:
         write(tmp)
-        os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes it 0600; an image gets the usual mode
-        os.replace(tmp, path)
-    except BaseException:
+        if in_place:
+            with open(tmp, "rb") as src, open(target, "wb") as dst:
+                shutil.copyfileobj(src, dst)
+                dst.flush()
+            return
+        _fsync(tmp)
+        mode = stat.S_IMODE(target.stat().st_mode) if target.exists() else 0o666 & ~_umask()
+        os.chmod(tmp, mode)  # mkstemp makes it 0600
+        os.replace(tmp, target)
+        _fsync(target.parent, directory=True)
+    finally:
         if os.path.exists(tmp):
             os.unlink(tmp)
-        raise
+
+
+def _fsync(path, directory: bool = False):
+    """Flush a file (or a folder's entries, after a rename) to the disk: a full disk or a failing one
+    is reported here, before the rename, rather than lost after the command said it wrote the file."""
+    fd = os.open(path, os.O_RDONLY | (os.O_DIRECTORY if directory else 0))
+    try:
+        os.fsync(fd)
+    except OSError as e:
+        if not directory or e.errno not in (errno.EINVAL, errno.ENOTSUP):  # some file systems cannot sync folders
+            raise
+    finally:
+        os.close(fd)
 
 
 def _umask() -> int:
@@ -82,12 +156,17 @@ def _umask() -> int:
     return mask
 
 
+def _cannot_write(path: Path, field: str, e: OSError) -> SceneError:
+    through = f" (writing {target_of(path)}, where the link leads)" if path.is_symlink() else ""
+    return SceneError(str(path), field, f"cannot write: {e.strerror or e}{through}")
+
+
 def write_text(path, text: str, field: str = "output") -> Path:
     path = check_text_path(path, field)
     try:
         _atomic(path, lambda tmp: Path(tmp).write_text(text))
-    except OSError as e:
-        raise SceneError(str(path), field, f"cannot write: {e.strerror or e}") from None
+    except OSError as e:  # a full disk, a folder removed meanwhile
+        raise _cannot_write(path, field, e) from None
     return path
 
 
@@ -99,8 +178,15 @@ def _write_exr(fileobj, image: np.ndarray):
     h, w = image.shape[:2]
     channels = {c: np.ascontiguousarray(image[:, :, i], np.float32) for i, c in enumerate("RGB")}
     header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
-    with OpenEXR.File(header, channels) as f:
-        f.write(fileobj)
+    try:
+        with OpenEXR.File(header, channels) as f:
+            f.write(fileobj)
+    except RuntimeError as e:
+        # OpenEXR reports a failed write (a full disk) as a RuntimeError with the C library's text.
+        code = next((c for c in errno.errorcode if os.strerror(c) in str(e)), None)
+        if code is None:
+            raise
+        raise OSError(code, os.strerror(code)) from None
 
 
 def write_image(path, image: np.ndarray, field: str = "output") -> Path:
@@ -114,15 +200,19 @@ def write_image(path, image: np.ndarray, field: str = "output") -> Path:
 
             Image.fromarray(to_srgb8(image), "RGB").save(tmp, format="PNG")
         elif ext == ".npy":
+            a = np.ascontiguousarray(image, np.float32)
             with open(tmp, "wb") as f:
-                np.save(f, np.asarray(image, np.float32))
+                # np.save's own short-write error has no errno ("N requested and M written"); the
+                # file object's write reports the system's reason (a full disk), with no copy either.
+                np.lib.format.write_array_header_1_0(f, np.lib.format.header_data_from_array_1_0(a))
+                f.write(memoryview(a).cast("B"))
         elif ext == ".exr":
             _write_exr(tmp, image)
 
     try:
         _atomic(path, write)
     except OSError as e:  # a full disk, a folder removed meanwhile
-        raise SceneError(str(path), field, f"cannot write: {e.strerror or e}") from None
+        raise _cannot_write(path, field, e) from None
     return path
 
 

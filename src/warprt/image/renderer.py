@@ -16,7 +16,7 @@ from ..geometry import Geometry
 from ..kernels import camera_data, make_shade_kernel, make_trace_kernel, raster_kernel, stack_size
 from ..scene import EffectSet, ObjectCache, camera_basis, resolve_effects, validate_camera, validate_scene, zbuffer_effects
 from .launch import bands_of, launch_bands, launch_plan
-from .memory import frame_memory
+from .memory import RASTER_BYTES_PER_SAMPLE, check_frame_memory, frame_estimate, frame_memory
 from .stats import RenderResult, RenderStats
 from .zbuffer import RASTER_TILE, ZBuffer, empty_fragments, eye_on_surface
 
@@ -39,8 +39,6 @@ DEFAULTS = Defaults()
 # trace time on six of eight scenes, 1.01 and 1.03 on two (benchmarks/ATTEMPTS.md).
 PIXEL_TILE = (8, 8)
 
-# The Z-buffer's buffers per sample: 1/z and its nearest rival (float64 each), the face (int32), (u, v).
-RASTER_BYTES_PER_SAMPLE = 8 + 8 + 4 + 8
 # primary="auto" rasterizes only while those buffers stay under this: 19 million samples, 1920x1080
 # at 9 spp. Tracing needs no per-sample memory, so a bigger frame (4K at 16 spp would need 3.7 GB)
 # is traced rather than made to pay for its speed-up in memory.
@@ -119,12 +117,17 @@ def render(scene, *, threads: int | None = None, device: str = "cpu", effects=No
                               variant=f"trace_{fx.variant}",
                               max_depth=scene.render.max_depth if fx.reflection or fx.refraction else 1)
     stack = stack_size(scene.render.max_depth, scene.source) if fx.refraction else 0
+    n_pixels = cam.width * cam.height
+    samples = scene.render.spp if fx.supersampling else 1
+    # Before any buffer: the most this frame can need (the Z-buffer's buffers wherever the policy may
+    # ask for them; a camera on a surface may still trace), against what the machine has.
+    may_raster = primary == "zbuffer" or (primary == "auto" and raster_is_cheaper(scene.triangle_count, n_pixels * samples, device))
+    check_frame_memory(scene, _without_geometry(frame_estimate(scene, samples, may_raster), geometry))
 
     with stats.phase("bvh"):
         geom = geometry or cached_geometry(scene, device)
     stats.triangles = geom.triangle_count
-    n_pixels = cam.width * cam.height
-    raster = primary_from_zbuffer(primary, geom, basis, n_pixels * (scene.render.spp if fx.supersampling else 1), device)
+    raster = primary_from_zbuffer(primary, geom, basis, n_pixels * samples, device)
     stats.primary = "zbuffer" if raster else "raytrace"
 
     with stats.phase("compile"):
@@ -151,7 +154,7 @@ def render(scene, *, threads: int | None = None, device: str = "cpu", effects=No
         _launch_with_progress(kernel, inputs, n_pixels, threads, bands, device, counts, progress)
         pixels = image.numpy().reshape(-1, cam.height, cam.width, 3)
         out = pixels[0].copy()
-        per_kind = counts.numpy().astype(np.int64).sum(0)
+        per_kind = counts.numpy().sum(0, dtype=np.int64)  # no int64 copy of every pixel's counts
     check_finite(out)
     if report_truncated:
         stats.truncated = pixels[1].copy()
@@ -162,7 +165,15 @@ def render(scene, *, threads: int | None = None, device: str = "cpu", effects=No
     stats.rays_per_second = stats.rays["total"] / max(stats.times["trace"], 1e-9)
     stats.times["total"] = time.perf_counter() - t_start
     stats.memory = frame_memory(geom, image.capacity + counts.capacity, zb.nbytes if zb is not None else 0)
+    stats.memory["estimate"] = frame_estimate(scene, samples, raster)
     return RenderResult(out, stats)
+
+
+def _without_geometry(estimate: dict, geometry) -> dict:
+    """The estimate less the geometry when the caller hands over a Geometry already built."""
+    if geometry is None:
+        return estimate
+    return {**estimate, "geometry": 0, "total": estimate["total"] - estimate["geometry"]}
 
 
 def _launch_with_progress(kernel, inputs, n_pixels, threads, bands, device, counts, progress):
@@ -197,6 +208,9 @@ def render_zbuffer(scene, *, threads: int | None = None, device: str = "cpu", ef
     threads, bands = launch_plan(threads, bands, device)
     cam = scene.camera
     fx = zbuffer_effects(scene, effects, disable)
+    samples = scene.render.spp if fx.supersampling else 1
+    estimate = frame_estimate(scene, samples, True, algorithm="zbuffer")
+    check_frame_memory(scene, _without_geometry(estimate, geometry))
     stats = RenderStats.begin(scene, fx, threads=threads, bands=bands, device=device, algorithm="zbuffer",
                               variant=f"zbuffer_{fx.variant}", max_depth=1)
     stats.rays = {"primary": 0, "shadow": 0, "reflection": 0, "refraction": 0, "total": 0}  # none: visibility is rasterized
@@ -222,5 +236,6 @@ def render_zbuffer(scene, *, threads: int | None = None, device: str = "cpu", ef
             out = image.numpy().reshape(cam.height, cam.width, 3).copy()
     check_finite(out, "zbuffer")
     stats.times["total"] = time.perf_counter() - t_start
+    stats.memory["estimate"] = estimate
     result = RenderResult(out, stats)
     return (result, zb.faces()) if return_faces else result

@@ -8,11 +8,13 @@ import tomllib
 from dataclasses import asdict
 from pathlib import Path
 
+from ..diagnostics import collecting
 from ..errors import SceneError
 from .autoframe import scene_for_mesh
 from .meshio import FORMATS, is_mesh_path
 from .model import Camera, Scene
 from .reader import read_camera, read_render, scene_from_dict
+from .validate import validate_scene
 
 
 def load_scene(path=None, overrides: dict | None = None, up: str | None = None) -> Scene:
@@ -20,7 +22,9 @@ def load_scene(path=None, overrides: dict | None = None, up: str | None = None) 
     overridden camera and image size; only camera.* and render.* can be overridden; ``up``: the
     file's up axis), or None for the built-in default scene."""
     t = time.perf_counter()
-    scene = _load_scene(path, overrides, up)
+    with collecting(str(path) if path is not None else "default scene"):
+        scene = _load_scene(path, overrides, up)
+    scene.files = (Path(path if path is not None else default_scene_path()), *scene.files)
     scene.load_seconds = time.perf_counter() - t
     return scene
 
@@ -70,7 +74,8 @@ def _load_scene(path, overrides, up) -> Scene:
         raise SceneError("command line", "--up", "applies to a mesh file; in a scene file, give the object "
                                                  "up = \"z\" (or x, y, -x, -y, -z)")
     try:
-        text = path.read_text(encoding="utf-8")
+        # utf-8-sig: a byte-order mark, which Windows editors write, is not part of the TOML.
+        text = path.read_text(encoding="utf-8-sig")
     except FileNotFoundError:
         raise SceneError(source, None, "scene file not found") from None
     except IsADirectoryError:
@@ -110,4 +115,16 @@ def _load_mesh_scene(path: Path, overrides, up) -> Scene:
     if doc["render"]:
         base = {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(scene.render).items() if v is not None}
         scene.render = read_render(source, {**base, **doc["render"]})
+    # As a scene file is: everything render() relies on is checked here, while the load's warnings
+    # are still held (a mesh too far out to frame is then one error, not a warning and an error).
+    try:
+        validate_scene(scene)
+    except SceneError as e:
+        framed = e.field is not None and e.field.split("[")[0] in ("lights", "camera.eye", "camera.center", "camera.near")
+        if not framed or any(k.split("[")[0] == e.field.split("[")[0] for k in overrides or ()):
+            raise
+        # The file did not name that field: the framing made it, from a mesh too large or too far out.
+        lo, hi = scene.bounds()
+        raise SceneError(source, None, f"cannot frame the mesh, which spans {lo.tolist()} .. {hi.tolist()}: "
+                                       f"the framing's {e.field} {e.message}") from None
     return scene

@@ -3,10 +3,39 @@ geometry becomes float32 only when it is handed to the BVH (warprt.geometry)."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, fields, replace
 
 import numpy as np
 
+from ..errors import SceneError, show
+
+
+def _as_floats(owner, name: str, v, scalar_ok: bool = False) -> tuple:
+    """A vector field as a tuple of floats, whatever sequence gave it (a list, a tuple, a NumPy array):
+    the dataclasses are compared and hashed as cache keys. Its length and range are validate.py's."""
+    if scalar_ok and isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, (bool, np.bool_)):
+        return (float(v),) * 3
+    try:
+        items = list(v)
+        if any(isinstance(x, (bool, np.bool_, str, bytes)) for x in items):
+            raise TypeError
+        return tuple(float(x) for x in items)
+    except (TypeError, ValueError):
+        raise SceneError(type(owner).__name__, name, f"expected a list of 3 numbers, got {show(v)}") from None
+
+
+def _as_int(owner, name: str, v):
+    """A NumPy integer as int (the stats are JSON); other values are left for validate.py to refuse."""
+    return int(v) if isinstance(v, np.integer) else v
+
+
+def _convert(owner, vectors=(), ints=(), scalar_ok=()):
+    for f in fields(owner):
+        v = getattr(owner, f.name)
+        if f.name in vectors and v is not None:
+            object.__setattr__(owner, f.name, _as_floats(owner, f.name, v, f.name in scalar_ok))
+        elif f.name in ints:
+            object.__setattr__(owner, f.name, _as_int(owner, f.name, v))
 from .texture import Texture
 
 
@@ -22,6 +51,9 @@ class Camera:
     width: int = 640
     height: int = 480
 
+    def __post_init__(self):
+        _convert(self, vectors=("eye", "center", "up"), ints=("width", "height"))
+
 
 @dataclass(frozen=True)
 class RenderSettings:
@@ -32,6 +64,13 @@ class RenderSettings:
     spp: int = 1  # k*k stratified samples per pixel
     effects: tuple | None = None  # None: every effect the scene calls for
 
+    def __post_init__(self):
+        _convert(self, vectors=("ambient", "background"), ints=("max_depth", "spp"))
+        if self.effects is not None and not isinstance(self.effects, tuple):
+            if isinstance(self.effects, str):
+                raise SceneError("RenderSettings", "effects", f"expected a list of effect names, got {show(self.effects)}")
+            object.__setattr__(self, "effects", tuple(self.effects))
+
 
 @dataclass(frozen=True)
 class Light:
@@ -39,6 +78,9 @@ class Light:
 
     position: tuple
     color: tuple = (1.0, 1.0, 1.0)
+
+    def __post_init__(self):
+        _convert(self, vectors=("position", "color"))
 
 
 @dataclass(frozen=True)
@@ -62,6 +104,9 @@ class Material:
     absorption: tuple = (0.0, 0.0, 0.0)  # sigma per scene unit (Beer's law), only with ior
 
     def __post_init__(self):
+        # reflectivity, transmittance and absorption may be one number, as in the scene file.
+        _convert(self, vectors=("kd", "ka", "ks", "reflectivity", "transmittance", "absorption"),
+                 scalar_ok=("reflectivity", "transmittance", "absorption"))
         if self.ka is None:
             object.__setattr__(self, "ka", self.kd)
             if self.ka_texture is None:
@@ -99,6 +144,21 @@ class SceneObject:
     uv: np.ndarray | None = None  # (N, 2) texture coordinates, v = 0 at an image's bottom row
     colors: np.ndarray | None = None  # (N, 3) linear RGB, multiplying ka and kd
 
+    def __post_init__(self):
+        # Lists (as a notebook writes them) become the arrays the renderer takes; validate.py checks shapes.
+        for name, dtype in (("vertices", np.float64), ("faces", None), ("normals", np.float64), ("uv", np.float64),
+                            ("colors", np.float64)):
+            v = getattr(self, name)
+            if v is None or isinstance(v, np.ndarray):
+                continue
+            try:
+                a = np.asarray(v, dtype)
+                if a.dtype == object or a.dtype.kind not in "iuf":
+                    raise ValueError
+            except (TypeError, ValueError):
+                raise SceneError("SceneObject", name, f"expected a list of [x, y, z] rows, got {show(v)}") from None
+            setattr(self, name, a.astype(np.int64) if name == "faces" and a.dtype.kind in "iu" else a)
+
 
 @dataclass
 class Scene:
@@ -109,6 +169,7 @@ class Scene:
     objects: list[SceneObject]
     source: str = "<scene>"
     load_seconds: float | None = None  # time load_scene spent reading and validating
+    files: tuple = ()  # the files it was read from: the scene file, then the mesh files it names
 
     @property
     def triangle_count(self) -> int:

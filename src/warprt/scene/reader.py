@@ -378,7 +378,7 @@ def read_object(source: str, base: Path, t: dict, i: int, materials: dict) -> li
         default_name = kind
     scale = np.asarray(r.vector("scale", 1.0, allow_scalar=True))
     if np.any(scale == 0.0):
-        r.fail("scale", f"expected non-zero scale factors, got {list(scale)}")
+        r.fail("scale", f"expected non-zero scale factors, got {[float(x) for x in scale]}")
     rot = rotation(r.vector("rotate", (0.0, 0.0, 0.0)))
     translate = np.asarray(r.vector("translate", (0.0, 0.0, 0.0)))
     # By default the file's own up axis (a USD stage's upAxis, glTF's y), else y: as placed in the file.
@@ -388,7 +388,12 @@ def read_object(source: str, base: Path, t: dict, i: int, materials: dict) -> li
 
     def place(v):
         v = v if turn is None else v @ turn.T
-        return np.ascontiguousarray((v * scale) @ rot.T + translate, np.float64)
+        with np.errstate(over="ignore", invalid="ignore"):  # an absurd scale is reported here, once
+            world = (v * scale) @ rot.T + translate
+        if not np.all(np.isfinite(world)):
+            r.fail("scale", f"scale [{', '.join(f'{x:g}' for x in scale)}], rotate and translate take the mesh "
+                            "beyond the range of float64")
+        return np.ascontiguousarray(world, np.float64)
 
     linear = rot @ np.diag(scale) @ (np.eye(3) if turn is None else turn)
     if mesh is not None:
@@ -401,7 +406,7 @@ def read_object(source: str, base: Path, t: dict, i: int, materials: dict) -> li
         if faces.min() < 0 or faces.max() >= len(vertices):
             r.fail("faces", f"vertex index out of range [0, {len(vertices) - 1}]")
         world = place(vertices)
-        if np.linalg.det(np.diag(scale)) < 0:  # a mirroring scale flips the winding; keep faces outward
+        if np.prod(np.sign(scale)) < 0:  # a mirroring scale flips the winding; keep faces outward
             faces = faces[:, ::-1]
         faces = np.ascontiguousarray(faces, np.int64)
         shading = resolve_normals(world, faces, smooth)
@@ -432,7 +437,8 @@ def scene_from_dict(data: dict, source: str = "<scene>", base: Path | None = Non
         materials[name] = read_material(source, name, t, base)
     objects = [o for i, t in enumerate(_array_of_tables(source, data, "objects"))
                for o in read_object(source, base, t, i, materials)]
-    scene = Scene(camera, render, lights, materials, objects, source)
+    meshes = tuple(base / t["mesh"] for t in _array_of_tables(source, data, "objects") if isinstance(t.get("mesh"), str))
+    scene = Scene(camera, render, lights, materials, objects, source, files=meshes)
     validate_scene(scene)  # what needs the whole scene: reach from the eye, float32 overflow
     warn_unclosed(scene)
     return scene

@@ -51,7 +51,7 @@ def validate_camera(cam: Camera, source: str = "camera"):
     eye, center, up = (np.asarray(v, np.float64) for v in (cam.eye, cam.center, cam.up))
     for name, v in (("eye", eye), ("center", center), ("up", up)):
         if v.shape != (3,) or not np.all(np.isfinite(v)):
-            raise SceneError(source, f"camera.{name}", f"expected 3 finite numbers, got {list(v)}")
+            raise SceneError(source, f"camera.{name}", f"expected 3 finite numbers, got {v.tolist()}")
     if not _is_real(cam.fovy) or not (0.0 < cam.fovy < 180.0) or not math.isfinite(cam.fovy):
         raise SceneError(source, "camera.fovy", f"expected a number in (0, 180) degrees, got {_num(cam.fovy)}")
     if not _is_real(cam.near) or not (cam.near > 0.0) or not math.isfinite(cam.near):

@@ -229,8 +229,9 @@ def file_objects(name: str, mesh: MeshFile, materials: dict, fallback: str, smoo
     False, get ``fallback``), shaded as ``smooth`` says (normals.resolve_normals), with the file's uvs
     and vertex colours."""
     linear = np.eye(3) if linear is None else np.asarray(linear, np.float64)
-    mirrored = np.linalg.det(linear) < 0  # a mirroring placement turns the winding over
-    normal_map = np.linalg.inv(linear)  # normals as row vectors: n' = n L^-1 (the inverse transpose)
+    with np.errstate(all="ignore"):  # an absurd scale is reported once, by place()
+        mirrored = np.linalg.det(linear) < 0  # a mirroring placement turns the winding over
+        normal_map = np.linalg.inv(linear)  # normals as row vectors: n' = n L^-1 (the inverse transpose)
     kw = {} if auto_crease is None else {"auto_crease": auto_crease}
     placed = []
     for p in mesh.parts:

@@ -66,8 +66,14 @@ class _Document:
         else:
             try:
                 doc = json.loads(data.decode("utf-8-sig"))
-            except (UnicodeDecodeError, json.JSONDecodeError) as e:
-                raise SceneError(self.src, None, f"not a glTF file (not JSON: {one_line(e)})") from None
+            except UnicodeDecodeError as e:
+                raise SceneError(self.src, None, f"not a glTF file (not UTF-8 JSON text: byte 0x{e.object[e.start]:02x} "
+                                                 f"at offset {e.start})") from None
+            except json.JSONDecodeError as e:
+                raise SceneError(self.src, None, f"not a glTF file (not JSON: {e.msg} at line {e.lineno}, "
+                                                 f"column {e.colno})") from None
+            except RecursionError:
+                raise SceneError(self.src, None, "not a glTF file (JSON nested too deeply to read)") from None
         if not isinstance(doc, dict):
             raise SceneError(self.src, None, "not a glTF file (the JSON is not an object)")
         self.doc = doc

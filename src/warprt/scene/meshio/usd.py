@@ -10,48 +10,51 @@ bias), per prim and per GeomSubset; metersPerUnit and upAxis where the stage aut
 
 from __future__ import annotations
 
-import os
 import re
-import sys
-import tempfile
-from contextlib import contextmanager
 from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
-from ...diagnostics import warn
+from ...diagnostics import native_stderr, usd_messages, warn
 from ...errors import SceneError
 from ..dielectric_formats import dielectric_from_usd
 from ..model import Material
 from ..texture import Texture, image_texture
+from .usdcrate import MAGIC as CRATE_MAGIC, check_crate
 from . import MeshFile, MeshPart, dedupe, fan_corners, unique_name, unit_rows, weld_corners
 
 _USD_GREY = (0.18, 0.18, 0.18)  # UsdPreviewSurface's diffuseColor when not authored
 
 
-@contextmanager
-def _usd_diagnostics(src: str):
-    """pxr prints its C++ diagnostics, several lines each, straight to the process's stderr: catch them
-    there and pass on the first line of each as one warning."""
-    sys.stderr.flush()
-    saved = os.dup(2)
-    captured = tempfile.TemporaryFile()
-    os.dup2(captured.fileno(), 2)
+def read_usd(path: Path) -> MeshFile:
+    src = str(path)
     try:
-        yield
+        from pxr import Usd
+    except ImportError:
+        raise SceneError(src, None, "reading USD needs the usd-core package (pip install usd-core)") from None
+    with open(path, "rb") as f:
+        if f.read(len(CRATE_MAGIC)) == CRATE_MAGIC:
+            check_crate(src, path, path.stat().st_size)
+    # USD reports on fd 2 in multi-line C++ diagnostics: each becomes one warprt warning.
+    native = None
+    try:
+        with native_stderr() as native:
+            try:
+                stage = Usd.Stage.Open(src)
+            except Exception as e:
+                raise SceneError(src, None, f"cannot open USD stage: {_pxr_message(e)}") from None
+            if stage is None:
+                raise SceneError(src, None, "cannot open USD stage")
+            return _Stage(path, stage).mesh_file()
+    except Exception as e:
+        if isinstance(e, SceneError) or not type(e).__module__.startswith("pxr"):
+            raise
+        # USD read the layer but a value in it is damaged (a corrupt crate value, a bad array).
+        raise SceneError(src, None, f"cannot read USD file: {_pxr_message(e)}") from None
     finally:
-        sys.stderr.flush()
-        os.dup2(saved, 2)
-        os.close(saved)
-        captured.seek(0)
-        text = captured.read().decode(errors="replace")
-        captured.close()
-        for line in text.splitlines():  # warprt's own warnings, given while the stream was caught
-            if line.startswith("warprt: "):
-                print(line, file=sys.stderr)
-        for message in re.findall(r"(?:Warning|Error|Coding Error)[^:]*: (?:in [^:]* at line \d+ of [^-]*-- )?([^\n]+)", text):
-            warn(src, None, _plain(message))
+        for message in usd_messages(native.text if native else ""):
+            warn(src, "USD", message)
 
 
 def _plain(message: str) -> str:
@@ -61,27 +64,21 @@ def _plain(message: str) -> str:
     return " ".join(message.split())
 
 
-def read_usd(path: Path) -> MeshFile:
-    src = str(path)
-    try:
-        from pxr import Usd
-    except ImportError:
-        raise SceneError(src, None, "reading USD needs the usd-core package (pip install usd-core)") from None
-    with _usd_diagnostics(src):
-        try:
-            stage = Usd.Stage.Open(src)
-        except Exception as e:
-            raise SceneError(src, None, f"cannot open USD stage: {_pxr_message(e)}") from None
-        if stage is None:
-            raise SceneError(src, None, "cannot open USD stage")
-        return _Stage(path, stage).mesh_file()
-
-
 def _pxr_message(e: Exception) -> str:
     """The first quoted reason in a pxr error, without its C++ namespaces."""
-    text = str(e)
+    try:
+        text = str(e)
+    except UnicodeDecodeError:  # USD's message quotes the file's own bytes, and they are not UTF-8
+        text = "\n".join(_commentary(a) for a in e.args)
     found = re.findall(r": '(.*?)'\s*(?:\n|$)", text, flags=re.S)
     return _plain(found[0] if found else text)
+
+
+def _commentary(error) -> str:
+    try:
+        return f": '{error.commentary}'"
+    except (UnicodeDecodeError, AttributeError):
+        return ": 'the file holds bytes that are not UTF-8 text where USD expects text'"
 
 
 class _Stage:
