@@ -87,6 +87,8 @@ class Geometry:
         self.indices_np = np.ascontiguousarray(np.concatenate(faces).reshape(-1), np.int32)
         self.tri_material_np = np.concatenate(mats)
         self.material_names = names
+        self.object_face_counts = [len(obj.faces) for obj in scene.objects]
+        self.object_ids = None  # object_tables(), once built
 
         d = device
         if build_bvh:
@@ -159,3 +161,15 @@ class Geometry:
                                              device=device) for a in images]
         s.textures = wp.array(self.texture_objects, dtype=wp.Texture2D, device=device)  # the objects kept alive with it
         self.texture_bytes = int(sum(a.shape[0] * a.shape[1] * 16 for a in images))
+
+    def object_tables(self):
+        """Per triangle, its object's index in scene.objects, and per object its first triangle: what
+        the object and face AOVs read. Built on first use (4 bytes a triangle), so renders without
+        those AOVs never hold them."""
+        if self.object_ids is None:
+            counts = self.object_face_counts or [1]  # an empty scene's one degenerate triangle
+            first = np.concatenate([[0], np.cumsum(counts)[:-1]]).astype(np.int32)
+            tri_object = np.repeat(np.arange(len(counts), dtype=np.int32), counts)
+            self.object_ids = (wp.array(tri_object, dtype=wp.int32, device=self.device),
+                                   wp.array(first, dtype=wp.int32, device=self.device))
+        return self.object_ids

@@ -13,8 +13,10 @@ import numpy as np
 from .._warp import init_warp, wp
 from ..errors import SceneError
 from ..geometry import Geometry
-from ..kernels import camera_data, make_shade_kernel, make_trace_kernel, raster_kernel
+from ..kernels import (aov_buffers, aov_bytes, aov_sums, camera_data, empty_aov_buffers, make_shade_kernel,
+                       make_trace_kernel, raster_kernel)
 from ..scene import EffectSet, ObjectCache, camera_basis, resolve_effects, validate_camera, validate_scene, zbuffer_effects
+from .aovs import check_aovs, finish_aovs
 from .launch import bands_of, launch_bands, launch_plan
 from .memory import frame_memory
 from .stats import RenderResult, RenderStats
@@ -92,18 +94,23 @@ def _check_choice(value: str, choices, flag: str, what: str):
 
 def render(scene, *, threads: int | None = None, device: str = "cpu", effects=None, disable=(),
            bands: int | None = None, geometry: Geometry | None = None, algorithm: str = "raytrace",
-           progress=None, tile: tuple[int, int] | None = None, primary: str | None = None) -> RenderResult:
+           progress=None, tile: tuple[int, int] | None = None, primary: str | None = None, aovs=None) -> RenderResult:
     """Render ``scene`` with the Whitted tracer (or, algorithm="zbuffer", by rasterization with the same
     local shading). ``effects`` (names) limits the effect set, ``disable`` removes effects; neither
     can add one the scene has nothing for. ``primary`` says where the tracer's first hits come from:
     "raytrace"; "zbuffer" (hybrid rendering: the Z-buffer's visible triangle wherever it is certain
     to be the traced one, the other samples traced; the image is the traced image to the bit); or
-    "auto", the default, which rasterizes where that is the cheaper of the two (raster_is_cheaper)."""
+    "auto", the default, which rasterizes where that is the cheaper of the two (raster_is_cheaper).
+    ``aovs`` (names from image.aovs.AOVS) come back as the result's ``.aovs``, from the camera rays'
+    first hits; the image is the same with or without them."""
     primary = DEFAULTS.primary if primary is None else primary
     _check_choice(primary, PRIMARY, "--primary", "primary visibility")
     _check_choice(algorithm, ALGORITHMS, "--algorithm", "algorithm")
+    aovs = check_aovs(aovs)
     validate_scene(scene)  # a Scene built in Python gets the file's checks too, before any kernel
     if algorithm == "zbuffer":
+        if aovs:
+            raise SceneError("command line", "--aov", "AOVs come from the tracer's camera rays: not with --algorithm zbuffer")
         return render_zbuffer(scene, threads=threads, device=device, effects=effects, disable=disable,
                               bands=bands, geometry=geometry)
     init_warp()
@@ -123,11 +130,11 @@ def render(scene, *, threads: int | None = None, device: str = "cpu", effects=No
     stats.primary = "zbuffer" if raster else "raytrace"
 
     with stats.phase("compile"):
-        kernel = make_trace_kernel(fx, raster_primary=raster)
+        kernel = make_trace_kernel(fx, raster_primary=raster, aovs=aovs)
         wp.load_module(kernel.module, device=device)
         if raster:
             wp.load_module(raster_kernel.module, device=device)
-    stats.variant += "_zprimary" if raster else ""
+    stats.variant += ("_zprimary" if raster else "") + ("_aov_" + "_".join(aovs) if aovs else "")
 
     zb = None
     if raster:
@@ -140,19 +147,23 @@ def render(scene, *, threads: int | None = None, device: str = "cpu", effects=No
         image = wp.empty(n_pixels, dtype=wp.vec3, device=device)
         counts = wp.empty(n_pixels, dtype=wp.vec3i, device=device)
         c, k, max_depth, data = camera_data(basis), math.isqrt(scene.render.spp), stats.max_depth, geom.data
+        samples = k * k if fx.supersampling else 1
+        buffers = aov_buffers(aovs, geom, n_pixels, math.isqrt(samples), device) if aovs else empty_aov_buffers(device)
         tile_w, tile_h = tile or PIXEL_TILE
-        inputs = lambda first: [data, c, max_depth, k, first, tile_w, tile_h, frags, image, counts]
+        inputs = lambda first: [data, c, max_depth, k, first, tile_w, tile_h, frags, buffers, image, counts]
         _launch_with_progress(kernel, inputs, n_pixels, threads, bands, device, counts, progress)
         out = image.numpy().reshape(cam.height, cam.width, 3).copy()
         per_kind = counts.numpy().astype(np.int64).sum(0)
     check_finite(out)
+    aov_arrays = finish_aovs(aovs, aov_sums(buffers, aovs), samples, geom.origin, cam.height, cam.width) if aovs else {}
 
     stats.rays = {"primary": int(per_kind[0]), "shadow": int(per_kind[1]), "reflection": int(per_kind[2])}
     stats.rays["total"] = sum(stats.rays.values())
     stats.rays_per_second = stats.rays["total"] / max(stats.times["trace"], 1e-9)
     stats.times["total"] = time.perf_counter() - t_start
-    stats.memory = frame_memory(geom, image.capacity + counts.capacity, zb.nbytes if zb is not None else 0)
-    return RenderResult(out, stats)
+    stats.memory = frame_memory(geom, image.capacity + counts.capacity, zb.nbytes if zb is not None else 0,
+                                aov_bytes(buffers))
+    return RenderResult(out, stats, aov_arrays)
 
 
 def _launch_with_progress(kernel, inputs, n_pixels, threads, bands, device, counts, progress):

@@ -11,6 +11,7 @@ import functools
 
 from .._warp import wp
 from ..geometry import SceneData
+from .aov import AovBuffers, make_record_first_hit
 from .camera import CameraData, camera_ray, sample_offset
 from .hybrid import uncertain
 from .interaction import make_surface, offset_ray_origin, reflect
@@ -35,19 +36,21 @@ def tile_order_pixel(i: int, width: int, height: int, tile_w: int, tile_h: int) 
 
 
 @functools.cache
-def make_trace_kernel(fx, raster_primary: bool = False):
+def make_trace_kernel(fx, raster_primary: bool = False, aovs: tuple = ()):
     """The kernel for one EffectSet; code for disabled effects is removed by wp.static. With
     raster_primary (hybrid rendering), a sample's first hit is the Z-buffer's visible triangle, tested
     with the ray query's own triangle test, wherever the rasterizer's answer is certain to be the
     tracer's (hybrid.uncertain); every other sample is traced. The image is the traced image, to the
-    bit; shadows and reflections are traced as always."""
+    bit; shadows and reflections are traced as always. With ``aovs`` (names, aov.py), each camera
+    ray's first hit is also recorded into the AOV buffers; without, that code is absent."""
     shade = make_shade(fx)
     surface = make_surface(fx.smooth, fx.texture, fx.vertex_color)
-    REFLECTION, SUPERSAMPLING, RASTER = fx.reflection, fx.supersampling, raster_primary
+    record_first_hit = make_record_first_hit(tuple(aovs))
+    REFLECTION, SUPERSAMPLING, RASTER, AOVS = fx.reflection, fx.supersampling, raster_primary, bool(aovs)
 
     @wp.kernel(module="unique", enable_backward=False)
     def trace(s: SceneData, c: CameraData, max_depth: int, k: int, first: int, tile_w: int, tile_h: int,
-              frags: Fragments, image: wp.array(dtype=wp.vec3), counts: wp.array(dtype=wp.vec3i)):
+              frags: Fragments, aov: AovBuffers, image: wp.array(dtype=wp.vec3), counts: wp.array(dtype=wp.vec3i)):
         i = first + wp.tid()  # position in tile order; the image itself is row-major
         xy = tile_order_pixel(i, c.width, c.height, tile_w, tile_h)
         x = xy[0]
@@ -100,6 +103,9 @@ def make_trace_kernel(fx, raster_primary: bool = False):
                     color = color + wp.cw_mul(weight, s.background)
                     break
                 hit = surface(s, f, u, v, face_normal, d)
+                if wp.static(AOVS):
+                    if depth == 0:
+                        record_first_hit(aov, s, pixel, sample, f, u, v, hit, o)
                 r = shade(s, hit, -d)
                 color = color + wp.cw_mul(weight, r.color)
                 shadow_rays += r.shadow_rays
