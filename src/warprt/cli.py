@@ -31,6 +31,9 @@ EXAMPLES = """examples:
   warprt render s.toml --no-shadows --effects ambient,diffuse --stats
   warprt render s.toml --algorithm zbuffer    rasterized: the tracer's local shading, no shadows/reflections
   warprt render s.toml --set camera.fovy=30 --set 'lights[0].color=[1,0.9,0.8]'
+  warprt render s.toml -o s.exr --aov depth,normal,object
+                                              AOVs of the camera rays' first hits: channels in the EXR
+                                              (.npz: arrays; .png: s.depth.exr, ... beside it)
   warprt info s.toml                          triangles, objects, materials, lights, bounds, effects, memory
   warprt compare s.toml -o cmp.png --width 320 --height 240
                                               warprt | Mitsuba 3 | |difference| x 10; prints SSIM, PSNR
@@ -99,6 +102,12 @@ def _check_device(device: str):
         raise SceneError("command line", "--device", f"'{device}' is not available on this machine (Warp found no CUDA device); use --device cpu")
 
 
+def _aov_list(text) -> tuple:
+    from .image.aovs import check_aovs
+
+    return check_aovs([n.strip() for n in text.split(",")] if text else None)
+
+
 def cmd_render(args) -> int:
     from .image import render
     from .image.film import check_output_path, check_text_path, write_image, write_text
@@ -107,7 +116,10 @@ def cmd_render(args) -> int:
 
     # Everything that can be checked before the render is: a render whose result cannot be
     # saved, or that cannot start, should fail at once and leave nothing behind.
-    out = check_output_path(args.output, "--output")
+    aovs = _aov_list(args.aov)
+    if aovs and args.algorithm == "zbuffer":
+        raise SceneError("command line", "--aov", "AOVs come from the tracer's camera rays: not with --algorithm zbuffer")
+    out = check_output_path(args.output, "--output", aovs)
     if args.stats_file:
         check_text_path(args.stats_file, "--stats-file")
     if args.threads is not None and args.threads < 1:
@@ -119,9 +131,9 @@ def cmd_render(args) -> int:
     effects = args.effects.split(",") if args.effects else None
     progress = None if args.quiet else Progress()
     result = render(scene, threads=args.threads, device=args.device, effects=effects, algorithm=args.algorithm,
-                    progress=progress, primary=args.primary)
+                    progress=progress, primary=args.primary, aovs=aovs)
     t = time.perf_counter()
-    write_image(out, result.image, "--output")
+    write_image(out, result.image, "--output", result.aovs)
     stats = result.stats
     stats.times["write"] = time.perf_counter() - t
     stats.memory["peak_rss"] = peak_rss()
@@ -134,7 +146,8 @@ def cmd_render(args) -> int:
               f"{stats.triangles:,} triangles rasterized in {stats.times['render']:.3f} s)", file=sys.stderr)
     elif not args.quiet and not args.stats:
         r = stats.rays
-        print(f"wrote {out} ({stats.width}x{stats.height}, {stats.effects}; "
+        with_aovs = f" with AOVs {','.join(aovs)}" if aovs else ""
+        print(f"wrote {out}{with_aovs} ({stats.width}x{stats.height}, {stats.effects}; "
               f"{r['total']:,} rays in {stats.times['trace']:.3f} s)", file=sys.stderr)
     return 0
 
@@ -223,7 +236,10 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("render", help="render a scene to an image", epilog=EXAMPLES,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     _add_scene_options(p)
-    p.add_argument("-o", "--output", default="warprt.png", help="output image: .png (sRGB 8-bit), .exr or .npy (linear float)")
+    p.add_argument("-o", "--output", default="warprt.png", help="output image: .png (sRGB 8-bit), .exr, .npy or .npz (linear float)")
+    p.add_argument("--aov", metavar="LIST", help="also write AOVs of the camera rays' first hits, comma-separated: "
+                                                 "depth,normal,albedo,position,uv,object,material,face,coverage "
+                                                 "(in the .exr or .npz; beside a .png as <stem>.<aov>.exr)")
     p.add_argument("--threads", type=int, metavar="N", help="worker threads (default: all cores)")
     p.add_argument("--device", default="cpu", choices=["cpu", "cuda"], help="Warp device (default: cpu)")
     p.add_argument("--effects", help="comma-separated effects to keep: ambient,diffuse,specular,shadows,reflection,supersampling,smooth,"

@@ -1,5 +1,5 @@
-"""Image output: the linear float image to PNG (sRGB 8-bit), OpenEXR or .npy (linear float32),
-written atomically so that a failed write never leaves a partial file behind."""
+"""Image output: the linear float image to PNG (sRGB 8-bit), OpenEXR, .npy or .npz (linear float32), with
+the AOVs asked for, written atomically so that a failed write never leaves a partial file behind."""
 
 from __future__ import annotations
 
@@ -11,8 +11,9 @@ import numpy as np
 
 from ..errors import SceneError
 from ..scene import srgb_to_linear
+from .aovs import AOVS, CHANNELS, IDS
 
-FORMATS = (".png", ".npy", ".exr")
+FORMATS = (".png", ".npy", ".exr", ".npz")
 
 
 def linear_to_srgb(x: np.ndarray) -> np.ndarray:
@@ -25,15 +26,29 @@ def to_srgb8(image: np.ndarray) -> np.ndarray:
     return np.round(linear_to_srgb(image) * 255.0).astype(np.uint8)
 
 
-def check_output_path(path, field: str = "output") -> Path:
+def check_output_path(path, field: str = "output", aovs=()) -> Path:
     """Fail before rendering on an unknown extension or a folder we cannot write to: a render
-    that cannot be saved should not run."""
+    that cannot be saved should not run. With ``aovs`` (names), their files too (aov_paths)."""
     path = Path(path)
     ext = path.suffix.lower()
     if ext not in FORMATS:
         raise SceneError(str(path), field, f"unknown image extension '{ext or '(none)'}'; expected one of: {', '.join(FORMATS)}")
+    if aovs and ext == ".npy":
+        raise SceneError(str(path), field, "a .npy file holds the colour only; for AOVs write .npz, .exr, or .png "
+                                           "(the AOVs beside it as <stem>.<aov>.exr)")
     _check_writable(path, field)
+    for sibling in aov_paths(path, aovs).values():
+        _check_writable(sibling, field)
     return path
+
+
+def aov_paths(path, aovs) -> dict:
+    """The files the AOVs ``aovs`` (names) of an image written to ``path`` go to besides it: none for
+    .exr and .npz, which hold them; for a .png, <stem>.<aov>.exr beside it, one per AOV."""
+    path = Path(path)
+    if path.suffix.lower() != ".png":
+        return {}
+    return {name: path.with_name(f"{path.stem}.{name}.exr") for name in aovs}
 
 
 def _check_writable(path: Path, field: str):
@@ -91,22 +106,42 @@ def write_text(path, text: str, field: str = "output") -> Path:
     return path
 
 
-def _write_exr(fileobj, image: np.ndarray):
+def _exr_channels(aovs: dict) -> dict:
+    """Each AOV's channels (aovs.CHANNELS): float32, the IDs as UINT holding their int32 bits."""
+    channels = {}
+    for name, a in aovs.items():
+        a = np.asarray(a)
+        planes = a[..., None] if a.ndim == 2 else a
+        for i, c in enumerate(CHANNELS[name]):
+            plane = np.ascontiguousarray(planes[..., i], np.int32 if name in IDS else np.float32)
+            channels[c] = plane.view(np.uint32) if name in IDS else plane
+    return channels
+
+
+def _write_exr(fileobj, image: np.ndarray | None, aovs: dict | None = None):
     try:
         import OpenEXR
     except ImportError:
         raise SceneError("output", None, "writing EXR needs the OpenEXR package (pip install OpenEXR)") from None
-    h, w = image.shape[:2]
-    channels = {c: np.ascontiguousarray(image[:, :, i], np.float32) for i, c in enumerate("RGB")}
+    channels = {} if image is None else {c: np.ascontiguousarray(image[:, :, i], np.float32) for i, c in enumerate("RGB")}
+    channels.update(_exr_channels(aovs or {}))
     header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
     with OpenEXR.File(header, channels) as f:
         f.write(fileobj)
 
 
-def write_image(path, image: np.ndarray, field: str = "output") -> Path:
-    """Write by extension; the file appears complete or not at all (temporary file, then rename)."""
-    path = check_output_path(path, field)
+def write_image(path, image: np.ndarray, field: str = "output", aovs: dict | None = None) -> Path:
+    """Write by extension; the file appears complete or not at all (temporary file, then rename).
+    ``aovs`` (name -> array, as render() returns them) go into the .exr or .npz file itself, or one
+    EXR each beside a .png (aov_paths), written before it: once the PNG is there, so are they."""
+    aovs = aovs or {}
+    path = check_output_path(path, field, tuple(aovs))
     ext = path.suffix.lower()
+    for name, sibling in aov_paths(path, aovs).items():
+        try:
+            _atomic(sibling, lambda tmp: _write_exr(tmp, None, {name: aovs[name]}))
+        except OSError as e:
+            raise SceneError(str(sibling), field, f"cannot write: {e.strerror or e}") from None
 
     def write(tmp):
         if ext == ".png":
@@ -117,7 +152,10 @@ def write_image(path, image: np.ndarray, field: str = "output") -> Path:
             with open(tmp, "wb") as f:
                 np.save(f, np.asarray(image, np.float32))
         elif ext == ".exr":
-            _write_exr(tmp, image)
+            _write_exr(tmp, image, aovs)
+        elif ext == ".npz":
+            with open(tmp, "wb") as f:  # np.savez given a name would append ".npz" to the temporary one
+                np.savez(f, color=np.asarray(image, np.float32), **aovs)
 
     try:
         _atomic(path, write)
@@ -127,11 +165,14 @@ def write_image(path, image: np.ndarray, field: str = "output") -> Path:
 
 
 def read_image(path) -> np.ndarray:
-    """Read back a PNG (decoded to linear), .npy or .exr as float32 (H, W, 3)."""
+    """Read back a PNG (decoded to linear), .npy, .npz or .exr as float32 (H, W, 3)."""
     path = Path(path)
     ext = path.suffix.lower()
     if ext == ".npy":
         return np.load(path).astype(np.float32)
+    if ext == ".npz":
+        with np.load(path) as z:
+            return z["color"].astype(np.float32)
     if ext == ".exr":
         import OpenEXR
 
@@ -143,3 +184,31 @@ def read_image(path) -> np.ndarray:
     from PIL import Image
 
     return srgb_to_linear(np.asarray(Image.open(path).convert("RGB"), np.float64) / 255.0).astype(np.float32)
+
+
+def read_aovs(path) -> dict:
+    """The AOVs written with an image (write_image's ``aovs``), by name: from a .npz as they were
+    written (position in float64), from EXR channels in float32 (IDs int32 again), for a .png from the
+    EXR files beside it."""
+    path = Path(path)
+    ext = path.suffix.lower()
+    if ext == ".npz":
+        with np.load(path) as z:
+            return {name: z[name] for name in AOVS if name in z.files}
+    if ext == ".png":
+        out = {}
+        for name in AOVS:
+            sibling = path.with_name(f"{path.stem}.{name}.exr")
+            if sibling.is_file():
+                out.update(read_aovs(sibling))
+        return out
+    import OpenEXR
+
+    with OpenEXR.File(str(path), separate_channels=True) as f:
+        ch = {name: c.pixels for name, c in f.channels().items()}
+    out = {}
+    for name in AOVS:
+        if all(c in ch for c in CHANNELS[name]):
+            planes = [ch[c].view(np.int32) if name in IDS else ch[c] for c in CHANNELS[name]]
+            out[name] = planes[0] if len(planes) == 1 else np.stack(planes, -1)
+    return out
