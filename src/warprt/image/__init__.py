@@ -6,7 +6,8 @@ Warp is imported on first use of a name that needs it: writing or reading an ima
 """
 
 from .aovs import AOVS, check_aovs
-from .film import FORMATS as IMAGE_FORMATS, aov_paths, linear_to_srgb, read_aovs, read_image, srgb_to_linear, to_srgb8, write_image
+from .film import (FORMATS as IMAGE_FORMATS, aov_paths, linear_to_srgb, partial_files, read_aovs, read_image, srgb_to_linear,
+                   to_srgb8, write_image)
 from .stats import RenderResult, RenderStats
 
 _WARP_NAMES = {
@@ -17,7 +18,7 @@ _WARP_NAMES = {
 }
 
 __all__ = ["AOVS", "IMAGE_FORMATS", "RenderResult", "RenderStats", "aov_paths", "check_aovs", "linear_to_srgb",
-           "read_aovs", "read_image", "srgb_to_linear", "to_srgb8", "write_image", *(n for names in _WARP_NAMES.values() for n in names)]
+           "partial_files", "read_aovs", "read_image", "srgb_to_linear", "to_srgb8", "write_image", *(n for names in _WARP_NAMES.values() for n in names)]
 
 
 def __getattr__(name):

@@ -3,6 +3,7 @@ the AOVs asked for, written atomically so that a failed write never leaves a par
 
 from __future__ import annotations
 
+import glob
 import os
 import tempfile
 from pathlib import Path
@@ -89,6 +90,13 @@ def _atomic(path: Path, write):
         if os.path.exists(tmp):
             os.unlink(tmp)
         raise
+
+
+def partial_files(path) -> list[Path]:
+    """The temporary files that writes of ``path`` killed midway left beside it (_atomic's names)."""
+    path = Path(path)
+    folder = path.parent if str(path.parent) else Path(".")
+    return sorted(folder.glob(f".{glob.escape(path.name)}.*{glob.escape(path.suffix)}"))
 
 
 def _umask() -> int:
