@@ -46,7 +46,7 @@ def _worker_main(conn, spec, threads):
 
 def stall_timeout() -> float | None:
     """Seconds without any result after which a run fails instead of waiting on (a hung worker, an
-    actor that can never be placed): off unless WARPRT_BATCH_STALL_TIMEOUT is set (CI sets it)."""
+    actor that can never be placed): off unless WARPRT_BATCH_STALL_TIMEOUT is set (the test suite sets it)."""
     v = os.environ.get("WARPRT_BATCH_STALL_TIMEOUT")
     return float(v) if v else None
 
