@@ -249,7 +249,7 @@ def cmd_batch(args) -> int:
         raise SceneError("command line", "--workers", f"expected an integer >= 1, got {args.workers}")
     summary: dict = {}
     rows = batch(args.job, args.output_dir, workers=args.workers, ray=args.ray, shard=args.shard,
-                 resume=args.resume, quiet=args.quiet, start_method=args.start_method, summary=summary)
+                 resume=args.resume, quiet=args.quiet, summary=summary)
     if not args.quiet:
         s = summary
         secs = s.get("render_seconds") or 0.0
@@ -307,7 +307,6 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--shard", metavar="I/N", help="render frames k with k mod N = I; 'auto' or 'auto/N' reads "
                                                   "SLURM_ARRAY_TASK_ID/COUNT or JOB_COMPLETION_INDEX")
     p.add_argument("--resume", action="store_true", help="skip frames whose manifest line and files exist")
-    p.add_argument("--start-method", choices=["spawn", "forkserver"], help=argparse.SUPPRESS)
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar (shown only on a terminal), no summary")
     p.add_argument("--debug", action="store_true", help="show tracebacks")
     p.set_defaults(func=cmd_batch)

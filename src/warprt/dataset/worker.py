@@ -13,7 +13,7 @@ import traceback
 from pathlib import Path
 
 from ..errors import SceneError
-from ..scene import load_scene, sets_in_place, with_overrides
+from ..scene import load_scene, resolve_effects, sets_in_place, with_overrides
 
 
 class FrameScenes:
@@ -81,15 +81,18 @@ class FrameRenderer:
         self.scenes = FrameScenes(spec["scene"])
         t = time.perf_counter()
         # Warp's start (about 0.6 s) and every kernel variant the job's frames use, compiled or loaded
-        # now at 1x1 pixel rather than in the first frames, with first hits traced and from the Z-buffer
-        # (which one a frame gets depends on its size).
+        # now at 1x1 pixel rather than in the first frames; with first hits from the Z-buffer where
+        # render()'s policy takes them from there at the frame's own size.
         with _warmup_lock():
             self.lock_seconds = time.perf_counter() - t
             for overrides in spec["warmup"]:
                 try:
-                    tiny = self.scenes.scene({**overrides, "camera.width": 1, "camera.height": 1})
-                    for primary in ("raytrace", "zbuffer"):
-                        image.render(tiny, threads=threads, aovs=self.aovs, primary=primary)
+                    frame = self.scenes.scene(overrides)
+                    cam, settings = frame.camera, frame.render
+                    samples = cam.width * cam.height * (settings.spp if resolve_effects(frame).supersampling else 1)
+                    primary = "zbuffer" if image.raster_is_cheaper(frame.triangle_count, samples) else "raytrace"
+                    tiny = frame.with_camera(width=1, height=1)
+                    image.render(tiny, threads=threads, aovs=self.aovs, primary=primary)
                 except SceneError:
                     pass  # a bad frame reports itself when it is rendered
         self.warmup_seconds = time.perf_counter() - t
