@@ -29,7 +29,7 @@ class FrameScenes:
 
     def scene(self, overrides: dict):
         """warprt.load_scene(path, overrides), equal field by field; a SceneError as load_scene's."""
-        rest = {k: v for k, v in overrides.items() if not sets_in_place(k)}
+        rest = {k: v for k, v in overrides.items() if not sets_in_place(k, self.path)}
         key = json.dumps(rest, sort_keys=True)
         base = self._loaded.pop(key, None) or load_scene(self.path, rest)
         self._loaded[key] = base
