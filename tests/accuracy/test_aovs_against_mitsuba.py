@@ -4,8 +4,9 @@ geometric normals, position, uv, shape and primitive index) on every scene of th
 Thresholds. Both renderers find hits in float32, Mitsuba in world coordinates, so its rounding grows
 with |eye| + t, warprt relative to the eye; a ray-triangle hit is good to some tens of float32 ulps
 (2^-24 = 6e-8) of that scale, more where a ray grazes its surface. Depth, position and uv (as the point
-it names on the face) may differ by POSITION_REL (|eye|_max + depth), about 170 ulps; measured at the
-suite's width: at most 3.9e-6 (mirrors: a floor seen at a grazing angle). Normals: the same face gives
+it names on the face: barycentrics, or texture coordinates where the object has them) may differ by
+POSITION_REL (|eye|_max + depth), about 170 ulps; measured at the suite's width: at most 3.9e-6
+(mirrors: a floor seen at a grazing angle). Normals: the same face gives
 the same flat normal to float32 rounding (1e-7 rad); smooth normals are interpolated at hit points that
 differ by the above, so they turn by the curvature times that: at most 6.4e-5 rad measured (the knot's
 small triangles), NORMAL_ANGLE is 5e-4 rad. Indices must agree exactly wherever both hit, and hit or
@@ -38,13 +39,24 @@ def angle(a, b):
 
 
 def point_on_face(scene, obj, face, uv):
-    """The point (1 - b1 - b2) p0 + b1 p1 + b2 p2 that barycentrics uv = (b1, b2) name on each pixel's face."""
+    """The point on each pixel's face that its uv names: (1 - b1 - b2) p0 + b1 p1 + b2 p2 for the
+    barycentrics (b1, b2), which uv is on an object without texture coordinates, and which solve
+    uv = (1 - b1 - b2) t0 + b1 t1 + b2 t2 on one with them (t: its corners' coordinates). NaN where
+    the face's texture coordinates have no area (they name no one point)."""
     out = np.zeros(uv.shape[:-1] + (3,))
     for idx in np.argwhere(obj >= 0):
         o = scene.objects[obj[tuple(idx)]]
-        p0, p1, p2 = o.vertices[o.faces[face[tuple(idx)]]]
-        b1, b2 = uv[tuple(idx)]
-        out[tuple(idx)] = (1.0 - b1 - b2) * p0 + b1 * p1 + b2 * p2
+        corners = o.faces[face[tuple(idx)]]
+        p0, p1, p2 = o.vertices[corners]
+        b = np.asarray(uv[tuple(idx)], np.float64)
+        if getattr(o, "uv", None) is not None:
+            t0, t1, t2 = np.asarray(o.uv, np.float64)[corners]
+            m = np.column_stack([t1 - t0, t2 - t0])
+            if abs(np.linalg.det(m)) < 1e-12:
+                out[tuple(idx)] = np.nan
+                continue
+            b = np.linalg.solve(m, b - t0)
+        out[tuple(idx)] = (1.0 - b[0] - b[1]) * p0 + b[0] * p1 + b[1] * p2
     return out
 
 
@@ -74,7 +86,7 @@ def errors(scene, a, m, where):
                     - point_on_face(scene, m["object"], m["face"], m["uv"])).max(-1)
     return {"depth": (np.abs(a["depth"] - m["depth"]) / scale)[where],
             "position": (np.abs(a["position"] - m["position"]).max(-1) / scale)[where],
-            "uv": (uv_gap / scale)[where],
+            "uv": np.nan_to_num(uv_gap / scale)[where],
             "normal": angle(a["normal"], normal)[where]}
 
 

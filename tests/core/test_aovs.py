@@ -122,6 +122,42 @@ def test_geometric_aovs_average_the_samples_that_hit_and_ids_come_from_the_centr
     assert set(np.unique(a["object"][mixed])) <= {-1, 0, 1}
 
 
+# The card with texture coordinates and vertex colours; the quad with a checker texture on its own uv.
+UV = [[0.1, 0.2], [0.9, 0.3], [0.4, 0.8]]
+COLORS = [[1.0, 0.2, 0.2], [0.2, 1.0, 0.2], [0.2, 0.2, 1.0]]
+QUAD_UV = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]
+CHECKS = [[0.9, 0.8, 0.7], [0.1, 0.2, 0.3]]
+
+
+def attributes_scene():
+    quad = {**OBJECTS[0], "uv": QUAD_UV, "material": "checked"}
+    card = {**OBJECTS[1], "uv": UV, "colors": COLORS}
+    materials = {**MATERIALS, "checked": {"kd": [0.5, 1.0, 1.0], "kd_texture": {"checker": CHECKS, "scale": 4}}}
+    return make_scene([quad, card], materials, (), None, ambient=[0.2, 0.2, 0.2])
+
+
+def test_uv_is_the_texture_coordinates_and_albedo_the_textured_and_coloured_kd():
+    """uv: each object's texture coordinates interpolated at the hit; albedo: kd times the checker's
+    colour there (4 x 4 checks over the quad's unit uv square) or times the interpolated vertex colour."""
+    scene = attributes_scene()
+    a = warprt.render(scene, aovs=["uv", "albedo", "object"]).aovs
+    eye, d, f, t, edge = pixel_hits(scene, TRIANGLES)
+    tri = TRIANGLES[np.maximum(f, 0)]
+    h = ray_triangle(eye, d, tri[..., 0, :], tri[..., 1, :], tri[..., 2, :])
+    weights = np.stack([1.0 - h.u - h.v, h.u, h.v], -1)  # of the triangle's corners a, b, c
+    corners = {0: np.array(QUAD_UV)[[0, 1, 2]], 1: np.array(QUAD_UV)[[0, 2, 3]], 2: np.array(UV)}
+    uv = np.einsum("...k,...kj->...j", weights, np.array([corners[i] for i in range(3)])[np.maximum(f, 0)])
+    checks = np.floor(4.0 * uv)
+    on_a_check = np.all(np.abs(4.0 * uv - np.rint(4.0 * uv)) > 1e-3, -1)  # not on a check's border
+    clear = (edge > TOO_CLOSE) & (f >= 0) & on_a_check
+    np.testing.assert_allclose(a["uv"][clear], uv[clear], atol=1e-5)
+    colour = np.einsum("...k,kj->...j", weights, np.array(COLORS))
+    check = np.where((checks.sum(-1) % 2 == 0)[..., None], CHECKS[0], CHECKS[1])
+    albedo = np.where((f == 2)[..., None], np.array(MATERIALS["card"]["kd"]) * colour, np.array([0.5, 1.0, 1.0]) * check)
+    np.testing.assert_allclose(a["albedo"][clear], albedo[clear], atol=1e-5)
+    assert len(np.unique(check[clear & (f < 2)], axis=0)) == 2  # both checks seen
+
+
 def test_smooth_shading_normal_is_the_interpolated_vertex_normal():
     sphere = {"shape": "sphere", "radius": 1.5, "subdivisions": 2, "smooth": True, "material": "floor"}
     scene = scene_of([sphere])

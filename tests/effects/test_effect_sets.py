@@ -124,7 +124,7 @@ def test_disabled_effect_code_is_absent_from_the_compiled_variant(off):
 # A line of each AOV's recording code, as above.
 AOV_MARKERS = {
     "depth": "a.depth[pixel] = a.depth[pixel] + wp.length(hit.p - o)",
-    "uv": "a.uv[pixel] = a.uv[pixel] + wp.vec2(v, 1.0 - u - v)",
+    "uv": "a.uv[pixel] = a.uv[pixel] + uv",
     "face": "a.face[pixel] = f - a.object_first_face[obj]",
 }
 

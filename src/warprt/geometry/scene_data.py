@@ -89,6 +89,8 @@ class Geometry:
         self.material_names = names
         self.object_face_counts = [len(obj.faces) for obj in scene.objects]
         self.object_ids = None  # object_tables(), once built
+        self._object_uv = [(len(obj.vertices), getattr(obj, "uv", None)) for obj in scene.objects]
+        self.object_uv = None  # uv_tables(), once built
 
         d = device
         if build_bvh:
@@ -171,5 +173,15 @@ class Geometry:
             first = np.concatenate([[0], np.cumsum(counts)[:-1]]).astype(np.int32)
             tri_object = np.repeat(np.arange(len(counts), dtype=np.int32), counts)
             self.object_ids = (wp.array(tri_object, dtype=wp.int32, device=self.device),
-                                   wp.array(first, dtype=wp.int32, device=self.device))
+                               wp.array(first, dtype=wp.int32, device=self.device))
         return self.object_ids
+
+    def uv_tables(self):
+        """Every vertex's texture coordinates ((0, 0) on objects without) and, per object, whether it has
+        them: what the uv AOV reads. Built on first use (8 bytes a vertex), like object_tables."""
+        if self.object_uv is None:
+            uv = [np.zeros((n, 2)) if u is None else u for n, u in self._object_uv] or [np.zeros((3, 2))]
+            has = [int(u is not None) for _, u in self._object_uv] or [0]
+            self.object_uv = (wp.array(np.concatenate(uv).astype(np.float32), dtype=wp.vec2, device=self.device),
+                              wp.array(np.asarray(has, np.int32), dtype=wp.int32, device=self.device))
+        return self.object_uv

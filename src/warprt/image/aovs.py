@@ -10,11 +10,12 @@ from ..errors import SceneError, show
 # Definitions (first hits of camera rays; misses: depth +inf, ids -1, the rest 0):
 #   depth      distance from the eye to the hit along the ray                    float32 (H, W)
 #   normal     world-space shading normal, turned to face the camera              float32 (H, W, 3)
-#   albedo     the diffuse colour kd at the hit                                   float32 (H, W, 3)
+#   albedo     the diffuse colour at the hit as the shading reads it: kd times its   float32 (H, W, 3)
+#              texture and the vertex colour, where the scene (and its effect set) has them
 #   position   world-space hit point, float64: the geometry's float64 origin plus float64 (H, W, 3)
 #              the float32 camera-relative hit
-#   uv         barycentrics (b1, b2) of the hit on its face, p = (1-b1-b2) p0 + b1 p1 + b2 p2
-#              (Mitsuba's uv for a mesh without texture coordinates)                float32 (H, W, 2)
+#   uv         as Mitsuba's: the object's texture coordinates at the hit where it has  float32 (H, W, 2)
+#              them, else the hit's barycentrics (b1, b2), p = (1-b1-b2) p0 + b1 p1 + b2 p2
 #   object     index in scene.objects                                             int32 (H, W)
 #   material   index in scene.materials (in its order, "default" first)           int32 (H, W)
 #   face       triangle index within its object                                   int32 (H, W)

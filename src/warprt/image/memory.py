@@ -30,7 +30,7 @@ def geometry_memory(geom) -> dict:
         "indices": size(geom.indices),  # int32, 3 per triangle
         "normals": size(d.normals),
         "per_triangle": size(d.tri_material, d.tri_smooth, *(getattr(geom, "object_ids", None) or ())),
-        "uv_colors": size(d.uvs, d.colors),
+        "uv_colors": size(d.uvs, d.colors, *(getattr(geom, "object_uv", None) or ())),
         "materials_lights": size(d.ka, d.kd, d.ks, d.kr, d.shininess, d.ka_map, d.kd_map, d.ks_map, d.light_pos,
                                  d.light_color),
         "textures": int(getattr(geom, "texture_bytes", 0)),

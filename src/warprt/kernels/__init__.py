@@ -4,8 +4,7 @@
     vertices, normal and Woop test), interaction.py (the hit record, its error bound, the ray offset,
     reflect), texture.py (a material colour's texture at a hit), shading.py (Phong), trace.py (the
     Whitted kernel), aov.py (what a first hit records besides colour), clip.py and raster.py (the
-    Z-buffer: Fragments), hybrid.py (where the Z-buffer's
-    first hit is the tracer's), zbuffer_shade.py.
+    Z-buffer: Fragments), hybrid.py (where the Z-buffer's first hit is the tracer's), zbuffer_shade.py.
 """
 
 from .._warp import init_warp, wp

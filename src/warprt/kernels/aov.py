@@ -13,6 +13,7 @@ import functools
 from .._warp import wp
 from ..geometry import SceneData
 from .interaction import Surface
+from .shading import make_coefficients
 
 GEOMETRIC = ("depth", "normal", "albedo", "position", "uv")
 IDS = ("object", "material", "face")
@@ -27,14 +28,16 @@ class AovBuffers:
     hits: wp.array(dtype=wp.int32)
     depth: wp.array(dtype=float)  # distance from the eye along the ray
     normal: wp.array(dtype=wp.vec3)  # shading normal, facing the camera
-    albedo: wp.array(dtype=wp.vec3)  # kd
+    albedo: wp.array(dtype=wp.vec3)  # kd as shading reads it: times its texture and the vertex colour
     position: wp.array(dtype=wp.vec3d)  # hit point relative to the geometry's origin, summed in float64
-    uv: wp.array(dtype=wp.vec2)  # barycentrics (b1, b2) on the face
+    uv: wp.array(dtype=wp.vec2)  # the object's texture coordinates, or barycentrics (b1, b2) on the face
     object: wp.array(dtype=wp.int32)  # -1: the chosen sample missed
     material: wp.array(dtype=wp.int32)
     face: wp.array(dtype=wp.int32)  # within its object
     tri_object: wp.array(dtype=wp.int32)  # per triangle: its object's index in the scene
     object_first_face: wp.array(dtype=wp.int32)  # per object: its first triangle in the scene's set
+    vertex_uv: wp.array(dtype=wp.vec2)  # per vertex: texture coordinates, (0, 0) on objects without
+    object_has_uv: wp.array(dtype=wp.int32)  # per object
     id_sample: int
 
 
@@ -47,12 +50,14 @@ def id_sample(k: int) -> int:
 
 
 @functools.cache
-def make_record_first_hit(names: tuple):
+def make_record_first_hit(names: tuple, texture: bool = False, vertex_color: bool = False):
     """record_first_hit(a, s, pixel, sample, f, u, v, hit, o) for the AOVs ``names``: adds a camera
     ray's first hit (face f at Warp's barycentrics u, v; hit record ``hit``; ray origin o) to the pixel's
-    sums, and sets the pixel's IDs when ``sample`` is a.id_sample."""
+    sums, and sets the pixel's IDs when ``sample`` is a.id_sample. ``texture`` and ``vertex_color``: the
+    effect set's, so that the albedo is the kd the shading reads."""
     DEPTH, NORMAL, ALBEDO, POSITION, UV = (n in names for n in GEOMETRIC)
     OBJECT, MATERIAL, FACE = (n in names for n in IDS)
+    coefficients = make_coefficients(texture, vertex_color)
 
     @wp.func
     def record_first_hit(a: AovBuffers, s: SceneData, pixel: int, sample: int, f: int, u: float, v: float,
@@ -63,13 +68,18 @@ def make_record_first_hit(names: tuple):
         if wp.static(NORMAL):
             a.normal[pixel] = a.normal[pixel] + hit.n
         if wp.static(ALBEDO):
-            a.albedo[pixel] = a.albedo[pixel] + s.kd[hit.material]
+            a.albedo[pixel] = a.albedo[pixel] + coefficients(s, hit).kd
         if wp.static(POSITION):
             a.position[pixel] = a.position[pixel] + wp.vec3d(hit.p)
         if wp.static(UV):
-            # Warp's u, v weigh the face's first and second vertex (p = u p0 + v p1 + (1 - u - v) p2);
-            # the AOV is Mitsuba's (b1, b2) for a mesh without texture coordinates.
-            a.uv[pixel] = a.uv[pixel] + wp.vec2(v, 1.0 - u - v)
+            # Warp's u, v weigh the face's first and second vertex (p = u p0 + v p1 + (1 - u - v) p2).
+            # As Mitsuba's uv: the object's texture coordinates, interpolated so; without, (b1, b2).
+            w = 1.0 - u - v
+            uv = wp.vec2(v, w)
+            if a.object_has_uv[a.tri_object[f]] != 0:
+                uv = (a.vertex_uv[s.indices[f * 3 + 0]] * u + a.vertex_uv[s.indices[f * 3 + 1]] * v
+                      + a.vertex_uv[s.indices[f * 3 + 2]] * w)
+            a.uv[pixel] = a.uv[pixel] + uv
         if wp.static(OBJECT or MATERIAL or FACE):
             if sample == a.id_sample:
                 obj = a.tri_object[f]
@@ -89,7 +99,7 @@ _DTYPES = {"depth": float, "normal": wp.vec3, "albedo": wp.vec3, "position": wp.
 
 def aov_buffers(names, geometry, n_pixels: int, k: int, device) -> AovBuffers:
     """Zeroed sums and hit counts, IDs at -1, for the AOVs ``names`` of an image of n_pixels with
-    k x k samples per pixel; the object tables from ``geometry`` only when IDs are asked for."""
+    k x k samples per pixel; the object and uv tables from ``geometry`` only when IDs or uv are asked for."""
     a = empty_aov_buffers(device)
     a.hits = wp.zeros(n_pixels, dtype=wp.int32, device=device)
     for name in names:
@@ -97,8 +107,10 @@ def aov_buffers(names, geometry, n_pixels: int, k: int, device) -> AovBuffers:
             setattr(a, name, wp.zeros(n_pixels, dtype=_DTYPES[name], device=device))
         elif name in IDS:
             setattr(a, name, wp.full(n_pixels, -1, dtype=wp.int32, device=device))
-    if any(n in IDS for n in names):
+    if any(n in IDS or n == "uv" for n in names):
         a.tri_object, a.object_first_face = geometry.object_tables()
+    if "uv" in names:
+        a.vertex_uv, a.object_has_uv = geometry.uv_tables()
     a.id_sample = id_sample(k)
     return a
 
@@ -106,8 +118,8 @@ def aov_buffers(names, geometry, n_pixels: int, k: int, device) -> AovBuffers:
 def empty_aov_buffers(device) -> AovBuffers:
     """Buffers of no pixels: what the trace kernel gets when no AOV is asked for."""
     a = AovBuffers()
-    for name in ("hits", *_DTYPES, "tri_object", "object_first_face"):
-        setattr(a, name, wp.empty(0, dtype=_DTYPES.get(name, wp.int32), device=device))
+    for name in ("hits", *_DTYPES, "tri_object", "object_first_face", "vertex_uv", "object_has_uv"):
+        setattr(a, name, wp.empty(0, dtype=wp.vec2 if name == "vertex_uv" else _DTYPES.get(name, wp.int32), device=device))
     a.id_sample = 0
     return a
 

@@ -45,7 +45,7 @@ def make_trace_kernel(fx, raster_primary: bool = False, aovs: tuple = ()):
     ray's first hit is also recorded into the AOV buffers; without, that code is absent."""
     shade = make_shade(fx)
     surface = make_surface(fx.smooth, fx.texture, fx.vertex_color)
-    record_first_hit = make_record_first_hit(tuple(aovs))
+    record_first_hit = make_record_first_hit(tuple(aovs), fx.texture, fx.vertex_color)
     REFLECTION, SUPERSAMPLING, RASTER, AOVS = fx.reflection, fx.supersampling, raster_primary, bool(aovs)
 
     @wp.kernel(module="unique", enable_backward=False)
