@@ -22,8 +22,8 @@ IDS = ("object", "material", "face")
 @wp.struct
 class AovBuffers:
     """Per pixel: the number of samples that hit, the sums of the geometric AOVs over them, and the
-    ID AOVs of sample ``id_sample``; with the per-triangle object table the IDs are read from. An
-    AOV not asked for has an empty array (its code is not compiled)."""
+    ID AOVs of sample ``id_sample``; with the object and texture-coordinate tables the IDs and uv are
+    read from. An AOV not asked for has an empty array (its code is not compiled)."""
 
     hits: wp.array(dtype=wp.int32)
     depth: wp.array(dtype=float)  # distance from the eye along the ray
