@@ -6,8 +6,9 @@ export DRJIT_LIBLLVM_PATH ?= $(LLVM)
 
 .PHONY: install llvm demo test figures benchmark
 
+# The Ray extra too: the batch tests run on a real local Ray instance and a simulated 2-node cluster.
 install:
-	$(PYTHON) -m pip install -q -e '.[test]'
+	$(PYTHON) -m pip install -q -e '.[test,ray]'
 
 # Mitsuba's llvm_ad_rgb variant needs a libLLVM that Dr.Jit can use; Debian 12's libLLVM 15 is not one.
 llvm:
@@ -23,6 +24,6 @@ test: install llvm
 figures: install
 	$(PYTHON) -m benchmarks.figures
 
-# The performance report, benchmarks/REPORT.md (about 6 minutes on 2 cores; run on a quiet machine).
+# The performance report, benchmarks/REPORT.md (about 10 minutes on 2 cores; run on a quiet machine).
 benchmark: install llvm
 	$(PYTHON) -m benchmarks

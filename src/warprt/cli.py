@@ -1,4 +1,4 @@
-"""The ``warprt`` command line: render, info (and compare, figures where those parts are present).
+"""The ``warprt`` command line: render, info, batch (many frames from a job file) and compare.
 
 Bad input is one line on stderr naming the file and field, exit status 2, no output file;
 a traceback only with --debug. Library warnings are one line each (diagnostics.py).
@@ -32,7 +32,12 @@ EXAMPLES = """examples:
   warprt render s.toml --no-shadows --effects ambient,diffuse --stats
   warprt render s.toml --algorithm zbuffer    rasterized: the tracer's local shading, no shadows/reflections
   warprt render s.toml --set camera.fovy=30 --set 'lights[0].color=[1,0.9,0.8]'
+  warprt render s.toml -o s.exr --aov depth,normal,object
+                                              AOVs of the camera rays' first hits: channels in the EXR
+                                              (.npz: arrays; .png: s.depth.exr, ... beside it)
   warprt info s.toml                          triangles, objects, materials, lights, bounds, effects, memory
+  warprt batch orbit.toml -o out              the frames of a job file (orbit, cameras, path, sweep),
+                                              one worker process per core; out/manifest.jsonl
   warprt compare s.toml -o cmp.png --width 320 --height 240
                                               warprt | Mitsuba 3 | |difference| x 10; prints SSIM, PSNR
 
@@ -101,15 +106,25 @@ def _check_device(device: str):
         raise SceneError("command line", "--device", f"'{device}' is not available on this machine (Warp found no CUDA device); use --device cpu")
 
 
+def _aov_list(text) -> tuple:
+    from .image.aovs import check_aovs
+
+    return check_aovs([n.strip() for n in text.split(",")] if text else None)
+
+
 def cmd_render(args) -> int:
     from .image import render
-    from .image.film import check_distinct, check_output_path, check_text_path, write_image, write_text
+    from .image.film import aov_paths, check_distinct, check_output_path, check_text_path, write_image, write_text
     from .image.memory import peak_rss
     from .image.progress import Progress
 
     # Everything that can be checked before the render is: a render whose result cannot be
     # saved, or that cannot start, should fail at once and leave nothing behind.
-    outputs = {"--output": check_output_path(args.output, "--output")}
+    aovs = _aov_list(args.aov)
+    if aovs and args.algorithm == "zbuffer":
+        raise SceneError("command line", "--aov", "AOVs come from the tracer's camera rays: not with --algorithm zbuffer")
+    outputs = {"--output": check_output_path(args.output, "--output", aovs)}
+    outputs.update({f"--aov {name}": p for name, p in aov_paths(outputs["--output"], aovs).items()})
     if args.stats_file:
         outputs["--stats-file"] = check_text_path(args.stats_file, "--stats-file")
     check_distinct(outputs)
@@ -121,10 +136,10 @@ def cmd_render(args) -> int:
     effects = args.effects.split(",") if args.effects else None
     progress = None if args.quiet else Progress()
     result = render(scene, threads=args.threads, device=args.device, effects=effects, algorithm=args.algorithm,
-                    progress=progress, primary=args.primary)
+                    progress=progress, primary=args.primary, aovs=aovs)
     out = outputs["--output"]
     t = time.perf_counter()
-    write_image(out, result.image, "--output")
+    write_image(out, result.image, "--output", result.aovs)
     stats = result.stats
     stats.times["write"] = time.perf_counter() - t
     stats.memory["peak_rss"] = peak_rss()
@@ -138,7 +153,8 @@ def cmd_render(args) -> int:
               f"{stats.triangles:,} triangles rasterized in {stats.times['render']:.3f} s)", file=sys.stderr)
     elif not args.quiet and not args.stats:
         r = stats.rays
-        print(f"wrote {out} ({stats.width}x{stats.height}, {stats.effects}; "
+        with_aovs = f" with AOVs {','.join(aovs)}" if aovs else ""
+        print(f"wrote {out}{with_aovs} ({stats.width}x{stats.height}, {stats.effects}; "
               f"{r['total']:,} rays in {stats.times['trace']:.3f} s)", file=sys.stderr)
     return 0
 
@@ -225,6 +241,38 @@ def cmd_compare(args) -> int:
     return 0
 
 
+BATCH_EXAMPLES = """examples:
+  warprt batch orbit.toml                      frames beside the job file, one worker per core
+  warprt batch orbit.toml -o out --workers 2   2 worker processes, each with half the cores
+  warprt batch sweep.toml --ray                a local Ray instance (pip install 'warprt[ray]')
+  warprt batch sweep.toml --ray head:6379      join a Ray cluster (the output folder must be shared)
+  warprt batch orbit.toml --shard 1/4          frames k with k mod 4 = 1 (manifest.shard-1-of-4.jsonl)
+  sbatch --array=0-3 --wrap 'warprt batch orbit.toml -o /shared/out --shard auto'
+  warprt batch orbit.toml --resume             render only frames without a manifest line and files
+
+The manifest (DIR/manifest.jsonl) gets one JSON line per finished frame. Bad input is one line on
+stderr naming the job file and the field or frame, exit status 2, before anything is rendered.
+"""
+
+
+def cmd_batch(args) -> int:
+    from .dataset import batch
+
+    if args.workers is not None and args.workers < 1:
+        raise SceneError("command line", "--workers", f"expected an integer >= 1, got {args.workers}")
+    summary: dict = {}
+    rows = batch(args.job, args.output_dir, workers=args.workers, ray=args.ray, shard=args.shard,
+                 resume=args.resume, quiet=args.quiet, summary=summary)
+    if not args.quiet:
+        s = summary
+        secs = s.get("render_seconds") or 0.0
+        fps = f", {s['rendered'] / secs:.2f} frames/s" if secs > 0 and s["rendered"] else ""
+        workers = f" on {s['workers']} {s['backend']} workers x {s['threads']} threads" if s.get("workers") else ""
+        print(f"warprt batch: {s['rendered']} frames rendered, {s['skipped']} already done, of {len(rows)}"
+              f"{workers} in {s['seconds']:.1f} s{fps}", file=sys.stderr)
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="warprt", description="A Whitted ray tracer in NVIDIA Warp kernels.",
                      epilog=EXAMPLES, formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -235,7 +283,10 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("render", help="render a scene to an image", epilog=EXAMPLES,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     _add_scene_options(p)
-    p.add_argument("-o", "--output", default="warprt.png", help="output image: .png (sRGB 8-bit), .exr or .npy (linear float)")
+    p.add_argument("-o", "--output", default="warprt.png", help="output image: .png (sRGB 8-bit), .exr, .npy or .npz (linear float)")
+    p.add_argument("--aov", metavar="LIST", help="also write AOVs of the camera rays' first hits, comma-separated: "
+                                                 "depth,normal,albedo,position,uv,object,material,face,coverage "
+                                                 "(in the .exr or .npz; beside a .png as <stem>.<aov>.exr)")
     p.add_argument("--threads", type=int, metavar="N", help="worker threads (default: all cores)")
     p.add_argument("--device", default="cpu", choices=["cpu", "cuda"], help="Warp device (default: cpu)")
     p.add_argument("--effects", help=f"comma-separated effects to keep: {','.join(EFFECTS)}")
@@ -256,6 +307,21 @@ def build_parser() -> argparse.ArgumentParser:
     _add_scene_options(p)
     p.add_argument("--debug", action="store_true", help="show tracebacks")
     p.set_defaults(func=cmd_info)
+
+    p = sub.add_parser("batch", help="render a frame sequence or parameter sweep from a job file",
+                       epilog=BATCH_EXAMPLES, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("job", help="job file (.toml): scene, output, aovs, [set], [orbit] / [[cameras]] / [path], [sweep]")
+    p.add_argument("-o", "--output-dir", metavar="DIR", help="folder for the frames and the manifest (default: the job file's folder)")
+    p.add_argument("--workers", type=int, metavar="N", help="worker processes or Ray actors (default: one per core); "
+                                                            "each renders with cores // N threads")
+    p.add_argument("--ray", nargs="?", const="local", metavar="ADDRESS",
+                   help="run on Ray: a local instance, or join the cluster at ADDRESS ('auto', 'host:6379')")
+    p.add_argument("--shard", metavar="I/N", help="render frames k with k mod N = I; 'auto' or 'auto/N' reads "
+                                                  "SLURM_ARRAY_TASK_ID/COUNT or JOB_COMPLETION_INDEX")
+    p.add_argument("--resume", action="store_true", help="skip frames whose manifest line and files exist")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress bar (shown only on a terminal), no summary")
+    p.add_argument("--debug", action="store_true", help="show tracebacks")
+    p.set_defaults(func=cmd_batch)
 
     p = sub.add_parser("compare", help="render with warprt and with Mitsuba 3 (the reference): SSIM, PSNR, side-by-side image")
     _add_scene_options(p)

@@ -166,11 +166,19 @@ CASES = [
     ("--effects unknown", ["render", "ok.toml", "--effects", "glow"],
      "command line: --effects: unknown effect 'glow'; expected some of: ambient, diffuse, specular, shadows, "
      "reflection, supersampling, smooth, texture, vertex_color, refraction, absorption"),
+    ("--aov unknown", ["render", "ok.toml", "--aov", "depth,glow"],
+     "command line: --aov: unknown AOV 'glow'; expected some of: depth, normal, albedo, position, uv, object, material, "
+     "face, coverage"),
+    ("--aov with the Z-buffer", ["render", "ok.toml", "--aov", "depth", "--algorithm", "zbuffer"],
+     "command line: --aov: AOVs come from the tracer's camera rays: not with --algorithm zbuffer"),
+    ("--aov into .npy", ["render", "ok.toml", "--aov", "depth", "-o", "out.npy"],
+     "out.npy: --output: a .npy file holds the colour only; for AOVs write .npz, .exr, or .png (the AOVs beside it "
+     "as <stem>.<aov>.exr)"),
     # Output paths: checked before anything renders.
     ("output .jpg", ["render", "ok.toml", "-o", "out.jpg"],
-     "out.jpg: --output: unknown image extension '.jpg'; expected one of: .png, .npy, .exr"),
+     "out.jpg: --output: unknown image extension '.jpg'; expected one of: .png, .npy, .exr, .npz"),
     ("output without extension", ["render", "ok.toml", "-o", "out"],
-     "out: --output: unknown image extension '(none)'; expected one of: .png, .npy, .exr"),
+     "out: --output: unknown image extension '(none)'; expected one of: .png, .npy, .exr, .npz"),
     ("output folder missing", ["render", "ok.toml", "-o", "nowhere/out.png"],
      "nowhere/out.png: --output: folder does not exist: nowhere"),
     ("output folder is a file", ["render", "ok.toml", "-o", "notes.txt/out.png"],

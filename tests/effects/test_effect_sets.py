@@ -113,9 +113,9 @@ def test_scene_file_effects_setting_and_cli_flags(tmp_path):
     assert stats["rays"] == {"primary": 16 * 12, "shadow": 0, "reflection": 0, "refraction": 0, "total": 16 * 12}
 
 
-def _generated_source(fx) -> str:
+def _generated_source(fx, aovs=()) -> str:
     init_warp()
-    kernel = make_trace_kernel(fx, stack=stack_size(4) if fx.refraction else 0)
+    kernel = make_trace_kernel(fx, stack=stack_size(4) if fx.refraction else 0, aovs=aovs)
     wp.load_module(kernel.module, device="cpu")
     (module_exec,) = kernel.module.execs.values()
     return Path(module_exec.binary_path).with_suffix("").with_suffix(".cpp").read_text()
@@ -144,6 +144,24 @@ def test_disabled_effect_code_is_absent_from_the_compiled_variant(off):
     source = _generated_source(EffectSet(**{**{e: getattr(full, e) for e in EFFECTS}, off: False}))
     assert MARKERS[off] not in source
     assert all(MARKERS[e] in source for e in EFFECTS if e != off)
+
+
+# A line of each AOV's recording code, as above.
+AOV_MARKERS = {
+    "depth": "a.depth[pixel] = a.depth[pixel] + wp.length(hit.p - o)",
+    "uv": "a.uv[pixel] = a.uv[pixel] + uv",
+    "face": "a.face[pixel] = f - a.object_first_face[obj]",
+}
+
+
+def test_aov_code_is_compiled_in_only_for_the_aovs_asked_for():
+    fx = EffectSet()
+    plain = _generated_source(fx)
+    assert "record_first_hit" not in plain and not any(m in plain for m in AOV_MARKERS.values())
+    depth = _generated_source(fx, aovs=("depth",))
+    assert "record_first_hit" in depth and AOV_MARKERS["depth"] in depth
+    assert AOV_MARKERS["uv"] not in depth and AOV_MARKERS["face"] not in depth
+    assert all(m in _generated_source(fx, aovs=tuple(AOV_MARKERS)) for m in AOV_MARKERS.values())
 
 
 def test_a_second_process_loads_the_variant_from_the_disk_cache(tmp_path):

@@ -1,5 +1,5 @@
 """The house stays as it is built: src/warprt imports downstream only (scene -> geometry -> kernels ->
-image -> cli), with no import circle, and tests, benchmarks and reference/ use the package's faces."""
+image -> dataset -> cli), with no import circle, and tests, benchmarks and reference/ use the package's faces."""
 
 import ast
 from pathlib import Path
@@ -8,7 +8,7 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
 PACKAGE = ROOT / "src" / "warprt"
-LAYERS = ("scene", "geometry", "kernels", "image")  # the data flow, upstream first
+LAYERS = ("scene", "geometry", "kernels", "image", "dataset")  # the data flow, upstream first
 FACES = {"warprt", "warprt.cli", *(f"warprt.{layer}" for layer in LAYERS)}
 
 

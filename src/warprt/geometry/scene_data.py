@@ -92,6 +92,10 @@ class Geometry:
         self.indices_np = np.ascontiguousarray(np.concatenate(faces).reshape(-1), np.int32)
         self.tri_material_np = np.concatenate(mats)
         self.material_names = names
+        self.object_face_counts = [len(obj.faces) for obj in scene.objects]
+        self.object_ids = None  # object_tables(), once built
+        self._object_uv = [(len(obj.vertices), getattr(obj, "uv", None)) for obj in scene.objects]
+        self.object_uv = None  # uv_tables(), once built
 
         d = device
         if build_bvh:
@@ -170,3 +174,25 @@ class Geometry:
                                              device=device) for a in images]
         s.textures = wp.array(self.texture_objects, dtype=wp.Texture2D, device=device)  # the objects kept alive with it
         self.texture_bytes = int(sum(a.shape[0] * a.shape[1] * 16 for a in images))
+
+    def object_tables(self):
+        """Per triangle, its object's index in scene.objects, and per object its first triangle: what
+        the object and face AOVs read. Built on first use (4 bytes a triangle), so renders without
+        those AOVs never hold them."""
+        if self.object_ids is None:
+            counts = self.object_face_counts or [1]  # an empty scene's one degenerate triangle
+            first = np.concatenate([[0], np.cumsum(counts)[:-1]]).astype(np.int32)
+            tri_object = np.repeat(np.arange(len(counts), dtype=np.int32), counts)
+            self.object_ids = (wp.array(tri_object, dtype=wp.int32, device=self.device),
+                               wp.array(first, dtype=wp.int32, device=self.device))
+        return self.object_ids
+
+    def uv_tables(self):
+        """Every vertex's texture coordinates ((0, 0) on objects without) and, per object, whether it has
+        them: what the uv AOV reads. Built on first use (8 bytes a vertex), like object_tables."""
+        if self.object_uv is None:
+            uv = [np.zeros((n, 2)) if u is None else u for n, u in self._object_uv] or [np.zeros((3, 2))]
+            has = [int(u is not None) for _, u in self._object_uv] or [0]
+            self.object_uv = (wp.array(np.concatenate(uv).astype(np.float32), dtype=wp.vec2, device=self.device),
+                              wp.array(np.asarray(has, np.int32), dtype=wp.int32, device=self.device))
+        return self.object_uv

@@ -1,11 +1,13 @@
 """The host side of a frame: launching bands (launch.py), the stats and their timer (stats.py), the
-renderers and their policies (renderer.py), the Z-buffer's buffers (zbuffer.py), memory (memory.py),
-image files (film.py) and the progress line (progress.py).
+renderers and their policies (renderer.py), the Z-buffer's buffers (zbuffer.py), the AOVs (aovs.py),
+memory (memory.py), image files (film.py) and the progress line (progress.py).
 
 Warp is imported on first use of a name that needs it: writing or reading an image does not.
 """
 
-from .film import FORMATS as IMAGE_FORMATS, linear_to_srgb, read_image, srgb_to_linear, to_srgb8, write_image
+from .aovs import AOVS, check_aovs
+from .film import (FORMATS as IMAGE_FORMATS, aov_paths, linear_to_srgb, partial_files, read_aovs, read_image, srgb_to_linear,
+                   to_srgb8, write_image)
 from .stats import RenderResult, RenderStats
 
 _WARP_NAMES = {
@@ -15,8 +17,8 @@ _WARP_NAMES = {
     "launch": ("bands_of", "default_threads", "launch_bands"),
 }
 
-__all__ = ["IMAGE_FORMATS", "RenderResult", "RenderStats", "linear_to_srgb", "read_image", "srgb_to_linear", "to_srgb8",
-           "write_image", *(n for names in _WARP_NAMES.values() for n in names)]
+__all__ = ["AOVS", "IMAGE_FORMATS", "RenderResult", "RenderStats", "aov_paths", "check_aovs", "linear_to_srgb",
+           "partial_files", "read_aovs", "read_image", "srgb_to_linear", "to_srgb8", "write_image", *(n for names in _WARP_NAMES.values() for n in names)]
 
 
 def __getattr__(name):

@@ -1,9 +1,11 @@
-"""Image output: the linear float image to PNG (sRGB 8-bit), OpenEXR or .npy (linear float32), and the
-output-path policy every file a command writes follows (atomic, through symlinks, never onto an input)."""
+"""Image output: the linear float image to PNG (sRGB 8-bit), OpenEXR, .npy or .npz (linear float32), with
+the AOVs asked for, and the output-path policy every file a command writes follows (atomic, through
+symlinks, never onto an input)."""
 
 from __future__ import annotations
 
 import errno
+import glob
 import os
 import shutil
 import stat
@@ -14,8 +16,9 @@ import numpy as np
 
 from ..errors import SceneError
 from ..scene import srgb_to_linear
+from .aovs import AOVS, CHANNELS, IDS
 
-FORMATS = (".png", ".npy", ".exr")
+FORMATS = (".png", ".npy", ".exr", ".npz")
 
 
 def linear_to_srgb(x: np.ndarray) -> np.ndarray:
@@ -34,15 +37,29 @@ def to_srgb8(image: np.ndarray) -> np.ndarray:
     return out
 
 
-def check_output_path(path, field: str = "output") -> Path:
+def check_output_path(path, field: str = "output", aovs=()) -> Path:
     """Fail before rendering on an unknown extension or a folder we cannot write to: a render
-    that cannot be saved should not run."""
+    that cannot be saved should not run. With ``aovs`` (names), their files too (aov_paths)."""
     path = Path(path)
     ext = path.suffix.lower()
     if ext not in FORMATS:
         raise SceneError(str(path), field, f"unknown image extension '{ext or '(none)'}'; expected one of: {', '.join(FORMATS)}")
+    if aovs and ext == ".npy":
+        raise SceneError(str(path), field, "a .npy file holds the colour only; for AOVs write .npz, .exr, or .png "
+                                           "(the AOVs beside it as <stem>.<aov>.exr)")
     _check_writable(path, field)
+    for sibling in aov_paths(path, aovs).values():
+        _check_writable(sibling, field)
     return path
+
+
+def aov_paths(path, aovs) -> dict:
+    """The files the AOVs ``aovs`` (names) of an image written to ``path`` go to besides it: none for
+    .exr and .npz, which hold them; for a .png, <stem>.<aov>.exr beside it, one per AOV."""
+    path = Path(path)
+    if path.suffix.lower() != ".png":
+        return {}
+    return {name: path.with_name(f"{path.stem}.{name}.exr") for name in aovs}
 
 
 # The output-path policy, one for every file a command writes (images, statistics):
@@ -137,6 +154,12 @@ def _atomic(path: Path, write):
             os.unlink(tmp)
 
 
+def partial_files(path) -> list[Path]:
+    """The temporary files that writes of ``path`` killed midway left beside it (_atomic's names)."""
+    target = target_of(path)
+    return sorted(target.parent.glob(f".{glob.escape(target.name)}.*{glob.escape(target.suffix)}"))
+
+
 def _fsync(path, directory: bool = False):
     """Flush a file (or a folder's entries, after a rename) to the disk: a full disk or a failing one
     is reported here, before the rename, rather than lost after the command said it wrote the file."""
@@ -170,13 +193,25 @@ def write_text(path, text: str, field: str = "output") -> Path:
     return path
 
 
-def _write_exr(fileobj, image: np.ndarray):
+def _exr_channels(aovs: dict) -> dict:
+    """Each AOV's channels (aovs.CHANNELS): float32, the IDs as UINT holding their int32 bits."""
+    channels = {}
+    for name, a in aovs.items():
+        a = np.asarray(a)
+        planes = a[..., None] if a.ndim == 2 else a
+        for i, c in enumerate(CHANNELS[name]):
+            plane = np.ascontiguousarray(planes[..., i], np.int32 if name in IDS else np.float32)
+            channels[c] = plane.view(np.uint32) if name in IDS else plane
+    return channels
+
+
+def _write_exr(fileobj, image: np.ndarray | None, aovs: dict | None = None):
     try:
         import OpenEXR
     except ImportError:
         raise SceneError("output", None, "writing EXR needs the OpenEXR package (pip install OpenEXR)") from None
-    h, w = image.shape[:2]
-    channels = {c: np.ascontiguousarray(image[:, :, i], np.float32) for i, c in enumerate("RGB")}
+    channels = {} if image is None else {c: np.ascontiguousarray(image[:, :, i], np.float32) for i, c in enumerate("RGB")}
+    channels.update(_exr_channels(aovs or {}))
     header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
     try:
         with OpenEXR.File(header, channels) as f:
@@ -189,10 +224,18 @@ def _write_exr(fileobj, image: np.ndarray):
         raise OSError(code, os.strerror(code)) from None
 
 
-def write_image(path, image: np.ndarray, field: str = "output") -> Path:
-    """Write by extension; the file appears complete or not at all (temporary file, then rename)."""
-    path = check_output_path(path, field)
+def write_image(path, image: np.ndarray, field: str = "output", aovs: dict | None = None) -> Path:
+    """Write by extension; the file appears complete or not at all (temporary file, then rename).
+    ``aovs`` (name -> array, as render() returns them) go into the .exr or .npz file itself, or one
+    EXR each beside a .png (aov_paths), written before it: once the PNG is there, so are they."""
+    aovs = aovs or {}
+    path = check_output_path(path, field, tuple(aovs))
     ext = path.suffix.lower()
+    for name, sibling in aov_paths(path, aovs).items():
+        try:
+            _atomic(sibling, lambda tmp: _write_exr(tmp, None, {name: aovs[name]}))
+        except OSError as e:
+            raise _cannot_write(sibling, field, e) from None
 
     def write(tmp):
         if ext == ".png":
@@ -207,7 +250,10 @@ def write_image(path, image: np.ndarray, field: str = "output") -> Path:
                 np.lib.format.write_array_header_1_0(f, np.lib.format.header_data_from_array_1_0(a))
                 f.write(memoryview(a).cast("B"))
         elif ext == ".exr":
-            _write_exr(tmp, image)
+            _write_exr(tmp, image, aovs)
+        elif ext == ".npz":
+            with open(tmp, "wb") as f:  # np.savez given a name would append ".npz" to the temporary one
+                np.savez(f, color=np.asarray(image, np.float32), **aovs)
 
     try:
         _atomic(path, write)
@@ -217,11 +263,14 @@ def write_image(path, image: np.ndarray, field: str = "output") -> Path:
 
 
 def read_image(path) -> np.ndarray:
-    """Read back a PNG (decoded to linear), .npy or .exr as float32 (H, W, 3)."""
+    """Read back a PNG (decoded to linear), .npy, .npz or .exr as float32 (H, W, 3)."""
     path = Path(path)
     ext = path.suffix.lower()
     if ext == ".npy":
         return np.load(path).astype(np.float32)
+    if ext == ".npz":
+        with np.load(path) as z:
+            return z["color"].astype(np.float32)
     if ext == ".exr":
         import OpenEXR
 
@@ -233,3 +282,31 @@ def read_image(path) -> np.ndarray:
     from PIL import Image
 
     return srgb_to_linear(np.asarray(Image.open(path).convert("RGB"), np.float64) / 255.0).astype(np.float32)
+
+
+def read_aovs(path) -> dict:
+    """The AOVs written with an image (write_image's ``aovs``), by name: from a .npz as they were
+    written (position in float64), from EXR channels in float32 (IDs int32 again), for a .png from the
+    EXR files beside it."""
+    path = Path(path)
+    ext = path.suffix.lower()
+    if ext == ".npz":
+        with np.load(path) as z:
+            return {name: z[name] for name in AOVS if name in z.files}
+    if ext == ".png":
+        out = {}
+        for name in AOVS:
+            sibling = path.with_name(f"{path.stem}.{name}.exr")
+            if sibling.is_file():
+                out.update(read_aovs(sibling))
+        return out
+    import OpenEXR
+
+    with OpenEXR.File(str(path), separate_channels=True) as f:
+        ch = {name: c.pixels for name, c in f.channels().items()}
+    out = {}
+    for name in AOVS:
+        if all(c in ch for c in CHANNELS[name]):
+            planes = [ch[c].view(np.int32) if name in IDS else ch[c] for c in CHANNELS[name]]
+            out[name] = planes[0] if len(planes) == 1 else np.stack(planes, -1)
+    return out

@@ -50,8 +50,8 @@ def geometry_memory(geom) -> dict:
         "vertices": size(geom.points),  # float32 vec3; with the BVH's box corners after the vertices
         "indices": size(geom.indices),  # int32, 3 per triangle
         "normals": size(d.normals),
-        "per_triangle": size(d.tri_material, d.tri_smooth),
-        "uv_colors": size(d.uvs, d.colors),
+        "per_triangle": size(d.tri_material, d.tri_smooth, *(getattr(geom, "object_ids", None) or ())),
+        "uv_colors": size(d.uvs, d.colors, *(getattr(geom, "object_uv", None) or ())),
         "materials_lights": size(d.ka, d.kd, d.ks, d.kr, d.shininess, d.ka_map, d.kd_map, d.ks_map, d.ior,
                                  d.transmittance, d.absorption, d.light_pos, d.light_color),
         "textures": int(getattr(geom, "texture_bytes", 0)),
@@ -61,11 +61,12 @@ def geometry_memory(geom) -> dict:
     return out
 
 
-def frame_memory(geom, image_bytes: int, raster_bytes: int) -> dict:
+def frame_memory(geom, image_bytes: int, raster_bytes: int, aov_bytes: int = 0) -> dict:
     """The stats' memory record of one frame: geometry by role, the image and ray-count buffers, the
-    Z-buffer's per-sample buffers (0 when no first hit came from it), and the peak RSS so far."""
+    Z-buffer's per-sample buffers (0 when no first hit came from it), the AOVs' per-pixel buffers (0
+    when none were asked for), and the peak RSS so far."""
     return {"geometry": geometry_memory(geom), "image": int(image_bytes), "raster": int(raster_bytes),
-            "peak_rss": peak_rss()}
+            "aovs": int(aov_bytes), "peak_rss": peak_rss()}
 
 
 def frame_estimate(scene, samples: int, raster: bool, algorithm: str = "raytrace") -> dict:

@@ -13,8 +13,10 @@ import numpy as np
 from .._warp import init_warp, wp
 from ..errors import SceneError
 from ..geometry import Geometry
-from ..kernels import camera_data, make_shade_kernel, make_trace_kernel, raster_kernel, stack_size
+from ..kernels import (aov_buffers, aov_bytes, aov_sums, camera_data, empty_aov_buffers, make_shade_kernel,
+                       make_trace_kernel, raster_kernel, stack_size)
 from ..scene import EffectSet, ObjectCache, camera_basis, resolve_effects, validate_camera, validate_scene, zbuffer_effects
+from .aovs import check_aovs, finish_aovs
 from .launch import bands_of, launch_bands, launch_plan
 from .memory import RASTER_BYTES_PER_SAMPLE, check_frame_memory, frame_estimate, frame_memory
 from .stats import RenderResult, RenderStats
@@ -91,7 +93,7 @@ def _check_choice(value: str, choices, flag: str, what: str):
 def render(scene, *, threads: int | None = None, device: str = "cpu", effects=None, disable=(),
            bands: int | None = None, geometry: Geometry | None = None, algorithm: str = "raytrace",
            progress=None, tile: tuple[int, int] | None = None, primary: str | None = None,
-           report_truncated: bool = False) -> RenderResult:
+           report_truncated: bool = False, aovs=None) -> RenderResult:
     """Render ``scene`` with the Whitted tracer (or, algorithm="zbuffer", by rasterization with the same
     local shading). ``effects`` (names) limits the effect set, ``disable`` removes effects; neither
     can add one the scene has nothing for. ``primary`` says where the tracer's first hits come from:
@@ -99,12 +101,17 @@ def render(scene, *, threads: int | None = None, device: str = "cpu", effects=No
     to be the traced one, the other samples traced; the image is the traced image to the bit); or
     "auto", the default, which rasterizes where that is the cheaper of the two (raster_is_cheaper).
     With ``report_truncated``, stats.truncated is the weight per pixel (H, W, 3) of the reflected and
-    refracted rays max_depth cut off: the share of their radiance the image is missing."""
+    refracted rays max_depth cut off: the share of their radiance the image is missing.
+    ``aovs`` (names from image.aovs.AOVS) come back as the result's ``.aovs``, from the camera rays'
+    first hits; the image is the same with or without them."""
     primary = DEFAULTS.primary if primary is None else primary
     _check_choice(primary, PRIMARY, "--primary", "primary visibility")
     _check_choice(algorithm, ALGORITHMS, "--algorithm", "algorithm")
+    aovs = check_aovs(aovs)
     validate_scene(scene)  # a Scene built in Python gets the file's checks too, before any kernel
     if algorithm == "zbuffer":
+        if aovs:
+            raise SceneError("command line", "--aov", "AOVs come from the tracer's camera rays: not with --algorithm zbuffer")
         return render_zbuffer(scene, threads=threads, device=device, effects=effects, disable=disable,
                               bands=bands, geometry=geometry)
     init_warp()
@@ -131,11 +138,11 @@ def render(scene, *, threads: int | None = None, device: str = "cpu", effects=No
     stats.primary = "zbuffer" if raster else "raytrace"
 
     with stats.phase("compile"):
-        kernel = make_trace_kernel(fx, raster_primary=raster, stack=stack, report_truncated=report_truncated)
+        kernel = make_trace_kernel(fx, raster_primary=raster, stack=stack, report_truncated=report_truncated, aovs=aovs)
         wp.load_module(kernel.module, device=device)
         if raster:
             wp.load_module(raster_kernel.module, device=device)
-    stats.variant += "_zprimary" if raster else ""
+    stats.variant += ("_zprimary" if raster else "") + ("_aov_" + "_".join(aovs) if aovs else "")
 
     zb = None
     if raster:
@@ -149,8 +156,10 @@ def render(scene, *, threads: int | None = None, device: str = "cpu", effects=No
         image = wp.empty(n_pixels * (2 if report_truncated else 1), dtype=wp.vec3, device=device)
         counts = wp.empty(n_pixels, dtype=wp.vec4i if fx.refraction else wp.vec3i, device=device)
         c, k, max_depth, data = camera_data(basis), math.isqrt(scene.render.spp), stats.max_depth, geom.data
+        samples = k * k if fx.supersampling else 1
+        buffers = aov_buffers(aovs, geom, n_pixels, math.isqrt(samples), device) if aovs else empty_aov_buffers(device)
         tile_w, tile_h = tile or PIXEL_TILE
-        inputs = lambda first: [data, c, max_depth, k, first, tile_w, tile_h, frags, image, counts]
+        inputs = lambda first: [data, c, max_depth, k, first, tile_w, tile_h, frags, buffers, image, counts]
         _launch_with_progress(kernel, inputs, n_pixels, threads, bands, device, counts, progress)
         pixels = image.numpy().reshape(-1, cam.height, cam.width, 3)
         out = pixels[0].copy()
@@ -158,15 +167,17 @@ def render(scene, *, threads: int | None = None, device: str = "cpu", effects=No
     check_finite(out)
     if report_truncated:
         stats.truncated = pixels[1].copy()
+    aov_arrays = finish_aovs(aovs, aov_sums(buffers, aovs), samples, geom.origin, cam.height, cam.width) if aovs else {}
 
     stats.rays = {"primary": int(per_kind[0]), "shadow": int(per_kind[1]), "reflection": int(per_kind[2]),
                   "refraction": int(per_kind[3]) if fx.refraction else 0}
     stats.rays["total"] = sum(stats.rays.values())
     stats.rays_per_second = stats.rays["total"] / max(stats.times["trace"], 1e-9)
     stats.times["total"] = time.perf_counter() - t_start
-    stats.memory = frame_memory(geom, image.capacity + counts.capacity, zb.nbytes if zb is not None else 0)
+    stats.memory = frame_memory(geom, image.capacity + counts.capacity, zb.nbytes if zb is not None else 0,
+                                aov_bytes(buffers))
     stats.memory["estimate"] = frame_estimate(scene, samples, raster)
-    return RenderResult(out, stats)
+    return RenderResult(out, stats, aov_arrays)
 
 
 def _without_geometry(estimate: dict, geometry) -> dict:

@@ -67,6 +67,29 @@ def timed(times: dict, name: str):
         times[name] = time.perf_counter() - t
 
 
-class RenderResult(NamedTuple):
+class _Frame(NamedTuple):
     image: np.ndarray  # float32 (H, W, 3), linear RGB, row 0 at the top
     stats: RenderStats
+
+
+class RenderResult(_Frame):
+    """What render() returns: a pair, unpacked as ``image, stats = render(scene)``, with the AOVs asked
+    for (render(scene, aovs=[...])) as ``.aovs``, a dict of NumPy arrays by name (image/aovs.py)."""
+
+    def __new__(cls, image, stats, aovs=None):
+        self = super().__new__(cls, image, stats)
+        self.aovs = dict(aovs or {})
+        return self
+
+    def __getnewargs__(self):  # pickling and copying keep the AOVs
+        return (self.image, self.stats, self.aovs)
+
+    @classmethod
+    def _make(cls, iterable):  # namedtuple's own makes a bare tuple.__new__, without .aovs
+        return cls(*iterable)
+
+    def _replace(self, **fields):
+        aovs = fields.pop("aovs", self.aovs)
+        new = super()._replace(**fields)
+        new.aovs = dict(aovs)
+        return new

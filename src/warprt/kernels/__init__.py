@@ -3,11 +3,13 @@
     camera.py (the tracer's and the rasterizer's cameras, sample positions), triangle.py (a face's
     vertices, normal and Woop test), interaction.py (the hit record, its error bound, the ray offset,
     reflect), texture.py (a material colour's texture at a hit), shading.py (Phong), dielectric.py
-    (Fresnel, Snell, Beer), trace.py (the Whitted kernel and its ray tree), clip.py and raster.py (the
+    (Fresnel, Snell, Beer), trace.py (the Whitted kernel and its ray tree), aov.py (what a first hit records
+    besides colour), clip.py and raster.py (the
     Z-buffer: Fragments), hybrid.py (where the Z-buffer's first hit is the tracer's), zbuffer_shade.py.
 """
 
 from .._warp import init_warp, wp
+from .aov import AovBuffers, aov_buffers, aov_bytes, aov_sums, empty_aov_buffers, id_sample, make_record_first_hit
 from .camera import CameraData, RasterCamera, camera_data, camera_ray, raster_camera, sample_offset
 from .clip import CLIP_SCALE
 from .dielectric import beer, beer_forever, fresnel_dielectric, refract
@@ -20,10 +22,12 @@ from .trace import MAX_TREE_DEPTH, STACK_SIZES, make_trace_kernel, primary_faces
 from .triangle import query_normal, triangle, unit_normal, woop_hit
 from .zbuffer_shade import make_shade_kernel
 
-__all__ = ["CLIP_SCALE", "CameraData", "Coefficients", "Fragments", "MARGIN_PX", "MAX_TREE_DEPTH", "OFFSET_SCALE",
-           "RasterCamera", "STACK_SIZES", "ShadeResult", "Surface", "TIE_REL", "beer", "beer_forever", "camera_data",
-           "camera_ray", "count_kernel", "fill_kernel", "fresnel_dielectric", "hit_point_error", "init_warp",
-           "make_coefficients", "make_shade", "make_shade_kernel", "make_surface", "make_trace_kernel",
-           "offset_ray_origin", "phong_diffuse", "phong_specular", "primary_faces_kernel", "project_kernel",
-           "query_normal", "raster_camera", "raster_kernel", "reflect", "refract", "sample_offset", "stack_size",
-           "texel", "tile_order_pixel", "triangle", "uncertain", "uncertain_np", "unit_normal", "woop_hit", "wp"]
+__all__ = ["aov_buffers", "aov_bytes", "aov_sums", "AovBuffers", "beer", "beer_forever", "camera_data", "camera_ray",
+           "CameraData", "CLIP_SCALE", "Coefficients", "count_kernel", "empty_aov_buffers", "fill_kernel",
+           "Fragments", "fresnel_dielectric", "hit_point_error", "id_sample", "init_warp", "make_coefficients",
+           "make_record_first_hit", "make_shade", "make_shade_kernel", "make_surface", "make_trace_kernel",
+           "MARGIN_PX", "MAX_TREE_DEPTH", "offset_ray_origin", "OFFSET_SCALE", "phong_diffuse", "phong_specular",
+           "primary_faces_kernel", "project_kernel", "query_normal", "raster_camera", "raster_kernel",
+           "RasterCamera", "reflect", "refract", "sample_offset", "ShadeResult", "stack_size", "STACK_SIZES",
+           "Surface", "texel", "TIE_REL", "tile_order_pixel", "triangle", "uncertain", "uncertain_np", "unit_normal",
+           "woop_hit", "wp"]

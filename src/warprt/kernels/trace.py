@@ -13,6 +13,7 @@ import functools
 from .._warp import wp
 from ..errors import SceneError
 from ..geometry import SceneData
+from .aov import AovBuffers, make_record_first_hit
 from .camera import CameraData, camera_ray, sample_offset
 from .dielectric import beer, beer_forever, fresnel_dielectric, refract
 from .hybrid import uncertain
@@ -54,7 +55,8 @@ def tile_order_pixel(i: int, width: int, height: int, tile_w: int, tile_h: int) 
 
 
 @functools.cache
-def make_trace_kernel(fx, raster_primary: bool = False, stack: int = 0, report_truncated: bool = False):
+def make_trace_kernel(fx, raster_primary: bool = False, stack: int = 0, report_truncated: bool = False,
+                      aovs: tuple = ()):
     """The kernel for one EffectSet; code for disabled effects is removed by wp.static. With
     raster_primary (hybrid rendering), a sample's first hit is the Z-buffer's visible triangle, tested
     with the ray query's own triangle test, wherever the rasterizer's answer is certain to be the
@@ -62,10 +64,13 @@ def make_trace_kernel(fx, raster_primary: bool = False, stack: int = 0, report_t
     bit; shadows and reflections are traced as always. With fx.refraction, ``stack`` is the ray
     tree's stack (stack_size(max_depth)) and counts hold refraction rays too (vec4i). With
     report_truncated, image holds twice width * height values: the radiance, then the weight of the
-    paths cut off at max_depth (the energy the image is missing), both averaged over the samples."""
+    paths cut off at max_depth (the energy the image is missing), both averaged over the samples.
+    With ``aovs`` (names, aov.py), each camera ray's first hit is also recorded into the AOV buffers;
+    without, that code is absent."""
     shade = make_shade(fx)
     surface = make_surface(fx.smooth, fx.texture, fx.vertex_color)
-    REFLECTION, SUPERSAMPLING, RASTER = fx.reflection, fx.supersampling, raster_primary
+    record_first_hit = make_record_first_hit(tuple(aovs), fx.texture, fx.vertex_color)
+    REFLECTION, SUPERSAMPLING, RASTER, AOVS = fx.reflection, fx.supersampling, raster_primary, bool(aovs)
     REFRACTION, ABSORPTION, TRUNCATED = fx.refraction, fx.absorption, report_truncated
     MEDIUM = REFRACTION or ABSORPTION
     if REFRACTION and stack < 1:
@@ -77,7 +82,7 @@ def make_trace_kernel(fx, raster_primary: bool = False, stack: int = 0, report_t
 
     @wp.kernel(module="unique", enable_backward=False)
     def trace(s: SceneData, c: CameraData, max_depth: int, k: int, first: int, tile_w: int, tile_h: int,
-              frags: Fragments, image: wp.array(dtype=wp.vec3), counts: wp.array(dtype=COUNTS)):
+              frags: Fragments, aov: AovBuffers, image: wp.array(dtype=wp.vec3), counts: wp.array(dtype=COUNTS)):
         i = first + wp.tid()  # position in tile order; the image itself is row-major
         xy = tile_order_pixel(i, c.width, c.height, tile_w, tile_h)
         x = xy[0]
@@ -162,6 +167,9 @@ def make_trace_kernel(fx, raster_primary: bool = False, stack: int = 0, report_t
                 if wp.static(ABSORPTION):
                     if medium >= 0:
                         weight = beer(weight, s.absorption[medium], wp.length(hit.p - start))
+                if wp.static(AOVS):
+                    if depth == 0:
+                        record_first_hit(aov, s, pixel, sample, f, u, v, hit, o)
                 r = shade(s, hit, -d)
                 color = color + wp.cw_mul(weight, r.color)
                 shadow_rays += r.shadow_rays

@@ -1,20 +1,24 @@
 """load_scene: a TOML scene file, a bare mesh file (framed automatically) or the built-in default
-scene, with dotted overrides ("camera.width", "lights[0].color") applied before validation."""
+scene, with dotted overrides ("camera.width", "lights[0].color") applied before validation; and
+with_overrides, the same scene for other overrides, from one already loaded."""
 
 from __future__ import annotations
 
 import time
 import tomllib
-from dataclasses import asdict
+from dataclasses import asdict, fields, replace
 from pathlib import Path
 
 from ..diagnostics import collecting
 from ..errors import SceneError
 from .autoframe import scene_for_mesh
 from .meshio import FORMATS, is_mesh_path
-from .model import Camera, Scene
+from .model import Camera, RenderSettings, Scene
 from .reader import read_camera, read_render, scene_from_dict
 from .validate import validate_scene
+
+# The fields with_overrides sets on a loaded scene without reading its file again.
+_IN_PLACE = {"camera": {f.name for f in fields(Camera)}, "render": {f.name for f in fields(RenderSettings)}}
 
 
 def load_scene(path=None, overrides: dict | None = None, up: str | None = None) -> Scene:
@@ -61,6 +65,41 @@ def apply_overrides(data: dict, overrides: dict, source: str) -> dict:
                 else:
                     node = arr[index]
     return data
+
+
+def with_overrides(base: Scene, path, overrides: dict, base_overrides: dict | None = None) -> Scene:
+    """load_scene(path, overrides), made from ``base`` = load_scene(path, base_overrides) without reading
+    the file again where the two differ only in camera.* and render.* fields (sets_in_place): those go through the
+    reader's own read_camera and read_render on the merged tables (its coercion and checks, the same
+    SceneError), then the whole scene's checks; lights, materials and objects are base's own, so a
+    renderer's geometry cache keeps them. Any other difference loads the file."""
+    t = time.perf_counter()
+    base_overrides = base_overrides or {}
+    changed = {k: v for k, v in overrides.items() if k not in base_overrides or base_overrides[k] != v}
+    in_place = all(k in overrides for k in base_overrides) and all(sets_in_place(k, path) for k in changed)
+    if not in_place:
+        return load_scene(path, overrides)
+    scene = _set_camera_render(base, changed, base.source) if changed else replace(base)
+    validate_scene(scene)
+    scene.load_seconds = time.perf_counter() - t
+    return scene
+
+
+def sets_in_place(key: str, path=None) -> bool:
+    """Whether with_overrides sets the dotted field ``key`` on a scene loaded from ``path``: camera.* and
+    render.* of a scene file; of a bare mesh only render.*, as its framing follows its camera."""
+    section, _, name = key.partition(".")
+    if path is not None and Path(path).suffix.lower() != ".toml" and section == "camera":
+        return False
+    return section in _IN_PLACE and name.isidentifier()  # unknown names too: the reader reports them
+
+
+def _set_camera_render(scene: Scene, overrides: dict, source: str) -> Scene:
+    """``scene`` with dotted camera.* and render.* overrides set on its own tables, read again by the reader."""
+    doc = {"camera": asdict(scene.camera), "render": {k: v for k, v in asdict(scene.render).items() if v is not None}}
+    doc = apply_overrides(doc, overrides, source)
+    doc = {section: {k: list(v) if isinstance(v, tuple) else v for k, v in table.items()} for section, table in doc.items()}
+    return replace(scene, camera=read_camera(source, doc["camera"]), render=read_render(source, doc["render"]))
 
 
 def _load_scene(path, overrides, up) -> Scene:

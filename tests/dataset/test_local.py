@@ -1,0 +1,143 @@
+"""The local backend (worker processes): every frame and its AOVs bit-identical to `warprt render` of that
+frame, a killed worker, --resume after the whole run is killed, and shards whose union is the run."""
+
+import json
+import multiprocessing as mp
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+
+import warprt
+from warprt.dataset import batch, read_rows
+from warprt.image import read_aovs, read_image
+
+from dataset.jobs import ROOT, SCENE, cli, write_job
+
+ORBIT = """
+scene = "{scene}"
+output = "frames/{frame:03d}_spp{render.spp}.npz"
+aovs = ["depth", "normal", "object"]
+[orbit]
+frames = 3
+[sweep]
+"render.spp" = [1, 4]
+"""
+
+
+def same_rows(a, b):
+    keep = ("frame", "key", "camera", "sweep", "overrides", "outputs")
+    return [{k: r[k] for k in keep} for r in a] == [{k: r[k] for k in keep} for r in b]
+
+
+@pytest.fixture(scope="module")
+def orbit_run(tmp_path_factory):
+    d = tmp_path_factory.mktemp("orbit")
+    job = write_job(d, ORBIT)
+    summary = {}
+    rows = batch(job, d / "out", workers=2, summary=summary)
+    return job, d / "out", rows, summary
+
+
+def test_frames_and_aovs_are_bit_identical_to_direct_renders(orbit_run):
+    job, out, rows, summary = orbit_run
+    assert [r["frame"] for r in rows] == list(range(6)) and summary["rendered"] == 6 and summary["workers"] == 2
+    for r in rows:
+        direct = warprt.render(warprt.load_scene(SCENE, overrides=r["overrides"]), aovs=r["aovs"])
+        path = out / r["outputs"]["color"]
+        assert np.array_equal(read_image(path), direct.image), r["frame"]
+        aovs = read_aovs(path)
+        assert aovs.keys() == direct.aovs.keys() and all(np.array_equal(aovs[n], direct.aovs[n]) for n in aovs)
+        assert r["stats"]["rays"] == direct.stats.rays and r["stats"]["spp"] == r["sweep"]["render.spp"]
+
+
+def test_png_and_exr_frames_are_the_files_warprt_render_writes(tmp_path):
+    """The same bytes as the command writes with --set for the frame's overrides: PNG, its AOV files, EXR."""
+    for ext in ("png", "exr"):
+        job = write_job(tmp_path, f'scene = "{{scene}}"\noutput = "f/{{frame}}.{ext}"\naovs = ["depth", "normal", "object"]\n'
+                                  '[[cameras]]\neye = [1.0, 1.2, 4.5]\nfovy = 38.5\n[[cameras]]\ncenter = [0.2, 0.5, 0.0]\n',
+                        name=f"job_{ext}.toml")
+        rows = batch(job, tmp_path / ext, workers=1)
+        assert [r["frame"] for r in rows] == [0, 1]
+        r = rows[1]
+        ref = tmp_path / f"ref.{ext}"
+        sets = [f"--set={k}={json.dumps(v)}" for k, v in r["overrides"].items()]
+        p = cli("render", SCENE, "-o", ref, "-q", "--aov", "depth,normal,object", *sets)
+        assert p.returncode == 0, p.stderr
+        names = {"color": ref} if ext == "exr" else \
+            {"color": ref, **{n: ref.with_name(f"ref.{n}.exr") for n in ("depth", "normal", "object")}}
+        assert r["outputs"].keys() == names.keys()
+        for name, path in names.items():
+            assert (tmp_path / ext / r["outputs"][name]).read_bytes() == path.read_bytes(), (ext, name)
+
+
+def test_killed_worker_leaves_every_frame_once(tmp_path):
+    job = write_job(tmp_path, 'scene = "{scene}"\noutput = "f/{frame:02d}.png"\naovs = ["depth", "normal", "object"]\n'
+                              '[set]\n"camera.width" = 64\n"camera.height" = 48\n"render.spp" = 4\n[orbit]\nframes = 12\n')
+    killed = []
+
+    def on_frame(row):
+        if not killed:  # the other worker has a frame in hand: kill it
+            others = [p for p in mp.active_children() if p.name == "warprt-batch-worker" and p.pid != row["worker"]["pid"]]
+            os.kill(others[0].pid, signal.SIGKILL)
+            killed.append(others[0].pid)
+
+    rows = batch(job, tmp_path / "out", workers=2, on_frame=on_frame)
+    lines = [json.loads(x) for x in (tmp_path / "out" / "manifest.jsonl").read_text().splitlines()]
+    assert killed and sorted(x["frame"] for x in lines) == list(range(12))  # one line per frame, none twice
+    assert [r["frame"] for r in rows] == list(range(12))
+    assert any(r["attempt"] == 2 for r in rows)  # the killed worker's frame, rendered again
+    files = sorted(p.name for p in (tmp_path / "out" / "f").iterdir())
+    assert files == sorted(f"{k:02d}{x}" for k in range(12) for x in (".png", ".depth.exr", ".normal.exr", ".object.exr"))
+    for r in rows:  # no temporary leftovers (above), every file whole
+        assert read_image(tmp_path / "out" / r["outputs"]["color"]).shape == (48, 64, 3)
+        assert read_aovs(tmp_path / "out" / r["outputs"]["color"])["depth"].shape == (48, 64)
+
+
+def test_resume_after_an_interrupt_renders_only_what_is_missing(tmp_path):
+    n = 16
+    job = write_job(tmp_path, 'scene = "{scene}"\noutput = "f/{frame:02d}.png"\n'
+                              f'[set]\n"camera.width" = 64\n"camera.height" = 48\n"render.spp" = 4\n[orbit]\nframes = {n}\n')
+    out = tmp_path / "out"
+    manifest = out / "manifest.jsonl"
+    p = subprocess.Popen([sys.executable, "-m", "warprt", "batch", str(job), "-o", str(out), "--workers", "1", "-q"],
+                         cwd=ROOT, start_new_session=True, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    deadline = time.time() + 120
+    while time.time() < deadline and p.poll() is None:
+        if manifest.exists() and manifest.read_text().count("\n") >= 3:
+            break
+        time.sleep(0.005)
+    os.killpg(p.pid, signal.SIGKILL)  # the driver and its worker, as a lost node would
+    p.wait()
+    first = read_rows(out)
+    assert 3 <= len(first) < n, "the interrupt came too late to test anything"
+    mtimes = {r["frame"]: (out / r["outputs"]["color"]).stat().st_mtime_ns for r in first}
+
+    summary = {}
+    rows = batch(job, out, workers=1, resume=True, summary=summary)
+    assert summary["skipped"] == len(first) and summary["rendered"] == n - len(first)
+    resumed = {r["run"] for r in rows if r["frame"] not in mtimes}
+    assert len(resumed) == 1 and {r["frame"] for r in rows if r["run"] in resumed} == set(range(n)) - set(mtimes)
+    assert all((out / r["outputs"]["color"]).stat().st_mtime_ns == mtimes[r["frame"]] for r in first)
+    assert sorted(r["frame"] for r in read_rows(out)) == list(range(n))  # one line each, no duplicates
+    assert sorted(x.name for x in (out / "f").iterdir()) == [f"{k:02d}.png" for k in range(n)]
+
+    again = {}
+    batch(job, out, resume=True, summary=again)  # nothing left: no worker starts
+    assert again["rendered"] == 0 and again["skipped"] == n and "workers" not in again
+
+
+def test_union_of_shards_is_the_unsharded_run(orbit_run, tmp_path):
+    job, out, rows, _ = orbit_run
+    shards = [batch(job, tmp_path, workers=1, shard=f"{i}/2") for i in range(2)]
+    assert [r["frame"] for r in shards[0]] == [0, 2, 4] and [r["frame"] for r in shards[1]] == [1, 3, 5]
+    assert sorted(p.name for p in tmp_path.glob("manifest*.jsonl")) == ["manifest.shard-0-of-2.jsonl",
+                                                                       "manifest.shard-1-of-2.jsonl"]
+    union = sorted(read_rows(tmp_path), key=lambda r: r["frame"])
+    assert same_rows(union, rows)
+    for r in union:
+        assert (tmp_path / r["outputs"]["color"]).read_bytes() == (out / r["outputs"]["color"]).read_bytes()
