@@ -57,7 +57,10 @@ class Progress:
     def end(self):
         if self._thread is not None:
             self._stop.set()
-            self._thread.join()
+            try:
+                self._thread.join()
+            except RuntimeError:  # interrupted before the thread started: nothing was drawn
+                pass
             self._thread = None
         if self.drawn:
             self.stream.write("\r\x1b[K")  # leave the terminal line clean for the result line

@@ -200,8 +200,11 @@ def _launch_with_progress(kernel, inputs, n_pixels, threads, bands, device, coun
 
         on_band = report
 
-        progress.begin(len(bands_of(n_pixels, bands)), n_pixels)
     try:
+        if progress is not None:
+            # Inside the try: a Ctrl-C landing while begin() waits for its thread to start must still
+            # clear the line the thread may already have drawn.
+            progress.begin(len(bands_of(n_pixels, bands)), n_pixels)
         launch_bands(kernel, inputs, n_pixels, threads, bands, device, on_band)
     finally:
         if progress is not None:
