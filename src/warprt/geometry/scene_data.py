@@ -1,8 +1,10 @@
-"""The scene flattened for the kernels: one triangle set in camera-relative float32, with a
-per-triangle material index, vertex normals for smooth objects, and material and light tables.
+"""The scene flattened for the kernels: one triangle set in float32 relative to a frame origin, with a
+per-triangle material slot, vertex normals for smooth objects, and per-frame material and light tables.
 
-Coordinates are made relative to the eye in float64 before the cast to float32, so a scene far
-from the origin keeps the precision it has near it (the camera ray origin is exactly 0).
+Coordinates are made relative to the frame origin (the eye of the first frame) in float64 before the
+cast to float32, so a scene far from the world origin keeps the precision it has near it. Later
+frames reuse the triangles and the BVH while their eye stays in the region the BVH's padding covers
+(bvh.EYE_REACH); their camera rays start at the float32 eye - origin, exactly 0 for the first frame.
 """
 
 from __future__ import annotations
@@ -10,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 from .._warp import wp
 from ..scene import vertex_normals
-from .bvh import build_mesh
+from .bvh import build_mesh, eye_reach
 
 
 @wp.struct
@@ -26,7 +28,7 @@ class SceneData:
     ks: wp.array(dtype=wp.vec3)
     kr: wp.array(dtype=wp.vec3)
     shininess: wp.array(dtype=float)
-    light_pos: wp.array(dtype=wp.vec3)  # camera-relative
+    light_pos: wp.array(dtype=wp.vec3)  # relative to the frame origin
     light_color: wp.array(dtype=wp.vec3)
     num_lights: int
     ambient: wp.vec3  # C_amb
@@ -34,20 +36,23 @@ class SceneData:
 
 
 class Geometry:
-    """Owns the device arrays and the BVH for one scene."""
+    """Owns the device arrays and the BVH for one set of objects, in coordinates relative to
+    ``origin`` (default: the scene's eye); ``scene_data(scene)`` gives the kernels a frame's view."""
 
-    def __init__(self, scene, device="cpu", bvh_constructor: str = "sah", build_bvh: bool = True):
+    def __init__(self, scene, device="cpu", bvh_constructor: str = "sah", build_bvh: bool = True, origin=None):
         # build_bvh=False: the Z-buffer needs the triangles and tables but never a ray query, and
         # its timings must not pay for a BVH (about 1.5 s for a million triangles on the CPU).
         self.device = device
-        self.origin = np.asarray(scene.camera.eye, np.float64)  # world position of the eye
-        names = list(scene.materials)
+        self.origin = np.asarray(scene.camera.eye if origin is None else origin, np.float64)  # world position
+        # A triangle's material is a slot: the objects' material names in order of first use, so the
+        # triangle arrays depend on the objects alone and a frame with other materials only swaps tables.
+        self.material_names = list(dict.fromkeys(obj.material for obj in scene.objects))
         verts, faces, mats, smooth, normals = [], [], [], [], []
         base = 0
         for obj in scene.objects:
             verts.append(obj.vertices - self.origin)
             faces.append(obj.faces + base)
-            mats.append(np.full(len(obj.faces), names.index(obj.material), np.int32))
+            mats.append(np.full(len(obj.faces), self.material_names.index(obj.material), np.int32))
             smooth.append(np.full(len(obj.faces), int(obj.smooth), np.int32))
             if obj.smooth:
                 given = getattr(obj, "normals", None)
@@ -64,36 +69,60 @@ class Geometry:
         self.points_np = np.ascontiguousarray(np.concatenate(verts), np.float32)
         self.indices_np = np.ascontiguousarray(np.concatenate(faces).reshape(-1), np.int32)
         self.tri_material_np = np.concatenate(mats)
-        self.material_names = names
+        self.eye_reach = eye_reach(self.points_np)  # E: how far an eye may move and keep this BVH
 
         d = device
         if build_bvh:
             # Padded triangle boxes (bvh.py): rays through shared vertices and edges cannot leak.
             # The points array then also holds the boxes' corners, after the V real points.
-            self.mesh, self.points, self.indices = build_mesh(self.points_np, self.indices_np, d, bvh_constructor)
+            self.mesh, self.points, self.indices = build_mesh(self.points_np, self.indices_np, d, bvh_constructor,
+                                                              eye=self.eye_reach)
         else:
             self.points = wp.array(self.points_np, dtype=wp.vec3, device=d)
             self.indices = wp.array(self.indices_np, dtype=wp.int32, device=d)
             self.mesh = None
+        self.normals = wp.array(np.concatenate(normals).astype(np.float32), dtype=wp.vec3, device=d)
+        self.tri_material = wp.array(self.tri_material_np, dtype=wp.int32, device=d)
+        self.tri_smooth = wp.array(np.concatenate(smooth), dtype=wp.int32, device=d)
+        self._tables = None
+        self.data = self.scene_data(scene)  # the tables of the scene it was built for
 
-        m = [scene.materials[n] for n in names]
-        lights = scene.lights
+    def eye_offset(self, eye) -> np.ndarray:
+        """Where the camera rays of an eye at world position ``eye`` start: eye - origin, computed in
+        float64 and rounded to float32 as the points were (exactly 0 at the origin)."""
+        return (np.asarray(eye, np.float64) - self.origin).astype(np.float32)
+
+    def covers(self, eye) -> bool:
+        """Whether camera rays from ``eye`` (world) keep the BVH's guarantees: within eye_reach of the
+        origin on every axis (bvh.py: the padding's slab-test argument)."""
+        return bool(np.abs(np.asarray(eye, np.float64) - self.origin).max() <= self.eye_reach)
+
+    def scene_data(self, scene) -> SceneData:
+        """The kernels' view of these triangles for a frame of ``scene``: its materials, lights,
+        ambient and background as small new arrays where they changed; the triangle arrays and the
+        BVH are shared, never rebuilt."""
+        m = [scene.materials[n] for n in self.material_names]
+        key = (tuple(m), tuple(scene.lights), tuple(scene.render.ambient), tuple(scene.render.background))
+        if self._tables is not None and self._tables[0] == key:
+            return self._tables[1]
+        d, lights = self.device, scene.lights
         s = SceneData()
-        s.mesh = self.mesh.id if build_bvh else wp.uint64(0)
+        s.mesh = self.mesh.id if self.mesh is not None else wp.uint64(0)
         s.points = self.points
         s.indices = self.indices
-        s.normals = wp.array(np.concatenate(normals).astype(np.float32), dtype=wp.vec3, device=d)
-        s.tri_material = wp.array(self.tri_material_np, dtype=wp.int32, device=d)
-        s.tri_smooth = wp.array(np.concatenate(smooth), dtype=wp.int32, device=d)
+        s.normals = self.normals
+        s.tri_material = self.tri_material
+        s.tri_smooth = self.tri_smooth
         vec = lambda rows: wp.array(np.asarray(rows, np.float32).reshape(-1, 3), dtype=wp.vec3, device=d)
-        s.ka = vec([x.ka for x in m])
-        s.kd = vec([x.kd for x in m])
-        s.ks = vec([x.ks for x in m])
-        s.kr = vec([x.reflectivity for x in m])
-        s.shininess = wp.array(np.asarray([x.shininess for x in m], np.float32), dtype=float, device=d)
+        s.ka = vec([x.ka for x in m] or [[0, 0, 0]])
+        s.kd = vec([x.kd for x in m] or [[0, 0, 0]])
+        s.ks = vec([x.ks for x in m] or [[0, 0, 0]])
+        s.kr = vec([x.reflectivity for x in m] or [[0, 0, 0]])
+        s.shininess = wp.array(np.asarray([x.shininess for x in m] or [0.0], np.float32), dtype=float, device=d)
         s.light_pos = vec([np.asarray(l.position) - self.origin for l in lights] or [[0, 0, 0]])
         s.light_color = vec([l.color for l in lights] or [[0, 0, 0]])
         s.num_lights = len(lights)
         s.ambient = wp.vec3(*scene.render.ambient)
         s.background = wp.vec3(*scene.render.background)
-        self.data = s
+        self._tables = (key, s)
+        return s

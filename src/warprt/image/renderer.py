@@ -26,10 +26,12 @@ PRIMARY = ("auto", "raytrace", "zbuffer")
 
 @dataclass
 class Defaults:
-    """render()'s defaults for what it is not told; the test suite sets ``primary`` to run whole
-    suites on both paths (tests/conftest.py)."""
+    """render()'s defaults for what it is not told; the test suite sets them to run whole suites on
+    every path (tests/conftest.py). ``origin_shift`` (tests only) builds each cached Geometry that
+    fraction of the scene's reach away from the eye, so that every frame runs on a reused BVH."""
 
     primary: str = "auto"
+    origin_shift: float = 0.0
 
 
 DEFAULTS = Defaults()
@@ -68,13 +70,48 @@ def primary_from_zbuffer(primary: str, geom: Geometry, basis, samples: int, devi
 _geometries = ObjectCache(size=4)
 
 
+def frame_geometry(scene, device: str = "cpu") -> tuple[Geometry, dict]:
+    """The Geometry (triangles, normals, BVH) for a frame of ``scene``, and how it came: built, or
+    reused from an earlier frame of the same objects, as Mitsuba reuses a loaded scene. Keyed by the
+    objects alone (Scene.with_camera/with_render share them): another eye, lights or materials reuse
+    it while the eye stays in the region its BVH's padding covers (Geometry.covers); the tables of
+    lights and materials are the frame's own (Geometry.scene_data)."""
+    key = (id(scene.objects), tuple(id(o.vertices) for o in scene.objects),
+           tuple((o.material, o.smooth, id(o.normals)) for o in scene.objects), str(device), DEFAULTS.origin_shift)
+    eye = scene.camera.eye
+    found = _geometries.peek(key, scene.objects)
+    if found is not None and found.covers(eye):
+        return found, {"bvh": "reused", "reason": geometry_reason(found, eye)}
+    reason = ("no geometry was built for these objects" if found is None else
+              f"the eye left the region the cached BVH covers ({geometry_reason(found, eye)})")
+    geom = _geometries.put(key, scene.objects, Geometry(scene, device=device, origin=shifted_origin(scene)))
+    return geom, {"bvh": "built", "reason": reason}
+
+
+def shifted_origin(scene):
+    """The eye, or with DEFAULTS.origin_shift = s a point s R away from it along a fixed slant (R: the
+    largest coordinate of the scene relative to the eye); s <= 0.5 keeps the eye well inside the
+    region the BVH covers (bvh.EYE_REACH = 2)."""
+    eye = np.asarray(scene.camera.eye, np.float64)
+    if not DEFAULTS.origin_shift or not scene.objects:
+        return eye
+    reach = max(float(np.abs(o.vertices - eye).max(initial=0.0)) for o in scene.objects)
+    slant = np.array([1.0, -0.75, 0.5])  # not along an axis: every coordinate moves
+    return eye + DEFAULTS.origin_shift * reach * slant
+
+
+def geometry_reason(geom: Geometry, eye) -> str:
+    """Where ``eye`` lies in the region ``geom``'s BVH covers, in words for the stats."""
+    moved = float(np.abs(np.asarray(eye, np.float64) - geom.origin).max())
+    if moved == 0.0:
+        return "eye at the BVH's origin"
+    share = moved / geom.eye_reach if geom.eye_reach > 0 else float("inf")
+    return f"eye {moved:.4g} from the BVH's origin on its farthest axis, {share:.2f} of the {geom.eye_reach:.4g} its padding covers"
+
+
 def cached_geometry(scene, device: str = "cpu") -> Geometry:
-    """The scene's Geometry (BVH, normals, tables), built once and reused by the next frames of the
-    same scene from the same eye, as Mitsuba reuses a loaded scene. Keyed by the objects' identity
-    (Scene.with_camera/with_render share them) and every value the Geometry is made of."""
-    key = (id(scene.objects), tuple(id(o.vertices) for o in scene.objects), tuple(scene.camera.eye),
-           tuple(scene.materials.items()), tuple(scene.lights), scene.render.ambient, scene.render.background, str(device))
-    return _geometries.get(key, scene.objects, lambda: Geometry(scene, device=device))
+    """frame_geometry's Geometry."""
+    return frame_geometry(scene, device)[0]
 
 
 def check_finite(image: np.ndarray, what: str = "render"):
@@ -116,7 +153,8 @@ def render(scene, *, threads: int | None = None, device: str = "cpu", effects=No
                               variant=f"trace_{fx.variant}", max_depth=scene.render.max_depth if fx.reflection else 1)
 
     with stats.phase("bvh"):
-        geom = geometry or cached_geometry(scene, device)
+        geom, stats.geometry = frame_geometry(scene, device) if geometry is None else given_geometry(geometry, cam.eye)
+        data = geom.scene_data(scene)  # this frame's lights and materials: small tables, the BVH shared
     stats.triangles = geom.triangle_count
     n_pixels = cam.width * cam.height
     raster = primary_from_zbuffer(primary, geom, basis, n_pixels * (scene.render.spp if fx.supersampling else 1), device)
@@ -139,7 +177,7 @@ def render(scene, *, threads: int | None = None, device: str = "cpu", effects=No
     with stats.phase("trace"):
         image = wp.empty(n_pixels, dtype=wp.vec3, device=device)
         counts = wp.empty(n_pixels, dtype=wp.vec3i, device=device)
-        c, k, max_depth, data = camera_data(basis), math.isqrt(scene.render.spp), stats.max_depth, geom.data
+        c, k, max_depth = camera_data(basis, geom.eye_offset(cam.eye)), math.isqrt(scene.render.spp), stats.max_depth
         tile_w, tile_h = tile or PIXEL_TILE
         inputs = lambda first: [data, c, max_depth, k, first, tile_w, tile_h, frags, image, counts]
         _launch_with_progress(kernel, inputs, n_pixels, threads, bands, device, counts, progress)
@@ -153,6 +191,14 @@ def render(scene, *, threads: int | None = None, device: str = "cpu", effects=No
     stats.times["total"] = time.perf_counter() - t_start
     stats.memory = frame_memory(geom, image.capacity + counts.capacity, zb.nbytes if zb is not None else 0)
     return RenderResult(out, stats)
+
+
+def given_geometry(geom: Geometry, eye) -> tuple[Geometry, dict]:
+    """A Geometry passed to render(): used as it is, if its BVH covers the eye."""
+    if not geom.covers(eye):
+        raise ValueError(f"the Geometry passed to render() does not cover the eye {list(eye)}: "
+                         f"{geometry_reason(geom, eye)}; build one for this eye")
+    return geom, {"bvh": "given", "reason": geometry_reason(geom, eye)}
 
 
 def _launch_with_progress(kernel, inputs, n_pixels, threads, bands, device, counts, progress):
@@ -193,6 +239,7 @@ def render_zbuffer(scene, *, threads: int | None = None, device: str = "cpu", ef
 
     with stats.phase("geometry"):
         geom = geometry or Geometry(scene, device=device, build_bvh=False)
+        data = geom.scene_data(scene)
     stats.triangles = geom.triangle_count
 
     with stats.phase("compile"):
@@ -207,7 +254,7 @@ def render_zbuffer(scene, *, threads: int | None = None, device: str = "cpu", ef
         with stats.phase("shade"):
             n_pixels = cam.width * cam.height
             image = wp.empty(n_pixels, dtype=wp.vec3, device=device)
-            c, data, k, frags = camera_data(zb.basis), geom.data, zb.k, zb.fragments
+            c, k, frags = camera_data(zb.basis, zb.eye), zb.k, zb.fragments
             launch_bands(kernel, lambda first: [data, c, k, first, frags, image], n_pixels, threads, bands, device)
             out = image.numpy().reshape(cam.height, cam.width, 3).copy()
     check_finite(out, "zbuffer")

@@ -29,6 +29,7 @@ class RenderStats:
     times: dict = field(default_factory=dict)  # seconds: load, bvh, compile, trace, write, total
     rays_per_second: float = 0.0
     memory: dict = field(default_factory=dict)  # bytes: geometry arrays and BVH by role, image, peak_rss
+    geometry: dict = field(default_factory=dict)  # bvh: "built" | "reused" | "given", and the reason
 
     def to_dict(self) -> dict:
         return asdict(self)

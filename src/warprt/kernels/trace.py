@@ -63,7 +63,7 @@ def make_trace_kernel(fx, raster_primary: bool = False):
             offset = wp.vec2(0.5, 0.5)
             if wp.static(SUPERSAMPLING):
                 offset = sample_offset(sample, k)
-            o = wp.vec3(0.0)
+            o = c.eye
             d = camera_ray(c, x, row, offset[0], offset[1])
             weight = wp.vec3(1.0)
             color = wp.vec3(0.0)
@@ -132,7 +132,7 @@ def primary_faces_kernel(s: SceneData, c: CameraData, k: int, samples: int, firs
         offset = wp.vec2(0.5, 0.5)
         if samples > 1:
             offset = sample_offset(sample, k)
-        q = wp.mesh_query_ray(s.mesh, wp.vec3(0.0), camera_ray(c, x, row, offset[0], offset[1]), 1.0e30)
+        q = wp.mesh_query_ray(s.mesh, c.eye, camera_ray(c, x, row, offset[0], offset[1]), 1.0e30)
         f = int(-1)
         if q.result:
             f = q.face
