@@ -1,7 +1,9 @@
-"""Scene -> what the kernels read: one triangle set in camera-relative float32 with its material and
-light tables (scene_data.py), and the BVH over it, built from padded bounds (bvh.py)."""
+"""Scene -> what the kernels read: one triangle set in float32 with its material and light tables
+(scene_data.py), the BVH over padded bounds (bvh.py) and the shadow rays' light-space grid (shadow_grid.py)."""
 
-from .bvh import BOUNDS_PAD, build_mesh, padded_bounds
+from .bvh import BOUNDS_PAD, EYE_REACH, build_mesh, eye_reach, padded_bounds
 from .scene_data import Geometry, SceneData
+from .shadow_grid import GridEntry, ShadowGrid, ShadowGridBuild, cells_for, empty_grid, kept_shadow_grid, shadow_grid
 
-__all__ = ["BOUNDS_PAD", "Geometry", "SceneData", "build_mesh", "padded_bounds"]
+__all__ = ["BOUNDS_PAD", "EYE_REACH", "Geometry", "GridEntry", "SceneData", "ShadowGrid", "ShadowGridBuild", "build_mesh",
+           "cells_for", "empty_grid", "eye_reach", "kept_shadow_grid", "padded_bounds", "shadow_grid"]

@@ -13,6 +13,7 @@ import numpy as np
 from .._warp import wp
 from ..scene import vertex_normals
 from .bvh import build_mesh, eye_reach
+from .shadow_grid import ShadowGrid, empty_grid
 
 
 @wp.struct
@@ -33,6 +34,7 @@ class SceneData:
     num_lights: int
     ambient: wp.vec3  # C_amb
     background: wp.vec3
+    shadow_grid: ShadowGrid  # the light-space structure (shadow_grid.py), read where shadow rays use it
 
 
 class Geometry:
@@ -97,12 +99,18 @@ class Geometry:
         origin on every axis (bvh.py: the padding's slab-test argument)."""
         return bool(np.abs(np.asarray(eye, np.float64) - self.origin).max() <= self.eye_reach)
 
-    def scene_data(self, scene) -> SceneData:
+    def light_positions(self, scene) -> np.ndarray:
+        """The kernels' light positions (L, 3): relative to the origin in float64, then float32."""
+        return np.asarray([np.asarray(l.position, np.float64) - self.origin for l in scene.lights],
+                          np.float32).reshape(-1, 3)
+
+    def scene_data(self, scene, shadow_grid: ShadowGrid | None = None) -> SceneData:
         """The kernels' view of these triangles for a frame of ``scene``: its materials, lights,
-        ambient and background as small new arrays where they changed; the triangle arrays and the
-        BVH are shared, never rebuilt."""
+        ambient and background as small new arrays where they changed, and the shadow rays' grid if
+        one is given; the triangle arrays and the BVH are shared, never rebuilt."""
         m = [scene.materials[n] for n in self.material_names]
-        key = (tuple(m), tuple(scene.lights), tuple(scene.render.ambient), tuple(scene.render.background))
+        key = (tuple(m), tuple(scene.lights), tuple(scene.render.ambient), tuple(scene.render.background),
+               id(shadow_grid))
         if self._tables is not None and self._tables[0] == key:
             return self._tables[1]
         d, lights = self.device, scene.lights
@@ -119,10 +127,13 @@ class Geometry:
         s.ks = vec([x.ks for x in m] or [[0, 0, 0]])
         s.kr = vec([x.reflectivity for x in m] or [[0, 0, 0]])
         s.shininess = wp.array(np.asarray([x.shininess for x in m] or [0.0], np.float32), dtype=float, device=d)
-        s.light_pos = vec([np.asarray(l.position) - self.origin for l in lights] or [[0, 0, 0]])
+        s.light_pos = vec(self.light_positions(scene) if lights else [[0, 0, 0]])
         s.light_color = vec([l.color for l in lights] or [[0, 0, 0]])
         s.num_lights = len(lights)
         s.ambient = wp.vec3(*scene.render.ambient)
         s.background = wp.vec3(*scene.render.background)
-        self._tables = (key, s)
+        if shadow_grid is None:
+            self.__dict__.setdefault("_no_grid", empty_grid(d))
+        s.shadow_grid = shadow_grid if shadow_grid is not None else self._no_grid
+        self._tables = (key, s, shadow_grid)  # the grid kept alive while its id is in the key
         return s

@@ -9,8 +9,8 @@ from .film import FORMATS as IMAGE_FORMATS, linear_to_srgb, read_image, srgb_to_
 from .stats import RenderResult, RenderStats
 
 _WARP_NAMES = {
-    "renderer": ("DEFAULTS", "AUTO_RASTER_MAX_BYTES", "RASTER_BYTES_PER_SAMPLE", "cached_geometry", "raster_is_cheaper",
-                 "render", "render_zbuffer", "check_finite"),
+    "renderer": ("DEFAULTS", "AUTO_RASTER_MAX_BYTES", "RASTER_BYTES_PER_SAMPLE", "cached_geometry", "frame_geometry",
+                 "raster_is_cheaper", "render", "render_zbuffer", "check_finite", "shadows_from_grid"),
     "zbuffer": ("ZBuffer", "eye_on_surface", "traced_faces"),
     "launch": ("bands_of", "default_threads", "launch_bands"),
 }

@@ -12,7 +12,7 @@ import numpy as np
 
 from .._warp import init_warp, wp
 from ..errors import SceneError
-from ..geometry import Geometry
+from ..geometry import Geometry, kept_shadow_grid, shadow_grid
 from ..kernels import camera_data, make_shade_kernel, make_trace_kernel, raster_kernel
 from ..scene import EffectSet, ObjectCache, camera_basis, resolve_effects, validate_camera, validate_scene, zbuffer_effects
 from .launch import bands_of, launch_bands, launch_plan
@@ -22,6 +22,7 @@ from .zbuffer import RASTER_TILE, ZBuffer, empty_fragments, eye_on_surface
 
 ALGORITHMS = ("raytrace", "zbuffer")
 PRIMARY = ("auto", "raytrace", "zbuffer")
+SHADOWS = ("auto", "bvh", "grid")
 
 
 @dataclass
@@ -31,6 +32,7 @@ class Defaults:
     fraction of the scene's reach away from the eye, so that every frame runs on a reused BVH."""
 
     primary: str = "auto"
+    shadows: str = "auto"
     origin_shift: float = 0.0
 
 
@@ -65,6 +67,39 @@ def primary_from_zbuffer(primary: str, geom: Geometry, basis, samples: int, devi
     where it is the cheaper; a camera on a surface is traced either way (the traced image is the promise)."""
     wanted = primary == "zbuffer" or (primary == "auto" and raster_is_cheaper(geom.triangle_count, samples, device))
     return wanted and not eye_on_surface(geom, basis)
+
+
+# What the light-space grid costs and saves, measured on the scenes on a quiet 2-core machine (the
+# research prototype, ../shared/research/exact-secondary-rays): a shadow ray's any-hit query about
+# 200 ns of thread time, the grid's answer about 70 ns; a build about 10 ms per light plus 0.8 us per
+# triangle and light (0.024 s for the default scene, 0.83 s for the 524k-triangle knot).
+GRID_SAVES_PER_RAY = 130e-9
+GRID_BUILD_PER_LIGHT = 10e-3
+GRID_BUILD_PER_TRIANGLE_LIGHT = 780e-9
+
+
+def shadows_from_grid(shadows: str, geom: Geometry, scene, fx, samples: int, threads: int, device: str) -> bool:
+    """The shadow rays' policy: whether the light-space grid answers them. "grid" asks for it; "auto"
+    takes it on the CPU where it is the cheaper: once built (it is kept with the geometry for the next
+    frames with these lights), or when its build costs less than what it saves over the frames so far
+    with these lights, this one included (about one shadow ray per sample and light). Either way the
+    image is the traced one, to the bit."""
+    if not fx.shadows or geom.triangle_count == 0 or shadows == "bvh":
+        return False
+    if shadows == "grid":
+        return True
+    if device != "cpu":
+        return False
+    lights = geom.light_positions(scene)
+    frames = geom.__dict__.setdefault("_frames_with_lights", {})
+    if len(frames) >= 64:  # lights moving every frame: no set of them stays long enough to amortize
+        frames.clear()
+    key = lights.tobytes()
+    frames[key] = frames.get(key, 0) + 1
+    if kept_shadow_grid(geom, lights) is not None:
+        return True
+    build = (GRID_BUILD_PER_LIGHT + GRID_BUILD_PER_TRIANGLE_LIGHT * geom.triangle_count) * len(lights)
+    return build <= GRID_SAVES_PER_RAY * samples * len(lights) / threads * frames[key]
 
 
 _geometries = ObjectCache(size=4)
@@ -129,15 +164,20 @@ def _check_choice(value: str, choices, flag: str, what: str):
 
 def render(scene, *, threads: int | None = None, device: str = "cpu", effects=None, disable=(),
            bands: int | None = None, geometry: Geometry | None = None, algorithm: str = "raytrace",
-           progress=None, tile: tuple[int, int] | None = None, primary: str | None = None) -> RenderResult:
+           progress=None, tile: tuple[int, int] | None = None, primary: str | None = None,
+           shadows: str | None = None) -> RenderResult:
     """Render ``scene`` with the Whitted tracer (or, algorithm="zbuffer", by rasterization with the same
     local shading). ``effects`` (names) limits the effect set, ``disable`` removes effects; neither
     can add one the scene has nothing for. ``primary`` says where the tracer's first hits come from:
     "raytrace"; "zbuffer" (hybrid rendering: the Z-buffer's visible triangle wherever it is certain
     to be the traced one, the other samples traced; the image is the traced image to the bit); or
-    "auto", the default, which rasterizes where that is the cheaper of the two (raster_is_cheaper)."""
+    "auto", the default, which rasterizes where that is the cheaper of the two (raster_is_cheaper).
+    ``shadows`` says what answers the shadow rays: "bvh" (Warp's any-hit query), "grid" (the exact
+    light-space grid: the same answers), or "auto", the default, the grid where it is the cheaper."""
     primary = DEFAULTS.primary if primary is None else primary
+    shadows = DEFAULTS.shadows if shadows is None else shadows
     _check_choice(primary, PRIMARY, "--primary", "primary visibility")
+    _check_choice(shadows, SHADOWS, "--shadow-rays", "shadow-ray query")
     _check_choice(algorithm, ALGORITHMS, "--algorithm", "algorithm")
     validate_scene(scene)  # a Scene built in Python gets the file's checks too, before any kernel
     if algorithm == "zbuffer":
@@ -154,18 +194,29 @@ def render(scene, *, threads: int | None = None, device: str = "cpu", effects=No
 
     with stats.phase("bvh"):
         geom, stats.geometry = frame_geometry(scene, device) if geometry is None else given_geometry(geometry, cam.eye)
-        data = geom.scene_data(scene)  # this frame's lights and materials: small tables, the BVH shared
     stats.triangles = geom.triangle_count
     n_pixels = cam.width * cam.height
-    raster = primary_from_zbuffer(primary, geom, basis, n_pixels * (scene.render.spp if fx.supersampling else 1), device)
+    samples = n_pixels * (scene.render.spp if fx.supersampling else 1)
+    raster = primary_from_zbuffer(primary, geom, basis, samples, device)
     stats.primary = "zbuffer" if raster else "raytrace"
 
+    grid = None
+    if shadows_from_grid(shadows, geom, scene, fx, samples, threads, device):
+        lights = geom.light_positions(scene)
+        kept = kept_shadow_grid(geom, lights) is not None
+        with stats.phase("shadow_grid"):
+            build = shadow_grid(geom, lights)
+        grid = build.grid  # None: over the memory budget, or every light has geometry at it
+        stats.shadow_grid = {"grid": "reused" if kept else "built", **build.stats}
+    stats.shadows = "grid" if grid is not None else "bvh"
+    data = geom.scene_data(scene, grid)  # this frame's lights and materials: small tables, the BVH shared
+
     with stats.phase("compile"):
-        kernel = make_trace_kernel(fx, raster_primary=raster)
+        kernel = make_trace_kernel(fx, raster_primary=raster, shadow_grid=grid is not None)
         wp.load_module(kernel.module, device=device)
         if raster:
             wp.load_module(raster_kernel.module, device=device)
-    stats.variant += "_zprimary" if raster else ""
+    stats.variant += ("_zprimary" if raster else "") + ("_gshadow" if grid is not None else "")
 
     zb = None
     if raster:
@@ -189,7 +240,8 @@ def render(scene, *, threads: int | None = None, device: str = "cpu", effects=No
     stats.rays["total"] = sum(stats.rays.values())
     stats.rays_per_second = stats.rays["total"] / max(stats.times["trace"], 1e-9)
     stats.times["total"] = time.perf_counter() - t_start
-    stats.memory = frame_memory(geom, image.capacity + counts.capacity, zb.nbytes if zb is not None else 0)
+    stats.memory = frame_memory(geom, image.capacity + counts.capacity, zb.nbytes if zb is not None else 0,
+                                stats.shadow_grid.get("bytes", 0) if grid is not None else 0)
     return RenderResult(out, stats)
 
 

@@ -23,6 +23,8 @@ class RenderStats:
     bands: int = 1
     algorithm: str = "raytrace"
     primary: str = "raytrace"  # where the first hits came from: "raytrace", or "zbuffer" (hybrid; same image)
+    shadows: str = "bvh"  # what answered the shadow rays: "bvh", or "grid" (the light-space grid; same image)
+    shadow_grid: dict = field(default_factory=dict)  # the grid's cells, lights, entries, bytes, build time
     effects: str = ""
     variant: str = ""
     rays: dict = field(default_factory=dict)  # primary, shadow, reflection, total

@@ -9,6 +9,7 @@ import functools
 from .._warp import wp
 from ..geometry import SceneData
 from .interaction import offset_ray_origin, reflect
+from .shadow import make_occluded
 
 
 @wp.func
@@ -33,15 +34,18 @@ class ShadeResult:
     shadow_rays: int
 
 
-def make_shade(fx):
+def make_shade(fx, shadow_grid: bool = False):
     """The local shading function for one effect set (its ambient, diffuse, specular and shadow
-    switches): ambient + the lit terms of every light, with shadow rays when fx.shadows."""
-    return _make_shade(fx.ambient, fx.diffuse, fx.specular, fx.shadows)
+    switches): ambient + the lit terms of every light, with shadow rays when fx.shadows, answered by
+    the BVH or, with ``shadow_grid``, by the light-space grid (the same answers: kernels/shadow.py)."""
+    return _make_shade(fx.ambient, fx.diffuse, fx.specular, fx.shadows, fx.shadows and shadow_grid)
 
 
 @functools.cache
-def _make_shade(AMBIENT: bool, DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool):
+def _make_shade(AMBIENT: bool, DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool, GRID: bool):
     # Disabled terms are absent from the generated code (wp.static).
+    occluded = make_occluded(GRID)
+
     @wp.func
     def shade(s: SceneData, m: int, p: wp.vec3, err: wp.vec3, ng: wp.vec3, n: wp.vec3, v: wp.vec3) -> ShadeResult:
         out = ShadeResult()
@@ -61,7 +65,7 @@ def _make_shade(AMBIENT: bool, DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool):
                         to_light_o = s.light_pos[l] - o
                         dist = wp.length(to_light_o)
                         out.shadow_rays += 1
-                        visible = not wp.mesh_query_ray_anyhit(s.mesh, o, to_light_o / dist, dist)
+                        visible = not occluded(s, l, o, to_light_o / dist, dist)
                     if visible:
                         lit = wp.vec3(0.0)
                         if wp.static(DIFFUSE):

@@ -35,13 +35,14 @@ def tile_order_pixel(i: int, width: int, height: int, tile_w: int, tile_h: int) 
 
 
 @functools.cache
-def make_trace_kernel(fx, raster_primary: bool = False):
+def make_trace_kernel(fx, raster_primary: bool = False, shadow_grid: bool = False):
     """The kernel for one EffectSet; code for disabled effects is removed by wp.static. With
     raster_primary (hybrid rendering), a sample's first hit is the Z-buffer's visible triangle, tested
     with the ray query's own triangle test, wherever the rasterizer's answer is certain to be the
-    tracer's (hybrid.uncertain); every other sample is traced. The image is the traced image, to the
-    bit; shadows and reflections are traced as always."""
-    shade = make_shade(fx)
+    tracer's (hybrid.uncertain); every other sample is traced. With shadow_grid, shadow rays are
+    answered by the light-space grid in s.shadow_grid (kernels/shadow.py). The image is the traced
+    image, to the bit."""
+    shade = make_shade(fx, shadow_grid)
     surface = make_surface(fx.smooth)
     REFLECTION, SUPERSAMPLING, RASTER = fx.reflection, fx.supersampling, raster_primary
 
