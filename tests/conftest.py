@@ -10,13 +10,14 @@ import pytest
 # Every shortcut promises the traced image to the bit, so each closed form, count and stability
 # property of these suites must hold with every ray traced from a BVH built at the eye, and with every
 # shortcut at once: the first hits from the Z-buffer where certain, shadow rays from the light-space
-# grid, on a BVH built for another eye and reused (warprt.image.DEFAULTS.origin_shift). Two paths keep
-# the suite's time what it was; each shortcut is also held to the traced image on its own, on every
-# scene, hard case and random scene (tests/zbuffer, tests/shadows, tests/geometry).
+# grid, reflections off planar mirrors from their virtual cameras, on a BVH built for another eye and
+# reused (warprt.image.DEFAULTS.origin_shift). Two paths keep the suite's time what it was; each
+# shortcut is also held to the traced image on its own, on every scene, hard case and random scene
+# (tests/zbuffer, tests/shadows, tests/mirrors, tests/geometry).
 PATH_SUITES = ("core", "effects", "stability")
 PATHS = {
-    "traced": {"primary": "raytrace", "shadows": "bvh", "origin_shift": 0.0},
-    "shortcuts": {"primary": "zbuffer", "shadows": "grid", "origin_shift": 0.5},
+    "traced": {"primary": "raytrace", "shadows": "bvh", "reflections": "bvh", "origin_shift": 0.0},
+    "shortcuts": {"primary": "zbuffer", "shadows": "grid", "reflections": "mirrors", "origin_shift": 0.5},
 }
 
 

@@ -112,8 +112,8 @@ def test_grid_shadows_give_the_traced_image_on_the_zbuffer_hard_cases(name):
 @pytest.mark.parametrize("path", SCENES, ids=IDS)
 def test_grid_shadows_give_the_traced_image_on_every_scene(path):
     scene = at(path, 200).with_render(spp=4)
-    traced = warprt.render(scene, primary="raytrace", shadows="bvh")
-    grid = warprt.render(scene, primary="raytrace", shadows="grid")
+    traced = warprt.render(scene, primary="raytrace", shadows="bvh", reflections="bvh")
+    grid = warprt.render(scene, primary="raytrace", shadows="grid", reflections="bvh")
     assert grid.stats.shadows == "grid" and grid.stats.variant.endswith("_gshadow")
     assert np.array_equal(grid.image, traced.image) and grid.stats.rays == traced.stats.rays
 

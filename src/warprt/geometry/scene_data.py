@@ -49,9 +49,10 @@ class Geometry:
         # A triangle's material is a slot: the objects' material names in order of first use, so the
         # triangle arrays depend on the objects alone and a frame with other materials only swaps tables.
         self.material_names = list(dict.fromkeys(obj.material for obj in scene.objects))
-        verts, faces, mats, smooth, normals = [], [], [], [], []
+        verts, faces, mats, smooth, normals, owner = [], [], [], [], [], []
         base = 0
-        for obj in scene.objects:
+        for index, obj in enumerate(scene.objects):
+            owner.append(np.full(len(obj.faces), index, np.int32))
             verts.append(obj.vertices - self.origin)
             faces.append(obj.faces + base)
             mats.append(np.full(len(obj.faces), self.material_names.index(obj.material), np.int32))
@@ -65,12 +66,15 @@ class Geometry:
         if not verts:  # an empty scene still gets a (degenerate, never hit) mesh so kernels can run
             verts, faces = [np.zeros((3, 3))], [np.zeros((1, 3), np.int64)]
             mats, smooth, normals = [np.zeros(1, np.int32)], [np.zeros(1, np.int32)], [np.zeros((3, 3))]
+            owner = [np.zeros(1, np.int32)]
             self.triangle_count = 0
         else:
             self.triangle_count = int(sum(len(f) for f in faces))
         self.points_np = np.ascontiguousarray(np.concatenate(verts), np.float32)
         self.indices_np = np.ascontiguousarray(np.concatenate(faces).reshape(-1), np.int32)
         self.tri_material_np = np.concatenate(mats)
+        self.tri_smooth_np = np.concatenate(smooth)
+        self.tri_object_np = np.concatenate(owner)  # the index of each triangle's object
         self.eye_reach = eye_reach(self.points_np)  # E: how far an eye may move and keep this BVH
 
         d = device
@@ -85,7 +89,7 @@ class Geometry:
             self.mesh = None
         self.normals = wp.array(np.concatenate(normals).astype(np.float32), dtype=wp.vec3, device=d)
         self.tri_material = wp.array(self.tri_material_np, dtype=wp.int32, device=d)
-        self.tri_smooth = wp.array(np.concatenate(smooth), dtype=wp.int32, device=d)
+        self.tri_smooth = wp.array(self.tri_smooth_np, dtype=wp.int32, device=d)
         self._tables = None
         self.data = self.scene_data(scene)  # the tables of the scene it was built for
 

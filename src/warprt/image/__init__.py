@@ -13,6 +13,7 @@ _WARP_NAMES = {
                  "raster_is_cheaper", "render", "render_zbuffer", "check_finite", "shadows_from_grid"),
     "zbuffer": ("ZBuffer", "eye_on_surface", "traced_faces"),
     "launch": ("bands_of", "default_threads", "launch_bands"),
+    "mirrors": ("MirrorFrame",),
 }
 
 __all__ = ["IMAGE_FORMATS", "RenderResult", "RenderStats", "linear_to_srgb", "read_image", "srgb_to_linear", "to_srgb8",

@@ -37,12 +37,13 @@ def geometry_memory(geom) -> dict:
     return out
 
 
-def frame_memory(geom, image_bytes: int, raster_bytes: int, shadow_grid_bytes: int = 0) -> dict:
+def frame_memory(geom, image_bytes: int, raster_bytes: int, shadow_grid_bytes: int = 0, mirrors_bytes: int = 0) -> dict:
     """The stats' memory record of one frame: geometry by role, the image and ray-count buffers, the
     Z-buffer's per-sample buffers (0 when no first hit came from it), the shadow rays' light-space grid
-    (0 when they were traced; kept with the geometry), and the peak RSS so far."""
+    (0 when they were traced; kept with the geometry), the planar mirrors' unfolded scenes and stored
+    rasters (0 when reflection rays were traced), and the peak RSS so far."""
     return {"geometry": geometry_memory(geom), "image": int(image_bytes), "raster": int(raster_bytes),
-            "shadow_grid": int(shadow_grid_bytes), "peak_rss": peak_rss()}
+            "shadow_grid": int(shadow_grid_bytes), "mirrors": int(mirrors_bytes), "peak_rss": peak_rss()}
 
 
 def peak_rss() -> int:

@@ -17,12 +17,14 @@ from ..kernels import camera_data, make_shade_kernel, make_trace_kernel, raster_
 from ..scene import EffectSet, ObjectCache, camera_basis, resolve_effects, validate_camera, validate_scene, zbuffer_effects
 from .launch import bands_of, launch_bands, launch_plan
 from .memory import frame_memory
+from .mirrors import MirrorFrame, empty_mirrors
 from .stats import RenderResult, RenderStats
 from .zbuffer import RASTER_TILE, ZBuffer, empty_fragments, eye_on_surface
 
 ALGORITHMS = ("raytrace", "zbuffer")
 PRIMARY = ("auto", "raytrace", "zbuffer")
 SHADOWS = ("auto", "bvh", "grid")
+REFLECTIONS = ("auto", "bvh", "mirrors")
 
 
 @dataclass
@@ -33,6 +35,7 @@ class Defaults:
 
     primary: str = "auto"
     shadows: str = "auto"
+    reflections: str = "auto"
     origin_shift: float = 0.0
 
 
@@ -165,7 +168,7 @@ def _check_choice(value: str, choices, flag: str, what: str):
 def render(scene, *, threads: int | None = None, device: str = "cpu", effects=None, disable=(),
            bands: int | None = None, geometry: Geometry | None = None, algorithm: str = "raytrace",
            progress=None, tile: tuple[int, int] | None = None, primary: str | None = None,
-           shadows: str | None = None) -> RenderResult:
+           shadows: str | None = None, reflections: str | None = None) -> RenderResult:
     """Render ``scene`` with the Whitted tracer (or, algorithm="zbuffer", by rasterization with the same
     local shading). ``effects`` (names) limits the effect set, ``disable`` removes effects; neither
     can add one the scene has nothing for. ``primary`` says where the tracer's first hits come from:
@@ -173,11 +176,16 @@ def render(scene, *, threads: int | None = None, device: str = "cpu", effects=No
     to be the traced one, the other samples traced; the image is the traced image to the bit); or
     "auto", the default, which rasterizes where that is the cheaper of the two (raster_is_cheaper).
     ``shadows`` says what answers the shadow rays: "bvh" (Warp's any-hit query), "grid" (the exact
-    light-space grid: the same answers), or "auto", the default, the grid where it is the cheaper."""
+    light-space grid: the same answers), or "auto", the default, the grid where it is the cheaper.
+    ``reflections`` says what answers the reflection rays: "bvh" (Warp's closest-hit query), "mirrors"
+    (off planar mirrors, their virtual cameras' rasters wherever certain to give the query's answer,
+    the rest traced), or "auto", the default, the mirrors' rasters on the CPU where they are cheaper."""
     primary = DEFAULTS.primary if primary is None else primary
     shadows = DEFAULTS.shadows if shadows is None else shadows
+    reflections = DEFAULTS.reflections if reflections is None else reflections
     _check_choice(primary, PRIMARY, "--primary", "primary visibility")
     _check_choice(shadows, SHADOWS, "--shadow-rays", "shadow-ray query")
+    _check_choice(reflections, REFLECTIONS, "--reflection-rays", "reflection-ray query")
     _check_choice(algorithm, ALGORITHMS, "--algorithm", "algorithm")
     validate_scene(scene)  # a Scene built in Python gets the file's checks too, before any kernel
     if algorithm == "zbuffer":
@@ -211,12 +219,24 @@ def render(scene, *, threads: int | None = None, device: str = "cpu", effects=No
     stats.shadows = "grid" if grid is not None else "bvh"
     data = geom.scene_data(scene, grid)  # this frame's lights and materials: small tables, the BVH shared
 
+    mirror_frame = None
+    if fx.reflection and (reflections == "mirrors" or (reflections == "auto" and device == "cpu")):
+        with stats.phase("mirrors"):
+            mirror_frame = MirrorFrame(scene, geom, data, fx, threads, bands, device, auto=reflections == "auto")
+        stats.mirrors = mirror_frame.stats
+        if mirror_frame.mirrors is None:
+            mirror_frame = None
+    stats.reflections = "mirrors" if mirror_frame is not None else "bvh"
+    mirrors = mirror_frame.mirrors if mirror_frame is not None else empty_mirrors(device)
+
     with stats.phase("compile"):
-        kernel = make_trace_kernel(fx, raster_primary=raster, shadow_grid=grid is not None)
+        kernel = make_trace_kernel(fx, raster_primary=raster, shadow_grid=grid is not None,
+                                   mirrors=mirror_frame is not None)
         wp.load_module(kernel.module, device=device)
-        if raster:
+        if raster or mirror_frame is not None:
             wp.load_module(raster_kernel.module, device=device)
-    stats.variant += ("_zprimary" if raster else "") + ("_gshadow" if grid is not None else "")
+    stats.variant += (("_zprimary" if raster else "") + ("_gshadow" if grid is not None else "")
+                      + ("_mreflect" if mirror_frame is not None else ""))
 
     zb = None
     if raster:
@@ -230,7 +250,7 @@ def render(scene, *, threads: int | None = None, device: str = "cpu", effects=No
         counts = wp.empty(n_pixels, dtype=wp.vec3i, device=device)
         c, k, max_depth = camera_data(basis, geom.eye_offset(cam.eye)), math.isqrt(scene.render.spp), stats.max_depth
         tile_w, tile_h = tile or PIXEL_TILE
-        inputs = lambda first: [data, c, max_depth, k, first, tile_w, tile_h, frags, image, counts]
+        inputs = lambda first: [data, c, max_depth, k, first, tile_w, tile_h, frags, mirrors, image, counts]
         _launch_with_progress(kernel, inputs, n_pixels, threads, bands, device, counts, progress)
         out = image.numpy().reshape(cam.height, cam.width, 3).copy()
         per_kind = counts.numpy().astype(np.int64).sum(0)
@@ -238,10 +258,14 @@ def render(scene, *, threads: int | None = None, device: str = "cpu", effects=No
 
     stats.rays = {"primary": int(per_kind[0]), "shadow": int(per_kind[1]), "reflection": int(per_kind[2])}
     stats.rays["total"] = sum(stats.rays.values())
+    if mirror_frame is not None:
+        decided = int(mirrors.decided.numpy().sum())
+        stats.mirrors.update(decided=decided, share=decided / max(stats.rays["reflection"], 1))
     stats.rays_per_second = stats.rays["total"] / max(stats.times["trace"], 1e-9)
     stats.times["total"] = time.perf_counter() - t_start
     stats.memory = frame_memory(geom, image.capacity + counts.capacity, zb.nbytes if zb is not None else 0,
-                                stats.shadow_grid.get("bytes", 0) if grid is not None else 0)
+                                stats.shadow_grid.get("bytes", 0) if grid is not None else 0,
+                                mirror_frame.nbytes if mirror_frame is not None else 0)
     return RenderResult(out, stats)
 
 

@@ -25,6 +25,8 @@ class RenderStats:
     primary: str = "raytrace"  # where the first hits came from: "raytrace", or "zbuffer" (hybrid; same image)
     shadows: str = "bvh"  # what answered the shadow rays: "bvh", or "grid" (the light-space grid; same image)
     shadow_grid: dict = field(default_factory=dict)  # the grid's cells, lights, entries, bytes, build time
+    reflections: str = "bvh"  # what answered the reflection rays: "bvh", or "mirrors" (virtual cameras; same image)
+    mirrors: dict = field(default_factory=dict)  # the virtual cameras' chains, bytes, rays decided and their share
     effects: str = ""
     variant: str = ""
     rays: dict = field(default_factory=dict)  # primary, shadow, reflection, total

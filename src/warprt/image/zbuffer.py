@@ -78,7 +78,9 @@ class ZBuffer:
     """Owns the per-sample buffers of one scene's rasterization (self.fragments)."""
 
     def __init__(self, scene, geometry: Geometry, fx: EffectSet, device: str = "cpu", tile: int = RASTER_TILE,
-                 track_uncertain: bool = True):
+                 track_uncertain: bool = True, margin: float = MARGIN_PX, fragments: Fragments | None = None):
+        """``fragments``: buffers of this size to draw into instead of new ones, every sample cleared
+        (the virtual cameras pass one from chain to chain, cleared as they gather it)."""
         cam = scene.camera
         self.geometry, self.device, self.tile = geometry, device, int(tile)
         self.track_uncertain = track_uncertain
@@ -87,9 +89,12 @@ class ZBuffer:
         self.k = math.isqrt(scene.render.spp)
         self.samples = self.k * self.k if fx.supersampling else 1
         # track_uncertain: fill rival_inv_depth for hybrid rendering; a plain Z-buffer image skips it.
-        self.camera = raster_camera(self.basis, clip_distance(geometry, self.eye), MARGIN_PX if track_uncertain else 0.0,
+        self.camera = raster_camera(self.basis, clip_distance(geometry, self.eye), margin if track_uncertain else 0.0,
                                     self.eye)
         n = cam.width * cam.height * self.samples
+        if fragments is not None:
+            self.fragments, self.times, self.pairs = fragments, {}, 0
+            return
         frags = Fragments()
         frags.face = wp.full(n, -1, dtype=wp.int32, device=device)
         frags.inv_depth = wp.zeros(n, dtype=wp.float64, device=device)  # 0 is "nothing yet"
@@ -104,8 +109,9 @@ class ZBuffer:
         f = self.fragments
         return int(f.face.capacity + f.inv_depth.capacity + f.uv.capacity + f.rival_inv_depth.capacity)
 
-    def rasterize(self, threads: int, bands: int):
-        """Project, bin and depth-test every triangle; times["project"|"bin"|"raster"] in seconds."""
+    def rasterize(self, threads: int, bands: int, tiles: np.ndarray | None = None):
+        """Project, bin and depth-test every triangle; times["project"|"bin"|"raster"] in seconds. With
+        ``tiles`` (one flag per raster tile, row-major from the bottom), only those tiles' samples."""
         g, c, dev = self.geometry, self.camera, self.device
         data = g.data
         k = self.k if self.samples > 1 else 1
@@ -122,14 +128,15 @@ class ZBuffer:
             tile = self.tile
             tiles_x, tiles_y = -(-c.width // tile), -(-c.height // tile)
             tile_count = wp.zeros(tiles_x * tiles_y, dtype=wp.int32, device=dev)
-            wp.launch(count_kernel, dim=g.triangle_count, inputs=[bounds, tile, tiles_x, tile_count], device=dev)
+            mask = wp.array(np.asarray(tiles if tiles is not None else [], np.int32), dtype=wp.int32, device=dev)
+            wp.launch(count_kernel, dim=g.triangle_count, inputs=[bounds, tile, tiles_x, mask, tile_count], device=dev)
             tile_start = np.zeros(tiles_x * tiles_y + 1, np.int32)
             tile_start[1:] = np.cumsum(tile_count.numpy())
             self.pairs = int(tile_start[-1])
             starts = wp.array(tile_start, dtype=wp.int32, device=dev)
             cursor = wp.array(tile_start[:-1], dtype=wp.int32, device=dev)
             faces = wp.empty(max(self.pairs, 1), dtype=wp.int32, device=dev)
-            wp.launch(fill_kernel, dim=g.triangle_count, inputs=[bounds, tile, tiles_x, cursor, faces], device=dev)
+            wp.launch(fill_kernel, dim=g.triangle_count, inputs=[bounds, tile, tiles_x, mask, cursor, faces], device=dev)
             wp.synchronize_device(dev)
 
         with timed(self.times, "raster"):

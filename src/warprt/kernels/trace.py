@@ -14,6 +14,7 @@ from ..geometry import SceneData
 from .camera import CameraData, camera_ray, sample_offset
 from .hybrid import uncertain
 from .interaction import make_surface, offset_ray_origin, reflect
+from .mirror import FROM_CAMERA, Mirrors, mirror_chain, mirror_hit
 from .raster import Fragments
 from .shading import make_shade
 from .triangle import query_normal, triangle, woop_hit
@@ -35,20 +36,22 @@ def tile_order_pixel(i: int, width: int, height: int, tile_w: int, tile_h: int) 
 
 
 @functools.cache
-def make_trace_kernel(fx, raster_primary: bool = False, shadow_grid: bool = False):
+def make_trace_kernel(fx, raster_primary: bool = False, shadow_grid: bool = False, mirrors: bool = False):
     """The kernel for one EffectSet; code for disabled effects is removed by wp.static. With
     raster_primary (hybrid rendering), a sample's first hit is the Z-buffer's visible triangle, tested
     with the ray query's own triangle test, wherever the rasterizer's answer is certain to be the
     tracer's (hybrid.uncertain); every other sample is traced. With shadow_grid, shadow rays are
-    answered by the light-space grid in s.shadow_grid (kernels/shadow.py). The image is the traced
-    image, to the bit."""
+    answered by the light-space grid in s.shadow_grid (kernels/shadow.py). With mirrors, a reflection
+    ray's first hit comes from its planar mirrors' virtual camera where that is certain to be the
+    query's (kernels/mirror.py). The image is the traced image, to the bit."""
     shade = make_shade(fx, shadow_grid)
     surface = make_surface(fx.smooth)
     REFLECTION, SUPERSAMPLING, RASTER = fx.reflection, fx.supersampling, raster_primary
+    MIRRORS = fx.reflection and mirrors
 
     @wp.kernel(module="unique", enable_backward=False)
     def trace(s: SceneData, c: CameraData, max_depth: int, k: int, first: int, tile_w: int, tile_h: int,
-              frags: Fragments, image: wp.array(dtype=wp.vec3), counts: wp.array(dtype=wp.vec3i)):
+              frags: Fragments, m: Mirrors, image: wp.array(dtype=wp.vec3), counts: wp.array(dtype=wp.vec3i)):
         i = first + wp.tid()  # position in tile order; the image itself is row-major
         xy = tile_order_pixel(i, c.width, c.height, tile_w, tile_h)
         x = xy[0]
@@ -69,6 +72,9 @@ def make_trace_kernel(fx, raster_primary: bool = False, shadow_grid: bool = Fals
             weight = wp.vec3(1.0)
             color = wp.vec3(0.0)
             depth = int(0)
+            if wp.static(MIRRORS):
+                src = int(-1)  # the face a reflection ray leaves
+                chain = int(FROM_CAMERA)  # the planar mirrors it bounced off
             while depth < max_depth:
                 f = int(-1)
                 u = float(0.0)
@@ -90,6 +96,18 @@ def make_trace_kernel(fx, raster_primary: bool = False, shadow_grid: bool = Fals
                             else:  # never seen: a certain sample is well inside its triangle
                                 rasterized = False
                                 f = -1
+                if wp.static(MIRRORS):
+                    if depth > 0:
+                        mh = mirror_hit(s, m, depth, o, d, chain, x, row, sample, src)
+                        if mh.found:
+                            rasterized = True
+                            f = mh.face
+                            u = mh.u
+                            v = mh.v
+                            if f >= 0:
+                                p0, p1, p2 = triangle(s, f)
+                                face_normal = query_normal(p0, p1, p2)
+                            m.decided[i] = m.decided[i] + 1
                 if not rasterized:
                     q = wp.mesh_query_ray(s.mesh, o, d, 1.0e30)
                     if q.result:
@@ -112,6 +130,9 @@ def make_trace_kernel(fx, raster_primary: bool = False, shadow_grid: bool = Fals
                         d = wp.normalize(reflect(d, hit.n))
                         o = offset_ray_origin(hit.p, hit.err, hit.ng, d)
                         reflection_rays += 1
+                        if wp.static(MIRRORS):
+                            chain = mirror_chain(m, chain, f)
+                            src = f
                         continue
                 break
             total = total + color
