@@ -16,6 +16,7 @@ from .scene_data import SceneData
 
 COPLANAR = 1.0e-7  # relative to the scene's size: triangles this close to one plane form a group
 MAX_GROUPS = 64  # the largest by area, where a flat-shaded curved mirror would make a group of each triangle
+KEEP_BYTES = 256 * 2**20  # the unfolded scenes kept with a Geometry for the next frames
 
 
 def planar_groups(geom, reflective_slots) -> tuple[np.ndarray, np.ndarray]:
@@ -132,7 +133,7 @@ def mirrored_geometry(geom, planes: np.ndarray, side: float) -> MirroredGeometry
     key = (np.asarray(planes, np.float64).tobytes(), float(side))
     memo = geom.__dict__.setdefault("_mirrored", {})
     if key not in memo:
-        if len(memo) >= 16:
-            memo.pop(next(iter(memo)))
         memo[key] = MirroredGeometry(geom, np.asarray(planes, np.float64).reshape(-1, 4), side)
+        while len(memo) > 1 and sum(m.nbytes for m in memo.values()) > KEEP_BYTES:  # the oldest go first
+            memo.pop(next(iter(memo)))
     return memo[key]

@@ -17,10 +17,25 @@ from .launch import launch_bands
 from .zbuffer import RASTER_TILE, ZBuffer
 
 MAX_CHAINS = 12
+# What a chain's raster costs and saves, measured on the scenes at 1024x768 on 2 cores (benchmarks/ATTEMPTS.md):
+# a reflection ray's closest-hit query against its virtual camera's answer about 150 ns of frame time; a
+# chain about 1.5 ms of launches plus 250 ns per unfolded triangle projected, binned and drawn (measured
+# on the knot's floor, 524,288 small triangles; rough: the machine was shared).
+RASTER_SAVES_PER_RAY = 150e-9
+RASTER_PER_CHAIN = 1.5e-3
+RASTER_PER_TRIANGLE = 250e-9
+
+
+def raster_pays(rays: int, triangles: int) -> bool:
+    """Whether a chain's raster costs less than its rays' queries (``rays`` estimated from the probes)."""
+    return RASTER_PER_CHAIN + RASTER_PER_TRIANGLE * triangles <= RASTER_SAVES_PER_RAY * rays
 PROBES_PER_SIDE = 2  # traced camera rays per raster tile side, to find the chains a frame's rays follow
 # The stored rasters: face (int32), 1/z and its rival (float64 each) per sample of a stored tile.
 BYTES_PER_SAMPLE = 4 + 8 + 8
 MAX_BYTES = 256 * 2**20
+
+
+_scratch: dict = {}  # one frame's worth of raster buffers, every sample clear, kept for the next frame
 
 
 def empty_mirrors(device) -> Mirrors:
@@ -102,7 +117,7 @@ class MirrorFrame:
                 candidates.append((chain, p, side, seen, probes))
         candidates.sort(key=lambda c: (-c[4], len(c[0])))  # a chain after its prefix
         budget = MAX_BYTES
-        for groups, chain_planes, side, seen, _ in candidates:
+        for groups, chain_planes, side, seen, probes in candidates:
             if len(self.chains) >= MAX_CHAINS:
                 break
             if len(groups) > 1 and groups[:-1] not in [c["groups"] for c in self.chains]:
@@ -111,9 +126,7 @@ class MirrorFrame:
             if stored > budget:
                 continue
             unfolded = mirrored_geometry(geom, chain_planes, side)
-            # A chain's raster projects every unfolded triangle but bins and draws only its tiles: measured
-            # on the knot's floor at 1024x768 (524,288 triangles, 786,432 samples) it about breaks even.
-            if auto and unfolded.triangle_count > int(seen.sum()) * per_tile_samples:
+            if auto and not raster_pays(probes * spp * (tile // PROBES_PER_SIDE) ** 2, unfolded.triangle_count):
                 continue
             budget -= stored
             self.chains.append({"groups": groups, "planes": chain_planes, "side": side, "tiles": seen,
@@ -160,6 +173,7 @@ class MirrorFrame:
         n_tiles = tiles_x * tiles_y
         spp = scene.render.spp if fx.supersampling else 1
         per_tile = tile * tile * spp
+        n_samples = cam.width * cam.height * spp
         C, G = len(self.chains), len(planes)
         tile_slot = np.full(C * n_tiles, -1, np.int32)
         first_chain = np.full(G, -2, np.int32)
@@ -182,7 +196,7 @@ class MirrorFrame:
         rival = wp.empty(slot * per_tile, dtype=wp.float64, device=device)
         tile_slot_wp = wp.array(tile_slot, dtype=wp.int32, device=device)
         flat = replace(fx, shadows=False, reflection=False)
-        scratch, z_clip = None, 0.0
+        scratch, z_clip = _scratch.pop((n_samples, device), None), 0.0
         for c, chain in enumerate(self.chains):
             zb = ZBuffer(scene, chain["unfolded"], flat, device=device, margin=self.margin, fragments=scratch)
             zb.rasterize(threads, bands, tiles=chain["tiles"])
@@ -193,6 +207,8 @@ class MirrorFrame:
                               chain["unfolded"].source, wp.array(stored, dtype=wp.int32, device=device), face,
                               inv_depth, rival], device=device)
             chain["triangles"] = chain["unfolded"].triangle_count
+        _scratch.clear()
+        _scratch[(n_samples, device)] = scratch  # clean again (gathered), for the next frame of this size
         m = Mirrors()
         m.group = wp.array(group, dtype=wp.int32, device=device)
         m.first_chain = wp.array(first_chain, dtype=wp.int32, device=device)

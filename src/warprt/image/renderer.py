@@ -83,10 +83,10 @@ GRID_BUILD_PER_TRIANGLE_LIGHT = 780e-9
 
 def shadows_from_grid(shadows: str, geom: Geometry, scene, fx, samples: int, threads: int, device: str) -> bool:
     """The shadow rays' policy: whether the light-space grid answers them. "grid" asks for it; "auto"
-    takes it on the CPU where it is the cheaper: once built (it is kept with the geometry for the next
-    frames with these lights), or when its build costs less than what it saves over the frames so far
-    with these lights, this one included (about one shadow ray per sample and light). Either way the
-    image is the traced one, to the bit."""
+    takes it on the CPU where it is the cheaper: on a first frame when its build costs less than the
+    frame's shadow rays save (about one per sample and light), and from the second frame with the same
+    lights on, when it is kept with the geometry for the next ones as the BVH is. Either way the image
+    is the traced one, to the bit."""
     if not fx.shadows or geom.triangle_count == 0 or shadows == "bvh":
         return False
     if shadows == "grid":
@@ -102,7 +102,7 @@ def shadows_from_grid(shadows: str, geom: Geometry, scene, fx, samples: int, thr
     if kept_shadow_grid(geom, lights) is not None:
         return True
     build = (GRID_BUILD_PER_LIGHT + GRID_BUILD_PER_TRIANGLE_LIGHT * geom.triangle_count) * len(lights)
-    return build <= GRID_SAVES_PER_RAY * samples * len(lights) / threads * frames[key]
+    return frames[key] >= 2 or build <= GRID_SAVES_PER_RAY * samples * len(lights) / threads
 
 
 _geometries = ObjectCache(size=4)
