@@ -3,6 +3,7 @@ written atomically so that a failed write never leaves a partial file behind."""
 
 from __future__ import annotations
 
+import functools
 import os
 import tempfile
 from pathlib import Path
@@ -12,6 +13,7 @@ import numpy as np
 from ..errors import SceneError
 
 FORMATS = (".png", ".npy", ".exr")
+PNG_LEVEL = 1
 
 
 def linear_to_srgb(x: np.ndarray) -> np.ndarray:
@@ -26,7 +28,39 @@ def srgb_to_linear(x: np.ndarray) -> np.ndarray:
 
 
 def to_srgb8(image: np.ndarray) -> np.ndarray:
-    return np.round(linear_to_srgb(image) * 255.0).astype(np.uint8)
+    """round(255 sRGB(x)), sRGB evaluated in float64. A float32 image goes through two tables instead of
+    a power per value: the code at the start of each run of 2^16 float32 values, and the value where
+    the next code starts (a run spans at most one step: 0.83 codes where sRGB is steepest in ln x)."""
+    image = np.asarray(image)
+    if image.dtype != np.float32:
+        return np.round(linear_to_srgb(np.asarray(image, np.float64)) * 255.0).astype(np.uint8)
+    x = np.clip(image, np.float32(0.0), np.float32(1.0)) + np.float32(0.0)  # + 0: -0 becomes 0
+    first, step = _srgb8_tables()
+    run = x.view(np.uint32) >> 16
+    return first[run] + (x >= step[run])
+
+
+def _srgb8_code(bits: np.ndarray) -> np.ndarray:
+    return np.round(linear_to_srgb(bits.view(np.float32).astype(np.float64)) * 255.0).astype(np.uint8)
+
+
+@functools.cache
+def _srgb8_tables() -> tuple[np.ndarray, np.ndarray]:
+    """Per run of float32 values in [0, 1] (their bit patterns >> 16, which order non-negative floats
+    as their values): the code at its first value, and the least value with the next code (found by
+    bisection on the bit patterns; above 1 where there is none)."""
+    runs = (np.float32(1.0).view(np.uint32) >> 16) + 1
+    first = _srgb8_code(np.arange(runs, dtype=np.uint32) << 16)
+    lo = np.zeros(256, np.uint32)  # the code at lo is below k, at hi it is k or more
+    hi = np.full(256, np.float32(1.0).view(np.uint32), np.uint32)
+    k = np.arange(1, 257)
+    while np.any(hi - lo > 1):
+        mid = lo + (hi - lo) // 2
+        up = _srgb8_code(mid) >= k
+        hi, lo = np.where(up, mid, hi), np.where(up, lo, mid)
+    steps = hi.view(np.float32).copy()
+    steps[-1] = np.float32(2.0)  # no code after 255
+    return first, steps[first]
 
 
 def check_output_path(path, field: str = "output") -> Path:
@@ -116,7 +150,8 @@ def write_image(path, image: np.ndarray, field: str = "output") -> Path:
         if ext == ".png":
             from PIL import Image
 
-            Image.fromarray(to_srgb8(image), "RGB").save(tmp, format="PNG")
+            # zlib level 1: 640x480 in about a third of the default level 6's time, files ~1.4x as large
+            Image.fromarray(to_srgb8(image), "RGB").save(tmp, format="PNG", compress_level=PNG_LEVEL)
         elif ext == ".npy":
             with open(tmp, "wb") as f:
                 np.save(f, np.asarray(image, np.float32))
