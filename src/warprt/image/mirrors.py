@@ -1,6 +1,6 @@
-"""A frame's virtual cameras for planar mirrors (the host side of kernels/mirror.py): the chains of one or
-two planar groups its reflection rays can follow, each chain's unfolded scene rasterized from the camera
-over the tiles its rays cover, and the Mirrors record of those rasters that the trace kernel reads."""
+"""A frame's virtual cameras for planar mirrors (the host side of kernels/mirror.py): the chains of planar
+groups its reflection rays follow, each chain's unfolded scene rasterized from the camera over the tiles
+its rays cover, and the Mirrors record of those rasters that the trace kernel reads."""
 
 from __future__ import annotations
 
@@ -17,6 +17,10 @@ from .launch import launch_bands
 from .zbuffer import RASTER_TILE, ZBuffer
 
 MAX_CHAINS = 12
+PROBES_PER_SIDE = 2  # traced camera rays per raster tile side, to find the chains a frame's rays follow
+# The stored rasters: face (int32), 1/z and its rival (float64 each) per sample of a stored tile.
+BYTES_PER_SAMPLE = 4 + 8 + 8
+MAX_BYTES = 256 * 2**20
 # What a chain's raster costs and saves, measured on the scenes at 1024x768 on 2 cores (benchmarks/ATTEMPTS.md):
 # a reflection ray's closest-hit query against its virtual camera's answer about 150 ns of frame time; a
 # chain about 1.5 ms of launches plus 250 ns per unfolded triangle projected, binned and drawn (measured
@@ -29,10 +33,6 @@ RASTER_PER_TRIANGLE = 250e-9
 def raster_pays(rays: int, triangles: int) -> bool:
     """Whether a chain's raster costs less than its rays' queries (``rays`` estimated from the probes)."""
     return RASTER_PER_CHAIN + RASTER_PER_TRIANGLE * triangles <= RASTER_SAVES_PER_RAY * rays
-PROBES_PER_SIDE = 2  # traced camera rays per raster tile side, to find the chains a frame's rays follow
-# The stored rasters: face (int32), 1/z and its rival (float64 each) per sample of a stored tile.
-BYTES_PER_SAMPLE = 4 + 8 + 8
-MAX_BYTES = 256 * 2**20
 
 
 _scratch: dict = {}  # one frame's worth of raster buffers, every sample clear, kept for the next frame
@@ -75,6 +75,17 @@ def tiles_seen(tri: np.ndarray, basis, eye: np.ndarray, tile: int) -> np.ndarray
     return seen.reshape(-1)
 
 
+def in_front(geom, plane: np.ndarray, side: float) -> int:
+    """About how many triangles a chain ending at ``plane`` unfolds: those with a vertex on its ``side``
+    (kept with the geometry: the mirrors do not move with the camera)."""
+    memo = geom.__dict__.setdefault("_in_front", {})
+    key = (plane.tobytes(), side)
+    if key not in memo:
+        ahead = side * (geom.points_np.astype(np.float64) @ plane[:3] - plane[3]) > 0.0
+        memo[key] = int(ahead[geom.indices_np.reshape(-1, 3)[: geom.triangle_count]].any(axis=1).sum())
+    return memo[key]
+
+
 def reflected(points: np.ndarray, plane: np.ndarray) -> np.ndarray:
     return points - 2.0 * ((points @ plane[:3]) - plane[3])[..., None] * plane[:3]
 
@@ -95,8 +106,12 @@ class MirrorFrame:
         self.chains, self.mirrors, self.nbytes = [], None, 0
         if not len(planes):
             return
+        spp = scene.render.spp if fx.supersampling else 1
+        if auto and not raster_pays(cam.width * cam.height * spp, 0):
+            return  # no chain could pay, even if every sample saw a mirror
         eye = geom.eye_offset(cam.eye).astype(np.float64)
-        tri = geom.points_np.astype(np.float64)[geom.indices_np.reshape(-1, 3)][: geom.triangle_count]
+        faces = geom.indices_np.reshape(-1, 3)[: geom.triangle_count]
+        group_tri = lambda g: geom.points_np[faces[group == g]].astype(np.float64)  # a mirror's triangles
         tile = RASTER_TILE
         tiles_x, tiles_y = -(-cam.width // tile), -(-cam.height // tile)
         spp = scene.render.spp if fx.supersampling else 1
@@ -106,10 +121,10 @@ class MirrorFrame:
         candidates = []
         for chain, (where, side, probes) in probed.items():
             p = planes[list(chain)]
-            seen = tiles_seen(tri[group == chain[0]], basis, eye, tile)
+            seen = tiles_seen(group_tri(chain[0]), basis, eye, tile)
             if len(chain) == 2:
                 # the level-1 rays leave the first mirror on the eye's side: the second, seen through it
-                there = tri[group == chain[1]]
+                there = group_tri(chain[1])
                 there = there[np.any(np.sign(p[0, :3] @ eye - p[0, 3]) * (there @ p[0, :3] - p[0, 3]) > 0.0, axis=1)]
                 seen &= tiles_seen(reflected(there, p[0]), basis, eye, tile)
             seen &= where  # (deeper chains: where their probes went)
@@ -125,9 +140,10 @@ class MirrorFrame:
             stored = int(seen.sum()) * per_tile_samples * BYTES_PER_SAMPLE
             if stored > budget:
                 continue
-            unfolded = mirrored_geometry(geom, chain_planes, side)
-            if auto and not raster_pays(probes * spp * (tile // PROBES_PER_SIDE) ** 2, unfolded.triangle_count):
+            rays = probes * spp * (tile // PROBES_PER_SIDE) ** 2
+            if auto and not raster_pays(rays, in_front(geom, chain_planes[-1], side)):
                 continue
+            unfolded = mirrored_geometry(geom, chain_planes, side)
             budget -= stored
             self.chains.append({"groups": groups, "planes": chain_planes, "side": side, "tiles": seen,
                                 "unfolded": unfolded})

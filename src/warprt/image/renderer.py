@@ -79,14 +79,15 @@ def primary_from_zbuffer(primary: str, geom: Geometry, basis, samples: int, devi
 GRID_SAVES_PER_RAY = 130e-9
 GRID_BUILD_PER_LIGHT = 10e-3
 GRID_BUILD_PER_TRIANGLE_LIGHT = 780e-9
+GRID_HORIZON = 20  # frames a second frame with the same lights is taken to promise
 
 
 def shadows_from_grid(shadows: str, geom: Geometry, scene, fx, samples: int, threads: int, device: str) -> bool:
     """The shadow rays' policy: whether the light-space grid answers them. "grid" asks for it; "auto"
     takes it on the CPU where it is the cheaper: on a first frame when its build costs less than the
     frame's shadow rays save (about one per sample and light), and from the second frame with the same
-    lights on, when it is kept with the geometry for the next ones as the BVH is. Either way the image
-    is the traced one, to the bit."""
+    lights on when it costs less than GRID_HORIZON such frames save (it is kept with the geometry for
+    the next frames, as the BVH is). Either way the image is the traced one, to the bit."""
     if not fx.shadows or geom.triangle_count == 0 or shadows == "bvh":
         return False
     if shadows == "grid":
@@ -102,7 +103,8 @@ def shadows_from_grid(shadows: str, geom: Geometry, scene, fx, samples: int, thr
     if kept_shadow_grid(geom, lights) is not None:
         return True
     build = (GRID_BUILD_PER_LIGHT + GRID_BUILD_PER_TRIANGLE_LIGHT * geom.triangle_count) * len(lights)
-    return frames[key] >= 2 or build <= GRID_SAVES_PER_RAY * samples * len(lights) / threads
+    per_frame = GRID_SAVES_PER_RAY * samples * len(lights) / threads
+    return build <= per_frame * (GRID_HORIZON if frames[key] >= 2 else 1)
 
 
 _geometries = ObjectCache(size=4)
