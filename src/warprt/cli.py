@@ -227,10 +227,10 @@ def build_parser() -> argparse.ArgumentParser:
                         "is the cheaper), bvh (Warp's any-hit query, every ray traced), or grid (the exact "
                         "light-space grid: each ray tests the triangles of its cell with the query's own test)")
     p.add_argument("--reflection-rays", default="auto", choices=["auto", "bvh", "mirrors"],
-                   help="what answers the reflection rays, the image being the same: auto (default: planar "
-                        "mirrors' virtual cameras where they are the cheaper), bvh (Warp's closest-hit query, every "
-                        "ray traced), or mirrors (a ray off planar mirrors from their rasterized virtual camera "
-                        "wherever that is certain, the rest traced)")
+                   help="what answers the reflection rays, the image being the same: auto (default: traced, "
+                        "where the mirrors' rasters were measured to cost what they save), bvh (Warp's closest-hit "
+                        "query, every ray traced), or mirrors (a ray off planar mirrors from their rasterized "
+                        "virtual camera wherever that is certain, the rest traced)")
     p.add_argument("--stats", action="store_true", help="print render statistics (times, rays, memory) as JSON on stdout")
     p.add_argument("--stats-file", metavar="FILE", help="write render statistics as JSON to this file")
     p.add_argument("-q", "--quiet", action="store_true",

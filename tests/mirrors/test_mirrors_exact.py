@@ -34,7 +34,7 @@ def counts(scene, **options):
     """Per reflection level: (rays, decided by the mirrors, mismatches), and the frame's chains."""
     geom = Geometry(scene)
     data, fx = geom.scene_data(scene), resolve_effects(scene)
-    frame = MirrorFrame(scene, geom, data, fx, 2, 16, "cpu", False, **options)
+    frame = MirrorFrame(scene, geom, data, fx, 2, 16, "cpu", **options)
     if frame.mirrors is None:
         return None, frame
     return level_counts(scene, geom, data, frame.mirrors, fx.supersampling), frame

@@ -92,7 +92,6 @@ class Geometry:
         self.tri_smooth = wp.array(self.tri_smooth_np, dtype=wp.int32, device=d)
         self._tables = None
         self.data = self.scene_data(scene)  # the tables of the scene it was built for
-        self.frames = 0  # frames rendered with it (the renderer's policies amortize over them)
 
     def eye_offset(self, eye) -> np.ndarray:
         """Where the camera rays of an eye at world position ``eye`` start: eye - origin, computed in

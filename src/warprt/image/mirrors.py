@@ -21,20 +21,6 @@ PROBES_PER_SIDE = 2  # traced camera rays per raster tile side, to find the chai
 # The stored rasters: face (int32), 1/z and its rival (float64 each) per sample of a stored tile.
 BYTES_PER_SAMPLE = 4 + 8 + 8
 MAX_BYTES = 256 * 2**20
-# What a chain's raster costs and saves, measured on the scenes at 1024x768 on 2 cores (benchmarks/ATTEMPTS.md):
-# a reflection ray's closest-hit query against its virtual camera's answer about 150 ns of frame time; a
-# chain about 1.5 ms of launches plus 250 ns per unfolded triangle projected, binned and drawn (measured
-# on the knot's floor, 524,288 small triangles; rough: the machine was shared).
-RASTER_SAVES_PER_RAY = 150e-9
-RASTER_PER_CHAIN = 1.5e-3
-RASTER_PER_TRIANGLE = 250e-9
-
-
-def raster_pays(rays: int, triangles: int) -> bool:
-    """Whether a chain's raster costs less than its rays' queries (``rays`` estimated from the probes)."""
-    return RASTER_PER_CHAIN + RASTER_PER_TRIANGLE * triangles <= RASTER_SAVES_PER_RAY * rays
-
-
 _scratch: dict = {}  # one frame's worth of raster buffers, every sample clear, kept for the next frame
 
 
@@ -75,17 +61,6 @@ def tiles_seen(tri: np.ndarray, basis, eye: np.ndarray, tile: int) -> np.ndarray
     return seen.reshape(-1)
 
 
-def in_front(geom, plane: np.ndarray, side: float) -> int:
-    """About how many triangles a chain ending at ``plane`` unfolds: those with a vertex on its ``side``
-    (kept with the geometry: the mirrors do not move with the camera)."""
-    memo = geom.__dict__.setdefault("_in_front", {})
-    key = (plane.tobytes(), side)
-    if key not in memo:
-        ahead = side * (geom.points_np.astype(np.float64) @ plane[:3] - plane[3]) > 0.0
-        memo[key] = int(ahead[geom.indices_np.reshape(-1, 3)[: geom.triangle_count]].any(axis=1).sum())
-    return memo[key]
-
-
 def reflected(points: np.ndarray, plane: np.ndarray) -> np.ndarray:
     return points - 2.0 * ((points @ plane[:3]) - plane[3])[..., None] * plane[:3]
 
@@ -94,7 +69,7 @@ class MirrorFrame:
     """The virtual cameras of one frame: ``chains`` (groups, side, tiles, triangles of the unfolded
     scene), ``mirrors`` (the kernel's record; None when no chain was worth a raster), ``nbytes``."""
 
-    def __init__(self, scene, geom, data, fx, threads: int, bands: int, device: str, auto: bool,
+    def __init__(self, scene, geom, data, fx, threads: int, bands: int, device: str,
                  margin: float = MIRROR_MARGIN_PX, stray_check: bool = True):
         """``margin`` and ``stray_check`` (tests only): the rasters' edge margin, and whether a ray
         that strays from its ideal line is traced; without both the decisions are not exact."""
@@ -106,9 +81,6 @@ class MirrorFrame:
         self.chains, self.mirrors, self.nbytes = [], None, 0
         if not len(planes):
             return
-        spp = scene.render.spp if fx.supersampling else 1
-        if auto and not raster_pays(cam.width * cam.height * spp, 0):
-            return  # no chain could pay, even if every sample saw a mirror
         eye = geom.eye_offset(cam.eye).astype(np.float64)
         faces = geom.indices_np.reshape(-1, 3)[: geom.triangle_count]
         group_tri = lambda g: geom.points_np[faces[group == g]].astype(np.float64)  # a mirror's triangles
@@ -130,18 +102,15 @@ class MirrorFrame:
             seen &= where  # (deeper chains: where their probes went)
             if side != 0.0 and seen.any():
                 candidates.append((chain, p, side, seen, probes))
-        candidates.sort(key=lambda c: (-c[4], len(c[0])))  # a chain after its prefix
+        candidates.sort(key=lambda c: (-c[4], len(c[0])))  # the most rays first, a chain after its prefix
         budget = MAX_BYTES
-        for groups, chain_planes, side, seen, probes in candidates:
+        for groups, chain_planes, side, seen, _ in candidates:
             if len(self.chains) >= MAX_CHAINS:
                 break
             if len(groups) > 1 and groups[:-1] not in [c["groups"] for c in self.chains]:
                 continue
             stored = int(seen.sum()) * per_tile_samples * BYTES_PER_SAMPLE
             if stored > budget:
-                continue
-            rays = probes * spp * (tile // PROBES_PER_SIDE) ** 2
-            if auto and not raster_pays(rays, in_front(geom, chain_planes[-1], side)):
                 continue
             unfolded = mirrored_geometry(geom, chain_planes, side)
             budget -= stored
@@ -154,10 +123,11 @@ class MirrorFrame:
     @staticmethod
     def _probe(data, planes, basis, eye, group, tile, tiles_x, tiles_y, bounces, threads, bands, device) -> dict:
         """{chain of groups: (the tiles where PROBES_PER_SIDE^2 traced camera rays per tile follow it, and
-        their neighbours; the side of its last plane they start on; how many)}: which virtual cameras
-        the frame needs, and where. A first bounce's side is the eye's; a later one's the probes' majority."""
+        their neighbours; the side of its last plane they start on; how many then hit something)}: which
+        virtual cameras the frame needs, and where. A first bounce's side is the eye's; a later one's the
+        probes' majority."""
         n = tiles_x * tiles_y * PROBES_PER_SIDE ** 2
-        out = wp.empty((n, 1 + 2 * bounces), dtype=wp.int32, device=device)
+        out = wp.empty((n, 2 + 2 * bounces), dtype=wp.int32, device=device)
         c, groups = camera_data(basis, eye), wp.array(group, dtype=wp.int32, device=device)
         planes32 = wp.array(planes.astype(np.float32), dtype=wp.vec4, device=device)
         launch_bands(probe_kernel, lambda first: [data, c, groups, planes32, tile, tiles_x, PROBES_PER_SIDE, bounces,
@@ -180,7 +150,8 @@ class MirrorFrame:
                         where[mine[:, 0] // tiles_x + dy, mine[:, 0] % tiles_x + dx] = True
                 p = planes[chain[0]]
                 side = np.sign(p[:3] @ eye - p[3]) if level == 1 else np.sign(mine[:, 2 * level].sum())
-                found[chain] = (where[1:-1, 1:-1].reshape(-1), float(side), len(mine))
+                hitting = int((mine[:, -1] > level).sum())  # a ray that misses everything is cheap to trace too
+                found[chain] = (where[1:-1, 1:-1].reshape(-1), float(side), hitting)
         return found
 
     def _rasterize(self, scene, geom, group, planes, fx, basis, eye, threads, bands, device):

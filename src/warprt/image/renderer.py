@@ -181,10 +181,8 @@ def render(scene, *, threads: int | None = None, device: str = "cpu", effects=No
     light-space grid: the same answers), or "auto", the default, the grid where it is the cheaper.
     ``reflections`` says what answers the reflection rays: "bvh" (Warp's closest-hit query), "mirrors"
     (off planar mirrors, their virtual cameras' rasters wherever certain to give the query's answer,
-    the rest traced), or "auto", the default, the mirrors' rasters on the CPU where they are cheaper,
-    from the second frame of the same objects on (a first frame would pay for unfolding the scene and
-    loading the kernels: measured 0.2 s for a cold 640x480 frame of the default scene, which they
-    save 0.08 s of)."""
+    the rest traced), or "auto", the default, which traces them: measured on every scene here, the
+    virtual cameras' rasters cost about what the queries they replace do (benchmarks/ATTEMPTS.md)."""
     primary = DEFAULTS.primary if primary is None else primary
     shadows = DEFAULTS.shadows if shadows is None else shadows
     reflections = DEFAULTS.reflections if reflections is None else reflections
@@ -225,10 +223,9 @@ def render(scene, *, threads: int | None = None, device: str = "cpu", effects=No
     data = geom.scene_data(scene, grid)  # this frame's lights and materials: small tables, the BVH shared
 
     mirror_frame = None
-    geom.frames += 1
-    if fx.reflection and (reflections == "mirrors" or (reflections == "auto" and device == "cpu" and geom.frames >= 2)):
+    if fx.reflection and reflections == "mirrors":
         with stats.phase("mirrors"):
-            mirror_frame = MirrorFrame(scene, geom, data, fx, threads, bands, device, auto=reflections == "auto")
+            mirror_frame = MirrorFrame(scene, geom, data, fx, threads, bands, device)
         stats.mirrors = mirror_frame.stats
         if mirror_frame.mirrors is None:
             mirror_frame = None

@@ -182,8 +182,8 @@ def gather_kernel(frags: Fragments, tile_slot: wp.array(dtype=wp.int32), chain: 
 def probe_kernel(s: SceneData, c: CameraData, group: wp.array(dtype=wp.int32), planes: wp.array(dtype=wp.vec4),
                  tile: int, tiles_x: int, per_side: int, bounces: int, first: int, out: wp.array2d(dtype=wp.int32)):
     """Which planar groups a few camera rays per raster tile bounce off, traced: out[i] = (tile, then per
-    bounce the group and the side of its plane the ray meets it from), group -1 once the ray has left
-    the planar mirrors; per_side x per_side rays per tile."""
+    bounce the group and the side of its plane the ray meets it from, group -1 once the ray has left
+    the planar mirrors, then how many of its queries hit something); per_side x per_side rays per tile."""
     i = first + wp.tid()
     per_tile = per_side * per_side
     t = i / per_tile
@@ -194,12 +194,16 @@ def probe_kernel(s: SceneData, c: CameraData, group: wp.array(dtype=wp.int32), p
     out[i, 0] = t
     for level in range(bounces):
         out[i, 1 + 2 * level] = -1
+    out[i, 1 + 2 * bounces] = 0
     if x < c.width and y < c.height:
         o = c.eye
         d = camera_ray(c, x, c.height - 1 - y, 0.5, 0.5)
-        for level in range(bounces):
+        for level in range(bounces + 1):
             q = wp.mesh_query_ray(s.mesh, o, d, 1.0e30)
             if not q.result:
+                break
+            out[i, 1 + 2 * bounces] = level + 1
+            if level == bounces:
                 break
             g = group[q.face]
             if g < 0:
