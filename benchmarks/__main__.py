@@ -50,8 +50,9 @@ def targets(h2h: dict, cast: dict, floor: dict | None = None, orbit: dict | None
     closest = [r["warp_closest_1t"] / r["mitsuba_closest_1t"] for r in cast["rows"]]
     anyhit = [r["warp_any_1t"] / r["mitsuba_any_1t"] for r in cast["rows"]]
     met = lambda ok: "met" if ok else "not met"
+    size = f"{rows_h[0]['width']}x{rows_h[0]['height']}"
     rows = [
-        ("Warm 1024x768 frame, every scene: <= 0.6x today's (warprt before the shadow grid and the mirrors' virtual "
+        (f"Warm {size} frame, every scene: <= 0.6x today's (warprt before the shadow grid and the mirrors' virtual "
          "cameras, every shadow and reflection ray traced)",
          f"{min(before):.2f}x to {max(before):.2f}x (worst: {worst}); against Mitsuba {min(hybrid):.2f}x to {max(hybrid):.2f}x",
          met(max(before) <= 0.6)),
@@ -72,7 +73,7 @@ def targets(h2h: dict, cast: dict, floor: dict | None = None, orbit: dict | None
     rows += [
         ("Cold `warprt render` of the default scene: <= 1.25x Mitsuba's Python API from process start",
          f"{d['warprt_cold']:.2f} s against {d['mitsuba_llvm_cold']:.2f} s: {cold:.2f}x", met(cold <= 1.25)),
-        ("Warm 1024x768 frame, every scene: <= 1.0x Mitsuba `llvm_ad_rgb`",
+        (f"Warm {size} frame, every scene: <= 1.0x Mitsuba `llvm_ad_rgb`",
          f"{min(hybrid):.2f}x to {max(hybrid):.2f}x (every ray traced: {min(warm):.2f}x to {max(warm):.2f}x)", met(max(hybrid) <= 1.0)),
         ("Rays per second per core: >= 50% of Mitsuba/Embree's on the same mesh",
          f"closest hit {min(closest):.0%} to {max(closest):.0%}, any hit {min(anyhit):.0%} to {max(anyhit):.0%} "

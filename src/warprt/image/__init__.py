@@ -1,6 +1,6 @@
 """The host side of a frame: launching bands (launch.py), the stats and their timer (stats.py), the
-renderers and their policies (renderer.py), the Z-buffer's buffers (zbuffer.py), memory (memory.py),
-image files (film.py) and the progress line (progress.py).
+renderers and their policies (renderer.py), the Z-buffer's buffers (zbuffer.py), the planar mirrors'
+virtual cameras (mirrors.py), memory (memory.py), image files (film.py) and the progress line (progress.py).
 
 Warp is imported on first use of a name that needs it: writing or reading an image does not.
 """
