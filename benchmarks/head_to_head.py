@@ -2,7 +2,10 @@
 llvm_ad_rgb and scalar_rgb running the same Whitted integrator (reference/).
 
 Cold: process start to image file, every compiled-kernel cache warm (each command is run once
-before it is timed). Warm: a second frame in the same process. Ratios are to Mitsuba llvm_ad_rgb.
+before it is timed). Warm: a frame after two in the same process (the first builds the BVH, the second
+what auto keeps from the second frame on: the shadow grid, the mirrors' unfolded scenes). Ratios are
+to Mitsuba llvm_ad_rgb; "before" is warprt's default before the exact shadow and mirror structures
+(first hits as now, every shadow and reflection ray traced), the target's "today's".
 
     python -m benchmarks.head_to_head [--width 1024 --height 768]
 """
@@ -49,8 +52,11 @@ if engine.startswith("mitsuba"):
     frame = lambda: ms.render(switches)
 else:
     algorithm = "zbuffer" if engine == "zbuffer" else "raytrace"
-    primary = "auto" if engine == "hybrid" else "raytrace"  # hybrid: the default; warprt: every ray traced
-    frame = lambda: warprt.render(scene, algorithm=algorithm, primary=primary)
+    # hybrid: the default; before: the default with every shadow and reflection ray traced; warprt: every ray
+    options = {"hybrid": {}, "before": {"shadows": "bvh", "reflections": "bvh"}}.get(
+        engine, {"primary": "raytrace", "shadows": "bvh", "reflections": "bvh"})
+    frame = lambda: warprt.render(scene, algorithm=algorithm, **options)
+frame()
 frame()
 times = []
 for _ in range(repeat):
@@ -114,8 +120,8 @@ def run(width=1024, height=768, scalar_width=128, scalar_height=96, repeat=3, on
         if only and scene.stem not in only:
             continue
         row = {"scene": scene.stem, "width": width, "height": height}
-        for engine in ("mitsuba_llvm", "warprt", "hybrid", "zbuffer"):
-            if engine != "hybrid":
+        for engine in ("mitsuba_llvm", "warprt", "before", "hybrid", "zbuffer"):
+            if engine not in ("hybrid", "before"):
                 row[f"{engine}_cold"] = cold(engine, scene, width, height, repeat)
             row[f"{engine}_warm"], rays = warm(engine, scene, width, height, repeat)
             if engine == "warprt":
@@ -146,17 +152,19 @@ def report(data: dict) -> str:
         "and its BVH built once, on both sides). The Z-buffer renders without shadows and reflections, so its image "
         "is not the same image: it is listed for its cost. warprt default = `primary=\"auto\"`, what `warprt render` "
         "does: first hits from the Z-buffer where it is the cheaper (one triangle per ten samples or fewer) and certain, "
-        "the rest traced, the image the traced one to the bit; traced = `primary=\"raytrace\"`, every ray traced. warprt "
+        "shadow rays from the light-space grid and reflections off planar mirrors from their virtual cameras where those "
+        "are the cheaper, the rest traced, the image the traced one to the bit; before = that default before the grid and "
+        "the mirrors (`shadows=\"bvh\", reflections=\"bvh\"`); traced = every ray traced. warprt "
         "cold is `warprt render`, so the default. Rays per second use warprt's exact ray count and the traced time.",
         "",
-        "| scene | rays | Mitsuba llvm warm | warprt default warm | ratio | warprt traced warm | ratio | Z-buffer warm | ratio | Mitsuba llvm cold | warprt cold | ratio | Z-buffer cold | traced Mrays/s |",
-        "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
+        "| scene | rays | Mitsuba llvm warm | warprt default warm | ratio | / before | warprt before warm | warprt traced warm | ratio | Z-buffer warm | ratio | Mitsuba llvm cold | warprt cold | ratio | Z-buffer cold | traced Mrays/s |",
+        "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
     ]
     for r in rows:
         m = r["mitsuba_llvm_warm"]
         mc = r["mitsuba_llvm_cold"]
         lines.append(f"| {r['scene']} | {r['rays']:,} | {m:.3f} | {r['hybrid_warm']:.3f} | {r['hybrid_warm'] / m:.2f} "
-                     f"| {r['warprt_warm']:.3f} | {r['warprt_warm'] / m:.2f} | {r['zbuffer_warm']:.3f} | {r['zbuffer_warm'] / m:.2f} | {mc:.2f} | {r['warprt_cold']:.2f} "
+                     f"| {r['hybrid_warm'] / r['before_warm']:.2f} | {r['before_warm']:.3f} | {r['warprt_warm']:.3f} | {r['warprt_warm'] / m:.2f} | {r['zbuffer_warm']:.3f} | {r['zbuffer_warm'] / m:.2f} | {mc:.2f} | {r['warprt_cold']:.2f} "
                      f"| {r['warprt_cold'] / mc:.2f} | {r['zbuffer_cold']:.2f} | {r['rays'] / r['warprt_warm'] / 1e6:.1f} |")
     if "default_cold" in data:
         d = data["default_cold"]

@@ -136,7 +136,8 @@ def cmd_render(args) -> int:
     effects = args.effects.split(",") if args.effects else None
     progress = None if args.quiet else Progress()
     result = render(scene, threads=args.threads, device=args.device, effects=effects, algorithm=args.algorithm,
-                    progress=progress, primary=args.primary, aovs=aovs)
+                    progress=progress, primary=args.primary, aovs=aovs, shadows=args.shadow_rays,
+                    reflections=args.reflection_rays)
     out = outputs["--output"]
     t = time.perf_counter()
     write_image(out, result.image, "--output", result.aovs)
@@ -296,6 +297,15 @@ def build_parser() -> argparse.ArgumentParser:
                    help="where the tracer's first hits come from, the image being the same: auto (default: the "
                         "Z-buffer where it is the cheaper), raytrace (every ray traced), or zbuffer (hybrid: the "
                         "Z-buffer's visible triangle where it is certain, the rest traced)")
+    p.add_argument("--shadow-rays", default="auto", choices=["auto", "bvh", "grid"],
+                   help="what answers the shadow rays, the image being the same: auto (default: the grid where it "
+                        "is the cheaper), bvh (Warp's any-hit query, every ray traced), or grid (the exact "
+                        "light-space grid: each ray tests the triangles of its cell with the query's own test)")
+    p.add_argument("--reflection-rays", default="auto", choices=["auto", "bvh", "mirrors"],
+                   help="what answers the reflection rays, the image being the same: auto (default: traced, "
+                        "where the mirrors' rasters were measured to cost what they save), bvh (Warp's closest-hit "
+                        "query, every ray traced), or mirrors (a ray off planar mirrors from their rasterized "
+                        "virtual camera wherever that is certain, the rest traced)")
     p.add_argument("--stats", action="store_true", help="print render statistics (times, rays, memory) as JSON on stdout")
     p.add_argument("--stats-file", metavar="FILE", help="write render statistics as JSON to this file")
     p.add_argument("-q", "--quiet", action="store_true",

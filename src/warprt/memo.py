@@ -14,13 +14,24 @@ class ObjectCache:
 
     def get(self, key, holder, make):
         """The value for ``key`` made from ``holder``, or ``make()``'s, which is then kept."""
+        value = self.peek(key, holder)
+        return self.put(key, holder, make()) if value is None else value
+
+    def peek(self, key, holder):
+        """The value kept for ``key`` and ``holder``, or None; as get(), it becomes the most recent."""
         entry = self._entries.pop(key, None)
         if entry is None or entry[0] is not holder:
-            entry = (holder, make())
-        self._entries[key] = entry  # most recently used last
+            return None
+        self._entries[key] = entry
+        return entry[1]
+
+    def put(self, key, holder, value):
+        """Keep ``value`` for ``key`` made from ``holder``, replacing what was kept; returns it."""
+        self._entries.pop(key, None)
+        self._entries[key] = (holder, value)
         while len(self._entries) > self.size:
             self._entries.pop(next(iter(self._entries)))
-        return entry[1]
+        return value
 
     def clear(self):
         self._entries.clear()

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from scenekit import write_scene
-from warprt.image import read_image, write_image
+from warprt.image import read_image, to_srgb8, write_image
 
 SRC = str(Path(__file__).resolve().parents[2] / "src")
 
@@ -96,3 +96,24 @@ def test_written_image_has_the_usual_mode(tmp_path):
     umask = os.umask(0)
     os.umask(umask)
     assert (tmp_path / "a.png").stat().st_mode & 0o777 == 0o666 & ~umask
+
+
+def test_srgb8_of_float32_is_the_formula_at_every_step():
+    """to_srgb8 reads a float32 image through tables (the code per run of 2^16 float32 values, and
+    where the next code starts): it must give the float64 formula's code at every value where a
+    code could change (each run's ends, each step and the value before it) and elsewhere."""
+    runs = np.concatenate([np.arange(0x3F81, dtype=np.uint32) << 16, (np.arange(0x3F80, dtype=np.uint32) << 16) + 0xFFFF])
+    x = runs.view(np.float32)  # the first and last float32 of every run in [0, 1]
+    rng = np.random.default_rng(3)
+    values = np.concatenate([x, rng.uniform(-0.5, 1.5, 200_000).astype(np.float32),
+                             (10.0 ** rng.uniform(-10, 0, 200_000)).astype(np.float32)])
+    np.testing.assert_array_equal(to_srgb8(values).astype(np.int64), srgb8(values))
+    # the values where a code starts, and their predecessors, by bisection between run starts
+    ends = np.nonzero(np.diff(srgb8(x[: 0x3F81])))[0]
+    lo, hi = runs[ends], runs[ends + 1]
+    while np.any(hi - lo > 1):
+        mid = lo + (hi - lo) // 2
+        up = srgb8(mid.view(np.float32)) > srgb8(lo.view(np.float32))
+        hi, lo = np.where(up, mid, hi), np.where(up, lo, mid)
+    edges = np.concatenate([lo, hi]).view(np.float32)
+    np.testing.assert_array_equal(to_srgb8(edges).astype(np.int64), srgb8(edges))

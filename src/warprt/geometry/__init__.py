@@ -1,7 +1,12 @@
-"""Scene -> what the kernels read: one triangle set in camera-relative float32 with its material,
-texture and light tables (scene_data.py), and the BVH over it, built from padded bounds (bvh.py)."""
+"""Scene -> what the kernels read: one triangle set in float32 with its material, texture and light
+tables (scene_data.py), the BVH over padded bounds (bvh.py), the shadow rays' light-space grid
+(shadow_grid.py) and the scene seen through planar mirrors (planar.py)."""
 
-from .bvh import BOUNDS_PAD, build_mesh, padded_bounds
+from .bvh import BOUNDS_PAD, EYE_REACH, build_mesh, eye_reach, padded_bounds
+from .planar import MAX_GROUPS, MirroredGeometry, mirrored_geometry, planar_groups
 from .scene_data import CHECKER, Geometry, SceneData, TextureSlot
+from .shadow_grid import GridEntry, ShadowGrid, ShadowGridBuild, cells_for, empty_grid, kept_shadow_grid, shadow_grid
 
-__all__ = ["BOUNDS_PAD", "CHECKER", "Geometry", "SceneData", "TextureSlot", "build_mesh", "padded_bounds"]
+__all__ = ["BOUNDS_PAD", "CHECKER", "EYE_REACH", "MAX_GROUPS", "Geometry", "GridEntry", "MirroredGeometry", "SceneData",
+           "ShadowGrid", "ShadowGridBuild", "TextureSlot", "build_mesh", "cells_for", "empty_grid", "eye_reach",
+           "kept_shadow_grid", "mirrored_geometry", "padded_bounds", "planar_groups", "shadow_grid"]

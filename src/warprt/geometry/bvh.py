@@ -1,5 +1,5 @@
-"""The BVH over the scene's triangles, built from conservative (padded) bounds so that a ray which
-passes exactly through a shared vertex or edge can never slip between two triangles' boxes.
+"""The BVH over the scene's triangles, built from padded bounds so that a ray through a shared vertex
+or edge can never slip between two triangles' boxes, from any eye in the region the padding covers.
 
 Why: Warp's ray-box slab test (intersect_ray_aabb) rounds, and Warp bounds each triangle by its
 exact box. A ray aimed at a vertex enters the boxes of the triangles around it exactly at their
@@ -22,19 +22,35 @@ from .._warp import wp
 from ..floats import EPS32
 
 # The slab test computes t = (bound - o) * (1/d): three roundings, so |t error| <= gamma(3) |t|,
-# i.e. the box face seen by the ray moves by at most gamma(3) |bound - o| along that axis. Both
-# |bound| and |o| are at most R (ray origins are the eye, at 0, or hit points in the scene), so a
-# pad of 2 gamma(3) 2 R covers the entry and exit faces; 16 eps R is 1.3 times that.
+# i.e. the box face seen by the ray moves by at most gamma(3) |bound - o| along that axis. On axis a,
+# |bound| <= R_a, the reach of the coordinates (relative to the frame origin), and |o| <= max(R_a, E):
+# secondary rays start at hit points in the scene, camera rays at the eye, which may be anywhere
+# within E of the origin on each axis. A pad of 2 gamma(3) (R_a + max(R_a, E)) covers the entry and
+# exit faces; BOUNDS_PAD (R_a + max(R_a, E)) / 2 is 1.3 times that (16 eps R_a with the eye at the
+# origin, E = 0).
 BOUNDS_PAD = 16.0 * EPS32
+# E = EYE_REACH times the largest reach: a camera may orbit the scene at the distance it was built
+# from, or cross it, and reuse the BVH. The pad grows by at most 1.5x, ~1e-6 of the scene: the
+# images of the frame the BVH was built for stay bit-identical (checked on every scene at 320x240
+# and at full size), and traversal costs the same.
+EYE_REACH = 2.0
 
 
-def padded_bounds(points: np.ndarray, faces: np.ndarray, pad: float = BOUNDS_PAD) -> tuple[np.ndarray, np.ndarray]:
-    """Each triangle's box, widened per axis by BOUNDS_PAD times the largest |coordinate| on that
-    axis (the eye at 0 included), rounded outwards to float32."""
+def eye_reach(points: np.ndarray) -> float:
+    """E: how far (per axis) from the frame origin an eye may be for padded_bounds to hold."""
+    return EYE_REACH * float(np.abs(np.asarray(points, np.float64)).max(initial=0.0))
+
+
+def padded_bounds(points: np.ndarray, faces: np.ndarray, pad: float = BOUNDS_PAD,
+                  eye: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """Each triangle's box, widened on each axis by pad (R + max(R, eye)) / 2, R the largest
+    |coordinate| on that axis, for ray origins in the scene or within ``eye`` (E) of the origin on
+    every axis; rounded outwards to float32."""
     tri = points.astype(np.float64)[faces]
     reach = np.abs(points.astype(np.float64)).max(axis=0) if len(points) else np.zeros(3)
-    lower = (tri.min(axis=1) - pad * reach).astype(np.float32)
-    upper = (tri.max(axis=1) + pad * reach).astype(np.float32)
+    widen = pad * 0.5 * (reach + np.maximum(reach, eye))
+    lower = (tri.min(axis=1) - widen).astype(np.float32)
+    upper = (tri.max(axis=1) + widen).astype(np.float32)
     if pad > 0.0:  # the float32 cast rounds to nearest: step once outwards so the box only grows
         lower = np.nextafter(lower, np.float32(-np.inf))
         upper = np.nextafter(upper, np.float32(np.inf))
@@ -42,16 +58,17 @@ def padded_bounds(points: np.ndarray, faces: np.ndarray, pad: float = BOUNDS_PAD
 
 
 def build_mesh(points: np.ndarray, indices: np.ndarray, device="cpu", bvh_constructor: str = "sah",
-               pad: float = BOUNDS_PAD, groups: np.ndarray | None = None):
+               pad: float = BOUNDS_PAD, groups: np.ndarray | None = None, eye: float | None = None):
     """A wp.Mesh over float32 ``points`` (V, 3) and flat int32 ``indices`` (3T,) whose BVH uses
     padded_bounds. Returns (mesh, points array, indices array): the points array holds the V real
     points first, then the 2T proxy corners; the indices array holds the real indices. pad = 0
     gives Warp's own exact boxes (the stability suite measures what that loses); ``groups`` (one
-    int per triangle) gives each group its own subtree, for queries from wp.mesh_get_group_root."""
+    int per triangle) gives each group its own subtree, for queries from wp.mesh_get_group_root;
+    ``eye`` is E, how far from the origin the camera rays may start (default: eye_reach(points))."""
     points = np.asarray(points, np.float32).reshape(-1, 3)
     faces = np.asarray(indices, np.int32).reshape(-1, 3)
     v, t = len(points), len(faces)
-    lower, upper = padded_bounds(points, faces, pad)
+    lower, upper = padded_bounds(points, faces, pad, eye_reach(points) if eye is None else eye)
     all_points = np.ascontiguousarray(np.concatenate([points, lower, upper]), np.float32)
     corner = np.arange(t, dtype=np.int32)
     proxy = np.stack([v + corner, v + t + corner, v + corner], axis=1)  # box of (lower, upper, lower)

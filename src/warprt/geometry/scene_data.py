@@ -1,10 +1,12 @@
-"""The scene flattened for the kernels: one triangle set in camera-relative float32, with a
-per-triangle material index, vertex normals for smooth objects, uvs and colours per vertex where the
-scene has them, material tables (Phong with its texture slots, and the dielectrics' ior, k_t and sigma),
-the textures, the light table, and the medium the eye is in.
+"""The scene flattened for the kernels: one triangle set in float32 relative to a frame origin, with a
+per-triangle material slot, vertex normals for smooth objects, uvs and colours per vertex where the
+scene has them, and per-frame tables: the materials (Phong with its texture slots, and the dielectrics'
+ior, k_t and sigma), the textures, the lights, and the medium the eye is in.
 
-Coordinates are made relative to the eye in float64 before the cast to float32, so a scene far
-from the origin keeps the precision it has near it (the camera ray origin is exactly 0).
+Coordinates are made relative to the frame origin (the eye of the first frame) in float64 before the
+cast to float32, so a scene far from the world origin keeps the precision it has near it. Later
+frames reuse the triangles and the BVH while their eye stays in the region the BVH's padding covers
+(bvh.EYE_REACH); their camera rays start at the float32 eye - origin, exactly 0 for the first frame.
 """
 
 from __future__ import annotations
@@ -12,7 +14,8 @@ from __future__ import annotations
 import numpy as np
 from .._warp import wp
 from ..scene import eye_medium, vertex_normals
-from .bvh import build_mesh
+from .bvh import build_mesh, eye_reach
+from .shadow_grid import ShadowGrid, empty_grid
 
 CHECKER = -1  # TextureSlot.image: the procedural checker instead of an image
 
@@ -53,28 +56,33 @@ class SceneData:
     transmittance: wp.array(dtype=wp.vec3)  # k_t
     absorption: wp.array(dtype=wp.vec3)  # sigma per scene unit
     eye_medium: int  # the dielectric material holding the eye, -1: air
-    light_pos: wp.array(dtype=wp.vec3)  # camera-relative
+    light_pos: wp.array(dtype=wp.vec3)  # relative to the frame origin
     light_color: wp.array(dtype=wp.vec3)
     num_lights: int
     ambient: wp.vec3  # C_amb
     background: wp.vec3
+    shadow_grid: ShadowGrid  # the light-space structure (shadow_grid.py), read where shadow rays use it
 
 
 class Geometry:
-    """Owns the device arrays and the BVH for one scene."""
+    """Owns the device arrays and the BVH for one set of objects, in coordinates relative to
+    ``origin`` (default: the scene's eye); ``scene_data(scene)`` gives the kernels a frame's view."""
 
-    def __init__(self, scene, device="cpu", bvh_constructor: str = "sah", build_bvh: bool = True):
+    def __init__(self, scene, device="cpu", bvh_constructor: str = "sah", build_bvh: bool = True, origin=None):
         # build_bvh=False: the Z-buffer needs the triangles and tables but never a ray query, and
         # its timings must not pay for a BVH (about 1.5 s for a million triangles on the CPU).
         self.device = device
-        self.origin = np.asarray(scene.camera.eye, np.float64)  # world position of the eye
-        names = list(scene.materials)
-        verts, faces, mats, smooth, normals = [], [], [], [], []
+        self.origin = np.asarray(scene.camera.eye if origin is None else origin, np.float64)  # world position
+        # A triangle's material is a slot: the objects' material names in order of first use, so the
+        # triangle arrays depend on the objects alone and a frame with other materials only swaps tables.
+        self.material_names = list(dict.fromkeys(obj.material for obj in scene.objects))
+        verts, faces, mats, smooth, normals, owner = [], [], [], [], [], []
         base = 0
-        for obj in scene.objects:
+        for index, obj in enumerate(scene.objects):
+            owner.append(np.full(len(obj.faces), index, np.int32))
             verts.append(obj.vertices - self.origin)
             faces.append(obj.faces + base)
-            mats.append(np.full(len(obj.faces), names.index(obj.material), np.int32))
+            mats.append(np.full(len(obj.faces), self.material_names.index(obj.material), np.int32))
             smooth.append(np.full(len(obj.faces), int(obj.smooth), np.int32))
             if obj.smooth:
                 given = getattr(obj, "normals", None)
@@ -85,73 +93,125 @@ class Geometry:
         if not verts:  # an empty scene still gets a (degenerate, never hit) mesh so kernels can run
             verts, faces = [np.zeros((3, 3))], [np.zeros((1, 3), np.int64)]
             mats, smooth, normals = [np.zeros(1, np.int32)], [np.zeros(1, np.int32)], [np.zeros((3, 3))]
+            owner = [np.zeros(1, np.int32)]
             self.triangle_count = 0
         else:
             self.triangle_count = int(sum(len(f) for f in faces))
         self.points_np = np.ascontiguousarray(np.concatenate(verts), np.float32)
         self.indices_np = np.ascontiguousarray(np.concatenate(faces).reshape(-1), np.int32)
         self.tri_material_np = np.concatenate(mats)
-        self.material_names = names
+        self.tri_smooth_np = np.concatenate(smooth)
+        self.tri_object_np = np.concatenate(owner)  # the index of each triangle's object
+        self.eye_reach = eye_reach(self.points_np)  # E: how far an eye may move and keep this BVH
         self.object_face_counts = [len(obj.faces) for obj in scene.objects]
         self.object_ids = None  # object_tables(), once built
         self._object_uv = [(len(obj.vertices), getattr(obj, "uv", None)) for obj in scene.objects]
         self.object_uv = None  # uv_tables(), once built
+        self._uv_array = None  # uv_array(), once a frame has textures or the uv AOV is asked for
+        coloured = any(getattr(o, "colors", None) is not None for o in scene.objects)
+        rgb = [o.colors if getattr(o, "colors", None) is not None else np.ones((len(o.vertices), 3)) for o in scene.objects]
+        colors = np.concatenate(rgb).astype(np.float32) if coloured and rgb else np.ones((1, 3), np.float32)
 
         d = device
         if build_bvh:
             # Padded triangle boxes (bvh.py): rays through shared vertices and edges cannot leak.
             # The points array then also holds the boxes' corners, after the V real points.
-            self.mesh, self.points, self.indices = build_mesh(self.points_np, self.indices_np, d, bvh_constructor)
+            self.mesh, self.points, self.indices = build_mesh(self.points_np, self.indices_np, d, bvh_constructor,
+                                                              eye=self.eye_reach)
         else:
             self.points = wp.array(self.points_np, dtype=wp.vec3, device=d)
             self.indices = wp.array(self.indices_np, dtype=wp.int32, device=d)
             self.mesh = None
+        self.normals = wp.array(np.concatenate(normals).astype(np.float32), dtype=wp.vec3, device=d)
+        self.tri_material = wp.array(self.tri_material_np, dtype=wp.int32, device=d)
+        self.tri_smooth = wp.array(self.tri_smooth_np, dtype=wp.int32, device=d)
+        self.colors = wp.array(colors, dtype=wp.vec3, device=d)  # white where the scene has no vertex colours
+        self._tables = None
+        self.data = self.scene_data(scene)  # the tables of the scene it was built for
 
-        m = [scene.materials[n] for n in names]
-        lights = scene.lights
+    def eye_offset(self, eye) -> np.ndarray:
+        """Where the camera rays of an eye at world position ``eye`` start: eye - origin, computed in
+        float64 and rounded to float32 as the points were (exactly 0 at the origin)."""
+        return (np.asarray(eye, np.float64) - self.origin).astype(np.float32)
+
+    def covers(self, eye) -> bool:
+        """Whether camera rays from ``eye`` (world) keep the BVH's guarantees: within eye_reach of the
+        origin on every axis (bvh.py: the padding's slab-test argument)."""
+        return bool(np.abs(np.asarray(eye, np.float64) - self.origin).max() <= self.eye_reach)
+
+    def light_positions(self, scene) -> np.ndarray:
+        """The kernels' light positions (L, 3): relative to the origin in float64, then float32."""
+        return np.asarray([np.asarray(l.position, np.float64) - self.origin for l in scene.lights],
+                          np.float32).reshape(-1, 3)
+
+    def scene_data(self, scene, shadow_grid: ShadowGrid | None = None) -> SceneData:
+        """The kernels' view of these triangles for a frame of ``scene``: its materials and textures,
+        lights, ambient, background and the eye's medium as small new arrays where they changed, and the
+        shadow rays' grid if one is given; the triangle arrays and the BVH are shared, never rebuilt."""
+        m = [scene.materials[n] for n in self.material_names]
+        dielectric = any(x.dielectric for x in m)
+        # With glass, the medium the eye is in (eye_medium) depends on the eye too.
+        key = (tuple(m), tuple(scene.lights), tuple(scene.render.ambient), tuple(scene.render.background),
+               id(shadow_grid), tuple(scene.camera.eye) if dielectric else None)
+        if self._tables is not None and self._tables[0] == key:
+            return self._tables[1]
+        d, lights = self.device, scene.lights
         s = SceneData()
-        s.mesh = self.mesh.id if build_bvh else wp.uint64(0)
+        s.mesh = self.mesh.id if self.mesh is not None else wp.uint64(0)
         s.points = self.points
         s.indices = self.indices
-        s.normals = wp.array(np.concatenate(normals).astype(np.float32), dtype=wp.vec3, device=d)
-        s.tri_material = wp.array(self.tri_material_np, dtype=wp.int32, device=d)
-        s.tri_smooth = wp.array(np.concatenate(smooth), dtype=wp.int32, device=d)
+        s.normals = self.normals
+        s.tri_material = self.tri_material
+        s.tri_smooth = self.tri_smooth
+        s.colors = self.colors
         vec = lambda rows: wp.array(np.asarray(rows, np.float32).reshape(-1, 3), dtype=wp.vec3, device=d)
-        s.ka = vec([x.ka for x in m])
-        s.kd = vec([x.kd for x in m])
-        s.ks = vec([x.ks for x in m])
-        s.kr = vec([x.reflectivity for x in m])
-        s.shininess = wp.array(np.asarray([x.shininess for x in m], np.float32), dtype=float, device=d)
-        self._attributes(s, scene.objects, m, d)
-        s.ior = wp.array(np.asarray([x.ior or 0.0 for x in m], np.float32), dtype=float, device=d)
-        s.transmittance = vec([x.transmittance for x in m])
-        s.absorption = vec([x.absorption for x in m])
+        s.ka = vec([x.ka for x in m] or [[0, 0, 0]])
+        s.kd = vec([x.kd for x in m] or [[0, 0, 0]])
+        s.ks = vec([x.ks for x in m] or [[0, 0, 0]])
+        s.kr = vec([x.reflectivity for x in m] or [[0, 0, 0]])
+        s.shininess = wp.array(np.asarray([x.shininess for x in m] or [0.0], np.float32), dtype=float, device=d)
+        textures = self._textures(s, m)
+        s.ior = wp.array(np.asarray([x.ior or 0.0 for x in m] or [0.0], np.float32), dtype=float, device=d)
+        s.transmittance = vec([x.transmittance for x in m] or [[1, 1, 1]])
+        s.absorption = vec([x.absorption for x in m] or [[0, 0, 0]])
         # Only the tracer follows rays into a medium (the Z-buffer's geometry has no BVH).
-        medium = eye_medium(scene) if build_bvh and any(x.dielectric for x in m) else None
-        s.eye_medium = names.index(medium) if medium is not None else -1
-        s.light_pos = vec([np.asarray(l.position) - self.origin for l in lights] or [[0, 0, 0]])
+        medium = eye_medium(scene) if self.mesh is not None and dielectric else None
+        s.eye_medium = self.material_names.index(medium) if medium is not None else -1
+        s.light_pos = vec(self.light_positions(scene) if lights else [[0, 0, 0]])
         s.light_color = vec([l.color for l in lights] or [[0, 0, 0]])
         s.num_lights = len(lights)
         s.ambient = wp.vec3(*scene.render.ambient)
         s.background = wp.vec3(*scene.render.background)
-        self.data = s
+        if shadow_grid is None:
+            self.__dict__.setdefault("_no_grid", empty_grid(d))
+        s.shadow_grid = shadow_grid if shadow_grid is not None else self._no_grid
+        self._tables = (key, s, shadow_grid, textures)  # the grid and textures kept alive with their ids
+        return s
 
-    def _attributes(self, s: SceneData, objects, materials, device):
-        """uvs, colours, texture slots and textures; one-element stand-ins where the scene has none
-        (the kernels read them only under the texture and vertex_color switches)."""
+    def uv_array(self):
+        """Every vertex's texture coordinates, (0, 0) on objects without: what textured shading and the uv
+        AOV read. Built on first use (8 bytes a vertex), so scenes without textures never hold it."""
+        if self._uv_array is None:
+            uv = [np.zeros((n, 2)) if u is None else u for n, u in self._object_uv] or [np.zeros((3, 2))]
+            self._uv_array = wp.array(np.concatenate(uv).astype(np.float32), dtype=wp.vec2, device=self.device)
+        return self._uv_array
+
+    def _textures(self, s: SceneData, materials) -> list:
+        """A frame's uvs, texture slots and textures; one-element stand-ins where it has none (the kernels
+        read them only under the texture switch). Returns the Texture2D objects, which must outlive
+        ``s``. An image is uploaded once while consecutive frames keep using it."""
+        device = self.device
         textured = any(mat.textures for mat in materials)
-        coloured = any(getattr(o, "colors", None) is not None for o in objects)
-        uv = [o.uv if getattr(o, "uv", None) is not None else np.zeros((len(o.vertices), 2)) for o in objects]
-        rgb = [o.colors if getattr(o, "colors", None) is not None else np.ones((len(o.vertices), 3)) for o in objects]
-        s.uvs = wp.array(np.concatenate(uv).astype(np.float32) if textured and uv else np.zeros((1, 2), np.float32),
-                         dtype=wp.vec2, device=device)
-        s.colors = wp.array(np.concatenate(rgb).astype(np.float32) if coloured and rgb else np.ones((1, 3), np.float32),
-                            dtype=wp.vec3, device=device)
+        if textured:
+            s.uvs = self.uv_array()
+        else:
+            self.__dict__.setdefault("_no_uvs", wp.zeros(1, dtype=wp.vec2, device=device))
+            s.uvs = self._no_uvs
         images, index = [np.ones((1, 1, 3), np.float32)], {}  # slot 0: white
         slots = {"ka": [], "kd": [], "ks": []}
-        for mat in materials:
+        for mat in materials or [None]:
             for key, rows in slots.items():
-                t = getattr(mat, f"{key}_texture", None)
+                t = getattr(mat, f"{key}_texture", None) if mat is not None else None
                 slot = TextureSlot()
                 slot.image, slot.u_map, slot.v_map = 0, wp.vec3(1.0, 0.0, 0.0), wp.vec3(0.0, 1.0, 0.0)
                 slot.c0, slot.c1 = wp.vec3(1.0), wp.vec3(1.0)
@@ -167,13 +227,22 @@ class Geometry:
                         slot.image = index[id(t.image)]
                 rows.append(slot)
         s.ka_map, s.kd_map, s.ks_map = (wp.array(slots[k], dtype=TextureSlot, device=device) for k in ("ka", "kd", "ks"))
-        # Warp's textures hold 1, 2 or 4 channels: RGB is padded to RGBA.
-        self.texture_objects = [wp.Texture2D(np.ascontiguousarray(np.concatenate([a, np.ones(a.shape[:2] + (1,), np.float32)], -1)),
-                                             filter_mode=wp.TextureFilterMode.LINEAR,
-                                             address_mode=wp.TextureAddressMode.WRAP, normalized_coords=True,
-                                             device=device) for a in images]
-        s.textures = wp.array(self.texture_objects, dtype=wp.Texture2D, device=device)  # the objects kept alive with it
+        # Warp's textures hold 1, 2 or 4 channels: RGB is padded to RGBA. The cache holds the image
+        # itself with its texture, so its id cannot be reused by another image while it is a key.
+        cache = self.__dict__.setdefault("_texture_cache", {})
+        objects = []
+        for a in images:
+            if id(a) not in cache:
+                rgba = np.ascontiguousarray(np.concatenate([a, np.ones(a.shape[:2] + (1,), np.float32)], -1))
+                cache[id(a)] = (a, wp.Texture2D(rgba, filter_mode=wp.TextureFilterMode.LINEAR,
+                                                address_mode=wp.TextureAddressMode.WRAP, normalized_coords=True,
+                                                device=device))
+            objects.append(cache[id(a)][1])
+        for key in [k for k in cache if k not in {id(a) for a in images}]:  # images no longer in use
+            del cache[key]
+        s.textures = wp.array(objects, dtype=wp.Texture2D, device=device)
         self.texture_bytes = int(sum(a.shape[0] * a.shape[1] * 16 for a in images))
+        return objects
 
     def object_tables(self):
         """Per triangle, its object's index in scene.objects, and per object its first triangle: what
@@ -182,17 +251,18 @@ class Geometry:
         if self.object_ids is None:
             counts = self.object_face_counts or [1]  # an empty scene's one degenerate triangle
             first = np.concatenate([[0], np.cumsum(counts)[:-1]]).astype(np.int32)
-            tri_object = np.repeat(np.arange(len(counts), dtype=np.int32), counts)
-            self.object_ids = (wp.array(tri_object, dtype=wp.int32, device=self.device),
+            self.object_ids = (wp.array(self.tri_object_np, dtype=wp.int32, device=self.device),
                                wp.array(first, dtype=wp.int32, device=self.device))
         return self.object_ids
 
     def uv_tables(self):
-        """Every vertex's texture coordinates ((0, 0) on objects without) and, per object, whether it has
-        them: what the uv AOV reads. Built on first use (8 bytes a vertex), like object_tables."""
+        """uv_array() and, per object, whether it has texture coordinates: what the uv AOV reads."""
         if self.object_uv is None:
-            uv = [np.zeros((n, 2)) if u is None else u for n, u in self._object_uv] or [np.zeros((3, 2))]
             has = [int(u is not None) for _, u in self._object_uv] or [0]
-            self.object_uv = (wp.array(np.concatenate(uv).astype(np.float32), dtype=wp.vec2, device=self.device),
-                              wp.array(np.asarray(has, np.int32), dtype=wp.int32, device=self.device))
+            self.object_uv = (self.uv_array(), wp.array(np.asarray(has, np.int32), dtype=wp.int32, device=self.device))
         return self.object_uv
+
+    def material_indices(self, scene) -> np.ndarray:
+        """Per material slot, the material's index in scene.materials (what the material AOV reports)."""
+        names = list(scene.materials)
+        return np.asarray([names.index(n) for n in self.material_names] or [0], np.int32)

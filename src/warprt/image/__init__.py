@@ -1,6 +1,7 @@
 """The host side of a frame: launching bands (launch.py), the stats and their timer (stats.py), the
-renderers and their policies (renderer.py), the Z-buffer's buffers (zbuffer.py), the AOVs (aovs.py),
-memory (memory.py), image files (film.py) and the progress line (progress.py).
+renderers and their policies (renderer.py), the Z-buffer's buffers (zbuffer.py), the planar mirrors'
+virtual cameras (mirrors.py), the AOVs (aovs.py), memory (memory.py), image files (film.py) and the
+progress line (progress.py).
 
 Warp is imported on first use of a name that needs it: writing or reading an image does not.
 """
@@ -11,10 +12,11 @@ from .film import (FORMATS as IMAGE_FORMATS, aov_paths, linear_to_srgb, partial_
 from .stats import RenderResult, RenderStats
 
 _WARP_NAMES = {
-    "renderer": ("DEFAULTS", "AUTO_RASTER_MAX_BYTES", "RASTER_BYTES_PER_SAMPLE", "cached_geometry", "raster_is_cheaper",
-                 "render", "render_zbuffer", "check_finite"),
+    "renderer": ("DEFAULTS", "AUTO_RASTER_MAX_BYTES", "RASTER_BYTES_PER_SAMPLE", "cached_geometry", "frame_geometry",
+                 "raster_is_cheaper", "render", "render_zbuffer", "check_finite", "shadows_from_grid"),
     "zbuffer": ("ZBuffer", "eye_on_surface", "traced_faces"),
     "launch": ("bands_of", "default_threads", "launch_bands"),
+    "mirrors": ("MirrorFrame",),
 }
 
 __all__ = ["AOVS", "IMAGE_FORMATS", "RenderResult", "RenderStats", "aov_paths", "check_aovs", "linear_to_srgb",

@@ -43,8 +43,8 @@ def geometry_memory(geom) -> dict:
     """Bytes by role for a Geometry: the arrays as allocated (Warp's own count) and the BVH."""
     d = geom.data
 
-    def size(*arrays):
-        return int(sum(a.capacity for a in arrays if a is not None))
+    def size(*arrays):  # an array two roles share (the uvs: shading's and the uv AOV's) counted once
+        return int(sum(a.capacity for a in {id(a): a for a in arrays if a is not None}.values()))
 
     out = {
         "vertices": size(geom.points),  # float32 vec3; with the BVH's box corners after the vertices
@@ -61,12 +61,16 @@ def geometry_memory(geom) -> dict:
     return out
 
 
-def frame_memory(geom, image_bytes: int, raster_bytes: int, aov_bytes: int = 0) -> dict:
+def frame_memory(geom, image_bytes: int, raster_bytes: int, aov_bytes: int = 0, shadow_grid_bytes: int = 0,
+                 mirrors_bytes: int = 0) -> dict:
     """The stats' memory record of one frame: geometry by role, the image and ray-count buffers, the
     Z-buffer's per-sample buffers (0 when no first hit came from it), the AOVs' per-pixel buffers (0
-    when none were asked for), and the peak RSS so far."""
+    when none were asked for), the shadow rays' light-space grid (0 when they were traced; kept with
+    the geometry), the planar mirrors' unfolded scenes and stored rasters (0 when reflection rays were
+    traced), and the peak RSS so far."""
     return {"geometry": geometry_memory(geom), "image": int(image_bytes), "raster": int(raster_bytes),
-            "aovs": int(aov_bytes), "peak_rss": peak_rss()}
+            "aovs": int(aov_bytes), "shadow_grid": int(shadow_grid_bytes), "mirrors": int(mirrors_bytes),
+            "peak_rss": peak_rss()}
 
 
 def frame_estimate(scene, samples: int, raster: bool, algorithm: str = "raytrace") -> dict:

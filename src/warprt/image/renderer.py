@@ -12,26 +12,33 @@ import numpy as np
 
 from .._warp import init_warp, wp
 from ..errors import SceneError
-from ..geometry import Geometry
+from ..geometry import Geometry, kept_shadow_grid, shadow_grid
 from ..kernels import (aov_buffers, aov_bytes, aov_sums, camera_data, empty_aov_buffers, make_shade_kernel,
                        make_trace_kernel, raster_kernel, stack_size)
 from ..scene import EffectSet, ObjectCache, camera_basis, resolve_effects, validate_camera, validate_scene, zbuffer_effects
 from .aovs import check_aovs, finish_aovs
 from .launch import bands_of, launch_bands, launch_plan
 from .memory import RASTER_BYTES_PER_SAMPLE, check_frame_memory, frame_estimate, frame_memory
+from .mirrors import MirrorFrame, empty_mirrors
 from .stats import RenderResult, RenderStats
 from .zbuffer import RASTER_TILE, ZBuffer, empty_fragments, eye_on_surface
 
 ALGORITHMS = ("raytrace", "zbuffer")
 PRIMARY = ("auto", "raytrace", "zbuffer")
+SHADOWS = ("auto", "bvh", "grid")
+REFLECTIONS = ("auto", "bvh", "mirrors")
 
 
 @dataclass
 class Defaults:
-    """render()'s defaults for what it is not told; the test suite sets ``primary`` to run whole
-    suites on both paths (tests/conftest.py)."""
+    """render()'s defaults for what it is not told; the test suite sets them to run whole suites on
+    every path (tests/conftest.py). ``origin_shift`` (tests only) builds each cached Geometry that
+    fraction of the scene's reach away from the eye, so that every frame runs on a reused BVH."""
 
     primary: str = "auto"
+    shadows: str = "auto"
+    reflections: str = "auto"
+    origin_shift: float = 0.0
 
 
 DEFAULTS = Defaults()
@@ -65,16 +72,87 @@ def primary_from_zbuffer(primary: str, geom: Geometry, basis, samples: int, devi
     return wanted and not eye_on_surface(geom, basis)
 
 
+# What the light-space grid costs and saves, measured on the scenes on a quiet 2-core machine (the
+# research prototype, ../shared/research/exact-secondary-rays): a shadow ray's any-hit query about
+# 200 ns of thread time, the grid's answer about 70 ns; a build about 10 ms per light plus 0.8 us per
+# triangle and light (0.024 s for the default scene, 0.83 s for the 524k-triangle knot).
+GRID_SAVES_PER_RAY = 130e-9
+GRID_BUILD_PER_LIGHT = 10e-3
+GRID_BUILD_PER_TRIANGLE_LIGHT = 780e-9
+GRID_HORIZON = 20  # frames a second frame with the same lights is taken to promise
+
+
+def shadows_from_grid(shadows: str, geom: Geometry, scene, fx, samples: int, threads: int, device: str) -> bool:
+    """The shadow rays' policy: whether the light-space grid answers them. "grid" asks for it; "auto"
+    takes it on the CPU where it is the cheaper: on a first frame when its build costs less than the
+    frame's shadow rays save (about one per sample and light), and from the second frame with the same
+    lights on when it costs less than GRID_HORIZON such frames save (it is kept with the geometry for
+    the next frames, as the BVH is). Either way the image is the traced one, to the bit."""
+    if not fx.shadows or geom.triangle_count == 0 or shadows == "bvh":
+        return False
+    if shadows == "grid":
+        return True
+    if device != "cpu":
+        return False
+    lights = geom.light_positions(scene)
+    frames = geom.__dict__.setdefault("_frames_with_lights", {})
+    if len(frames) >= 64:  # lights moving every frame: no set of them stays long enough to amortize
+        frames.clear()
+    key = lights.tobytes()
+    frames[key] = frames.get(key, 0) + 1
+    if kept_shadow_grid(geom, lights) is not None:
+        return True
+    build = (GRID_BUILD_PER_LIGHT + GRID_BUILD_PER_TRIANGLE_LIGHT * geom.triangle_count) * len(lights)
+    per_frame = GRID_SAVES_PER_RAY * samples * len(lights) / threads
+    return build <= per_frame * (GRID_HORIZON if frames[key] >= 2 else 1)
+
+
 _geometries = ObjectCache(size=4)
 
 
+def frame_geometry(scene, device: str = "cpu") -> tuple[Geometry, dict]:
+    """The Geometry (triangles, normals, BVH) for a frame of ``scene``, and how it came: built, or
+    reused from an earlier frame of the same objects, as Mitsuba reuses a loaded scene. Keyed by the
+    objects alone (Scene.with_camera/with_render share them): another eye, lights or materials reuse
+    it while the eye stays in the region its BVH's padding covers (Geometry.covers); the tables of
+    lights and materials are the frame's own (Geometry.scene_data)."""
+    key = (id(scene.objects), tuple(id(o.vertices) for o in scene.objects),
+           tuple((o.material, o.smooth, id(o.normals), id(o.uv), id(o.colors)) for o in scene.objects), str(device),
+           DEFAULTS.origin_shift)
+    eye = scene.camera.eye
+    found = _geometries.peek(key, scene.objects)
+    if found is not None and found.covers(eye):
+        return found, {"bvh": "reused", "reason": geometry_reason(found, eye)}
+    reason = ("no geometry was built for these objects" if found is None else
+              f"the eye left the region the cached BVH covers ({geometry_reason(found, eye)})")
+    geom = _geometries.put(key, scene.objects, Geometry(scene, device=device, origin=shifted_origin(scene)))
+    return geom, {"bvh": "built", "reason": reason}
+
+
+def shifted_origin(scene):
+    """The eye, or with DEFAULTS.origin_shift = s a point s R away from it along a fixed slant (R: the
+    largest coordinate of the scene relative to the eye); s <= 0.5 keeps the eye well inside the
+    region the BVH covers (bvh.EYE_REACH = 2)."""
+    eye = np.asarray(scene.camera.eye, np.float64)
+    if not DEFAULTS.origin_shift or not scene.objects:
+        return eye
+    reach = max(float(np.abs(o.vertices - eye).max(initial=0.0)) for o in scene.objects)
+    slant = np.array([1.0, -0.75, 0.5])  # not along an axis: every coordinate moves
+    return eye + DEFAULTS.origin_shift * reach * slant
+
+
+def geometry_reason(geom: Geometry, eye) -> str:
+    """Where ``eye`` lies in the region ``geom``'s BVH covers, in words for the stats."""
+    moved = float(np.abs(np.asarray(eye, np.float64) - geom.origin).max())
+    if moved == 0.0:
+        return "eye at the BVH's origin"
+    share = moved / geom.eye_reach if geom.eye_reach > 0 else float("inf")
+    return f"eye {moved:.4g} from the BVH's origin on its farthest axis, {share:.2f} of the {geom.eye_reach:.4g} its padding covers"
+
+
 def cached_geometry(scene, device: str = "cpu") -> Geometry:
-    """The scene's Geometry (BVH, normals, tables), built once and reused by the next frames of the
-    same scene from the same eye, as Mitsuba reuses a loaded scene. Keyed by the objects' identity
-    (Scene.with_camera/with_render share them) and every value the Geometry is made of."""
-    key = (id(scene.objects), tuple(id(o.vertices) for o in scene.objects), tuple(scene.camera.eye),
-           tuple(scene.materials.items()), tuple(scene.lights), scene.render.ambient, scene.render.background, str(device))
-    return _geometries.get(key, scene.objects, lambda: Geometry(scene, device=device))
+    """frame_geometry's Geometry."""
+    return frame_geometry(scene, device)[0]
 
 
 def check_finite(image: np.ndarray, what: str = "render"):
@@ -93,19 +171,30 @@ def _check_choice(value: str, choices, flag: str, what: str):
 def render(scene, *, threads: int | None = None, device: str = "cpu", effects=None, disable=(),
            bands: int | None = None, geometry: Geometry | None = None, algorithm: str = "raytrace",
            progress=None, tile: tuple[int, int] | None = None, primary: str | None = None,
-           report_truncated: bool = False, aovs=None) -> RenderResult:
+           report_truncated: bool = False, aovs=None, shadows: str | None = None,
+           reflections: str | None = None) -> RenderResult:
     """Render ``scene`` with the Whitted tracer (or, algorithm="zbuffer", by rasterization with the same
     local shading). ``effects`` (names) limits the effect set, ``disable`` removes effects; neither
     can add one the scene has nothing for. ``primary`` says where the tracer's first hits come from:
     "raytrace"; "zbuffer" (hybrid rendering: the Z-buffer's visible triangle wherever it is certain
     to be the traced one, the other samples traced; the image is the traced image to the bit); or
     "auto", the default, which rasterizes where that is the cheaper of the two (raster_is_cheaper).
+    ``shadows`` says what answers the shadow rays: "bvh" (Warp's any-hit query), "grid" (the exact
+    light-space grid: the same answers), or "auto", the default, the grid where it is the cheaper.
+    ``reflections`` says what answers the reflection rays: "bvh" (Warp's closest-hit query), "mirrors"
+    (off planar mirrors, their virtual cameras' rasters wherever certain to give the query's answer,
+    the rest traced), or "auto", the default, which traces them: measured on every scene here, the
+    virtual cameras' rasters cost about what the queries they replace do (benchmarks/ATTEMPTS.md).
     With ``report_truncated``, stats.truncated is the weight per pixel (H, W, 3) of the reflected and
     refracted rays max_depth cut off: the share of their radiance the image is missing.
     ``aovs`` (names from image.aovs.AOVS) come back as the result's ``.aovs``, from the camera rays'
     first hits; the image is the same with or without them."""
     primary = DEFAULTS.primary if primary is None else primary
+    shadows = DEFAULTS.shadows if shadows is None else shadows
+    reflections = DEFAULTS.reflections if reflections is None else reflections
     _check_choice(primary, PRIMARY, "--primary", "primary visibility")
+    _check_choice(shadows, SHADOWS, "--shadow-rays", "shadow-ray query")
+    _check_choice(reflections, REFLECTIONS, "--reflection-rays", "reflection-ray query")
     _check_choice(algorithm, ALGORITHMS, "--algorithm", "algorithm")
     aovs = check_aovs(aovs)
     validate_scene(scene)  # a Scene built in Python gets the file's checks too, before any kernel
@@ -125,24 +214,48 @@ def render(scene, *, threads: int | None = None, device: str = "cpu", effects=No
                               max_depth=scene.render.max_depth if fx.reflection or fx.refraction else 1)
     stack = stack_size(scene.render.max_depth, scene.source) if fx.refraction else 0
     n_pixels = cam.width * cam.height
-    samples = scene.render.spp if fx.supersampling else 1
+    spp = scene.render.spp if fx.supersampling else 1
+    samples = n_pixels * spp
     # Before any buffer: the most this frame can need (the Z-buffer's buffers wherever the policy may
     # ask for them; a camera on a surface may still trace), against what the machine has.
-    may_raster = primary == "zbuffer" or (primary == "auto" and raster_is_cheaper(scene.triangle_count, n_pixels * samples, device))
-    check_frame_memory(scene, _without_geometry(frame_estimate(scene, samples, may_raster), geometry))
+    may_raster = primary == "zbuffer" or (primary == "auto" and raster_is_cheaper(scene.triangle_count, samples, device))
+    check_frame_memory(scene, _without_geometry(frame_estimate(scene, spp, may_raster), geometry))
 
     with stats.phase("bvh"):
-        geom = geometry or cached_geometry(scene, device)
+        geom, stats.geometry = frame_geometry(scene, device) if geometry is None else given_geometry(geometry, cam.eye)
     stats.triangles = geom.triangle_count
-    raster = primary_from_zbuffer(primary, geom, basis, n_pixels * samples, device)
+    raster = primary_from_zbuffer(primary, geom, basis, samples, device)
     stats.primary = "zbuffer" if raster else "raytrace"
 
+    grid = None
+    if shadows_from_grid(shadows, geom, scene, fx, samples, threads, device):
+        lights = geom.light_positions(scene)
+        kept = kept_shadow_grid(geom, lights) is not None
+        with stats.phase("shadow_grid"):
+            build = shadow_grid(geom, lights)
+        grid = build.grid  # None: over the memory budget, or every light has geometry at it
+        stats.shadow_grid = {"grid": "reused" if kept else "built", **build.stats}
+    stats.shadows = "grid" if grid is not None else "bvh"
+    data = geom.scene_data(scene, grid)  # this frame's lights and materials: small tables, the BVH shared
+
+    mirror_frame = None
+    if fx.reflection and reflections == "mirrors":
+        with stats.phase("mirrors"):
+            mirror_frame = MirrorFrame(scene, geom, data, fx, threads, bands, device)
+        stats.mirrors = mirror_frame.stats
+        if mirror_frame.mirrors is None:
+            mirror_frame = None
+    stats.reflections = "mirrors" if mirror_frame is not None else "bvh"
+    mirrors = mirror_frame.mirrors if mirror_frame is not None else empty_mirrors(device)
+
     with stats.phase("compile"):
-        kernel = make_trace_kernel(fx, raster_primary=raster, stack=stack, report_truncated=report_truncated, aovs=aovs)
+        kernel = make_trace_kernel(fx, raster_primary=raster, stack=stack, report_truncated=report_truncated,
+                                   aovs=aovs, shadow_grid=grid is not None, mirrors=mirror_frame is not None)
         wp.load_module(kernel.module, device=device)
-        if raster:
+        if raster or mirror_frame is not None:
             wp.load_module(raster_kernel.module, device=device)
-    stats.variant += ("_zprimary" if raster else "") + ("_aov_" + "_".join(aovs) if aovs else "")
+    stats.variant += (("_zprimary" if raster else "") + ("_gshadow" if grid is not None else "")
+                      + ("_mreflect" if mirror_frame is not None else "") + ("_aov_" + "_".join(aovs) if aovs else ""))
 
     zb = None
     if raster:
@@ -155,11 +268,11 @@ def render(scene, *, threads: int | None = None, device: str = "cpu", effects=No
         # With report_truncated the kernel writes the truncated weights after the image.
         image = wp.empty(n_pixels * (2 if report_truncated else 1), dtype=wp.vec3, device=device)
         counts = wp.empty(n_pixels, dtype=wp.vec4i if fx.refraction else wp.vec3i, device=device)
-        c, k, max_depth, data = camera_data(basis), math.isqrt(scene.render.spp), stats.max_depth, geom.data
-        samples = k * k if fx.supersampling else 1
-        buffers = aov_buffers(aovs, geom, n_pixels, math.isqrt(samples), device) if aovs else empty_aov_buffers(device)
+        c, k, max_depth = camera_data(basis, geom.eye_offset(cam.eye)), math.isqrt(scene.render.spp), stats.max_depth
+        per_pixel = k * k if fx.supersampling else 1
+        buffers = aov_buffers(aovs, geom, n_pixels, math.isqrt(per_pixel), device) if aovs else empty_aov_buffers(device)
         tile_w, tile_h = tile or PIXEL_TILE
-        inputs = lambda first: [data, c, max_depth, k, first, tile_w, tile_h, frags, buffers, image, counts]
+        inputs = lambda first: [data, c, max_depth, k, first, tile_w, tile_h, frags, mirrors, buffers, image, counts]
         _launch_with_progress(kernel, inputs, n_pixels, threads, bands, device, counts, progress)
         pixels = image.numpy().reshape(-1, cam.height, cam.width, 3)
         out = pixels[0].copy()
@@ -167,16 +280,26 @@ def render(scene, *, threads: int | None = None, device: str = "cpu", effects=No
     check_finite(out)
     if report_truncated:
         stats.truncated = pixels[1].copy()
-    aov_arrays = finish_aovs(aovs, aov_sums(buffers, aovs), samples, geom.origin, cam.height, cam.width) if aovs else {}
+    aov_arrays = {}
+    if aovs:
+        aov_arrays = finish_aovs(aovs, aov_sums(buffers, aovs), per_pixel, geom.origin, cam.height, cam.width)
+        if "material" in aov_arrays:  # the kernel's material slots, as indices in scene.materials
+            slots = aov_arrays["material"]
+            aov_arrays["material"] = np.where(slots >= 0, geom.material_indices(scene)[np.maximum(slots, 0)], -1).astype(np.int32)
 
     stats.rays = {"primary": int(per_kind[0]), "shadow": int(per_kind[1]), "reflection": int(per_kind[2]),
                   "refraction": int(per_kind[3]) if fx.refraction else 0}
     stats.rays["total"] = sum(stats.rays.values())
+    if mirror_frame is not None:
+        decided = int(mirrors.decided.numpy().sum())
+        stats.mirrors.update(decided=decided, share=decided / max(stats.rays["reflection"], 1))
     stats.rays_per_second = stats.rays["total"] / max(stats.times["trace"], 1e-9)
     stats.times["total"] = time.perf_counter() - t_start
     stats.memory = frame_memory(geom, image.capacity + counts.capacity, zb.nbytes if zb is not None else 0,
-                                aov_bytes(buffers))
-    stats.memory["estimate"] = frame_estimate(scene, samples, raster)
+                                aov_bytes=aov_bytes(buffers),
+                                shadow_grid_bytes=stats.shadow_grid.get("bytes", 0) if grid is not None else 0,
+                                mirrors_bytes=mirror_frame.nbytes if mirror_frame is not None else 0)
+    stats.memory["estimate"] = frame_estimate(scene, spp, raster)
     return RenderResult(out, stats, aov_arrays)
 
 
@@ -185,6 +308,14 @@ def _without_geometry(estimate: dict, geometry) -> dict:
     if geometry is None:
         return estimate
     return {**estimate, "geometry": 0, "total": estimate["total"] - estimate["geometry"]}
+
+
+def given_geometry(geom: Geometry, eye) -> tuple[Geometry, dict]:
+    """A Geometry passed to render(): used as it is, if its BVH covers the eye."""
+    if not geom.covers(eye):
+        raise ValueError(f"the Geometry passed to render() does not cover the eye {list(eye)}: "
+                         f"{geometry_reason(geom, eye)}; build one for this eye")
+    return geom, {"bvh": "given", "reason": geometry_reason(geom, eye)}
 
 
 def _launch_with_progress(kernel, inputs, n_pixels, threads, bands, device, counts, progress):
@@ -231,6 +362,7 @@ def render_zbuffer(scene, *, threads: int | None = None, device: str = "cpu", ef
 
     with stats.phase("geometry"):
         geom = geometry or Geometry(scene, device=device, build_bvh=False)
+        data = geom.scene_data(scene)
     stats.triangles = geom.triangle_count
 
     with stats.phase("compile"):
@@ -245,7 +377,7 @@ def render_zbuffer(scene, *, threads: int | None = None, device: str = "cpu", ef
         with stats.phase("shade"):
             n_pixels = cam.width * cam.height
             image = wp.empty(n_pixels, dtype=wp.vec3, device=device)
-            c, data, k, frags = camera_data(zb.basis), geom.data, zb.k, zb.fragments
+            c, k, frags = camera_data(zb.basis, zb.eye), zb.k, zb.fragments
             launch_bands(kernel, lambda first: [data, c, k, first, frags, image], n_pixels, threads, bands, device)
             out = image.numpy().reshape(cam.height, cam.width, 3).copy()
     check_finite(out, "zbuffer")

@@ -23,6 +23,10 @@ class RenderStats:
     bands: int = 1
     algorithm: str = "raytrace"
     primary: str = "raytrace"  # where the first hits came from: "raytrace", or "zbuffer" (hybrid; same image)
+    shadows: str = "bvh"  # what answered the shadow rays: "bvh", or "grid" (the light-space grid; same image)
+    shadow_grid: dict = field(default_factory=dict)  # the grid's cells, lights, entries, bytes, build time
+    reflections: str = "bvh"  # what answered the reflection rays: "bvh", or "mirrors" (virtual cameras; same image)
+    mirrors: dict = field(default_factory=dict)  # the virtual cameras' chains, bytes, rays decided and their share
     effects: str = ""
     variant: str = ""
     rays: dict = field(default_factory=dict)  # primary, shadow, reflection, refraction, total
@@ -31,6 +35,7 @@ class RenderStats:
     memory: dict = field(default_factory=dict)  # bytes: geometry arrays and BVH by role, image, peak_rss
     # render(report_truncated=True): per pixel (H, W, 3), the weight of the rays max_depth cut off.
     truncated: np.ndarray | None = field(default=None, repr=False)
+    geometry: dict = field(default_factory=dict)  # bvh: "built" | "reused" | "given", and the reason
 
     def to_dict(self) -> dict:
         """The stats as JSON values; the truncated weights, if reported, as their largest and mean value."""

@@ -19,9 +19,12 @@ from .stats import timed
 RASTER_TILE = 16  # pixels per raster tile side: each raster thread owns one tile
 
 
-def clip_distance(geometry: Geometry) -> float:
-    """z_clip = CLIP_SCALE R, R = sqrt(3) max |coordinate| bounding every vertex's distance from the eye."""
-    reach = float(np.abs(geometry.points_np).max(initial=0.0)) * math.sqrt(3.0)
+def clip_distance(geometry: Geometry, eye=(0.0, 0.0, 0.0)) -> float:
+    """z_clip = CLIP_SCALE R, R = sqrt(3) (max |coordinate| + max |eye|) bounding every vertex's
+    distance from the eye (``eye`` relative to the frame origin, as Geometry.eye_offset gives it)."""
+    if "_reach" not in geometry.__dict__:  # a Geometry is reused across frames
+        geometry._reach = float(np.abs(geometry.points_np).max(initial=0.0))
+    reach = (geometry._reach + float(np.abs(np.asarray(eye, np.float64)).max())) * math.sqrt(3.0)
     return CLIP_SCALE * max(reach, 1e-30)
 
 
@@ -32,22 +35,29 @@ def eye_on_surface(geometry: Geometry, basis) -> bool:
     z_clip / cos(theta); twice that is the reach. The tracer's rays, which start at the eye and keep
     hits from t = 0, hit such a triangle there, as they do one the eye lies on. Hybrid rendering
     traces the first hits of such a view: a camera placed on (or a hair from) a surface."""
+    eye = geometry.eye_offset(basis.eye)
     cos_corner = basis.d_f / math.sqrt(basis.d_f ** 2 + (basis.h / 2.0) ** 2 + (basis.w / 2.0) ** 2)
-    tol = 2.0 * clip_distance(geometry) / cos_corner
+    tol = 2.0 * clip_distance(geometry, eye) / cos_corner
     cache = geometry.__dict__.setdefault("_eye_on_surface", {})  # a Geometry is reused across frames
-    if tol not in cache:
-        cache[tol] = _eye_on_surface(geometry, tol)
-    return cache[tol]
+    key = (tol, tuple(eye.tolist()))
+    if key not in cache:
+        if len(cache) >= 16:  # a camera path: keep the memo small
+            cache.clear()
+        cache[key] = _eye_on_surface(geometry, tol, eye.astype(np.float64))
+    return cache[key]
 
 
-def _eye_on_surface(geometry: Geometry, tol: float) -> bool:
+def _eye_on_surface(geometry: Geometry, tol: float, eye: np.ndarray) -> bool:
     if geometry.triangle_count == 0:
         return False
-    tri = geometry.points_np.astype(np.float64)[geometry.indices_np.reshape(-1, 3)]  # eye at the origin
-    in_box = np.all((tri.min(axis=1) <= tol) & (tri.max(axis=1) >= -tol), axis=1)
+    if "_boxes" not in geometry.__dict__:  # the triangles' boxes, once per Geometry
+        tri = geometry.points_np.astype(np.float64)[geometry.indices_np.reshape(-1, 3)]
+        geometry._boxes = (tri.min(axis=1), tri.max(axis=1))
+    lower, upper = geometry._boxes
+    in_box = np.all((lower - eye <= tol) & (upper - eye >= -tol), axis=1)
     if not in_box.any():
         return False
-    t = tri[in_box]
+    t = geometry.points_np.astype(np.float64)[geometry.indices_np.reshape(-1, 3)[in_box]] - eye
     n = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
     length = np.linalg.norm(n, axis=1)
     plane = np.abs(np.einsum("ij,ij->i", n, t[:, 0]))  # |n . p0|: |n| times the eye's distance to the plane
@@ -68,16 +78,23 @@ class ZBuffer:
     """Owns the per-sample buffers of one scene's rasterization (self.fragments)."""
 
     def __init__(self, scene, geometry: Geometry, fx: EffectSet, device: str = "cpu", tile: int = RASTER_TILE,
-                 track_uncertain: bool = True):
+                 track_uncertain: bool = True, margin: float = MARGIN_PX, fragments: Fragments | None = None):
+        """``fragments``: buffers of this size to draw into instead of new ones, every sample cleared
+        (the virtual cameras pass one from chain to chain, cleared as they gather it)."""
         cam = scene.camera
         self.geometry, self.device, self.tile = geometry, device, int(tile)
         self.track_uncertain = track_uncertain
         self.basis = camera_basis(cam)
+        self.eye = geometry.eye_offset(cam.eye)  # the tracer's camera ray origin
         self.k = math.isqrt(scene.render.spp)
         self.samples = self.k * self.k if fx.supersampling else 1
         # track_uncertain: fill rival_inv_depth for hybrid rendering; a plain Z-buffer image skips it.
-        self.camera = raster_camera(self.basis, clip_distance(geometry), MARGIN_PX if track_uncertain else 0.0)
+        self.camera = raster_camera(self.basis, clip_distance(geometry, self.eye), margin if track_uncertain else 0.0,
+                                    self.eye)
         n = cam.width * cam.height * self.samples
+        if fragments is not None:
+            self.fragments, self.times, self.pairs = fragments, {}, 0
+            return
         frags = Fragments()
         frags.face = wp.full(n, -1, dtype=wp.int32, device=device)
         frags.inv_depth = wp.zeros(n, dtype=wp.float64, device=device)  # 0 is "nothing yet"
@@ -92,8 +109,9 @@ class ZBuffer:
         f = self.fragments
         return int(f.face.capacity + f.inv_depth.capacity + f.uv.capacity + f.rival_inv_depth.capacity)
 
-    def rasterize(self, threads: int, bands: int):
-        """Project, bin and depth-test every triangle; times["project"|"bin"|"raster"] in seconds."""
+    def rasterize(self, threads: int, bands: int, tiles: np.ndarray | None = None):
+        """Project, bin and depth-test every triangle; times["project"|"bin"|"raster"] in seconds. With
+        ``tiles`` (one flag per raster tile, row-major from the bottom), only those tiles' samples."""
         g, c, dev = self.geometry, self.camera, self.device
         data = g.data
         k = self.k if self.samples > 1 else 1
@@ -110,14 +128,15 @@ class ZBuffer:
             tile = self.tile
             tiles_x, tiles_y = -(-c.width // tile), -(-c.height // tile)
             tile_count = wp.zeros(tiles_x * tiles_y, dtype=wp.int32, device=dev)
-            wp.launch(count_kernel, dim=g.triangle_count, inputs=[bounds, tile, tiles_x, tile_count], device=dev)
+            mask = wp.array(np.asarray(tiles if tiles is not None else [], np.int32), dtype=wp.int32, device=dev)
+            wp.launch(count_kernel, dim=g.triangle_count, inputs=[bounds, tile, tiles_x, mask, tile_count], device=dev)
             tile_start = np.zeros(tiles_x * tiles_y + 1, np.int32)
             tile_start[1:] = np.cumsum(tile_count.numpy())
             self.pairs = int(tile_start[-1])
             starts = wp.array(tile_start, dtype=wp.int32, device=dev)
             cursor = wp.array(tile_start[:-1], dtype=wp.int32, device=dev)
             faces = wp.empty(max(self.pairs, 1), dtype=wp.int32, device=dev)
-            wp.launch(fill_kernel, dim=g.triangle_count, inputs=[bounds, tile, tiles_x, cursor, faces], device=dev)
+            wp.launch(fill_kernel, dim=g.triangle_count, inputs=[bounds, tile, tiles_x, mask, cursor, faces], device=dev)
             wp.synchronize_device(dev)
 
         with timed(self.times, "raster"):
@@ -153,7 +172,7 @@ def traced_faces(scene, *, geometry: Geometry | None = None, effects=None, disab
         raise ValueError("traced_faces needs a Geometry with its BVH (build_bvh=True)")
     threads = threads or default_threads()
     face = wp.empty(cam.width * cam.height * samples, dtype=wp.int32, device=device)
-    c = camera_data(camera_basis(cam))
+    c = camera_data(camera_basis(cam), geom.eye_offset(cam.eye))
     launch_bands(primary_faces_kernel, lambda first: [geom.data, c, k, samples, first, face],
                  cam.width * cam.height, threads, max(16, 8 * threads), device)
     return face.numpy().reshape(cam.height, cam.width, samples)

@@ -1,5 +1,5 @@
-"""The cameras the kernels see: the tracer's pinhole (CameraData: the seed's basis, float32, eye at
-the origin) and the rasterizer's projection of it (RasterCamera, float64), and where a sample sits."""
+"""The cameras the kernels see: the tracer's pinhole (CameraData: the seed's basis and the eye, float32,
+relative to the geometry's frame origin) and the rasterizer's projection of it (RasterCamera, float64)."""
 
 from __future__ import annotations
 
@@ -8,8 +8,10 @@ from .._warp import wp
 
 @wp.struct
 class CameraData:
-    """The seed's camera basis and image-plane size, in camera-relative space (eye at 0)."""
+    """The seed's camera basis and image-plane size, and the eye relative to the frame origin (where
+    the camera rays start: 0 for the frame the geometry was built for)."""
 
+    eye: wp.vec3
     x_e: wp.vec3
     y_e: wp.vec3
     z_e: wp.vec3
@@ -20,9 +22,10 @@ class CameraData:
     height: int
 
 
-def camera_data(basis) -> CameraData:
-    """From a scene.CameraBasis."""
+def camera_data(basis, eye=(0.0, 0.0, 0.0)) -> CameraData:
+    """From a scene.CameraBasis and the float32 eye relative to the frame origin (Geometry.eye_offset)."""
     c = CameraData()
+    c.eye = wp.vec3(*map(float, eye))
     c.x_e, c.y_e, c.z_e = (wp.vec3(*map(float, v)) for v in (basis.x_e, basis.y_e, basis.z_e))
     c.d_f, c.h, c.w = float(basis.d_f), float(basis.h), float(basis.w)
     c.width, c.height = int(basis.width), int(basis.height)
@@ -51,8 +54,10 @@ def sample_offset(sample: int, k: int) -> wp.vec2:
 @wp.struct
 class RasterCamera:
     """The camera basis in float64 and the projection onto continuous pixel coordinates
-    (X, Y) = (c_x + f_x x/z, c_y + f_y y/z), y counted up from the bottom edge like the tracer."""
+    (X, Y) = (c_x + f_x x/z, c_y + f_y y/z), y counted up from the bottom edge like the tracer, of
+    points relative to the eye: the tracer's float32 ray origin, exactly, in float64."""
 
+    eye: wp.vec3d
     x_e: wp.vec3d
     y_e: wp.vec3d
     z_e: wp.vec3d
@@ -66,8 +71,9 @@ class RasterCamera:
     height: int
 
 
-def raster_camera(basis, z_clip: float, margin: float = 0.0) -> RasterCamera:
+def raster_camera(basis, z_clip: float, margin: float = 0.0, eye=(0.0, 0.0, 0.0)) -> RasterCamera:
     c = RasterCamera()
+    c.eye = wp.vec3d(*map(float, eye))
     c.x_e, c.y_e, c.z_e = (wp.vec3d(*map(float, v)) for v in (basis.x_e, basis.y_e, basis.z_e))
     c.f_x = wp.float64(basis.d_f * basis.width / basis.w)
     c.f_y = wp.float64(basis.d_f * basis.height / basis.h)

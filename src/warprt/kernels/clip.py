@@ -52,8 +52,9 @@ def lex_less(a: wp.vec3d, b: wp.vec3d) -> bool:
 
 @wp.func
 def clip_vertex(c: RasterCamera, p: wp.vec3, uv: wp.vec2) -> ClipVertex:
-    """Camera coordinates of a camera-relative point: (p.x_e, p.y_e, -p.z_e)."""
-    q = wp.vec3d(wp.float64(p[0]), wp.float64(p[1]), wp.float64(p[2]))
+    """Camera coordinates of a point: (q.x_e, q.y_e, -q.z_e), q = p - eye, exact in float64 (both are
+    float32 values) unless their magnitudes differ by more than 2^29."""
+    q = wp.vec3d(wp.float64(p[0]), wp.float64(p[1]), wp.float64(p[2])) - c.eye
     out = ClipVertex()
     out.c = wp.vec3d(wp.dot(q, c.x_e), wp.dot(q, c.y_e), -wp.dot(q, c.z_e))
     out.uv = uv

@@ -222,25 +222,34 @@ def raster_kernel(s: SceneData, c: RasterCamera, tile_start: wp.array(dtype=wp.i
 
 
 
+@wp.func
+def wanted(mask: wp.array(dtype=wp.int32), t: int) -> bool:
+    """Whether tile t is rasterized: every tile with an empty mask (a scissor for the virtual cameras)."""
+    return mask.shape[0] == 0 or mask[t] != 0
+
+
 @wp.kernel(enable_backward=False)
-def count_kernel(bounds: wp.array(dtype=wp.vec4i), tile: int, tiles_x: int, tile_count: wp.array(dtype=wp.int32)):
-    """Per triangle: +1 for every tile its pixel rectangle touches."""
+def count_kernel(bounds: wp.array(dtype=wp.vec4i), tile: int, tiles_x: int, mask: wp.array(dtype=wp.int32),
+                 tile_count: wp.array(dtype=wp.int32)):
+    """Per triangle: +1 for every wanted tile its pixel rectangle touches."""
     b = bounds[wp.tid()]
     if b[0] > b[1]:
         return  # culled
     for ty in range(b[2] / tile, b[3] / tile + 1):
         for tx in range(b[0] / tile, b[1] / tile + 1):
-            wp.atomic_add(tile_count, ty * tiles_x + tx, 1)
+            if wanted(mask, ty * tiles_x + tx):
+                wp.atomic_add(tile_count, ty * tiles_x + tx, 1)
 
 
 @wp.kernel(enable_backward=False)
-def fill_kernel(bounds: wp.array(dtype=wp.vec4i), tile: int, tiles_x: int, cursor: wp.array(dtype=wp.int32),
-                tile_faces: wp.array(dtype=wp.int32)):
-    """Per triangle: its index into the list of every tile it touches."""
+def fill_kernel(bounds: wp.array(dtype=wp.vec4i), tile: int, tiles_x: int, mask: wp.array(dtype=wp.int32),
+                cursor: wp.array(dtype=wp.int32), tile_faces: wp.array(dtype=wp.int32)):
+    """Per triangle: its index into the list of every wanted tile it touches."""
     f = wp.tid()
     b = bounds[f]
     if b[0] > b[1]:
         return
     for ty in range(b[2] / tile, b[3] / tile + 1):
         for tx in range(b[0] / tile, b[1] / tile + 1):
-            tile_faces[wp.atomic_add(cursor, ty * tiles_x + tx, 1)] = f
+            if wanted(mask, ty * tiles_x + tx):
+                tile_faces[wp.atomic_add(cursor, ty * tiles_x + tx, 1)] = f

@@ -11,6 +11,7 @@ import functools
 from .._warp import wp
 from ..geometry import SceneData
 from .interaction import Surface, offset_ray_origin, reflect
+from .shadow import make_occluded
 from .texture import texel
 
 
@@ -69,18 +70,23 @@ def make_coefficients(TEXTURE: bool, VERTEX_COLOR: bool):
     return coefficients
 
 
-def make_shade(fx):
+def make_shade(fx, shadow_grid: bool = False):
     """The local shading function for one effect set (its ambient, diffuse, specular and shadow
     switches, and how ka, kd and ks are read): ambient + the lit terms of every light, with shadow
-    rays when fx.shadows."""
-    return _make_shade(fx.ambient, fx.diffuse, fx.specular, fx.shadows, fx.texture, fx.vertex_color)
+    rays when fx.shadows, answered by the BVH or, with ``shadow_grid``, by the light-space grid (the
+    same answers: kernels/shadow.py)."""
+    return _make_shade(fx.ambient, fx.diffuse, fx.specular, fx.shadows, fx.texture, fx.vertex_color,
+                       fx.shadows and shadow_grid)
 
 
 @functools.cache
-def _make_shade(AMBIENT: bool, DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool, TEXTURE: bool, VERTEX_COLOR: bool):
+def _make_shade(AMBIENT: bool, DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool, TEXTURE: bool, VERTEX_COLOR: bool,
+                GRID: bool = False):
     coefficients = make_coefficients(TEXTURE, VERTEX_COLOR)
 
     # Disabled terms are absent from the generated code (wp.static).
+    occluded = make_occluded(GRID)
+
     @wp.func
     def shade(s: SceneData, hit: Surface, v: wp.vec3) -> ShadeResult:
         out = ShadeResult()
@@ -106,7 +112,7 @@ def _make_shade(AMBIENT: bool, DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool, TEX
                         to_light_o = s.light_pos[l] - o
                         dist = wp.length(to_light_o)
                         out.shadow_rays += 1
-                        visible = not wp.mesh_query_ray_anyhit(s.mesh, o, to_light_o / dist, dist)
+                        visible = not occluded(s, l, o, to_light_o / dist, dist)
                     if visible:
                         lit = wp.vec3(0.0)
                         if wp.static(DIFFUSE):

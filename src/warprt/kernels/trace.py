@@ -18,6 +18,7 @@ from .camera import CameraData, camera_ray, sample_offset
 from .dielectric import beer, beer_forever, fresnel_dielectric, refract
 from .hybrid import uncertain
 from .interaction import make_surface, offset_ray_origin, reflect
+from .mirror import FROM_CAMERA, NO_CHAIN, Mirrors, mirror_chain, mirror_hit
 from .raster import Fragments
 from .shading import make_shade
 from .triangle import query_normal, triangle, unit_normal, woop_hit
@@ -56,23 +57,26 @@ def tile_order_pixel(i: int, width: int, height: int, tile_w: int, tile_h: int) 
 
 @functools.cache
 def make_trace_kernel(fx, raster_primary: bool = False, stack: int = 0, report_truncated: bool = False,
-                      aovs: tuple = ()):
+                      aovs: tuple = (), shadow_grid: bool = False, mirrors: bool = False):
     """The kernel for one EffectSet; code for disabled effects is removed by wp.static. With
     raster_primary (hybrid rendering), a sample's first hit is the Z-buffer's visible triangle, tested
     with the ray query's own triangle test, wherever the rasterizer's answer is certain to be the
-    tracer's (hybrid.uncertain); every other sample is traced. The image is the traced image, to the
-    bit; shadows and reflections are traced as always. With fx.refraction, ``stack`` is the ray
-    tree's stack (stack_size(max_depth)) and counts hold refraction rays too (vec4i). With
-    report_truncated, image holds twice width * height values: the radiance, then the weight of the
-    paths cut off at max_depth (the energy the image is missing), both averaged over the samples.
-    With ``aovs`` (names, aov.py), each camera ray's first hit is also recorded into the AOV buffers;
-    without, that code is absent."""
-    shade = make_shade(fx)
+    tracer's (hybrid.uncertain); every other sample is traced. With shadow_grid, shadow rays are
+    answered by the light-space grid in s.shadow_grid (kernels/shadow.py). With mirrors, a reflection
+    ray's first hit comes from its planar mirrors' virtual camera where that is certain to be the
+    query's (kernels/mirror.py); rays a dielectric spawns are traced. The image is the traced image,
+    to the bit. With fx.refraction, ``stack`` is the ray tree's stack (stack_size(max_depth)) and
+    counts hold refraction rays too (vec4i). With report_truncated, image holds twice width * height
+    values: the radiance, then the weight of the paths cut off at max_depth (the energy the image is
+    missing), both averaged over the samples. With ``aovs`` (names, aov.py), each camera ray's first
+    hit is also recorded into the AOV buffers; without, that code is absent."""
+    shade = make_shade(fx, shadow_grid)
     surface = make_surface(fx.smooth, fx.texture, fx.vertex_color)
     record_first_hit = make_record_first_hit(tuple(aovs), fx.texture, fx.vertex_color)
     REFLECTION, SUPERSAMPLING, RASTER, AOVS = fx.reflection, fx.supersampling, raster_primary, bool(aovs)
     REFRACTION, ABSORPTION, TRUNCATED = fx.refraction, fx.absorption, report_truncated
     MEDIUM = REFRACTION or ABSORPTION
+    MIRRORS = fx.reflection and mirrors
     if REFRACTION and stack < 1:
         raise ValueError("a kernel with refraction needs a stack: stack_size(max_depth)")
     STACK = max(stack, 1)
@@ -82,7 +86,8 @@ def make_trace_kernel(fx, raster_primary: bool = False, stack: int = 0, report_t
 
     @wp.kernel(module="unique", enable_backward=False)
     def trace(s: SceneData, c: CameraData, max_depth: int, k: int, first: int, tile_w: int, tile_h: int,
-              frags: Fragments, aov: AovBuffers, image: wp.array(dtype=wp.vec3), counts: wp.array(dtype=COUNTS)):
+              frags: Fragments, mir: Mirrors, aov: AovBuffers, image: wp.array(dtype=wp.vec3),
+              counts: wp.array(dtype=COUNTS)):
         i = first + wp.tid()  # position in tile order; the image itself is row-major
         xy = tile_order_pixel(i, c.width, c.height, tile_w, tile_h)
         x = xy[0]
@@ -102,7 +107,7 @@ def make_trace_kernel(fx, raster_primary: bool = False, stack: int = 0, report_t
             offset = wp.vec2(0.5, 0.5)
             if wp.static(SUPERSAMPLING):
                 offset = sample_offset(sample, k)
-            o = wp.vec3(0.0)
+            o = c.eye
             d = camera_ray(c, x, row, offset[0], offset[1])
             weight = wp.vec3(1.0)
             color = wp.vec3(0.0)
@@ -119,6 +124,9 @@ def make_trace_kernel(fx, raster_primary: bool = False, stack: int = 0, report_t
                 stack_start = StackVec3()
                 stack_depth = StackInt()
                 stack_medium = StackInt()
+            if wp.static(MIRRORS):
+                src = int(-1)  # the face a reflection ray leaves
+                chain = int(FROM_CAMERA)  # the planar mirrors it bounced off
             while depth < max_depth:
                 f = int(-1)
                 u = float(0.0)
@@ -140,6 +148,18 @@ def make_trace_kernel(fx, raster_primary: bool = False, stack: int = 0, report_t
                             else:  # never seen: a certain sample is well inside its triangle
                                 rasterized = False
                                 f = -1
+                if wp.static(MIRRORS):
+                    if depth > 0:
+                        mh = mirror_hit(s, mir, depth, o, d, chain, x, row, sample, src)
+                        if mh.found:
+                            rasterized = True
+                            f = mh.face
+                            u = mh.u
+                            v = mh.v
+                            if f >= 0:
+                                p0, p1, p2 = triangle(s, f)
+                                face_normal = query_normal(p0, p1, p2)
+                            mir.decided[i] = mir.decided[i] + 1
                 if not rasterized:
                     q = wp.mesh_query_ray(s.mesh, o, d, 1.0e30)
                     if q.result:
@@ -161,6 +181,8 @@ def make_trace_kernel(fx, raster_primary: bool = False, stack: int = 0, report_t
                             start = stack_start[top]
                             depth = stack_depth[top]
                             medium = stack_medium[top]
+                            if wp.static(MIRRORS):
+                                chain = int(NO_CHAIN)
                             continue
                     break
                 hit = surface(s, f, u, v, face_normal, d)
@@ -183,6 +205,9 @@ def make_trace_kernel(fx, raster_primary: bool = False, stack: int = 0, report_t
                         reflection_rays += 1
                         if wp.static(MEDIUM):
                             start = hit.p  # a mirror's ray stays in the medium it came through
+                        if wp.static(MIRRORS):
+                            chain = mirror_chain(mir, chain, f)
+                            src = f
                         continue
                     if wp.static(TRUNCATED):
                         if depth >= max_depth:
@@ -232,6 +257,8 @@ def make_trace_kernel(fx, raster_primary: bool = False, stack: int = 0, report_t
                                 start = hit.p
                                 medium = wp.where(wp.dot(d, outward) < 0.0, hit.material, -1)
                                 refraction_rays += 1
+                                if wp.static(MIRRORS):
+                                    chain = int(NO_CHAIN)
                                 continue
                             if has_r:  # total internal reflection, or nothing transmitted
                                 d = d_r
@@ -240,6 +267,8 @@ def make_trace_kernel(fx, raster_primary: bool = False, stack: int = 0, report_t
                                 start = hit.p
                                 medium = medium_r
                                 reflection_rays += 1
+                                if wp.static(MIRRORS):
+                                    chain = int(NO_CHAIN)
                                 continue
                         else:
                             if wp.static(TRUNCATED):
@@ -255,6 +284,8 @@ def make_trace_kernel(fx, raster_primary: bool = False, stack: int = 0, report_t
                         start = stack_start[top]
                         depth = stack_depth[top]
                         medium = stack_medium[top]
+                        if wp.static(MIRRORS):
+                            chain = int(NO_CHAIN)
                         continue
                 break
             total = total + color
@@ -281,7 +312,7 @@ def primary_faces_kernel(s: SceneData, c: CameraData, k: int, samples: int, firs
         offset = wp.vec2(0.5, 0.5)
         if samples > 1:
             offset = sample_offset(sample, k)
-        q = wp.mesh_query_ray(s.mesh, wp.vec3(0.0), camera_ray(c, x, row, offset[0], offset[1]), 1.0e30)
+        q = wp.mesh_query_ray(s.mesh, c.eye, camera_ray(c, x, row, offset[0], offset[1]), 1.0e30)
         f = int(-1)
         if q.result:
             f = q.face

@@ -1,0 +1,103 @@
+"""A camera, light or material change reuses the geometry and its BVH (no rebuild): lights and
+materials are small per-frame tables, so their frame is the fresh build's image to the bit; a moved
+eye's camera rays start at eye - origin in float32, so its frame matches a fresh build from that eye
+within the accuracy suite's thresholds, and the hybrid stays the traced image. An eye outside the
+region the BVH's padding covers (bvh.EYE_REACH) gets a new build, and the stats say which and why."""
+
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import warprt
+from accuracy.harness import OFF_MAX, PSNR_MIN, SSIM_MIN
+from reference.compare import metrics
+from warprt.geometry import Geometry
+from warprt.scene import Light, Material
+
+ROOT = Path(__file__).resolve().parents[2]
+SCENES = [None] + sorted((ROOT / "scenes").glob("*.toml"))
+IDS = ["default"] + [p.stem for p in SCENES[1:]]
+
+
+def small(path, width=96):
+    scene = warprt.load_scene(path)
+    height = max(8, round(width * scene.camera.height / scene.camera.width))
+    return scene.with_camera(width=width, height=height)
+
+
+def orbit(scene, degrees):
+    """The eye turned about the vertical line through the camera's center, at the same distance."""
+    eye, center = np.asarray(scene.camera.eye), np.asarray(scene.camera.center)
+    a = np.radians(degrees)
+    x, z = eye[0] - center[0], eye[2] - center[2]
+    moved = center + [x * np.cos(a) + z * np.sin(a), eye[1] - center[1], -x * np.sin(a) + z * np.cos(a)]
+    return scene.with_camera(eye=tuple(float(v) for v in moved))
+
+
+def test_the_first_frame_builds_and_a_moved_eye_reuses_the_bvh():
+    scene = small(None)
+    first = warprt.render(scene).stats.geometry
+    assert first["bvh"] in ("built", "reused")  # reused if an earlier test cached these objects
+    moved = warprt.render(orbit(scene, 30.0)).stats.geometry
+    assert moved["bvh"] == "reused" and "padding covers" in moved["reason"]
+
+
+def test_an_eye_beyond_the_region_the_padding_covers_rebuilds():
+    scene = small(None)
+    geom = Geometry(scene)
+    far = np.asarray(scene.camera.eye) + [1.01 * geom.eye_reach, 0.0, 0.0]
+    assert geom.covers(np.asarray(scene.camera.eye) + [0.99 * geom.eye_reach, 0.0, 0.0]) and not geom.covers(far)
+    warprt.render(scene)
+    stats = warprt.render(scene.with_camera(eye=tuple(far), center=tuple(far - [0.0, 0.0, 1.0]))).stats.geometry
+    assert stats["bvh"] == "built" and "left the region" in stats["reason"]
+
+
+def test_a_geometry_passed_to_render_must_cover_the_eye():
+    scene = small(None)
+    geom = Geometry(scene)
+    far = tuple(np.asarray(scene.camera.eye) + [0.0, 0.0, 3.0 * geom.eye_reach])
+    with pytest.raises(ValueError, match="does not cover the eye"):
+        warprt.render(scene.with_camera(eye=far), geometry=geom)
+
+
+def test_new_lights_and_materials_reuse_the_bvh_and_render_the_fresh_image():
+    """The eye stays at the BVH's origin, so the coordinates are the fresh build's and the image must
+    be the fresh build's to the bit: only the tables changed."""
+    scene = small(None)
+    warprt.render(scene)
+    lights = [Light((-3.0, 5.0, 2.0), (0.9, 0.8, 0.7)), Light((2.0, 2.0, 6.0), (0.2, 0.3, 0.4))]
+    materials = {**scene.materials, "red": Material(kd=(0.1, 0.6, 0.2), ks=(0.9, 0.9, 0.9), shininess=8.0,
+                                                    reflectivity=(0.3, 0.3, 0.3))}
+    edited = replace(scene, lights=lights, materials=materials).with_render(ambient=(0.3, 0.2, 0.1),
+                                                                             background=(0.1, 0.1, 0.2))
+    reused = warprt.render(edited)
+    assert reused.stats.geometry["bvh"] == "reused"
+    fresh = warprt.render(edited, geometry=Geometry(edited))
+    assert np.array_equal(reused.image, fresh.image) and reused.stats.rays == fresh.stats.rays
+    assert not np.array_equal(reused.image, warprt.render(scene).image)  # the edit shows
+
+
+@pytest.mark.parametrize("path", SCENES, ids=IDS)
+@pytest.mark.parametrize("degrees", [25.0, 140.0])
+def test_a_moved_eye_renders_as_a_fresh_build_from_it(path, degrees):
+    scene = small(path)
+    home = Geometry(scene)
+    moved = orbit(scene, degrees)
+    assert home.covers(moved.camera.eye)
+    reused = warprt.render(moved, geometry=home, primary="raytrace").image
+    fresh = warprt.render(moved, geometry=Geometry(moved), primary="raytrace").image
+    ssim, psnr, off, _ = metrics(reused, fresh)
+    assert ssim >= SSIM_MIN and psnr >= PSNR_MIN and off <= OFF_MAX, (ssim, psnr, off)
+
+
+@pytest.mark.parametrize("path", SCENES, ids=IDS)
+def test_on_a_reused_bvh_the_hybrid_is_the_traced_image(path):
+    scene = small(path)
+    home = Geometry(scene)
+    moved = orbit(scene, 60.0)
+    traced = warprt.render(moved, geometry=home, primary="raytrace")
+    hybrid = warprt.render(moved, geometry=home, primary="zbuffer")
+    assert hybrid.stats.primary == "zbuffer" and hybrid.stats.geometry["bvh"] == "given"
+    assert np.array_equal(hybrid.image, traced.image) and hybrid.stats.rays == traced.stats.rays

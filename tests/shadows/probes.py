@@ -1,0 +1,99 @@
+"""Every shadow ray of a frame, as the tracer spawns it (its own camera, hit record, offset and mirror
+bounce), each answered by Warp's any-hit query and by the light-space grid, for the mismatch counters."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from warprt.geometry import SceneData
+from warprt.kernels import (CameraData, camera_data, camera_ray, grid_occluded, init_warp, make_surface,
+                            offset_ray_origin, reflect, wp)
+from warprt.scene import camera_basis
+
+init_warp()
+surface = make_surface(True)
+
+
+@wp.kernel
+def frame_shadow_rays(s: SceneData, c: CameraData, max_depth: int, counts: wp.array(dtype=wp.vec3i)):
+    """Per pixel centre: (shadow rays, blocked by the BVH, grid answers that differ from the BVH's)."""
+    i = wp.tid()
+    o = c.eye
+    d = camera_ray(c, i % c.width, i / c.width, 0.5, 0.5)
+    rays = int(0)
+    blocked = int(0)
+    differ = int(0)
+    for depth in range(max_depth):
+        q = wp.mesh_query_ray(s.mesh, o, d, 1.0e30)
+        if not q.result:
+            break
+        hit = surface(s, q.face, q.u, q.v, q.normal, d)
+        for l in range(s.num_lights):
+            L = wp.normalize(s.light_pos[l] - hit.p)
+            if wp.dot(hit.n, L) > 0.0:
+                so = offset_ray_origin(hit.p, hit.err, hit.ng, L)
+                to_light = s.light_pos[l] - so
+                dist = wp.length(to_light)
+                bvh = wp.mesh_query_ray_anyhit(s.mesh, so, to_light / dist, dist)
+                grid = grid_occluded(s, l, so, to_light / dist, dist)
+                rays += 1
+                blocked += wp.where(bvh, 1, 0)
+                differ += wp.where(bvh != grid, 1, 0)
+        if wp.max(s.kr[hit.material]) <= 0.0:
+            break
+        d = wp.normalize(reflect(d, hit.n))
+        o = offset_ray_origin(hit.p, hit.err, hit.ng, d)
+    counts[i] = wp.vec3i(rays, blocked, differ)
+
+
+@wp.kernel
+def given_rays(s: SceneData, lights: wp.array(dtype=wp.int32), origins: wp.array(dtype=wp.vec3),
+               out: wp.array(dtype=wp.vec2i)):
+    """Shadow rays from given origins to given lights: (BVH blocked, grid blocked)."""
+    i = wp.tid()
+    l = lights[i]
+    to_light = s.light_pos[l] - origins[i]
+    dist = wp.length(to_light)
+    d = to_light / dist
+    out[i] = wp.vec2i(wp.where(wp.mesh_query_ray_anyhit(s.mesh, origins[i], d, dist), 1, 0),
+                      wp.where(grid_occluded(s, l, origins[i], d, dist), 1, 0))
+
+
+def frame_counts(scene, geom, data: SceneData, max_depth: int) -> dict:
+    """The frame's shadow rays (pixel centres, every ray level): how many, blocked, mismatches."""
+    cam = scene.camera
+    counts = wp.zeros(cam.width * cam.height, dtype=wp.vec3i)
+    c = camera_data(camera_basis(cam), geom.eye_offset(cam.eye))
+    wp.launch(frame_shadow_rays, dim=cam.width * cam.height, inputs=[data, c, max_depth, counts])
+    rays, blocked, differ = counts.numpy().astype(np.int64).sum(0)
+    return {"rays": int(rays), "blocked": int(blocked), "mismatches": int(differ)}
+
+
+def through_every_vertex_and_edge(geom, rng, limit: int = 20_000) -> np.ndarray:
+    """Points (float64) where a shadow ray is hardest to decide: every vertex and edge midpoint (of
+    ``limit`` triangles at most), a third of them jittered by a few ulp."""
+    tri = geom.points_np.astype(np.float64)[geom.indices_np.reshape(-1, 3)][: max(geom.triangle_count, 0)]
+    if len(tri) > limit:
+        tri = tri[rng.choice(len(tri), limit, replace=False)]
+    at = np.concatenate([tri[:, 0], tri[:, 1], tri[:, 2], (tri[:, 0] + tri[:, 1]) / 2, (tri[:, 1] + tri[:, 2]) / 2,
+                         (tri[:, 2] + tri[:, 0]) / 2])
+    jittered = at.copy()
+    jittered[::3] += rng.normal(size=jittered[::3].shape) * np.abs(jittered[::3]) * 2e-7
+    return np.concatenate([at, jittered])
+
+
+def stress_counts(geom, data: SceneData, lights: np.ndarray, targets: np.ndarray) -> dict:
+    """Shadow rays aimed from behind each target, through it, at every light (origins 1.05, 1.5 and 3
+    times as far from the light as the target): how many, and how many answers differ."""
+    origins, which = [], []
+    for l, light in enumerate(np.asarray(lights, np.float64)):
+        for scale in (1.05, 1.5, 3.0):
+            o = (light + (targets - light) * scale).astype(np.float32)
+            keep = np.linalg.norm(light.astype(np.float32) - o, axis=1) > 0
+            origins.append(o[keep])
+            which.append(np.full(int(keep.sum()), l, np.int32))
+    o, w = np.concatenate(origins), np.concatenate(which)
+    out = wp.zeros(len(o), dtype=wp.vec2i)
+    wp.launch(given_rays, dim=len(o), inputs=[data, wp.array(w, dtype=wp.int32), wp.array(o, dtype=wp.vec3), out])
+    a = out.numpy()
+    return {"rays": len(o), "blocked": int(a[:, 0].sum()), "mismatches": int((a[:, 0] != a[:, 1]).sum())}
