@@ -358,7 +358,7 @@ def main(argv=None) -> int:
     args.debug = getattr(args, "debug", False) or "--debug" in (sys.argv[1:] if argv is None else argv)
     try:
         with diagnostics.quiet(getattr(args, "quiet", False)), \
-                diagnostics.collecting(args.scene or "default scene", hold=False):
+                diagnostics.collecting(_source(args), hold=False):
             code = args.func(args)
             sys.stdout.flush()  # a reader that has gone shows here, inside the handlers below
         return code
@@ -375,6 +375,11 @@ def main(argv=None) -> int:
             raise
         return _fail(f"warprt: internal error: {type(e).__name__}: {diagnostics.one_line(e)} "
                      "(run with --debug for a traceback)", 1)
+
+
+def _source(args) -> str:
+    """What a warning without a file of its own names: the scene, or batch's job file."""
+    return str(getattr(args, "scene", None) or getattr(args, "job", None) or "default scene")
 
 
 def _fail(line: str, code: int) -> int:
