@@ -1,6 +1,7 @@
 """A camera orbit: 20 frames around a 327,680-triangle mesh, each from a new eye, against the static warm
-frame (the same scene rendered again from its first eye). With the BVH reused across eyes (the geometry
-keeps its frame origin), a frame of the orbit should cost about what a static frame costs.
+frame (the same scene rendered again from its first eye). With the BVH reused across eyes (the frame
+origin is the objects' centre for every eye of the orbit), a frame of the orbit should cost about what a
+static frame costs.
 
     python -m benchmarks.orbit [--width 1024 --height 768] [--frames 20] [--subdivisions 7]
 """

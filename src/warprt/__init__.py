@@ -4,8 +4,8 @@
     image, stats = warprt.render(scene)
     rows = warprt.batch("orbit.toml", "out")      # many frames from a job file (warprt.dataset)
 
-The data flows one way, and so do the imports: scene/ (file -> Scene) -> geometry/ (camera-relative
-float32 triangles, BVH) -> kernels/ (Warp functions) -> image/ (a frame on the host) -> dataset/ (many
+The data flows one way, and so do the imports: scene/ (file -> Scene) -> geometry/ (float32
+triangles relative to the objects' centre, BVH) -> kernels/ (Warp functions) -> image/ (a frame on the host) -> dataset/ (many
 frames) -> cli.py.
 """
 

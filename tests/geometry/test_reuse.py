@@ -1,8 +1,9 @@
 """A camera, light or material change reuses the geometry and its BVH (no rebuild): lights and
-materials are small per-frame tables, so their frame is the fresh build's image to the bit; a moved
-eye's camera rays start at eye - origin in float32, so its frame matches a fresh build from that eye
-within the accuracy suite's thresholds, and the hybrid stays the traced image. An eye outside the
-region the BVH's padding covers (bvh.EYE_REACH) gets a new build, and the stats say which and why."""
+materials are small per-frame tables, and the frame origin is the objects' centre whatever the eye
+(bvh.frame_origin), so a reused frame is the fresh build's image to the bit, a moved eye's too (its
+camera rays start at eye - origin in float32, as a fresh build's do), and the hybrid stays the traced
+image. An eye outside the region the BVH's padding covers (bvh.EYE_REACH) gets a new build at itself,
+and the stats say which and why."""
 
 from dataclasses import replace
 from pathlib import Path
@@ -85,11 +86,35 @@ def test_a_moved_eye_renders_as_a_fresh_build_from_it(path, degrees):
     scene = small(path)
     home = Geometry(scene)
     moved = orbit(scene, degrees)
-    assert home.covers(moved.camera.eye)
-    reused = warprt.render(moved, geometry=home, primary="raytrace").image
-    fresh = warprt.render(moved, geometry=Geometry(moved), primary="raytrace").image
+    assert home.covers(moved.camera.eye) and np.array_equal(home.origin_for(moved.camera.eye), home.origin)
+    reused = warprt.render(moved, geometry=home, primary="raytrace")
+    fresh = warprt.render(moved, geometry=Geometry(moved), primary="raytrace")
+    assert np.array_equal(reused.image, fresh.image) and reused.stats.rays == fresh.stats.rays
+
+
+def test_negative_control_a_bvh_built_at_another_eye_is_close_but_not_the_same_bits():
+    """The same moved frame on a Geometry whose coordinates start at the first frame's eye (what a
+    reused BVH gave before the origin was the objects' centre) matches the fresh image within the
+    accuracy thresholds but not to the bit: the identity above comes from the rule, and the test sees it."""
+    scene = small(None)
+    moved = orbit(scene, 25.0)
+    at_first_eye = Geometry(scene, origin=scene.camera.eye)
+    reused = warprt.render(moved, geometry=at_first_eye, primary="raytrace").image
+    fresh = warprt.render(moved, primary="raytrace").image
+    assert not np.array_equal(reused, fresh)
     ssim, psnr, off, _ = metrics(reused, fresh)
     assert ssim >= SSIM_MIN and psnr >= PSNR_MIN and off <= OFF_MAX, (ssim, psnr, off)
+
+
+def test_the_origin_is_the_objects_centre_or_a_far_eye():
+    """bvh.frame_origin: the bounding box's centre for an eye within the covered region, the eye beyond."""
+    scene = small(None)
+    geom = Geometry(scene)
+    lo = np.min([o.vertices.min(0) for o in scene.objects], 0)
+    hi = np.max([o.vertices.max(0) for o in scene.objects], 0)
+    assert np.array_equal(geom.origin, (lo + hi) / 2) and np.array_equal(geom.planned_origin, geom.origin)
+    far = np.asarray(geom.center) + [1.01 * geom.eye_reach, 0.0, 0.0]
+    assert np.array_equal(geom.origin_for(far), far)
 
 
 @pytest.mark.parametrize("path", SCENES, ids=IDS)

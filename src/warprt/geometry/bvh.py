@@ -29,16 +29,39 @@ from ..floats import EPS32
 # exit faces; BOUNDS_PAD (R_a + max(R_a, E)) / 2 is 1.3 times that (16 eps R_a with the eye at the
 # origin, E = 0).
 BOUNDS_PAD = 16.0 * EPS32
-# E = EYE_REACH times the largest reach: a camera may orbit the scene at the distance it was built
-# from, or cross it, and reuse the BVH. The pad grows by at most 1.5x, ~1e-6 of the scene: the
-# images of the frame the BVH was built for stay bit-identical (checked on every scene at 320x240
-# and at full size), and traversal costs the same.
-EYE_REACH = 2.0
+# E = EYE_REACH times the largest reach R about the frame origin (the objects' centre, frame_origin):
+# a camera may orbit the scene at several times its size, or cross it, and reuse the BVH. The pad is
+# then 16 eps (R + 8 R) / 2 = 72 eps R, about 4e-6 of the scene, and traversal costs the same.
+EYE_REACH = 8.0
 
 
 def eye_reach(points: np.ndarray) -> float:
     """E: how far (per axis) from the frame origin an eye may be for padded_bounds to hold."""
     return EYE_REACH * float(np.abs(np.asarray(points, np.float64)).max(initial=0.0))
+
+
+def objects_center(objects) -> tuple[np.ndarray, float]:
+    """The centre of the objects' bounding box in float64, and their reach about it (the largest
+    |coordinate - centre|); (None, 0) for no vertices."""
+    parts = [np.asarray(o.vertices, np.float64) for o in objects if len(o.vertices)]
+    if not parts:
+        return None, 0.0
+    lo = np.min([p.min(axis=0) for p in parts], axis=0)
+    hi = np.max([p.max(axis=0) for p in parts], axis=0)
+    center = 0.5 * (lo + hi)
+    return center, float(max(np.max(hi - center), np.max(center - lo)))
+
+
+def frame_origin(center, reach: float, eye) -> np.ndarray:
+    """The world point a Geometry's float32 coordinates are made relative to, a function of the objects
+    and the eye alone, so that a frame's image never depends on which earlier frame built the BVH it
+    runs on: the objects' centre where the eye lies in the region a BVH built there covers (EYE_REACH
+    times the reach, less a margin for the float32 cast of the coordinates), else the eye itself (a
+    camera far from the scene keeps exact camera-ray origins, 0)."""
+    eye = np.asarray(eye, np.float64)
+    if center is None or not np.abs(eye - center).max() <= EYE_REACH * reach * (1.0 - 1e-6):
+        return eye
+    return np.asarray(center, np.float64)
 
 
 def padded_bounds(points: np.ndarray, faces: np.ndarray, pad: float = BOUNDS_PAD,

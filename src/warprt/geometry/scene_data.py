@@ -3,10 +3,11 @@ per-triangle material slot, vertex normals for smooth objects, uvs and colours p
 scene has them, and per-frame tables: the materials (Phong with its texture slots, and the dielectrics'
 ior, k_t and sigma), the textures, the lights, and the medium the eye is in.
 
-Coordinates are made relative to the frame origin (the eye of the first frame) in float64 before the
-cast to float32, so a scene far from the world origin keeps the precision it has near it. Later
-frames reuse the triangles and the BVH while their eye stays in the region the BVH's padding covers
-(bvh.EYE_REACH); their camera rays start at the float32 eye - origin, exactly 0 for the first frame.
+Coordinates are made relative to the frame origin (bvh.frame_origin: the objects' centre, or an eye
+beyond the region a BVH built there covers) in float64 before the cast to float32, so a scene far from
+the world origin keeps the precision it has near it. Camera rays start at the float32 eye - origin.
+Later frames reuse the triangles and the BVH while their eye keeps that origin; the origin depends on
+the objects and the eye alone, so a reused frame is a fresh build's image to the bit.
 """
 
 from __future__ import annotations
@@ -14,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 from .._warp import wp
 from ..scene import eye_medium, vertex_normals
-from .bvh import build_mesh, eye_reach
+from .bvh import build_mesh, eye_reach, frame_origin, objects_center
 from .shadow_grid import ShadowGrid, empty_grid
 
 CHECKER = -1  # TextureSlot.image: the procedural checker instead of an image
@@ -66,13 +67,17 @@ class SceneData:
 
 class Geometry:
     """Owns the device arrays and the BVH for one set of objects, in coordinates relative to
-    ``origin`` (default: the scene's eye); ``scene_data(scene)`` gives the kernels a frame's view."""
+    ``origin`` (default: bvh.frame_origin, the objects' centre or a far eye); ``scene_data(scene)``
+    gives the kernels a frame's view."""
 
     def __init__(self, scene, device="cpu", bvh_constructor: str = "sah", build_bvh: bool = True, origin=None):
         # build_bvh=False: the Z-buffer needs the triangles and tables but never a ray query, and
         # its timings must not pay for a BVH (about 1.5 s for a million triangles on the CPU).
         self.device = device
-        self.origin = np.asarray(scene.camera.eye if origin is None else origin, np.float64)  # world position
+        self.center, self.center_reach = objects_center(scene.objects)
+        # The origin the rule gives this eye (planned) and the one used (tests may move it: origin=).
+        self.planned_origin = self.origin_for(scene.camera.eye)
+        self.origin = np.asarray(self.planned_origin if origin is None else origin, np.float64)  # world position
         # A triangle's material is a slot: the objects' material names in order of first use, so the
         # triangle arrays depend on the objects alone and a frame with other materials only swaps tables.
         self.material_names = list(dict.fromkeys(obj.material for obj in scene.objects))
@@ -128,6 +133,11 @@ class Geometry:
         self.colors = wp.array(colors, dtype=wp.vec3, device=d)  # white where the scene has no vertex colours
         self._tables = None
         self.data = self.scene_data(scene)  # the tables of the scene it was built for
+
+    def origin_for(self, eye) -> np.ndarray:
+        """The frame origin bvh.frame_origin gives these objects seen from ``eye``: a frame reuses this
+        Geometry only where that is the origin it was planned with, so its image is a fresh build's."""
+        return frame_origin(self.center, self.center_reach, eye)
 
     def eye_offset(self, eye) -> np.ndarray:
         """Where the camera rays of an eye at world position ``eye`` start: eye - origin, computed in

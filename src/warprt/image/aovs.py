@@ -13,7 +13,7 @@ from ..errors import SceneError, show
 #   albedo     the diffuse colour at the hit as the shading reads it: kd times its   float32 (H, W, 3)
 #              texture and the vertex colour, where the scene (and its effect set) has them
 #   position   world-space hit point, float64: the geometry's float64 origin plus float64 (H, W, 3)
-#              the float32 camera-relative hit
+#              the float32 hit relative to it
 #   uv         as Mitsuba's: the object's texture coordinates at the hit where it has  float32 (H, W, 2)
 #              them, else the hit's barycentrics (b1, b2), p = (1-b1-b2) p0 + b1 p1 + b2 p2
 #   object     index in scene.objects                                             int32 (H, W)

@@ -12,7 +12,7 @@ import numpy as np
 
 from .._warp import init_warp, wp
 from ..errors import SceneError
-from ..geometry import Geometry, kept_shadow_grid, shadow_grid
+from ..geometry import Geometry, frame_origin, kept_shadow_grid, objects_center, shadow_grid
 from ..kernels import (aov_buffers, aov_bytes, aov_sums, camera_data, empty_aov_buffers, make_shade_kernel,
                        make_trace_kernel, raster_kernel, stack_size)
 from ..scene import EffectSet, ObjectCache, camera_basis, resolve_effects, validate_camera, validate_scene, zbuffer_effects
@@ -114,38 +114,45 @@ def frame_geometry(scene, device: str = "cpu") -> tuple[Geometry, dict]:
     """The Geometry (triangles, normals, BVH) for a frame of ``scene``, and how it came: built, or
     reused from an earlier frame of the same objects, as Mitsuba reuses a loaded scene. Keyed by the
     objects alone (Scene.with_camera/with_render share them): another eye, lights or materials reuse
-    it while the eye stays in the region its BVH's padding covers (Geometry.covers); the tables of
-    lights and materials are the frame's own (Geometry.scene_data)."""
+    it while the eye keeps the frame origin it was built with (bvh.frame_origin: the objects' centre,
+    for any eye in the region its BVH's padding covers), so a frame's image is a fresh build's to the
+    bit; the tables of lights and materials are the frame's own (Geometry.scene_data)."""
     key = (id(scene.objects), tuple(id(o.vertices) for o in scene.objects),
            tuple((o.material, o.smooth, id(o.normals), id(o.uv), id(o.colors)) for o in scene.objects), str(device),
            DEFAULTS.origin_shift)
     eye = scene.camera.eye
     found = _geometries.peek(key, scene.objects)
-    if found is not None and found.covers(eye):
-        return found, {"bvh": "reused", "reason": geometry_reason(found, eye)}
-    reason = ("no geometry was built for these objects" if found is None else
-              f"the eye left the region the cached BVH covers ({geometry_reason(found, eye)})")
-    geom = _geometries.put(key, scene.objects, Geometry(scene, device=device, origin=shifted_origin(scene)))
-    return geom, {"bvh": "built", "reason": reason}
+    if found is not None:
+        if np.array_equal(found.origin_for(eye), found.planned_origin) and found.covers(eye):
+            return found, {"bvh": "reused", "reason": geometry_reason(found, eye)}
+        reason = f"the eye left the region the cached BVH covers ({geometry_reason(found, eye)})"
+    else:
+        reason = "no geometry was built for these objects"
+    origin = None
+    if DEFAULTS.origin_shift:
+        origin = shifted_origin(scene, frame_origin(*objects_center(scene.objects), eye))
+    geom = Geometry(scene, device=device, origin=origin)
+    if not geom.covers(eye):  # a shifted origin too far for this eye
+        geom = Geometry(scene, device=device)
+    return _geometries.put(key, scene.objects, geom), {"bvh": "built", "reason": reason}
 
 
-def shifted_origin(scene):
-    """The eye, or with DEFAULTS.origin_shift = s a point s R away from it along a fixed slant (R: the
-    largest coordinate of the scene relative to the eye); s <= 0.5 keeps the eye well inside the
-    region the BVH covers (bvh.EYE_REACH = 2)."""
-    eye = np.asarray(scene.camera.eye, np.float64)
-    if not DEFAULTS.origin_shift or not scene.objects:
-        return eye
-    reach = max(float(np.abs(o.vertices - eye).max(initial=0.0)) for o in scene.objects)
+def shifted_origin(scene, origin):
+    """Tests only (DEFAULTS.origin_shift = s): ``origin`` moved s R along a fixed slant (R: the largest
+    coordinate of the scene relative to it), so that camera rays start far from the coordinates' zero."""
+    origin = np.asarray(origin, np.float64)
+    if not scene.objects:
+        return origin
+    reach = max(float(np.abs(o.vertices - origin).max(initial=0.0)) for o in scene.objects)
     slant = np.array([1.0, -0.75, 0.5])  # not along an axis: every coordinate moves
-    return eye + DEFAULTS.origin_shift * reach * slant
+    return origin + DEFAULTS.origin_shift * reach * slant
 
 
 def geometry_reason(geom: Geometry, eye) -> str:
     """Where ``eye`` lies in the region ``geom``'s BVH covers, in words for the stats."""
     moved = float(np.abs(np.asarray(eye, np.float64) - geom.origin).max())
     if moved == 0.0:
-        return "eye at the BVH's origin"
+        return "eye at the BVH's origin (an eye beyond the region one built at the objects' centre covers)"
     share = moved / geom.eye_reach if geom.eye_reach > 0 else float("inf")
     return f"eye {moved:.4g} from the BVH's origin on its farthest axis, {share:.2f} of the {geom.eye_reach:.4g} its padding covers"
 

@@ -55,7 +55,7 @@ def sample_offset(sample: int, k: int) -> wp.vec2:
 class RasterCamera:
     """The camera basis in float64 and the projection onto continuous pixel coordinates
     (X, Y) = (c_x + f_x x/z, c_y + f_y y/z), y counted up from the bottom edge like the tracer, of
-    points relative to the eye: the tracer's float32 ray origin, exactly, in float64."""
+    points relative to the eye, itself the tracer's float32 ray origin (eye - frame origin), exactly, in float64."""
 
     eye: wp.vec3d
     x_e: wp.vec3d

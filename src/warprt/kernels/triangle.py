@@ -9,7 +9,7 @@ from ..geometry import SceneData
 
 @wp.func
 def triangle(s: SceneData, f: int):
-    """The vertices p0, p1, p2 of face f (camera-relative float32)."""
+    """The vertices p0, p1, p2 of face f (float32, relative to the frame origin)."""
     return s.points[s.indices[f * 3 + 0]], s.points[s.indices[f * 3 + 1]], s.points[s.indices[f * 3 + 2]]
 
 
