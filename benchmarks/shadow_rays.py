@@ -33,7 +33,7 @@ def shadow_rays(s: SceneData, c: CameraData, origins: wp.array(dtype=wp.vec3), d
     """For pixel i and light l, the shadow ray the tracer would spawn (dists = -1 where it spawns none)."""
     i = wp.tid()
     d = camera_ray(c, i % c.width, i / c.width, 0.5, 0.5)
-    q = wp.mesh_query_ray(s.mesh, wp.vec3(0.0), d, 1.0e30)
+    q = wp.mesh_query_ray(s.mesh, c.eye, d, 1.0e30)
     for l in range(s.num_lights):
         k = i * s.num_lights + l
         dists[k] = -1.0
@@ -77,7 +77,8 @@ def run(width: int = 1024, height: int = 768, repeat: int = 5, scenes=None) -> d
         geom = Geometry(scene)
         n = width * height * geom.data.num_lights
         o, d, t = wp.zeros(n, dtype=wp.vec3), wp.zeros(n, dtype=wp.vec3), wp.full(n, -1.0, dtype=float)
-        wp.launch(shadow_rays, dim=width * height, inputs=[geom.data, camera_data(camera_basis(scene.camera)), o, d, t])
+        wp.launch(shadow_rays, dim=width * height, inputs=[geom.data, camera_data(camera_basis(scene.camera), geom.eye_offset(scene.camera.eye)),
+                                                         o, d, t])
         keep = t.numpy() > 0.0
         o, d, t = o.numpy()[keep], d.numpy()[keep], t.numpy()[keep]
         total, blocked = cast(geom.mesh, o, d, t, repeat)

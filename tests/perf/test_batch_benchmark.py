@@ -34,10 +34,11 @@ def test_report_lists_every_configuration_and_the_targets_their_verdicts():
     for config in batch.CONFIGS:
         assert batch.LABELS[config] in text
     assert "| 9.60 |" in text  # local_2's best: 48 frames in 5.0 s
-    table = targets({"rows": [{"warprt_warm": 1, "mitsuba_llvm_warm": 1, "hybrid_warm": 1}],
+    table = targets({"rows": [{"scene": "s", "width": 320, "height": 240, "warprt_warm": 1, "mitsuba_llvm_warm": 1,
+                               "hybrid_warm": 1, "before_warm": 1}],
                      "default_cold": {"warprt_cold": 1, "mitsuba_llvm_cold": 1}},
                     {"rows": [{"warp_closest_1t": 1, "mitsuba_closest_1t": 1, "warp_any_1t": 1, "mitsuba_any_1t": 1,
-                               "triangles": 1}]}, DATA)
+                               "triangles": 1}]}, many=DATA)
     local = next(line for line in table.splitlines() if "Python loop" in line)
     ray = next(line for line in table.splitlines() if "--ray" in line)
     assert "2.00x" in local and local.endswith("| met |")

@@ -1,5 +1,6 @@
-"""Every shadow ray of a frame, as the tracer spawns it (its own camera, hit record, offset and mirror
-bounce), each answered by Warp's any-hit query and by the light-space grid, for the mismatch counters."""
+"""Every shadow ray of a frame, as the tracer spawns it (its own camera, hit record, offset, mirror
+bounce, and at glass the refracted ray, or the reflected one past the critical angle), each answered by
+Warp's any-hit query and by the light-space grid, for the mismatch counters."""
 
 from __future__ import annotations
 
@@ -7,7 +8,7 @@ import numpy as np
 
 from warprt.geometry import SceneData
 from warprt.kernels import (CameraData, camera_data, camera_ray, grid_occluded, init_warp, make_surface,
-                            offset_ray_origin, reflect, wp)
+                            offset_ray_origin, reflect, refract, triangle, unit_normal, wp)
 from warprt.scene import camera_basis
 
 init_warp()
@@ -39,9 +40,19 @@ def frame_shadow_rays(s: SceneData, c: CameraData, max_depth: int, counts: wp.ar
                 rays += 1
                 blocked += wp.where(bvh, 1, 0)
                 differ += wp.where(bvh != grid, 1, 0)
-        if wp.max(s.kr[hit.material]) <= 0.0:
+        if wp.max(s.kr[hit.material]) > 0.0:
+            d = wp.normalize(reflect(d, hit.n))
+        elif s.ior[hit.material] > 0.0:  # one path of the ray tree: the refracted ray where there is one
+            p0, p1, p2 = triangle(s, q.face)
+            eta = s.ior[hit.material]
+            eta_rel = wp.where(wp.dot(hit.ng, unit_normal(p0, p1, p2)) > 0.0, eta, 1.0 / eta)
+            t, transmits = refract(d, hit.ng, eta_rel)
+            if transmits:
+                d = wp.normalize(t)
+            else:
+                d = wp.normalize(reflect(d, hit.ng))
+        else:
             break
-        d = wp.normalize(reflect(d, hit.n))
         o = offset_ray_origin(hit.p, hit.err, hit.ng, d)
     counts[i] = wp.vec3i(rays, blocked, differ)
 

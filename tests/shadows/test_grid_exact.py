@@ -5,6 +5,7 @@ triangles nearest the light first; lights with geometry at them, and a grid over
 leave the shadow rays to the BVH; and the images are the traced images to the bit, on every scene,
 every Z-buffer hard case and random scenes."""
 
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -15,6 +16,7 @@ from accuracy.test_random_scenes import random_scene
 from tests.scenekit import make_scene
 from tests.zbuffer.test_hybrid_exact import CASES, case_scene
 from warprt.geometry import Geometry, ShadowGridBuild, cells_for
+from warprt.scene import Light
 
 from shadows.probes import frame_counts, stress_counts, through_every_vertex_and_edge
 
@@ -24,7 +26,14 @@ IDS = ["default"] + [p.stem for p in SCENES[1:]]
 
 
 def at(path, width):
+    """The scene at ``width`` pixels; one with no lights (glass_slab) gets one above its objects, so that
+    every scene has shadow rays to check."""
     scene = warprt.load_scene(path)
+    if not scene.lights:
+        lo = np.min([o.vertices.min(0) for o in scene.objects], 0)
+        hi = np.max([o.vertices.max(0) for o in scene.objects], 0)
+        above = (lo + hi) / 2 + [0.3 * (hi - lo).max(), 1.5 * (hi - lo).max(), 0.2 * (hi - lo).max()]
+        scene = replace(scene, lights=[Light(tuple(float(v) for v in above), (1.0, 1.0, 1.0))])
     return scene.with_camera(width=width, height=max(8, round(width * scene.camera.height / scene.camera.width)))
 
 
@@ -40,7 +49,8 @@ def test_every_shadow_ray_of_every_scene_gets_the_bvh_answer(path):
     build, _ = grid_of(geom, scene)
     counts = frame_counts(scene, geom, geom.scene_data(scene, build.grid), scene.render.max_depth)
     print(path, counts, build.stats)
-    assert counts["rays"] > 10_000 and counts["blocked"] > 0
+    pixels = scene.camera.width * scene.camera.height
+    assert counts["rays"] > pixels // 4 and counts["blocked"] > 0
     assert counts["mismatches"] == 0
 
 
@@ -52,7 +62,8 @@ def test_rays_through_every_vertex_and_edge_midpoint_get_the_bvh_answer(path):
     targets = through_every_vertex_and_edge(geom, np.random.default_rng(1))
     counts = stress_counts(geom, geom.scene_data(scene, build.grid), lights, targets)
     print(path, counts)
-    assert counts["rays"] > 100_000 and counts["blocked"] > 0
+    # Three origins behind each target, for each light: none dropped (an origin at a light is).
+    assert counts["rays"] >= 0.99 * 3 * len(targets) * len(lights) and counts["blocked"] > 0
     assert counts["mismatches"] == 0
 
 
@@ -114,7 +125,10 @@ def test_grid_shadows_give_the_traced_image_on_every_scene(path):
     scene = at(path, 200).with_render(spp=4)
     traced = warprt.render(scene, primary="raytrace", shadows="bvh", reflections="bvh")
     grid = warprt.render(scene, primary="raytrace", shadows="grid", reflections="bvh")
-    assert grid.stats.shadows == "grid" and grid.stats.variant.endswith("_gshadow")
+    # glass_slab's materials have no diffuse or specular term: no lit term, so no shadow rays at all.
+    assert traced.stats.rays["shadow"] > 0 or IDS[SCENES.index(path)] == "glass_slab"
+    assert grid.stats.shadows == ("grid" if traced.stats.rays["shadow"] else "bvh")
+    assert grid.stats.variant.endswith("_gshadow") == (grid.stats.shadows == "grid")
     assert np.array_equal(grid.image, traced.image) and grid.stats.rays == traced.stats.rays
 
 
