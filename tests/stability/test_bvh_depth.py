@@ -25,8 +25,9 @@ def nearest(o, d, tri, candidates):
 def compare(name, vertices, faces, origins, dirs, constructor):
     tri = vertices[faces]
     dirs = dirs / np.linalg.norm(dirs, axis=1, keepdims=True)
+    # The BVH over the coordinates as given (origin 0): the rays and the brute force are in them.
     geom = Geometry(mesh_scene({name: (vertices, faces)}, eye=[0.0, 0.0, 0.0], center=[0.0, 0.0, -1.0]),
-                    bvh_constructor=constructor)
+                    bvh_constructor=constructor, origin=np.zeros(3))
     t, face = cast(geom.mesh.id, origins, dirs)
     centre = tri.mean(axis=1)
     radius2 = (((tri - centre[:, None]) ** 2).sum(axis=2).max(axis=1)) * 1.001

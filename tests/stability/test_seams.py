@@ -11,7 +11,7 @@ from stability.probes import cast, record
 # The quad x, y in [-5, 5] at z = 0, split along its diagonal from (-5, -5) to (5, 5).
 QUAD = {"shape": "triangles", "vertices": [[-5, -5, 0], [5, -5, 0], [5, 5, 0], [-5, 5, 0]],
         "faces": [[0, 1, 2], [0, 2, 3]], "material": "m"}
-EYE = [0.0, 0.0, 10.0]  # the rays' origin; the BVH holds coordinates relative to it
+EYE = [0.0, 0.0, 10.0]  # the rays' origin: eye_offset(EYE) in the BVH's coordinates, as the renderer's
 CAMERA = {"eye": EYE, "center": [0.0, 0.0, 0.0], "up": [0.0, 1.0, 0.0], "fovy": 40.0, "width": 101, "height": 101}
 
 
@@ -22,7 +22,7 @@ def quad_geometry():
 def test_the_issue_ray_hits_the_diagonal():
     d = np.array([[0.30458447, 0.30458447, -0.9024725]])
     geom = quad_geometry()  # keep it alive: the mesh is freed with it
-    t, face = cast(geom.mesh.id, np.zeros((1, 3)), d)
+    t, face = cast(geom.mesh.id, geom.eye_offset(EYE)[None].astype(np.float64), d)
     p = np.asarray(EYE) + t[0] * d[0] / np.linalg.norm(d[0])
     record("seams/issue_ray", {"face": int(face[0]), "t": float(t[0]), "hit": p.tolist()})
     assert face[0] in (0, 1)
@@ -35,7 +35,8 @@ def test_rays_along_the_whole_diagonal_hit():
     s = np.linspace(-4.9999, 4.9999, 100_000, dtype=np.float32).astype(np.float64)
     target = np.stack([s, s, np.zeros_like(s)], 1) - EYE
     geom = quad_geometry()
-    t, face = cast(geom.mesh.id, np.zeros_like(target), target / np.linalg.norm(target, axis=1, keepdims=True))
+    origins = np.broadcast_to(geom.eye_offset(EYE).astype(np.float64), target.shape)
+    t, face = cast(geom.mesh.id, origins, target / np.linalg.norm(target, axis=1, keepdims=True))
     record("seams/diagonal_rays", {"rays": len(s), "missed": int((face < 0).sum())})
     assert (face >= 0).all()
 

@@ -1,12 +1,13 @@
 """Closed meshes do not leak: rays from inside a closed mesh always hit it, including rays aimed
 exactly at its vertices and edge midpoints, near the eye and 2.7e5 units away from it.
 
-"Moved" is measured the way the renderer works: it subtracts the eye in float64 and hands the BVH
-float32 coordinates relative to it, so what matters is the mesh's distance from the eye, not from
-the world origin. Two placements test that: the mesh and camera moved together to about
-(1.5e5, 1.2e3, -2.2e5), where the float32 coordinates are those of the unmoved scene up to float64
-rounding; and the mesh moved there with the eye left at the origin, where its float32 vertices
-are quantized to 1/64 unit, still exactly shared, so the mesh stays closed."""
+"Moved" is measured the way the renderer works: it subtracts the frame origin (the objects' centre, or
+an eye far beyond them: geometry/bvh.frame_origin) in float64 and hands the BVH float32 coordinates
+relative to it, so what matters is the mesh's distance from that origin, not from the world origin.
+Two placements test that: the mesh and camera moved together to about (1.5e5, 1.2e3, -2.2e5), where
+the float32 coordinates are those of the unmoved scene up to float64 rounding; and the mesh moved
+there with the eye left at the origin (then the frame origin), where its float32 vertices are
+quantized to 1/64 unit, still exactly shared, so the mesh stays closed."""
 
 import zlib
 
@@ -62,8 +63,8 @@ def escapes(name, placement):
                   "moved with the eye": (FAR, FAR + [0.0, 0.0, 4.0]),
                   "moved, eye at the origin": (FAR, [0.0, 0.0, 0.0])}[placement]
     geom = Geometry(mesh_scene({name: (v + shift, f)}, eye))
-    # Inner points in world space (float64), made camera-relative and float32 as the renderer would.
-    inside = lambda r, n: ((sampler(r, n) + shift) - eye).astype(np.float32).astype(np.float64)
+    # Inner points in world space (float64), made relative to the frame origin and float32 as the renderer would.
+    inside = lambda r, n: ((sampler(r, n) + shift) - geom.origin).astype(np.float32).astype(np.float64)
     o, d, n_targets = rays_for(geom.points_np, f, inside, rng)
     t, face = cast(geom.mesh.id, o, d)
     return int((face < 0).sum()), len(o), n_targets, geom

@@ -73,7 +73,9 @@ def classify_ties(scene, geometry: Geometry, zb_faces, rt_faces, k: int) -> np.n
     rows, cols, sidx = np.nonzero(zb_faces != rt_faces)
     a, b = zb_faces[rows, cols, sidx], rt_faces[rows, cols, sidx]
     d = sample_rays(scene, rows, cols, sidx, k, zb_faces.shape[2])
-    tris = geometry.points_np.astype(np.float64)[geometry.indices_np.reshape(-1, 3)]
+    # The rays start at the eye: the triangles as the BVH holds them, made relative to the eye's offset.
+    eye = geometry.eye_offset(scene.camera.eye).astype(np.float64)
+    tris = geometry.points_np.astype(np.float64)[geometry.indices_np.reshape(-1, 3)] - eye
     far = np.full(len(a), np.inf)
     t_a, m_a = far.copy(), np.full(len(a), -np.inf)
     t_b, m_b = far.copy(), np.full(len(a), -np.inf)
