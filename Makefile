@@ -17,8 +17,10 @@ llvm:
 demo: install
 	warprt render -o warprt.png
 
+# Two worker processes (pytest-xdist), a test file each at a time: module fixtures stay shared.
+TEST_WORKERS ?= 2
 test: install llvm
-	$(PYTHON) -m pytest -q
+	$(PYTHON) -m pytest -q -n $(TEST_WORKERS) --dist loadfile
 
 # The seed's Figures 6-8 and the cost-growth plot, into benchmarks/figures/.
 figures: install
