@@ -80,6 +80,8 @@ def run(width: int = 1024, height: int = 768, repeat: int = 5, scenes=None) -> d
         wp.launch(shadow_rays, dim=width * height, inputs=[geom.data, camera_data(camera_basis(scene.camera), geom.eye_offset(scene.camera.eye)),
                                                          o, d, t])
         keep = t.numpy() > 0.0
+        if not keep.any():  # no lit term (glass_slab): no shadow rays to time
+            continue
         o, d, t = o.numpy()[keep], d.numpy()[keep], t.numpy()[keep]
         total, blocked = cast(geom.mesh, o, d, t, repeat)
         occluded, _ = cast(geom.mesh, o[blocked], d[blocked], t[blocked], repeat)
