@@ -26,6 +26,6 @@ test: install llvm
 figures: install
 	$(PYTHON) -m benchmarks.figures
 
-# The performance report, benchmarks/REPORT.md (about 10 minutes on 2 cores; run on a quiet machine).
+# The performance report, benchmarks/REPORT.md (about 40 minutes on 2 cores; run on a quiet machine).
 benchmark: install llvm
 	$(PYTHON) -m benchmarks

@@ -10,8 +10,8 @@ import pytest
 # Every shortcut promises the traced image to the bit, so each closed form, count and stability
 # property of these suites must hold with every ray traced from a BVH built at the eye, and with every
 # shortcut at once: the first hits from the Z-buffer where certain, shadow rays from the light-space
-# grid, reflections off planar mirrors from their virtual cameras, on a BVH built for another eye and
-# reused (warprt.image.DEFAULTS.origin_shift). Two paths keep the suite's time what it was; each
+# grid, reflections off planar mirrors from their virtual cameras, on a BVH whose frame origin is moved
+# half the scene's reach away (warprt.image.DEFAULTS.origin_shift), so camera rays start far from zero. Two paths keep the suite's time what it was; each
 # shortcut is also held to the traced image on its own, on every scene, hard case and random scene
 # (tests/zbuffer, tests/shadows, tests/mirrors, tests/geometry).
 PATH_SUITES = ("core", "effects", "stability")

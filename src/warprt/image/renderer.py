@@ -33,7 +33,8 @@ REFLECTIONS = ("auto", "bvh", "mirrors")
 class Defaults:
     """render()'s defaults for what it is not told; the test suite sets them to run whole suites on
     every path (tests/conftest.py). ``origin_shift`` (tests only) builds each cached Geometry that
-    fraction of the scene's reach away from the eye, so that every frame runs on a reused BVH."""
+    fraction of the scene's reach away from its frame origin, so that camera rays start far from the
+    coordinates' zero."""
 
     primary: str = "auto"
     shadows: str = "auto"
