@@ -4,7 +4,6 @@ will need, checked against what the machine has before anything is allocated (an
 
 from __future__ import annotations
 
-import os
 import resource
 import sys
 from pathlib import Path
