@@ -36,7 +36,7 @@ class ArgumentError(SceneError):
 
     def worded(self, source: str, names: dict) -> SceneError:
         """The same error in another vocabulary: ``names`` maps each argument to its name there (a
-        flag), another argument's value written ``--flag value``; self where the argument has no name there."""
+        flag), another argument's value written as that name, a space and the value; self where the argument has no name there."""
         if self.argument not in names or any(n not in names for n in self.values):
             return self
         return SceneError(source, names[self.argument], self._fill(lambda name, v: f"{names[name]} {v}"))
