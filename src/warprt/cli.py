@@ -11,13 +11,13 @@ import json
 import os
 import signal
 import sys
-import time
 import tomllib
 from pathlib import Path
 
 from . import __version__, diagnostics
-from .errors import SceneError
+from .errors import ArgumentError, SceneError, one_line
 from .scene import EFFECTS
+from .timing import timed
 
 EXAMPLES = """examples:
   warprt render                               the built-in default scene -> warprt.png
@@ -44,6 +44,16 @@ EXAMPLES = """examples:
 Bad input is one line on stderr naming the file and the field, exit status 2, and no output file
 (0 done, 130 interrupted, 1 internal error). Outputs are written whole, through symlinks, never onto an input.
 """
+
+
+# The library arguments the flags set, by the function that takes them: the library names its own
+# arguments in its errors (render(): shadows: ...), and main() rewords such an error as the flag.
+FLAGS = {
+    "render": {"threads": "--threads", "device": "--device", "effects": "--effects", "algorithm": "--algorithm",
+               "primary": "--primary", "shadows": "--shadow-rays", "reflections": "--reflection-rays", "aovs": "--aov"},
+    "load_scene": {"up": "--up"},
+    "batch": {"workers": "--workers", "ray": "--ray", "shard": "--shard"},
+}
 
 
 class _Parser(argparse.ArgumentParser):
@@ -106,43 +116,31 @@ def _check_device(device: str):
         raise SceneError("command line", "--device", f"'{device}' is not available on this machine (Warp found no CUDA device); use --device cpu")
 
 
-def _aov_list(text) -> tuple:
-    from .image.aovs import check_aovs
-
-    return check_aovs([n.strip() for n in text.split(",")] if text else None)
-
-
 def cmd_render(args) -> int:
-    from .image import render
+    from .image import RenderOptions, render
     from .image.film import aov_paths, check_distinct, check_output_path, check_text_path, write_image, write_text
     from .image.memory import peak_rss
     from .image.progress import Progress
 
     # Everything that can be checked before the render is: a render whose result cannot be
     # saved, or that cannot start, should fail at once and leave nothing behind.
-    aovs = _aov_list(args.aov)
-    if aovs and args.algorithm == "zbuffer":
-        raise SceneError("command line", "--aov", "AOVs come from the tracer's camera rays: not with --algorithm zbuffer")
+    options = RenderOptions(threads=args.threads, device=args.device, algorithm=args.algorithm, primary=args.primary,
+                            effects=args.effects.split(",") if args.effects else None,
+                            aovs=[n.strip() for n in args.aov.split(",")] if args.aov else None,
+                            shadows=args.shadow_rays, reflections=args.reflection_rays)
+    aovs = options.aovs
     outputs = {"--output": check_output_path(args.output, "--output", aovs)}
     outputs.update({f"--aov {name}": p for name, p in aov_paths(outputs["--output"], aovs).items()})
     if args.stats_file:
         outputs["--stats-file"] = check_text_path(args.stats_file, "--stats-file")
     check_distinct(outputs)
-    if args.threads is not None and args.threads < 1:
-        raise SceneError("command line", "--threads", f"expected an integer >= 1, got {args.threads}")
     scene = _load(args)
     check_distinct(outputs, _inputs(scene))
     _check_device(args.device)
-    effects = args.effects.split(",") if args.effects else None
-    progress = None if args.quiet else Progress()
-    result = render(scene, threads=args.threads, device=args.device, effects=effects, algorithm=args.algorithm,
-                    progress=progress, primary=args.primary, aovs=aovs, shadows=args.shadow_rays,
-                    reflections=args.reflection_rays)
-    out = outputs["--output"]
-    t = time.perf_counter()
-    write_image(out, result.image, "--output", result.aovs)
-    stats = result.stats
-    stats.times["write"] = time.perf_counter() - t
+    result = render(scene, options, progress=None if args.quiet else Progress())
+    out, stats = outputs["--output"], result.stats
+    with timed(stats.times, "write"):
+        write_image(out, result.image, "--output", result.aovs)
     stats.memory["peak_rss"] = peak_rss()
     # The file first: a reader of stdout that stops early (| head) must not cost the statistics file.
     if args.stats_file:
@@ -259,8 +257,6 @@ stderr naming the job file and the field or frame, exit status 2, before anythin
 def cmd_batch(args) -> int:
     from .dataset import batch
 
-    if args.workers is not None and args.workers < 1:
-        raise SceneError("command line", "--workers", f"expected an integer >= 1, got {args.workers}")
     summary: dict = {}
     rows = batch(args.job, args.output_dir, workers=args.workers, ray=args.ray, shard=args.shard,
                  resume=args.resume, quiet=args.quiet, summary=summary)
@@ -367,13 +363,15 @@ def main(argv=None) -> int:
     except SceneError as e:
         if args.debug:
             raise
-        return _fail(f"warprt: error: {diagnostics.one_line(e)}", 2)  # one line, always
+        if isinstance(e, ArgumentError):
+            e = e.worded("command line", FLAGS.get(e.function, {}))
+        return _fail(f"warprt: error: {one_line(e)}", 2)  # one line, always
     except KeyboardInterrupt:
         return _fail("warprt: interrupted", 130)
     except Exception as e:
         if args.debug:
             raise
-        return _fail(f"warprt: internal error: {type(e).__name__}: {diagnostics.one_line(e)} "
+        return _fail(f"warprt: internal error: {type(e).__name__}: {one_line(e)} "
                      "(run with --debug for a traceback)", 1)
 
 

@@ -19,14 +19,10 @@ import warnings
 from contextlib import contextmanager
 from pathlib import Path
 
-from .errors import SceneWarning
+from .errors import SceneWarning, one_line
 
 _quiet = False
 _collectors: list[list[str]] = []  # the open collecting() blocks, innermost last
-
-
-def one_line(text) -> str:
-    return " ".join(str(text).split())
 
 
 def warn(source, field, message):

@@ -255,9 +255,9 @@ def test_object_tables_are_built_only_for_the_id_aovs():
 def test_bad_aov_names_are_scene_errors(aovs, message):
     with pytest.raises(warprt.SceneError, match=message) as e:
         warprt.render(scene_of(camera={"width": 4, "height": 3}), aovs=aovs)
-    assert e.value.field == "--aov"
+    assert e.value.field == "aovs"
 
 
 def test_aovs_need_the_tracer():
-    with pytest.raises(warprt.SceneError, match="not with --algorithm zbuffer"):
+    with pytest.raises(warprt.SceneError, match="not with algorithm='zbuffer'"):
         warprt.render(scene_of(camera={"width": 4, "height": 3}), aovs=["depth"], algorithm="zbuffer")

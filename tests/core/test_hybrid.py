@@ -46,5 +46,5 @@ def test_auto_traces_a_frame_whose_raster_buffers_would_be_large():
 
 
 def test_unknown_primary_is_a_scene_error():
-    with pytest.raises(warprt.SceneError, match="--primary"):
+    with pytest.raises(warprt.SceneError, match=r"render\(\): primary: unknown"):
         warprt.render(warprt.load_scene().with_camera(width=8, height=6), primary="photon")

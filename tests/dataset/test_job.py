@@ -123,7 +123,7 @@ def test_parse_shard(text, env, expected):
 def test_parse_shard_errors(text, env, message):
     with pytest.raises(SceneError, match=message) as e:
         parse_shard(text, env)
-    assert e.value.field == "--shard"
+    assert e.value.field == "shard"
 
 
 BAD_JOBS = [

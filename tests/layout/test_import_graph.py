@@ -2,6 +2,7 @@
 image -> dataset -> cli), with no import circle, and tests, benchmarks and reference/ use the package's faces."""
 
 import ast
+import re
 from pathlib import Path
 
 import pytest
@@ -126,3 +127,37 @@ def test_tests_benchmarks_and_reference_use_the_package_faces():
                           == "import_module" and node.args and isinstance(node.args[0], ast.Constant)]
                 outside += [(str(p.relative_to(ROOT)), n) for n in names if n and n.split(".")[0] == "warprt" and n not in FACES]
     assert outside == []
+
+
+FLAG = re.compile(r"(?<![\w-])--[a-z][a-z0-9-]*")  # a long option: --shadow-rays, --aov; not '----' rules
+
+
+def flags_mentioned(package: Path) -> list[tuple[str, int, str]]:
+    """(file, line, flag) for each CLI flag in a string literal or docstring of a module of ``package``
+    other than its cli.py, the one module that speaks the command line's vocabulary."""
+    found = []
+    for p in sorted(package.rglob("*.py")):
+        if p == package / "cli.py":
+            continue
+        for node in ast.walk(ast.parse(p.read_text())):
+            if isinstance(node, ast.Constant) and isinstance(node.value, str):
+                found += [(str(p.relative_to(package)), node.lineno, m) for m in FLAG.findall(node.value)]
+    return found
+
+
+def test_only_the_command_line_mentions_its_flags():
+    """Below cli.py the library names its Python arguments (render(shadows=...)); cli.py's FLAGS rewords them."""
+    assert flags_mentioned(PACKAGE) == []
+
+
+def test_a_planted_flag_is_found(tmp_path):
+    """The negative control: a copy of the package with a flag in one error message and one docstring."""
+    pkg = tmp_path / "warprt"
+    for p in PACKAGE.rglob("*.py"):
+        dest = pkg / p.relative_to(PACKAGE)
+        dest.parent.mkdir(parents=True, exist_ok=True)
+        dest.write_text(p.read_text())
+    launch = pkg / "image" / "launch.py"
+    launch.write_text(launch.read_text() + '\n\ndef _planted(t):\n    """As --threads says."""\n'
+                      '    raise ValueError(f"command line: --threads: got {t}")\n')
+    assert [(f, flag) for f, _, flag in flags_mentioned(pkg)] == [("image/launch.py", "--threads")] * 2

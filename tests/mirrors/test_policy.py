@@ -35,7 +35,7 @@ def test_a_scene_without_planar_mirrors_traces_its_reflections():
 
 
 def test_unknown_reflection_query_is_a_scene_error():
-    with pytest.raises(warprt.SceneError, match="--reflection-rays"):
+    with pytest.raises(warprt.SceneError, match=r"render\(\): reflections: unknown"):
         warprt.render(warprt.load_scene().with_camera(width=8, height=6), reflections="portals")
 
 

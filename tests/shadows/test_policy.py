@@ -12,7 +12,7 @@ import pytest
 
 import warprt
 from warprt.geometry import Geometry
-from warprt.image import shadows_from_grid
+from warprt.image import light_history, shadows_from_grid
 from warprt.scene import resolve_effects
 
 
@@ -29,12 +29,27 @@ def test_a_grid_too_dear_for_one_frame_waits_for_the_second_frame_with_its_light
     never pays."""
     scene = warprt.load_scene(None, {"objects[1].subdivisions": 5}).with_camera(width=320, height=240)
     geom, fx = Geometry(scene), resolve_effects(scene)
-    ask = lambda s, device="cpu", policy="auto", samples=320 * 240: shadows_from_grid(policy, geom, s, fx, samples, 2, device)
+
+    def ask(s, device="cpu", policy="auto", samples=320 * 240):  # a frame: counted, then the policy asked
+        lights = geom.light_positions(s)
+        return shadows_from_grid(policy, fx, geom, lights, samples, 2, device, light_history(geom).record(lights))
+
     assert [ask(scene) for _ in range(3)] == [False, True, True]
     assert not any(ask(scene.with_camera(width=32, height=24), samples=32 * 24) for _ in range(3))
     moved = replace(scene, lights=[replace(scene.lights[0], position=(0.0, 9.0, 0.0)), *scene.lights[1:]])
     assert not ask(moved)
     assert not ask(scene, "cuda") and ask(scene, "cuda", "grid") and not ask(scene, policy="bvh")
+
+
+def test_asking_the_policy_counts_no_frame():
+    """The frames are counted by light_history(geom).record alone: the same question asked again gets the
+    same answer, and the history holds what was recorded, nothing more."""
+    scene = warprt.load_scene(None, {"objects[1].subdivisions": 5}).with_camera(width=320, height=240)
+    geom, fx = Geometry(scene), resolve_effects(scene)
+    lights = geom.light_positions(scene)
+    assert [shadows_from_grid("auto", fx, geom, lights, 320 * 240, 2, "cpu", 1) for _ in range(3)] == [False] * 3
+    assert light_history(geom).frames == {}
+    assert light_history(geom).record(lights) == 1 and light_history(geom).record(lights) == 2
 
 
 def test_the_grid_is_kept_for_the_next_frame_with_the_same_lights():
@@ -51,7 +66,7 @@ def test_a_scene_without_shadow_rays_builds_no_grid():
 
 
 def test_unknown_shadow_query_is_a_scene_error():
-    with pytest.raises(warprt.SceneError, match="--shadow-rays"):
+    with pytest.raises(warprt.SceneError, match=r"render\(\): shadows: unknown"):
         warprt.render(warprt.load_scene().with_camera(width=8, height=6), shadows="photons")
 
 

@@ -18,8 +18,9 @@ from skimage.metrics import structural_similarity
 
 import warprt
 from oracle import ray_directions, ray_triangle
+from tests.zbuffer.traced import traced_faces
 from warprt.geometry import Geometry
-from warprt.image import render_zbuffer, traced_faces
+from warprt.image import render_zbuffer
 
 TOL = 1e-5  # barycentric (fraction of the triangle) and relative depth; float32 geometry rounds at ~1e-7
 

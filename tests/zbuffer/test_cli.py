@@ -42,5 +42,5 @@ def test_unknown_algorithm_exits_2_without_output(tmp_path):
 
 
 def test_unknown_algorithm_in_the_api_names_the_option():
-    with pytest.raises(warprt.SceneError, match="--algorithm"):
+    with pytest.raises(warprt.SceneError, match=r"render\(\): algorithm: unknown algorithm"):
         warprt.render(warprt.load_scene(), algorithm="scanline")

@@ -15,8 +15,9 @@ import pytest
 import warprt
 from accuracy.test_random_scenes import random_scene
 from tests.zbuffer.test_agreement import CASES, built_in_cases, scene_file_case
+from tests.zbuffer.traced import traced_faces
 from warprt.geometry import Geometry
-from warprt.image import ZBuffer, eye_on_surface, traced_faces
+from warprt.image import ZBuffer, eye_on_surface
 from warprt.scene import camera_basis, zbuffer_effects
 
 ROOT = Path(__file__).resolve().parents[2]

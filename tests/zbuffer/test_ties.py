@@ -6,8 +6,8 @@ import numpy as np
 from tests.scenekit import make_scene
 from tests.zbuffer.compare import classify_ties
 from tests.zbuffer.test_agreement import LIGHTS, MATERIALS
+from tests.zbuffer.traced import traced_faces
 from warprt.geometry import Geometry
-from warprt.image import traced_faces
 
 RING = [[1, 0], [1, 1], [0, 1], [-1, 1], [-1, 0], [-1, -1], [0, -1], [1, -1]]
 

@@ -9,7 +9,7 @@ import time
 import uuid
 from pathlib import Path
 
-from ..errors import SceneError
+from ..errors import ArgumentError, SceneError
 from ..image import default_threads, partial_files
 from .job import Frame, Job, check_scene, load_job, parse_shard, select_shard
 from .manifest import Manifest, done, read_rows
@@ -48,7 +48,7 @@ def batch(job, output_dir=None, *, workers: int | None = None, ray=None, shard=N
           quiet: bool = True, check: bool = True, on_frame=None, start_method: str | None = None,
           summary: dict | None = None) -> list[dict]:
     """Render the frames of the job file ``job`` into ``output_dir`` (default: the job file's folder) and
-    return the manifest rows of this run's frames (this shard's, those --resume found done included),
+    return the manifest rows of this run's frames (this shard's, those ``resume`` found done included),
     sorted by frame.
 
     ``ray``: None or False for local worker processes (``workers`` of them, default one per core, each
@@ -63,7 +63,7 @@ def batch(job, output_dir=None, *, workers: int | None = None, ray=None, shard=N
     if isinstance(shard, str):
         shard = parse_shard(shard)
     if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
-        raise SceneError("command line", "--workers", f"expected an integer >= 1, got {workers!r}")
+        raise ArgumentError("batch", "workers", f"expected an integer >= 1, got {workers!r}")
     j = load_job(job, output_dir)
     out_dir = j.output_dir
     t_check = time.perf_counter()

@@ -7,7 +7,7 @@ the sweep's combinations and the cameras, numbered sweep-major,
     frame k = s * n_cameras + c      (s: sweep combination, c: camera index),
 
 so each sweep combination is one contiguous run of the camera sequence. A frame is defined entirely by
-its ``overrides`` (dotted scene fields as --set names them): it is warprt.render of
+its ``overrides`` (dotted scene fields, as load_scene's overrides name them): it is warprt.render of
 warprt.load_scene(scene, overrides).
 
     scene = "scenes/seed.toml"          # relative to the job file, or absolute
@@ -36,7 +36,7 @@ import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ..errors import SceneError, show
+from ..errors import ArgumentError, SceneError, show
 from ..image import aov_paths, check_aovs
 from ..scene import load_scene
 
@@ -412,13 +412,12 @@ def parse_shard(text: str | None, env=None) -> tuple[int, int] | None:
     if text is None:
         return None
     env = os.environ if env is None else env
-    where = "--shard"
 
     def num(v, what):
         try:
             return int(str(v).strip())
         except ValueError:
-            raise SceneError("command line", where, f"{what} is not an integer: {v!r}") from None
+            raise ArgumentError("batch", "shard", f"{what} is not an integer: {v!r}") from None
 
     head, _, tail = text.partition("/")
     n = num(tail, "the shard count") if tail else None
@@ -428,13 +427,13 @@ def parse_shard(text: str | None, env=None) -> tuple[int, int] | None:
             lo = num(env.get("SLURM_ARRAY_TASK_MIN", 0), "SLURM_ARRAY_TASK_MIN")
             step = num(env.get("SLURM_ARRAY_TASK_STEP", 1), "SLURM_ARRAY_TASK_STEP")
             if step < 1 or (tid - lo) % step:
-                raise SceneError("command line", where, f"SLURM array task {tid} is not on the array's grid (min {lo}, step {step})")
+                raise ArgumentError("batch", "shard", f"SLURM array task {tid} is not on the array's grid (min {lo}, step {step})")
             i = (tid - lo) // step
             count = env.get("SLURM_ARRAY_TASK_COUNT")
             if count is not None:
                 c = num(count, "SLURM_ARRAY_TASK_COUNT")
                 if n is not None and n != c:
-                    raise SceneError("command line", where, f"auto/{n} disagrees with SLURM_ARRAY_TASK_COUNT={c}")
+                    raise ArgumentError("batch", "shard", f"auto/{n} disagrees with SLURM_ARRAY_TASK_COUNT={c}")
                 n = c
         elif "JOB_COMPLETION_INDEX" in env:
             i = num(env["JOB_COMPLETION_INDEX"], "JOB_COMPLETION_INDEX")
@@ -445,15 +444,15 @@ def parse_shard(text: str | None, env=None) -> tuple[int, int] | None:
             if n is None and "WARPRT_SHARD_COUNT" in env:
                 n = num(env["WARPRT_SHARD_COUNT"], "WARPRT_SHARD_COUNT")
         else:
-            raise SceneError("command line", where, "auto found no shard index in the environment (SLURM_ARRAY_TASK_ID, "
+            raise ArgumentError("batch", "shard", "auto found no shard index in the environment (SLURM_ARRAY_TASK_ID, "
                                                     "JOB_COMPLETION_INDEX or WARPRT_SHARD_INDEX)")
         if n is None:
-            raise SceneError("command line", where, "auto found a shard index but no count: give it as auto/N "
+            raise ArgumentError("batch", "shard", "auto found a shard index but no count: give it as auto/N "
                                                     "(or set WARPRT_SHARD_COUNT)")
     else:
         if n is None:
-            raise SceneError("command line", where, f"expected I/N (e.g. 0/4) or auto, got {text!r}")
+            raise ArgumentError("batch", "shard", f"expected I/N (e.g. 0/4) or auto, got {text!r}")
         i = num(head, "the shard index")
     if n < 1 or not 0 <= i < n:
-        raise SceneError("command line", where, f"expected 0 <= I < N, got {i}/{n}")
+        raise ArgumentError("batch", "shard", f"expected 0 <= I < N, got {i}/{n}")
     return i, n

@@ -10,7 +10,7 @@ fingerprint), camera, sweep, overrides, outputs (relative to DIR), aovs, stats (
 worker (host, pid, threads; node on Ray), seconds (scene, render, write on the worker), attempt, run
 (the id of the run that rendered it), backend.
 
-A fresh (not --resume) unsharded run removes every manifest*.jsonl in DIR; a fresh shard
+A fresh (not resume) unsharded run removes every manifest*.jsonl in DIR; a fresh shard
 truncates its own file only. A line cut short by a crash is ignored when read, and a newline
 is added before the next line is appended after it.
 """

@@ -1,5 +1,5 @@
 """The Ray backend (pip install 'warprt[ray]'): workers are Ray actors holding a FrameRenderer,
-frames are actor tasks. `--ray` starts a local Ray instance, `--ray ADDRESS` joins a cluster.
+frames are actor tasks. batch(ray=True) starts a local Ray instance, batch(ray=ADDRESS) joins a cluster.
 
 Failures: actors are created with max_restarts / max_task_retries, so an actor whose process dies
 (os.kill, OOM, a lost node) is restarted (its __init__ loads the scene again) and its queued and
@@ -24,7 +24,7 @@ import logging
 import os
 import sys
 
-from ..errors import SceneError
+from ..errors import ArgumentError, SceneError
 from ..image import default_threads
 from .local import stall_timeout
 
@@ -41,7 +41,7 @@ def _import_ray(local: bool):
     try:
         import ray
     except ImportError:
-        raise SceneError("command line", "--ray", "needs Ray: pip install 'warprt[ray]'") from None
+        raise ArgumentError("batch", "ray", "needs Ray: pip install 'warprt[ray]'") from None
     return ray
 
 
@@ -62,7 +62,7 @@ def connect(address: str | None, num_cpus: int | None = None) -> bool:
         try:
             ray.init(address=address, **common)
         except ConnectionError as e:
-            raise SceneError("command line", "--ray", f"cannot join the Ray cluster at {address}: {e}") from None
+            raise ArgumentError("batch", "ray", f"cannot join the Ray cluster at {address}: {e}") from None
     return True
 
 
@@ -108,9 +108,9 @@ def _probe(address: str, timeout: float = 5.0):
         with socket.create_connection((host.strip("[]"), int(port)), timeout=timeout):
             pass
     except ValueError:
-        raise SceneError("command line", "--ray", f"expected HOST:PORT or 'auto', got {address!r}") from None
+        raise ArgumentError("batch", "ray", f"expected HOST:PORT or 'auto', got {address!r}") from None
     except OSError as e:
-        raise SceneError("command line", "--ray", f"cannot reach a Ray cluster at {address}: "
+        raise ArgumentError("batch", "ray", f"cannot reach a Ray cluster at {address}: "
                                                   f"{e.strerror or e}") from None
 
 

@@ -27,13 +27,13 @@ the triangles' sorted order; the structure is built on the CPU for every device 
 
 from __future__ import annotations
 
-import time
 from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
 from .._warp import wp
 from ..floats import EPS32
+from ..timing import timed
 
 DELTA_EPS = 64.0 * EPS32  # delta = DELTA_EPS * D: the depth margin, ~7x the bound above
 UV_ABS = 1.0e-5  # covers the float32 cell lookup's rounding of (u, v), ~1e-7
@@ -235,7 +235,12 @@ class ShadowGridBuild:
         """``points`` (V, 3) and ``indices`` (3T,) as the kernels read them (float32, relative to the
         frame origin), ``lights`` (L, 3): the kernels' float32 light positions. delta_eps = uv_abs = 0
         builds the structure without its margin (the tests' negative control)."""
-        t0 = time.perf_counter()
+        times: dict = {}
+        with timed(times, "build"):
+            self._build(points, indices, lights, n, device, max_bytes, delta_eps, uv_abs)
+        self.seconds = times["build"]
+
+    def _build(self, points, indices, lights, n, device, max_bytes, delta_eps, uv_abs):
         self.n = n
         points = np.ascontiguousarray(points, np.float32)
         indices = np.ascontiguousarray(indices, np.int32)
@@ -289,7 +294,6 @@ class ShadowGridBuild:
                 g.light_ok = wp.array(ok, dtype=wp.int32, device=device)
                 g.delta = float(delta)
                 self.grid = g
-        self.seconds = time.perf_counter() - t0
 
     @property
     def stats(self) -> dict:

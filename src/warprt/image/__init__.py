@@ -12,9 +12,10 @@ from .film import (FORMATS as IMAGE_FORMATS, aov_paths, linear_to_srgb, partial_
 from .stats import RenderResult, RenderStats
 
 _WARP_NAMES = {
-    "renderer": ("DEFAULTS", "AUTO_RASTER_MAX_BYTES", "RASTER_BYTES_PER_SAMPLE", "cached_geometry", "frame_geometry",
-                 "raster_is_cheaper", "render", "render_zbuffer", "check_finite", "shadows_from_grid"),
-    "zbuffer": ("ZBuffer", "eye_on_surface", "traced_faces"),
+    "renderer": ("DEFAULTS", "AUTO_RASTER_MAX_BYTES", "RASTER_BYTES_PER_SAMPLE", "RenderOptions", "cached_geometry",
+                 "frame_geometry", "light_history", "raster_is_cheaper", "render", "render_zbuffer", "check_finite",
+                 "shadows_from_grid"),
+    "zbuffer": ("ZBuffer", "eye_on_surface"),
     "launch": ("bands_of", "default_threads", "launch_bands"),
     "mirrors": ("MirrorFrame",),
 }

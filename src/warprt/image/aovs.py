@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import SceneError, show
+from ..errors import ArgumentError, SceneError, show
 
 # Definitions (first hits of camera rays; misses: depth +inf, ids -1, the rest 0):
 #   depth      distance from the eye to the hit along the ray                    float32 (H, W)
@@ -33,17 +33,22 @@ CHANNELS = {"depth": ("depth.Z",), "normal": ("normal.X", "normal.Y", "normal.Z"
             "coverage": ("coverage.A",)}
 
 
-def check_aovs(names, field: str = "--aov", source: str = "command line") -> tuple:
-    """The AOV names asked for, checked and in AOVS order; a SceneError names an unknown or repeated one."""
+def check_aovs(names, field: str = "aovs", source: str | None = None) -> tuple:
+    """The AOV names asked for, checked and in AOVS order; an unknown or repeated one is a SceneError
+    naming ``field`` of ``source`` (a job file), or with source=None render()'s argument ``aovs``."""
+
+    def bad(message):
+        return ArgumentError("render", field, message) if source is None else SceneError(source, field, message)
+
     if names is None:
         return ()
     if isinstance(names, str) or not isinstance(names, (list, tuple)) or not all(isinstance(n, str) for n in names):
-        raise SceneError(source, field, f"expected a list of AOV names, got {show(names)}")
+        raise bad(f"expected a list of AOV names, got {show(names)}")
     for n in names:
         if n not in AOVS:
-            raise SceneError(source, field, f"unknown AOV '{n}'; expected some of: {', '.join(AOVS)}")
+            raise bad(f"unknown AOV '{n}'; expected some of: {', '.join(AOVS)}")
     if len(set(names)) != len(names):
-        raise SceneError(source, field, f"an AOV is named twice: {', '.join(names)}")
+        raise bad(f"an AOV is named twice: {', '.join(names)}")
     return tuple(n for n in AOVS if n in names)
 
 

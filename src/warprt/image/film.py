@@ -143,7 +143,7 @@ def _check_writable(path: Path, field: str):
 
 
 def check_text_path(path, field: str) -> Path:
-    """The same checks for a text output (--stats-file), whatever its extension."""
+    """The same checks for a text output (the statistics file), whatever its extension."""
     path = Path(path)
     _check_writable(path, field)
     return path

@@ -11,7 +11,6 @@ from concurrent.futures import FIRST_EXCEPTION, ThreadPoolExecutor, wait
 import numpy as np
 
 from .._warp import wp
-from ..errors import SceneError
 
 
 def default_threads() -> int:
@@ -19,11 +18,10 @@ def default_threads() -> int:
 
 
 def launch_plan(threads: int | None, bands: int | None, device: str) -> tuple[int, int]:
-    """Threads and bands for a render: on the CPU each band is one launch, and 8 per thread (16 at
-    least) balance the load between threads; a GPU takes the whole image in one launch."""
-    threads = default_threads() if threads is None else int(threads)
-    if threads < 1:
-        raise SceneError("command line", "--threads", f"expected an integer >= 1, got {threads}")
+    """Threads (``threads``, checked by RenderOptions, or every core) and bands for a render: on the
+    CPU each band is one launch, and 8 per thread (16 at least) balance the load between threads; a
+    GPU takes the whole image in one launch."""
+    threads = default_threads() if threads is None else threads
     return threads, bands or (1 if device != "cpu" else max(16, 8 * threads))
 
 

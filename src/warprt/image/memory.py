@@ -1,6 +1,6 @@
 """What a render holds in memory: the bytes of the geometry arrays the kernels read and of Warp's
 BVH, the frame's buffers, the process's peak resident set size, and the one estimate of what a frame
-will need, checked against what the machine has before anything is allocated (and shown by --stats)."""
+will need, checked against what the machine has before anything is allocated (and shown in the stats)."""
 
 from __future__ import annotations
 
@@ -75,7 +75,7 @@ def frame_memory(geom, image_bytes: int, raster_bytes: int, aov_bytes: int = 0, 
 def frame_estimate(scene, samples: int, raster: bool, algorithm: str = "raytrace") -> dict:
     """Bytes a frame of ``scene`` will add to the process, by role (the calibration above): the image
     buffers, the Z-buffer's per-sample buffers (``raster``: first hits from it; ``samples`` per pixel),
-    and the geometry with its BVH. The same numbers are checked before a render and shown by --stats."""
+    and the geometry with its BVH. The same numbers are checked before a render and shown in the stats."""
     cam = scene.camera
     pixels = cam.width * cam.height
     triangles = scene.triangle_count

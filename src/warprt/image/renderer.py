@@ -1,25 +1,27 @@
-"""Render a Scene: the Whitted tracer (render) or the Z-buffer (render_zbuffer), each a few named
-phases: geometry (BVH), kernel variant, rasterized first hits where the hybrid policy says so, the
-bands of pixels, and what it cost (time per phase, exact ray counts, memory)."""
+"""Render a Scene: the Whitted tracer (render) or the Z-buffer (render_zbuffer). render() checks its
+options once (RenderOptions), plans the frame (FramePlan: samples, depth, stack, the shortcuts' policies),
+then runs named phases: geometry (BVH), the shortcuts (rasterized first hits, the shadow rays' grid, the
+mirrors' virtual cameras), the kernel variant, the bands of pixels, and what it cost (stats)."""
 
 from __future__ import annotations
 
-import math
-import time
-from dataclasses import dataclass, replace
+import weakref
+from dataclasses import dataclass, field, fields, replace
 
 import numpy as np
 
 from .._warp import init_warp, wp
-from ..errors import SceneError
-from ..geometry import Geometry, frame_origin, kept_shadow_grid, objects_center, shadow_grid
+from ..errors import ArgumentError
+from ..geometry import Geometry, kept_shadow_grid, shadow_grid
 from ..kernels import (aov_buffers, aov_bytes, aov_sums, camera_data, empty_aov_buffers, make_shade_kernel,
                        make_trace_kernel, raster_kernel, stack_size)
 from ..scene import EffectSet, ObjectCache, camera_basis, resolve_effects, validate_camera, validate_scene, zbuffer_effects
+from ..timing import timed
 from .aovs import check_aovs, finish_aovs
 from .launch import bands_of, launch_bands, launch_plan
 from .memory import RASTER_BYTES_PER_SAMPLE, check_frame_memory, frame_estimate, frame_memory
 from .mirrors import MirrorFrame, empty_mirrors
+from .samples import SampleGrid, sample_grid
 from .stats import RenderResult, RenderStats
 from .zbuffer import RASTER_TILE, ZBuffer, empty_fragments, eye_on_surface
 
@@ -32,21 +34,17 @@ REFLECTIONS = ("auto", "bvh", "mirrors")
 @dataclass
 class Defaults:
     """render()'s defaults for what it is not told; the test suite sets them to run whole suites on
-    every path (tests/conftest.py). ``origin_shift`` (tests only) builds each cached Geometry that
-    fraction of the scene's reach away from its frame origin, so that camera rays start far from the
-    coordinates' zero."""
+    every path (tests/conftest.py)."""
 
     primary: str = "auto"
     shadows: str = "auto"
     reflections: str = "auto"
-    origin_shift: float = 0.0
 
 
 DEFAULTS = Defaults()
 
 # Pixel order: bands walk the image in 8x8 tiles, so the rays of a band stay close together and
-# reuse the BVH nodes in cache. Measured at 1024x768 against row-major order: 0.83 to 0.96 of the
-# trace time on six of eight scenes, 1.01 and 1.03 on two (benchmarks/ATTEMPTS.md).
+# reuse the BVH nodes in cache (measured against row-major order in benchmarks/ATTEMPTS.md).
 PIXEL_TILE = (8, 8)
 
 # primary="auto" rasterizes only while those buffers stay under this: 19 million samples, 1920x1080
@@ -55,60 +53,126 @@ PIXEL_TILE = (8, 8)
 AUTO_RASTER_MAX_BYTES = 512 * 2**20
 
 
+@dataclass(frozen=True)
+class RenderOptions:
+    """How render() renders a scene, checked once, when made; each field is render()'s argument of the
+    same name (render's docstring). None for primary, shadows and reflections: DEFAULTS'."""
+
+    threads: int | None = None
+    device: str = "cpu"
+    effects: object = None
+    disable: object = ()
+    bands: int | None = None
+    algorithm: str = "raytrace"
+    tile: tuple[int, int] | None = None
+    primary: str | None = None
+    shadows: str | None = None
+    reflections: str | None = None
+    report_truncated: bool = False
+    aovs: tuple = field(default=())
+
+    def __post_init__(self):
+        put = lambda name, value: object.__setattr__(self, name, value)  # noqa: E731 (frozen)
+        for name in ("primary", "shadows", "reflections"):
+            put(name, getattr(DEFAULTS, name) if getattr(self, name) is None else getattr(self, name))
+        for name, choices, what in (("primary", PRIMARY, "primary visibility"), ("shadows", SHADOWS, "shadow-ray query"),
+                                    ("reflections", REFLECTIONS, "reflection-ray query"),
+                                    ("algorithm", ALGORITHMS, "algorithm")):
+            if getattr(self, name) not in choices:
+                raise ArgumentError("render", name, f"unknown {what} '{getattr(self, name)}'; "
+                                                    f"expected one of: {', '.join(choices)}")
+        put("aovs", check_aovs(self.aovs))
+        if self.aovs and self.algorithm == "zbuffer":
+            raise ArgumentError("render", "aovs", "AOVs come from the tracer's camera rays: not with {algorithm}",
+                                {"algorithm": "zbuffer"})
+        if self.threads is not None:
+            put("threads", int(self.threads))
+            if self.threads < 1:
+                raise ArgumentError("render", "threads", f"expected an integer >= 1, got {self.threads}")
+
+    @classmethod
+    def of(cls, options: "RenderOptions | None", kwargs: dict) -> "RenderOptions":
+        """``options`` with ``kwargs`` (render()'s keyword arguments) over it."""
+        unknown = set(kwargs) - {f.name for f in fields(cls)}
+        if unknown:
+            raise TypeError(f"render() got an unexpected keyword argument '{sorted(unknown)[0]}'")
+        if options is None:
+            return cls(**kwargs)
+        return replace(options, **kwargs) if kwargs else options
+
+
 def raster_is_cheaper(triangles: int, samples: int, device: str = "cpu") -> bool:
     """Whether rasterizing the primary hits beats tracing them. Rasterization costs about a fixed
-    amount per triangle plus per covered sample, tracing about log(triangles) per sample; at
-    1024x768 the Z-buffer found the first hits in 0.36-0.41x of the traced time with 5k-9k
-    triangles and in 2.7x with 524k (benchmarks/ATTEMPTS.md). Below one triangle per ten samples
-    the raster wins on every scene measured. Measured on the CPU only: on a GPU the primaries are
-    traced. Within AUTO_RASTER_MAX_BYTES of buffers only."""
+    amount per triangle plus per covered sample, tracing about log(triangles) per sample, so the
+    raster wins with few triangles per sample: below one triangle per ten samples it did on every scene
+    measured (benchmarks/ATTEMPTS.md), on the CPU only (on a GPU the primaries are traced), and within
+    AUTO_RASTER_MAX_BYTES of buffers."""
     return (device == "cpu" and 0 < triangles <= samples // 10
             and samples * RASTER_BYTES_PER_SAMPLE <= AUTO_RASTER_MAX_BYTES)
 
 
-def primary_from_zbuffer(primary: str, geom: Geometry, basis, samples: int, device: str) -> bool:
-    """The hybrid policy: whether the first hits come from the Z-buffer. "zbuffer" asks for it, "auto"
-    where it is the cheaper; a camera on a surface is traced either way (the traced image is the promise)."""
-    wanted = primary == "zbuffer" or (primary == "auto" and raster_is_cheaper(geom.triangle_count, samples, device))
-    return wanted and not eye_on_surface(geom, basis)
+def raster_wanted(primary: str, triangles: int, samples: int, device: str) -> bool:
+    """The hybrid policy before the eye is known to be off every surface: "zbuffer" asks for the
+    Z-buffer's first hits, "auto" takes them where they are the cheaper."""
+    return primary == "zbuffer" or (primary == "auto" and raster_is_cheaper(triangles, samples, device))
 
 
-# What the light-space grid costs and saves, measured on the scenes on a quiet 2-core machine (the
-# research prototype, ../shared/research/exact-secondary-rays): a shadow ray's any-hit query about
-# 200 ns of thread time, the grid's answer about 70 ns; a build about 10 ms per light plus 0.8 us per
-# triangle and light (0.024 s for the default scene, 0.83 s for the 524k-triangle knot).
+# What the light-space grid costs and saves, measured on the scenes on a quiet 2-core machine: a shadow
+# ray's any-hit query about 200 ns of thread time, the grid's answer about 70 ns; a build about 10 ms per
+# light plus 0.8 us per triangle and light (0.024 s for the default scene, 0.83 s for the 524k-triangle knot).
 GRID_SAVES_PER_RAY = 130e-9
 GRID_BUILD_PER_LIGHT = 10e-3
 GRID_BUILD_PER_TRIANGLE_LIGHT = 780e-9
 GRID_HORIZON = 20  # frames a second frame with the same lights is taken to promise
+LIGHT_SETS_KEPT = 64  # lights moving every frame: no set of them stays long enough to amortize a grid
 
 
-def shadows_from_grid(shadows: str, geom: Geometry, scene, fx, samples: int, threads: int, device: str) -> bool:
+class LightHistory:
+    """How many frames a Geometry has served with each set of light positions: a grid built for
+    them is kept with the Geometry, so its build is paid once by all of those frames."""
+
+    def __init__(self):
+        self.frames: dict[bytes, int] = {}
+
+    def record(self, lights: np.ndarray) -> int:
+        """Count one more frame with ``lights``; how many there have been, this one included."""
+        if len(self.frames) >= LIGHT_SETS_KEPT:
+            self.frames.clear()
+        key = lights.tobytes()
+        self.frames[key] = self.frames.get(key, 0) + 1
+        return self.frames[key]
+
+
+_light_histories: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()  # Geometry -> LightHistory
+
+
+def light_history(geom: Geometry) -> LightHistory:
+    """The frames ``geom`` has served with shadow rays, by light set (kept as long as the Geometry)."""
+    return _light_histories.setdefault(geom, LightHistory())
+
+
+def shadows_from_grid(shadows: str, fx, geom: Geometry, lights: np.ndarray, samples: int, threads: int,
+                      device: str, frames: int) -> bool:
     """The shadow rays' policy: whether the light-space grid answers them. "grid" asks for it; "auto"
     takes it on the CPU where it is the cheaper: on a first frame when its build costs less than the
     frame's shadow rays save (about one per sample and light), and from the second frame with the same
-    lights on when it costs less than GRID_HORIZON such frames save (it is kept with the geometry for
-    the next frames, as the BVH is). Either way the image is the traced one, to the bit."""
+    lights on (``frames``: light_history's count, this frame included) when it costs less than
+    GRID_HORIZON such frames save; a grid kept for these lights costs nothing. Either way the image is
+    the traced one, to the bit."""
     if not fx.shadows or geom.triangle_count == 0 or shadows == "bvh":
         return False
     if shadows == "grid":
         return True
     if device != "cpu":
         return False
-    lights = geom.light_positions(scene)
-    frames = geom.__dict__.setdefault("_frames_with_lights", {})
-    if len(frames) >= 64:  # lights moving every frame: no set of them stays long enough to amortize
-        frames.clear()
-    key = lights.tobytes()
-    frames[key] = frames.get(key, 0) + 1
     if kept_shadow_grid(geom, lights) is not None:
         return True
     build = (GRID_BUILD_PER_LIGHT + GRID_BUILD_PER_TRIANGLE_LIGHT * geom.triangle_count) * len(lights)
     per_frame = GRID_SAVES_PER_RAY * samples * len(lights) / threads
-    return build <= per_frame * (GRID_HORIZON if frames[key] >= 2 else 1)
+    return build <= per_frame * (GRID_HORIZON if frames >= 2 else 1)
 
 
-_geometries = ObjectCache(size=4)
+geometry_cache = ObjectCache(size=4)  # the Geometries kept for the next frames of the same objects
 
 
 def frame_geometry(scene, device: str = "cpu") -> tuple[Geometry, dict]:
@@ -119,34 +183,16 @@ def frame_geometry(scene, device: str = "cpu") -> tuple[Geometry, dict]:
     for any eye in the region its BVH's padding covers), so a frame's image is a fresh build's to the
     bit; the tables of lights and materials are the frame's own (Geometry.scene_data)."""
     key = (id(scene.objects), tuple(id(o.vertices) for o in scene.objects),
-           tuple((o.material, o.smooth, id(o.normals), id(o.uv), id(o.colors)) for o in scene.objects), str(device),
-           DEFAULTS.origin_shift)
+           tuple((o.material, o.smooth, id(o.normals), id(o.uv), id(o.colors)) for o in scene.objects), str(device))
     eye = scene.camera.eye
-    found = _geometries.peek(key, scene.objects)
+    found = geometry_cache.peek(key, scene.objects)
     if found is not None:
         if np.array_equal(found.origin_for(eye), found.planned_origin) and found.covers(eye):
             return found, {"bvh": "reused", "reason": geometry_reason(found, eye)}
         reason = f"the eye left the region the cached BVH covers ({geometry_reason(found, eye)})"
     else:
         reason = "no geometry was built for these objects"
-    origin = None
-    if DEFAULTS.origin_shift:
-        origin = shifted_origin(scene, frame_origin(*objects_center(scene.objects), eye))
-    geom = Geometry(scene, device=device, origin=origin)
-    if not geom.covers(eye):  # a shifted origin too far for this eye
-        geom = Geometry(scene, device=device)
-    return _geometries.put(key, scene.objects, geom), {"bvh": "built", "reason": reason}
-
-
-def shifted_origin(scene, origin):
-    """Tests only (DEFAULTS.origin_shift = s): ``origin`` moved s R along a fixed slant (R: the largest
-    coordinate of the scene relative to it), so that camera rays start far from the coordinates' zero."""
-    origin = np.asarray(origin, np.float64)
-    if not scene.objects:
-        return origin
-    reach = max(float(np.abs(o.vertices - origin).max(initial=0.0)) for o in scene.objects)
-    slant = np.array([1.0, -0.75, 0.5])  # not along an axis: every coordinate moves
-    return origin + DEFAULTS.origin_shift * reach * slant
+    return geometry_cache.put(key, scene.objects, Geometry(scene, device=device)), {"bvh": "built", "reason": reason}
 
 
 def geometry_reason(geom: Geometry, eye) -> str:
@@ -171,143 +217,190 @@ def check_finite(image: np.ndarray, what: str = "render"):
         raise RuntimeError(f"{what} produced {len(rows)} non-finite pixels (first at row {rows[0]}, column {cols[0]})")
 
 
-def _check_choice(value: str, choices, flag: str, what: str):
-    if value not in choices:
-        raise SceneError("command line", flag, f"unknown {what} '{value}'; expected one of: {', '.join(choices)}")
+@dataclass(frozen=True)
+class FramePlan:
+    """What a traced frame will do, decided once from the scene and the options before any buffer."""
+
+    fx: EffectSet
+    threads: int
+    bands: int
+    grid: SampleGrid  # the samples a pixel takes
+    n_pixels: int
+    max_depth: int  # ray levels the kernel follows: 1 without reflection and refraction
+    stack: int  # the ray tree's stack: 0 without refraction
+    raster: bool  # the hybrid policy wants the Z-buffer's first hits (a camera on a surface still traces)
+    mirrors: bool  # the reflection rays' virtual cameras are asked for
+
+    @property
+    def samples(self) -> int:
+        return self.n_pixels * self.grid.per_pixel
 
 
-def render(scene, *, threads: int | None = None, device: str = "cpu", effects=None, disable=(),
-           bands: int | None = None, geometry: Geometry | None = None, algorithm: str = "raytrace",
-           progress=None, tile: tuple[int, int] | None = None, primary: str | None = None,
-           report_truncated: bool = False, aovs=None, shadows: str | None = None,
-           reflections: str | None = None) -> RenderResult:
+def plan_frame(scene, o: RenderOptions) -> FramePlan:
+    threads, bands = launch_plan(o.threads, o.bands, o.device)
+    fx = resolve_effects(scene, o.effects, o.disable)
+    cam, grid = scene.camera, sample_grid(scene, fx)
+    return FramePlan(fx, threads, bands, grid, cam.width * cam.height,
+                     max_depth=scene.render.max_depth if fx.reflection or fx.refraction else 1,
+                     stack=stack_size(scene.render.max_depth, scene.source) if fx.refraction else 0,
+                     raster=raster_wanted(o.primary, scene.triangle_count, cam.width * cam.height * grid.per_pixel, o.device),
+                     mirrors=fx.reflection and o.reflections == "mirrors")
+
+
+@dataclass(frozen=True)
+class TraceVariant:
+    """make_trace_kernel's arguments for a frame, and the name the stats give the kernel they make."""
+
+    fx: EffectSet
+    raster_primary: bool
+    stack: int
+    report_truncated: bool
+    aovs: tuple
+    shadow_grid: bool
+    mirrors: bool
+
+    @property
+    def name(self) -> str:
+        return (f"trace_{self.fx.variant}" + ("_zprimary" if self.raster_primary else "")
+                + ("_gshadow" if self.shadow_grid else "") + ("_mreflect" if self.mirrors else "")
+                + ("_aov_" + "_".join(self.aovs) if self.aovs else ""))
+
+    def kernel(self):
+        return make_trace_kernel(self.fx, raster_primary=self.raster_primary, stack=self.stack,
+                                 report_truncated=self.report_truncated, aovs=self.aovs,
+                                 shadow_grid=self.shadow_grid, mirrors=self.mirrors)
+
+
+def render(scene, options: RenderOptions | None = None, *, geometry: Geometry | None = None, progress=None,
+           **kwargs) -> RenderResult:
     """Render ``scene`` with the Whitted tracer (or, algorithm="zbuffer", by rasterization with the same
-    local shading). ``effects`` (names) limits the effect set, ``disable`` removes effects; neither
-    can add one the scene has nothing for. ``primary`` says where the tracer's first hits come from:
-    "raytrace"; "zbuffer" (hybrid rendering: the Z-buffer's visible triangle wherever it is certain
-    to be the traced one, the other samples traced; the image is the traced image to the bit); or
-    "auto", the default, which rasterizes where that is the cheaper of the two (raster_is_cheaper).
-    ``shadows`` says what answers the shadow rays: "bvh" (Warp's any-hit query), "grid" (the exact
-    light-space grid: the same answers), or "auto", the default, the grid where it is the cheaper.
-    ``reflections`` says what answers the reflection rays: "bvh" (Warp's closest-hit query), "mirrors"
-    (off planar mirrors, their virtual cameras' rasters wherever certain to give the query's answer,
-    the rest traced), or "auto", the default, which traces them: measured on every scene here, the
-    virtual cameras' rasters cost about what the queries they replace do (benchmarks/ATTEMPTS.md).
-    With ``report_truncated``, stats.truncated is the weight per pixel (H, W, 3) of the reflected and
-    refracted rays max_depth cut off: the share of their radiance the image is missing.
-    ``aovs`` (names from image.aovs.AOVS) come back as the result's ``.aovs``, from the camera rays'
-    first hits; the image is the same with or without them."""
-    primary = DEFAULTS.primary if primary is None else primary
-    shadows = DEFAULTS.shadows if shadows is None else shadows
-    reflections = DEFAULTS.reflections if reflections is None else reflections
-    _check_choice(primary, PRIMARY, "--primary", "primary visibility")
-    _check_choice(shadows, SHADOWS, "--shadow-rays", "shadow-ray query")
-    _check_choice(reflections, REFLECTIONS, "--reflection-rays", "reflection-ray query")
-    _check_choice(algorithm, ALGORITHMS, "--algorithm", "algorithm")
-    aovs = check_aovs(aovs)
+    local shading), as ``options`` (a RenderOptions) and keyword arguments (its fields) say:
+    ``effects`` (names) limits the effect set, ``disable`` removes effects; neither can add one the
+    scene has nothing for. ``primary`` says where the tracer's first hits come from: "raytrace";
+    "zbuffer" (hybrid rendering: the Z-buffer's visible triangle wherever it is certain to be the traced
+    one, the other samples traced; the image is the traced image to the bit); or "auto", the default,
+    which rasterizes where that is the cheaper of the two (raster_is_cheaper). ``shadows`` says what
+    answers the shadow rays: "bvh" (Warp's any-hit query), "grid" (the exact light-space grid: the same
+    answers), or "auto", the default, the grid where it is the cheaper. ``reflections`` says what answers
+    the reflection rays: "bvh" (Warp's closest-hit query), "mirrors" (off planar mirrors, their virtual
+    cameras' rasters wherever certain to give the query's answer, the rest traced), or "auto", the
+    default, which traces them: the virtual cameras' rasters were measured to cost about what the
+    queries they replace do. With ``report_truncated``, stats.truncated is the weight per pixel (H, W, 3)
+    of the reflected and refracted rays max_depth cut off: the share of their radiance the image is
+    missing. ``aovs`` (names from image.aovs.AOVS) come back as the result's ``.aovs``, from the camera
+    rays' first hits; the image is the same with or without them. ``geometry``: a Geometry built for
+    this scene, used as it is; ``progress``: a progress.Progress told of each band done."""
+    o = RenderOptions.of(options, kwargs)
     validate_scene(scene)  # a Scene built in Python gets the file's checks too, before any kernel
-    if algorithm == "zbuffer":
-        if aovs:
-            raise SceneError("command line", "--aov", "AOVs come from the tracer's camera rays: not with --algorithm zbuffer")
-        return render_zbuffer(scene, threads=threads, device=device, effects=effects, disable=disable,
-                              bands=bands, geometry=geometry)
+    if o.algorithm == "zbuffer":
+        return render_zbuffer(scene, o, geometry=geometry)
     init_warp()
-    t_start = time.perf_counter()
-    threads, bands = launch_plan(threads, bands, device)
-    cam = scene.camera
-    basis = camera_basis(cam)
-    fx: EffectSet = resolve_effects(scene, effects, disable)
-    stats = RenderStats.begin(scene, fx, threads=threads, bands=bands, device=device, algorithm="raytrace",
-                              variant=f"trace_{fx.variant}",
-                              max_depth=scene.render.max_depth if fx.reflection or fx.refraction else 1)
-    stack = stack_size(scene.render.max_depth, scene.source) if fx.refraction else 0
-    n_pixels = cam.width * cam.height
-    spp = scene.render.spp if fx.supersampling else 1
-    samples = n_pixels * spp
-    # Before any buffer: the most this frame can need (the Z-buffer's buffers wherever the policy may
-    # ask for them; a camera on a surface may still trace), against what the machine has.
-    may_raster = primary == "zbuffer" or (primary == "auto" and raster_is_cheaper(scene.triangle_count, samples, device))
-    check_frame_memory(scene, _without_geometry(frame_estimate(scene, spp, may_raster), geometry))
+    times: dict = {}
+    with timed(times, "total"):
+        plan = plan_frame(scene, o)
+        stats = RenderStats.begin(scene, plan.fx, threads=plan.threads, bands=plan.bands, device=o.device,
+                                  algorithm="raytrace", variant="", max_depth=plan.max_depth)
+        # Before any buffer: the most this frame can need, against what the machine has.
+        check_frame_memory(scene, _without_geometry(frame_estimate(scene, plan.grid.per_pixel, plan.raster), geometry))
+        with stats.phase("bvh"):
+            geom, stats.geometry = frame_geometry(scene, o.device) if geometry is None else given_geometry(geometry, scene.camera.eye)
+        stats.triangles = geom.triangle_count
+        raster, grid, mirror_frame = _shortcuts(scene, o, plan, geom, stats)
+        variant = TraceVariant(plan.fx, raster, plan.stack, o.report_truncated, o.aovs, grid is not None,
+                               mirror_frame is not None)
+        stats.variant = variant.name
+        with stats.phase("compile"):
+            kernel = variant.kernel()
+            wp.load_module(kernel.module, device=o.device)
+            if raster or mirror_frame is not None:
+                wp.load_module(raster_kernel.module, device=o.device)
+        zb = None
+        if raster:
+            with stats.phase("raster"):
+                zb = ZBuffer(scene, geom, replace(plan.fx, shadows=False, reflection=False), device=o.device)
+                zb.rasterize(plan.threads, plan.bands)
+        data = geom.scene_data(scene, grid)
+        with stats.phase("trace"):
+            frame = _trace(scene, o, plan, geom, data, kernel, zb, mirror_frame, progress)
+        result = _finish(scene, o, plan, geom, stats, frame, zb, grid, mirror_frame)
+    stats.times["total"] = times["total"]
+    stats.memory["estimate"] = frame_estimate(scene, plan.grid.per_pixel, raster)
+    return result
 
-    with stats.phase("bvh"):
-        geom, stats.geometry = frame_geometry(scene, device) if geometry is None else given_geometry(geometry, cam.eye)
-    stats.triangles = geom.triangle_count
-    raster = primary_from_zbuffer(primary, geom, basis, samples, device)
+
+def _shortcuts(scene, o: RenderOptions, plan: FramePlan, geom: Geometry, stats: RenderStats):
+    """The shortcuts this frame takes, each giving the traced answer to the bit: first hits from the
+    Z-buffer (True or False), the shadow rays' grid (or None) and the mirrors' virtual cameras (or None)."""
+    raster = plan.raster and not eye_on_surface(geom, camera_basis(scene.camera))
     stats.primary = "zbuffer" if raster else "raytrace"
-
     grid = None
-    if shadows_from_grid(shadows, geom, scene, fx, samples, threads, device):
-        lights = geom.light_positions(scene)
+    lights = geom.light_positions(scene)
+    frames = light_history(geom).record(lights) if plan.fx.shadows and geom.triangle_count else 0
+    if shadows_from_grid(o.shadows, plan.fx, geom, lights, plan.samples, plan.threads, o.device, frames):
         kept = kept_shadow_grid(geom, lights) is not None
         with stats.phase("shadow_grid"):
             build = shadow_grid(geom, lights)
         grid = build.grid  # None: over the memory budget, or every light has geometry at it
         stats.shadow_grid = {"grid": "reused" if kept else "built", **build.stats}
     stats.shadows = "grid" if grid is not None else "bvh"
-    data = geom.scene_data(scene, grid)  # this frame's lights and materials: small tables, the BVH shared
-
     mirror_frame = None
-    if fx.reflection and reflections == "mirrors":
+    if plan.mirrors:
         with stats.phase("mirrors"):
-            mirror_frame = MirrorFrame(scene, geom, data, fx, threads, bands, device)
+            mirror_frame = MirrorFrame(scene, geom, geom.scene_data(scene, grid), plan.fx, plan.threads, plan.bands,
+                                       o.device)
         stats.mirrors = mirror_frame.stats
         if mirror_frame.mirrors is None:
             mirror_frame = None
     stats.reflections = "mirrors" if mirror_frame is not None else "bvh"
-    mirrors = mirror_frame.mirrors if mirror_frame is not None else empty_mirrors(device)
+    return raster, grid, mirror_frame
 
-    with stats.phase("compile"):
-        kernel = make_trace_kernel(fx, raster_primary=raster, stack=stack, report_truncated=report_truncated,
-                                   aovs=aovs, shadow_grid=grid is not None, mirrors=mirror_frame is not None)
-        wp.load_module(kernel.module, device=device)
-        if raster or mirror_frame is not None:
-            wp.load_module(raster_kernel.module, device=device)
-    stats.variant += (("_zprimary" if raster else "") + ("_gshadow" if grid is not None else "")
-                      + ("_mreflect" if mirror_frame is not None else "") + ("_aov_" + "_".join(aovs) if aovs else ""))
 
-    zb = None
-    if raster:
-        with stats.phase("raster"):
-            zb = ZBuffer(scene, geom, replace(fx, shadows=False, reflection=False), device=device)
-            zb.rasterize(threads, bands)
+def _trace(scene, o: RenderOptions, plan: FramePlan, geom: Geometry, data, kernel, zb, mirror_frame, progress) -> dict:
+    """Launch the kernel over the image: the image, the truncated weights after it (report_truncated),
+    each pixel's ray counts and the AOV buffers."""
+    cam, device = scene.camera, o.device
+    # With report_truncated the kernel writes the truncated weights after the image.
+    image = wp.empty(plan.n_pixels * (2 if o.report_truncated else 1), dtype=wp.vec3, device=device)
+    counts = wp.empty(plan.n_pixels, dtype=wp.vec4i if plan.fx.refraction else wp.vec3i, device=device)
+    buffers = aov_buffers(o.aovs, geom, plan.n_pixels, plan.grid.side, device) if o.aovs else empty_aov_buffers(device)
+    c = camera_data(camera_basis(cam), geom.eye_offset(cam.eye))
     frags = zb.fragments if zb is not None else empty_fragments(device)
+    mirrors = mirror_frame.mirrors if mirror_frame is not None else empty_mirrors(device)
+    tile_w, tile_h = o.tile or PIXEL_TILE
+    inputs = lambda first: [data, c, plan.max_depth, plan.grid.k, first, tile_w, tile_h, frags, mirrors,  # noqa: E731
+                            buffers, image, counts]
+    _launch_with_progress(kernel, inputs, plan.n_pixels, plan.threads, plan.bands, device, counts, progress)
+    pixels = image.numpy().reshape(-1, cam.height, cam.width, 3)
+    return {"pixels": pixels, "image": pixels[0].copy(), "buffers": buffers, "mirrors": mirrors,
+            "per_kind": counts.numpy().sum(0, dtype=np.int64),  # no int64 copy of every pixel's counts
+            "bytes": image.capacity + counts.capacity}
 
-    with stats.phase("trace"):
-        # With report_truncated the kernel writes the truncated weights after the image.
-        image = wp.empty(n_pixels * (2 if report_truncated else 1), dtype=wp.vec3, device=device)
-        counts = wp.empty(n_pixels, dtype=wp.vec4i if fx.refraction else wp.vec3i, device=device)
-        c, k, max_depth = camera_data(basis, geom.eye_offset(cam.eye)), math.isqrt(scene.render.spp), stats.max_depth
-        per_pixel = k * k if fx.supersampling else 1
-        buffers = aov_buffers(aovs, geom, n_pixels, math.isqrt(per_pixel), device) if aovs else empty_aov_buffers(device)
-        tile_w, tile_h = tile or PIXEL_TILE
-        inputs = lambda first: [data, c, max_depth, k, first, tile_w, tile_h, frags, mirrors, buffers, image, counts]
-        _launch_with_progress(kernel, inputs, n_pixels, threads, bands, device, counts, progress)
-        pixels = image.numpy().reshape(-1, cam.height, cam.width, 3)
-        out = pixels[0].copy()
-        per_kind = counts.numpy().sum(0, dtype=np.int64)  # no int64 copy of every pixel's counts
+
+def _finish(scene, o: RenderOptions, plan: FramePlan, geom: Geometry, stats: RenderStats, frame: dict, zb, grid,
+            mirror_frame) -> RenderResult:
+    """The result: the image checked, the AOVs, the truncated weights, and the ray counts and memory in the stats."""
+    cam, out, per_kind = scene.camera, frame["image"], frame["per_kind"]
     check_finite(out)
-    if report_truncated:
-        stats.truncated = pixels[1].copy()
+    if o.report_truncated:
+        stats.truncated = frame["pixels"][1].copy()
     aov_arrays = {}
-    if aovs:
-        aov_arrays = finish_aovs(aovs, aov_sums(buffers, aovs), per_pixel, geom.origin, cam.height, cam.width)
+    if o.aovs:
+        aov_arrays = finish_aovs(o.aovs, aov_sums(frame["buffers"], o.aovs), plan.grid.per_pixel, geom.origin,
+                                 cam.height, cam.width)
         if "material" in aov_arrays:  # the kernel's material slots, as indices in scene.materials
             slots = aov_arrays["material"]
             aov_arrays["material"] = np.where(slots >= 0, geom.material_indices(scene)[np.maximum(slots, 0)], -1).astype(np.int32)
-
     stats.rays = {"primary": int(per_kind[0]), "shadow": int(per_kind[1]), "reflection": int(per_kind[2]),
-                  "refraction": int(per_kind[3]) if fx.refraction else 0}
+                  "refraction": int(per_kind[3]) if plan.fx.refraction else 0}
     stats.rays["total"] = sum(stats.rays.values())
     if mirror_frame is not None:
-        decided = int(mirrors.decided.numpy().sum())
+        decided = int(frame["mirrors"].decided.numpy().sum())
         stats.mirrors.update(decided=decided, share=decided / max(stats.rays["reflection"], 1))
     stats.rays_per_second = stats.rays["total"] / max(stats.times["trace"], 1e-9)
-    stats.times["total"] = time.perf_counter() - t_start
-    stats.memory = frame_memory(geom, image.capacity + counts.capacity, zb.nbytes if zb is not None else 0,
-                                aov_bytes=aov_bytes(buffers),
+    stats.memory = frame_memory(geom, frame["bytes"], zb.nbytes if zb is not None else 0,
+                                aov_bytes=aov_bytes(frame["buffers"]),
                                 shadow_grid_bytes=stats.shadow_grid.get("bytes", 0) if grid is not None else 0,
                                 mirrors_bytes=mirror_frame.nbytes if mirror_frame is not None else 0)
-    stats.memory["estimate"] = frame_estimate(scene, spp, raster)
     return RenderResult(out, stats, aov_arrays)
 
 
@@ -350,46 +443,45 @@ def _launch_with_progress(kernel, inputs, n_pixels, threads, bands, device, coun
             progress.end()
 
 
-def render_zbuffer(scene, *, threads: int | None = None, device: str = "cpu", effects=None, disable=(),
-                   bands: int | None = None, geometry: Geometry | None = None, tile: int = RASTER_TILE,
-                   return_faces: bool = False):
-    """Render ``scene`` by rasterization with the tracer's local shading (no shadows, no reflections).
-    Returns a RenderResult, and with return_faces also the visible face per sample (H, W, samples)."""
+def render_zbuffer(scene, options: RenderOptions | None = None, *, geometry: Geometry | None = None,
+                   tile: int = RASTER_TILE, return_faces: bool = False, **kwargs):
+    """Render ``scene`` by rasterization with the tracer's local shading (no shadows, no reflections),
+    as ``options`` and keyword arguments say (render()'s threads, device, effects, disable, bands);
+    ``tile``: the raster tiles' side in pixels. Returns a RenderResult, and with return_faces also the
+    visible face per sample (H, W, samples)."""
+    o = RenderOptions.of(options, kwargs)
     init_warp()
     validate_camera(scene.camera, scene.source)
-    t_start = time.perf_counter()
-    threads, bands = launch_plan(threads, bands, device)
-    cam = scene.camera
-    fx = zbuffer_effects(scene, effects, disable)
-    samples = scene.render.spp if fx.supersampling else 1
-    estimate = frame_estimate(scene, samples, True, algorithm="zbuffer")
-    check_frame_memory(scene, _without_geometry(estimate, geometry))
-    stats = RenderStats.begin(scene, fx, threads=threads, bands=bands, device=device, algorithm="zbuffer",
-                              variant=f"zbuffer_{fx.variant}", max_depth=1)
-    stats.rays = {"primary": 0, "shadow": 0, "reflection": 0, "refraction": 0, "total": 0}  # none: visibility is rasterized
-
-    with stats.phase("geometry"):
-        geom = geometry or Geometry(scene, device=device, build_bvh=False)
-        data = geom.scene_data(scene)
-    stats.triangles = geom.triangle_count
-
-    with stats.phase("compile"):
-        kernel = make_shade_kernel(fx)
-        for m in (kernel.module, raster_kernel.module):
-            wp.load_module(m, device=device)
-
-    with stats.phase("render"):  # project + bin + raster + shade
-        zb = ZBuffer(scene, geom, fx, device=device, tile=tile, track_uncertain=False)
-        zb.rasterize(threads, bands)
-        stats.times.update(zb.times)
-        with stats.phase("shade"):
-            n_pixels = cam.width * cam.height
-            image = wp.empty(n_pixels, dtype=wp.vec3, device=device)
-            c, k, frags = camera_data(zb.basis, zb.eye), zb.k, zb.fragments
-            launch_bands(kernel, lambda first: [data, c, k, first, frags, image], n_pixels, threads, bands, device)
-            out = image.numpy().reshape(cam.height, cam.width, 3).copy()
-    check_finite(out, "zbuffer")
-    stats.times["total"] = time.perf_counter() - t_start
+    times: dict = {}
+    with timed(times, "total"):
+        threads, bands = launch_plan(o.threads, o.bands, o.device)
+        fx = zbuffer_effects(scene, o.effects, o.disable)
+        estimate = frame_estimate(scene, sample_grid(scene, fx).per_pixel, True, algorithm="zbuffer")
+        check_frame_memory(scene, _without_geometry(estimate, geometry))
+        stats = RenderStats.begin(scene, fx, threads=threads, bands=bands, device=o.device, algorithm="zbuffer",
+                                  variant=f"zbuffer_{fx.variant}", max_depth=1)
+        stats.rays = {"primary": 0, "shadow": 0, "reflection": 0, "refraction": 0, "total": 0}  # visibility is rasterized
+        with stats.phase("geometry"):
+            geom = geometry or Geometry(scene, device=o.device, build_bvh=False)
+            data = geom.scene_data(scene)
+        stats.triangles = geom.triangle_count
+        with stats.phase("compile"):
+            kernel = make_shade_kernel(fx)
+            for m in (kernel.module, raster_kernel.module):
+                wp.load_module(m, device=o.device)
+        with stats.phase("render"):  # project + bin + raster + shade
+            zb = ZBuffer(scene, geom, fx, device=o.device, tile=tile, track_uncertain=False)
+            zb.rasterize(threads, bands)
+            stats.times.update(zb.times)
+            with stats.phase("shade"):
+                cam = scene.camera
+                image = wp.empty(cam.width * cam.height, dtype=wp.vec3, device=o.device)
+                c, k, frags = camera_data(zb.basis, zb.eye), zb.k, zb.fragments
+                launch_bands(kernel, lambda first: [data, c, k, first, frags, image], cam.width * cam.height,
+                             threads, bands, o.device)
+                out = image.numpy().reshape(cam.height, cam.width, 3).copy()
+        check_finite(out, "zbuffer")
+    stats.times["total"] = times["total"]
     stats.memory["estimate"] = estimate
     result = RenderResult(out, stats)
     return (result, zb.faces()) if return_faces else result

@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
-import time
-from contextlib import contextmanager
 from dataclasses import asdict, dataclass, field
 from typing import NamedTuple
 
 import numpy as np
+
+from ..timing import timed
 
 
 @dataclass
@@ -60,16 +60,6 @@ class RenderStats:
     def phase(self, name: str):
         """Time the block as times[name], in seconds."""
         return timed(self.times, name)
-
-
-@contextmanager
-def timed(times: dict, name: str):
-    """Time the block as times[name], in seconds."""
-    t = time.perf_counter()
-    try:
-        yield
-    finally:
-        times[name] = time.perf_counter() - t
 
 
 class _Frame(NamedTuple):

@@ -1,6 +1,5 @@
 """The Z-buffer's host side: the per-sample buffers of one rasterization (ZBuffer, handing on
-kernels.raster.Fragments), the eye-on-a-surface test that sends a view to the tracer, and the
-tracer's own first hits for comparison (traced_faces)."""
+kernels.raster.Fragments) and the eye-on-a-surface test that sends a view to the tracer."""
 
 from __future__ import annotations
 
@@ -8,12 +7,13 @@ import math
 
 import numpy as np
 
-from .._warp import init_warp, wp
+from .._warp import wp
 from ..geometry import Geometry
-from ..kernels import (CLIP_SCALE, MARGIN_PX, Fragments, camera_data, count_kernel, fill_kernel, primary_faces_kernel,
-                       project_kernel, raster_camera, raster_kernel, uncertain_np)
-from ..scene import EffectSet, camera_basis, resolve_effects
-from .launch import default_threads, launch_bands
+from ..kernels import (CLIP_SCALE, MARGIN_PX, Fragments, count_kernel, fill_kernel, project_kernel,
+                       raster_camera, raster_kernel, uncertain_np)
+from ..scene import EffectSet, camera_basis
+from .launch import launch_bands
+from .samples import sample_grid
 from .stats import timed
 
 RASTER_TILE = 16  # pixels per raster tile side: each raster thread owns one tile
@@ -86,8 +86,8 @@ class ZBuffer:
         self.track_uncertain = track_uncertain
         self.basis = camera_basis(cam)
         self.eye = geometry.eye_offset(cam.eye)  # the tracer's camera ray origin
-        self.k = math.isqrt(scene.render.spp)
-        self.samples = self.k * self.k if fx.supersampling else 1
+        self.k, side = sample_grid(scene, fx)
+        self.samples = side * side
         # track_uncertain: fill rival_inv_depth for hybrid rendering; a plain Z-buffer image skips it.
         self.camera = raster_camera(self.basis, clip_distance(geometry, self.eye), margin if track_uncertain else 0.0,
                                     self.eye)
@@ -156,23 +156,3 @@ class ZBuffer:
     def faces(self) -> np.ndarray:
         """The visible triangle of every sample, (height, width, samples), -1 where none."""
         return self.fragments.face.numpy().reshape(self.basis.height, self.basis.width, self.samples)
-
-
-def traced_faces(scene, *, geometry: Geometry | None = None, effects=None, disable=(), threads: int | None = None,
-                 device: str = "cpu") -> np.ndarray:
-    """The face the ray tracer's primary ray hits at every sample, (height, width, samples), -1 for a miss;
-    samples as the tracer takes them for this effect set (k*k with supersampling, else the centre)."""
-    init_warp()
-    cam = scene.camera
-    fx = resolve_effects(scene, effects, disable)
-    k = math.isqrt(scene.render.spp)
-    samples = k * k if fx.supersampling else 1
-    geom = geometry or Geometry(scene, device=device)
-    if geom.mesh is None:
-        raise ValueError("traced_faces needs a Geometry with its BVH (build_bvh=True)")
-    threads = threads or default_threads()
-    face = wp.empty(cam.width * cam.height * samples, dtype=wp.int32, device=device)
-    c = camera_data(camera_basis(cam), geom.eye_offset(cam.eye))
-    launch_bands(primary_faces_kernel, lambda first: [geom.data, c, k, samples, first, face],
-                 cam.width * cam.height, threads, max(16, 8 * threads), device)
-    return face.numpy().reshape(cam.height, cam.width, samples)

@@ -22,7 +22,7 @@ from .raster import Fragments, count_kernel, fill_kernel, project_kernel, raster
 from .shading import Coefficients, ShadeResult, make_coefficients, make_shade, phong_diffuse, phong_specular
 from .shadow import cube_cell, grid_occluded, make_occluded
 from .texture import texel
-from .trace import MAX_TREE_DEPTH, STACK_SIZES, make_trace_kernel, primary_faces_kernel, stack_size, tile_order_pixel
+from .trace import MAX_TREE_DEPTH, STACK_SIZES, make_trace_kernel, stack_size, tile_order_pixel
 from .triangle import query_normal, triangle, unit_normal, woop_hit
 from .zbuffer_shade import make_shade_kernel
 
@@ -32,7 +32,7 @@ __all__ = ["aov_buffers", "aov_bytes", "aov_sums", "AovBuffers", "beer", "beer_f
            "id_sample", "init_warp", "make_coefficients", "make_occluded", "make_record_first_hit", "make_shade",
            "make_shade_kernel", "make_surface", "make_trace_kernel", "MARGIN_PX", "MAX_BOUNCES", "MAX_TREE_DEPTH",
            "mirror_chain", "mirror_hit", "MIRROR_MARGIN_PX", "MirrorHit", "Mirrors", "offset_ray_origin",
-           "OFFSET_SCALE", "phong_diffuse", "phong_specular", "primary_faces_kernel", "probe_kernel",
+           "OFFSET_SCALE", "phong_diffuse", "phong_specular", "probe_kernel",
            "project_kernel", "query_normal", "raster_camera", "raster_kernel", "RasterCamera", "reflect", "refract",
            "sample_offset", "ShadeResult", "stack_size", "STACK_SIZES", "Surface", "texel", "TIE_REL",
            "tile_order_pixel", "triangle", "uncertain", "uncertain_np", "unit_normal", "woop_hit", "wp"]

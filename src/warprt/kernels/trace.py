@@ -298,22 +298,3 @@ def make_trace_kernel(fx, raster_primary: bool = False, stack: int = 0, report_t
             counts[i] = wp.vec3i(samples, shadow_rays, reflection_rays)  # in tile order: a band's counts are contiguous
 
     return trace
-
-
-@wp.kernel(enable_backward=False)
-def primary_faces_kernel(s: SceneData, c: CameraData, k: int, samples: int, first_pixel: int,
-                         face: wp.array(dtype=wp.int32)):
-    """The face the trace kernel's first query hits at every sample (-1: a miss): the same camera ray,
-    origin and max_t, without shading, so the comparison with the Z-buffer leaves the tracer as it is."""
-    pixel = first_pixel + wp.tid()
-    x = pixel % c.width
-    row = pixel / c.width
-    for sample in range(samples):
-        offset = wp.vec2(0.5, 0.5)
-        if samples > 1:
-            offset = sample_offset(sample, k)
-        q = wp.mesh_query_ray(s.mesh, c.eye, camera_ray(c, x, row, offset[0], offset[1]), 1.0e30)
-        f = int(-1)
-        if q.result:
-            f = q.face
-        face[pixel * samples + sample] = f

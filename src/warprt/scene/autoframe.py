@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import SceneError
+from ..errors import ArgumentError, SceneError
 from .dielectric import warn_unclosed
 from .meshio import file_objects, read_mesh_file, warn_if_tiny, warn_if_unmapped
 from .model import Light, Material, RenderSettings, Scene
@@ -26,7 +26,7 @@ def scene_for_mesh(path: Path, camera: dict | None = None, up: str | None = None
     source = str(path)
     mesh = read_mesh_file(path)
     if up is not None and up.lower() not in UP_AXES:
-        raise SceneError("command line", "--up", f"expected one of {', '.join(UP_AXES)}, got '{up}'")
+        raise ArgumentError("load_scene", "up", f"expected one of {', '.join(UP_AXES)}, got '{up}'")
     axis = (up or mesh.up_axis or "y").lower()
     # The framing below is written for a y-up file: turned so that the camera's up is the file's up.
     to_up = up_rotation(axis).T

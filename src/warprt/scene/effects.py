@@ -9,7 +9,7 @@ from dataclasses import dataclass, fields, replace
 
 import numpy as np
 
-from ..errors import SceneError
+from ..errors import ArgumentError, SceneError
 
 EFFECTS = ("ambient", "diffuse", "specular", "shadows", "reflection", "supersampling", "smooth", "texture",
            "vertex_color", "refraction", "absorption")
@@ -71,13 +71,16 @@ def scene_effects(scene) -> EffectSet:
 
 
 def parse_effects(names, source: str = "render", field: str = "render.effects") -> set[str]:
+    """Effect names as a set; an unknown one is a SceneError naming ``field`` of ``source``, or, with
+    source=None, render()'s argument ``field``."""
     out = set()
     for n in names:
         n = n.strip()
         if n == "":
             continue
         if n not in EFFECTS:
-            raise SceneError(source, field, f"unknown effect '{n}'; expected some of: {', '.join(EFFECTS)}")
+            message = f"unknown effect '{n}'; expected some of: {', '.join(EFFECTS)}"
+            raise ArgumentError("render", field, message) if source is None else SceneError(source, field, message)
         out.add(n)
     return out
 
@@ -89,8 +92,8 @@ def resolve_effects(scene, allow=None, disable=()) -> EffectSet:
     if scene.render.effects is not None:
         keep &= parse_effects(scene.render.effects, scene.source)
     if allow is not None:
-        keep &= parse_effects(allow, "command line", "--effects")
-    keep -= parse_effects(disable, "command line", "--effects")
+        keep &= parse_effects(allow, None, "effects")
+    keep -= parse_effects(disable, None, "disable")
     on = {n: getattr(fx, n) and n in keep for n in EFFECTS}
     on["shadows"] = on["shadows"] and (on["diffuse"] or on["specular"])  # shadows only dim those terms
     return EffectSet(**on)

@@ -4,13 +4,13 @@ with_overrides, the same scene for other overrides, from one already loaded."""
 
 from __future__ import annotations
 
-import time
 import tomllib
 from dataclasses import asdict, fields, replace
 from pathlib import Path
 
 from ..diagnostics import collecting
-from ..errors import SceneError
+from ..errors import ArgumentError, SceneError
+from ..timing import timed
 from .autoframe import scene_for_mesh
 from .meshio import FORMATS, is_mesh_path
 from .model import Camera, RenderSettings, Scene
@@ -25,11 +25,11 @@ def load_scene(path=None, overrides: dict | None = None, up: str | None = None) 
     """Read a scene: a TOML scene file, any mesh file trimesh reads (framed automatically for the
     overridden camera and image size; only camera.* and render.* can be overridden; ``up``: the
     file's up axis), or None for the built-in default scene."""
-    t = time.perf_counter()
-    with collecting(str(path) if path is not None else "default scene"):
+    times: dict = {}
+    with timed(times, "load"), collecting(str(path) if path is not None else "default scene"):
         scene = _load_scene(path, overrides, up)
     scene.files = (Path(path if path is not None else default_scene_path()), *scene.files)
-    scene.load_seconds = time.perf_counter() - t
+    scene.load_seconds = times["load"]
     return scene
 
 
@@ -73,15 +73,16 @@ def with_overrides(base: Scene, path, overrides: dict, base_overrides: dict | No
     reader's own read_camera and read_render on the merged tables (its coercion and checks, the same
     SceneError), then the whole scene's checks; lights, materials and objects are base's own, so a
     renderer's geometry cache keeps them. Any other difference loads the file."""
-    t = time.perf_counter()
-    base_overrides = base_overrides or {}
-    changed = {k: v for k, v in overrides.items() if k not in base_overrides or base_overrides[k] != v}
-    in_place = all(k in overrides for k in base_overrides) and all(sets_in_place(k, path) for k in changed)
-    if not in_place:
-        return load_scene(path, overrides)
-    scene = _set_camera_render(base, changed, base.source) if changed else replace(base)
-    validate_scene(scene)
-    scene.load_seconds = time.perf_counter() - t
+    times: dict = {}
+    with timed(times, "load"):
+        base_overrides = base_overrides or {}
+        changed = {k: v for k, v in overrides.items() if k not in base_overrides or base_overrides[k] != v}
+        in_place = all(k in overrides for k in base_overrides) and all(sets_in_place(k, path) for k in changed)
+        if not in_place:
+            return load_scene(path, overrides)
+        scene = _set_camera_render(base, changed, base.source) if changed else replace(base)
+        validate_scene(scene)
+    scene.load_seconds = times["load"]
     return scene
 
 
@@ -110,8 +111,8 @@ def _load_scene(path, overrides, up) -> Scene:
     if path.suffix.lower() != ".toml":
         return _load_mesh_scene(path, overrides, up)
     if up is not None:
-        raise SceneError("command line", "--up", "applies to a mesh file; in a scene file, give the object "
-                                                 "up = \"z\" (or x, y, -x, -y, -z)")
+        raise ArgumentError("load_scene", "up", "applies to a mesh file; in a scene file, give the object "
+                                                "up = \"z\" (or x, y, -x, -y, -z)")
     try:
         # utf-8-sig: a byte-order mark, which Windows editors write, is not part of the TOML.
         text = path.read_text(encoding="utf-8-sig")

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import SceneError, show
+from ..errors import SceneError, one_line, show
 from . import shapes
 from .dielectric import warn_unclosed
 from .meshio import file_objects, read_mesh_file, warn_if_tiny, warn_if_unmapped
@@ -317,7 +317,7 @@ def _load_mesh_file(source: str, field_name: str, path: Path):
     except SceneError as e:
         raise SceneError(source, field_name, str(e)) from None
     except Exception as e:  # a reader's own failure on a damaged file
-        raise SceneError(source, field_name, f"{path}: cannot read mesh file: {' '.join(str(e).split())}") from None
+        raise SceneError(source, field_name, f"{path}: cannot read mesh file: {one_line(e)}") from None
 
 
 def up_rotation(axis: str) -> np.ndarray:

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import SceneError
+from ..errors import SceneError, one_line
 
 IDENTITY_UV = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0)  # u' = a u + b v + c, v' = d u + e v + f
 _MAGIC_EXR = b"\x76\x2f\x31\x01"
@@ -114,7 +114,7 @@ def _decode(data: bytes, srgb: bool | None, name: str, field) -> np.ndarray:
             raise SceneError(name, field, "not an image file read here (PNG, JPEG, TIFF, BMP, TGA, WebP, ... "
                                           "through Pillow; EXR)") from None
         except (OSError, ValueError) as e:
-            raise SceneError(name, field, f"cannot read image: {' '.join(str(e).split()) or 'damaged file'}") from None
+            raise SceneError(name, field, f"cannot read image: {one_line(e, 'damaged file')}") from None
         if im.mode in ("I;16", "I;16B", "I;16L", "I;16N", "I"):
             # 16-bit grey (Pillow keeps 16 bits only for grey images); 'I' PNGs hold 16-bit values too
             rgb = np.repeat((np.asarray(im, np.float64) / 65535.0)[..., None], 3, -1)
@@ -154,7 +154,7 @@ def _read_exr(data: bytes, name: str, field) -> np.ndarray:
     except SceneError:
         raise
     except Exception as e:
-        raise SceneError(name, field, f"cannot read EXR image: {' '.join(str(e).split())}") from None
+        raise SceneError(name, field, f"cannot read EXR image: {one_line(e)}") from None
     finally:
         os.unlink(tmp)
     return rgb

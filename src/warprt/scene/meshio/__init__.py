@@ -214,10 +214,6 @@ def unique_name(name: str, taken) -> str:
     return out
 
 
-def one_line(e: Exception) -> str:
-    return " ".join(str(e).split()) or type(e).__name__
-
-
 # --- a file's parts as scene objects ------------------------------------------------------------------
 
 

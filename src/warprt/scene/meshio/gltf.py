@@ -20,11 +20,11 @@ from urllib.parse import unquote
 import numpy as np
 
 from ...diagnostics import warn
-from ...errors import SceneError
+from ...errors import SceneError, one_line
 from ..dielectric_formats import dielectric_from_gltf
 from ..model import Material
 from ..texture import image_texture
-from . import MeshFile, MeshPart, one_line, unique_name, unit_rows, weld_corners
+from . import MeshFile, MeshPart, unique_name, unit_rows, weld_corners
 
 _COMPONENT = {5120: np.int8, 5121: np.uint8, 5122: np.int16, 5123: np.uint16, 5125: np.uint32, 5126: np.float32}
 _WIDTH = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT2": 4, "MAT3": 9, "MAT4": 16}
@@ -42,7 +42,7 @@ def read_gltf(path: Path) -> MeshFile:
     except SceneError:
         raise
     except (KeyError, IndexError, TypeError, ValueError, struct.error, OSError) as e:
-        raise SceneError(src, None, f"cannot read {path.suffix[1:].upper()} file: {type(e).__name__}: {one_line(e)}") from None
+        raise SceneError(src, None, f"cannot read {path.suffix[1:].upper()} file: {type(e).__name__}: {one_line(e, type(e).__name__)}") from None
 
 
 class _Document:

@@ -7,8 +7,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ...errors import SceneError
-from . import MeshFile, MeshPart, one_line
+from ...errors import SceneError, one_line
+from . import MeshFile, MeshPart
 
 
 def read_with_trimesh(path: Path) -> MeshFile:
@@ -19,7 +19,7 @@ def read_with_trimesh(path: Path) -> MeshFile:
         # process=False keeps the file's vertices as they are: no merging, no removal of faces.
         loaded = trimesh.load(src, process=False)
     except Exception as e:
-        raise SceneError(src, None, f"cannot read {ext[1:].upper()} file: {one_line(e)}") from None
+        raise SceneError(src, None, f"cannot read {ext[1:].upper()} file: {one_line(e, type(e).__name__)}") from None
     if isinstance(loaded, trimesh.Trimesh):
         loaded = trimesh.Scene(loaded)
     if not isinstance(loaded, trimesh.Scene):

@@ -16,10 +16,10 @@ from pathlib import Path
 import numpy as np
 
 from ...diagnostics import warn
-from ...errors import SceneError
+from ...errors import SceneError, one_line
 from ..model import Material
 from ..texture import image_texture, srgb_to_linear
-from . import MeshFile, MeshPart, dedupe, fan_corners, one_line, weld_corners
+from . import MeshFile, MeshPart, dedupe, fan_corners, weld_corners
 
 _UV_NAMES = [("s", "t"), ("u", "v"), ("texture_u", "texture_v"), ("texture_s", "texture_t")]
 _COLOR_NAMES = [("red", "green", "blue"), ("diffuse_red", "diffuse_green", "diffuse_blue"), ("r", "g", "b")]
@@ -32,7 +32,7 @@ def read_ply(path: Path) -> MeshFile:
     try:
         loaded = trimesh.load(src, process=False)
     except Exception as e:
-        raise SceneError(src, None, f"cannot read PLY file: {one_line(e)}") from None
+        raise SceneError(src, None, f"cannot read PLY file: {one_line(e, type(e).__name__)}") from None
     raw = getattr(loaded, "metadata", {}).get("_ply_raw")
     if raw is None or "vertex" not in raw:
         raise SceneError(src, None, "the mesh has no triangles")

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from ...diagnostics import native_stderr, usd_messages, warn
-from ...errors import SceneError
+from ...errors import SceneError, one_line
 from ..dielectric_formats import dielectric_from_usd
 from ..model import Material
 from ..texture import Texture, image_texture
@@ -61,7 +61,7 @@ def _plain(message: str) -> str:
     """A pxr message without its C++ namespaces and quoting."""
     message = re.sub(r"pxrInternal_[A-Za-z0-9_]*::", "", message)
     message = re.sub(r"\s*<0x[0-9a-fA-F]+>", "", message)  # object addresses: noise, and never the same twice
-    return " ".join(message.split())
+    return one_line(message)
 
 
 def _pxr_message(e: Exception) -> str:
