@@ -4,10 +4,15 @@ LLVM ?= /usr/lib/x86_64-linux-gnu/libLLVM.so.19.1
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 export DRJIT_LIBLLVM_PATH ?= $(LLVM)
 
-.PHONY: install llvm demo test figures benchmark
+.PHONY: install install-extras llvm demo test figures benchmark
 
-# The Ray extra too: the batch tests run on a real local Ray instance and a simulated 2-node cluster.
+# The package alone: rendering an image needs neither pytest, Mitsuba nor Ray.
 install:
+	$(PYTHON) -m pip install -q -e .
+
+# The test extra (Mitsuba, pytest, matplotlib) and the Ray extra: the batch tests run on a real local Ray
+# instance and a simulated 2-node cluster.
+install-extras:
 	$(PYTHON) -m pip install -q -e '.[test,ray]'
 
 # Mitsuba's llvm_ad_rgb variant needs a libLLVM that Dr.Jit can use; Debian 12's libLLVM 15 is not one.
@@ -19,13 +24,13 @@ demo: install
 
 # Two worker processes (pytest-xdist), a test file each at a time: module fixtures stay shared.
 TEST_WORKERS ?= 2
-test: install llvm
+test: install-extras llvm
 	$(PYTHON) -m pytest -q -n $(TEST_WORKERS) --dist loadfile
 
 # The seed's Figures 6-8 and the cost-growth plot, into benchmarks/figures/.
-figures: install
+figures: install-extras
 	$(PYTHON) -m benchmarks.figures
 
 # The performance report, benchmarks/REPORT.md (about 40 minutes on 2 cores; run on a quiet machine).
-benchmark: install llvm
+benchmark: install-extras llvm
 	$(PYTHON) -m benchmarks
