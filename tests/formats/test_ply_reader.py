@@ -6,10 +6,10 @@ Triangles are compared corner by corner (the polygon fanned as (v0, vk, vk+1)), 
 number its vertices as it likes.
 """
 
+import os
 import struct
 import subprocess
 import sys
-import textwrap
 from pathlib import Path
 
 import numpy as np
@@ -18,6 +18,9 @@ from PIL import Image
 
 from warprt import SceneError
 from warprt.scene import read_mesh_file
+
+SRC = str(Path(__file__).resolve().parents[2] / "src")
+ENV = {**os.environ, "PYTHONPATH": SRC + os.pathsep + os.environ.get("PYTHONPATH", "")}
 
 # Five vertices, all values exact in float32; a quad and a triangle sharing an edge.
 XYZ = np.array([[0, 0, 0], [2, 0, 0], [2, 1, 0], [0, 1, 0], [1, 3, 0.5]])
@@ -252,21 +255,23 @@ def test_the_intact_triangles_of_the_damaged_files_are_read(tmp_path):
 
 # --- what reading costs: no trimesh --------------------------------------------------------------------
 
-CHECK_IMPORTS = textwrap.dedent("""\
-    import sys
-    from warprt.scene import read_mesh_file
-    for path in sys.argv[1:]:
-        read_mesh_file(path)
-    print(" ".join(sorted({m.split(".")[0] for m in sys.modules} & {"trimesh", "scipy"})))
-    """)
+
+def imported(folder: Path, mesh: str) -> set:
+    """The top-level packages of trimesh, SciPy and PIL that `warprt render` of a scene holding ``mesh``
+    imports (python -X importtime lists every import)."""
+    (folder / "s.toml").write_text(f'[[lights]]\nposition = [2.0, 3.0, 4.0]\n\n[[objects]]\nmesh = "{mesh}"\n')
+    r = subprocess.run([sys.executable, "-X", "importtime", "-m", "warprt", "render", "s.toml", "-o", "x.png", "-q",
+                        "--width", "16", "--height", "12"], cwd=folder, capture_output=True, text=True, env=ENV)
+    assert r.returncode == 0 and (folder / "x.png").exists(), r.stderr[-2000:]
+    names = {line.rsplit("|", 1)[-1].strip().split(".")[0] for line in r.stderr.splitlines() if line.startswith("import time:")}
+    return names & {"trimesh", "scipy", "PIL"}
 
 
-def test_reading_ply_and_obj_imports_neither_trimesh_nor_scipy(tmp_path):
+def test_rendering_ply_and_obj_files_imports_neither_trimesh_nor_scipy(tmp_path):
     write_ply(tmp_path / "m.ply", "binary_little_endian", full_vertex(), POLYGONS)
     (tmp_path / "m.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvn 0 0 1\nf 1/1/1 2/1/1 3/1/1\n")
     (tmp_path / "m.stl").write_text("solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\n"
                                     "vertex 0 1 0\nendloop\nendfacet\nendsolid t\n")
-    run = lambda *files: subprocess.run([sys.executable, "-c", CHECK_IMPORTS, *map(str, files)], capture_output=True,
-                                        text=True, check=True).stdout.split()
-    assert run(tmp_path / "m.ply", tmp_path / "m.obj") == []
-    assert "trimesh" in run(tmp_path / "m.stl")  # the negative control: STL is trimesh's, and the check sees it
+    assert imported(tmp_path, "m.ply") == set()
+    assert imported(tmp_path, "m.obj") == set()
+    assert "trimesh" in imported(tmp_path, "m.stl")  # the negative control: STL is trimesh's, and the check sees it
