@@ -22,7 +22,7 @@ from ..scene import srgb_to_linear
 from .aovs import AOVS, CHANNELS, IDS
 
 FORMATS = (".png", ".npy", ".exr", ".npz")
-PNG_LEVEL = 1
+PNG_LEVEL = 1  # zlib level 1: 640x480 in about a third of level 6's time, files ~1.4x as large
 
 
 def linear_to_srgb(x: np.ndarray) -> np.ndarray:
