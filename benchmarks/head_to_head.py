@@ -111,11 +111,7 @@ def scenes() -> list[Path]:
 
 
 def run(width=1024, height=768, scalar_width=128, scalar_height=96, repeat=3, only=None) -> dict:
-    # The cold target: `warprt render` of the built-in default scene, at its own size, against the same
-    # scene rendered through Mitsuba's Python API, both from process start to PNG file.
-    default = {"warprt_cold": cold("warprt", None, None, None, repeat),
-               "mitsuba_llvm_cold": cold("mitsuba_llvm", None, None, None, repeat)}
-    print(f"default scene cold warprt/mitsuba {default['warprt_cold'] / default['mitsuba_llvm_cold']:.2f}", flush=True)
+    # The cold targets (the default scene, a scene of mesh files) are benchmarks/cold.py's.
     rows = []
     for scene in scenes():
         if only and scene.stem not in only:
@@ -137,7 +133,7 @@ def run(width=1024, height=768, scalar_width=128, scalar_height=96, repeat=3, on
         rows.append(row)
         print(f"{scene.stem:<16} warm warprt/mitsuba {row['warprt_warm'] / row['mitsuba_llvm_warm']:.2f}  "
               f"cold {row['warprt_cold'] / row['mitsuba_llvm_cold']:.2f}", flush=True)
-    return {"rows": rows, "default_cold": default}
+    return {"rows": rows}
 
 
 def report(data: dict) -> str:
@@ -169,11 +165,6 @@ def report(data: dict) -> str:
         lines.append(f"| {r['scene']} | {r['rays']:,} | {m:.3f} | {r['hybrid_warm']:.3f} | {r['hybrid_warm'] / m:.2f} "
                      f"| {r['hybrid_warm'] / r['before_warm']:.2f} | {r['before_warm']:.3f} | {r['warprt_warm']:.3f} | {r['warprt_warm'] / m:.2f} | {r['zbuffer_warm']:.3f} | {r['zbuffer_warm'] / m:.2f} | {mc:.2f} | {r['warprt_cold']:.2f} "
                      f"| {r['warprt_cold'] / mc:.2f} | {r['zbuffer_cold']:.2f} | {r['rays'] / r['warprt_warm'] / 1e6:.1f} |")
-    if "default_cold" in data:
-        d = data["default_cold"]
-        lines += ["", f"Cold target, the built-in default scene at its own 640x480 (`warprt render` against the same scene "
-                      f"through Mitsuba's Python API, each from process start to PNG file): warprt {d['warprt_cold']:.2f} s, "
-                      f"Mitsuba {d['mitsuba_llvm_cold']:.2f} s, ratio {d['warprt_cold'] / d['mitsuba_llvm_cold']:.2f}."]
     lines += ["", f"Mitsuba `scalar_rgb` runs the Python integrator per ray, so it is measured at {sw}x{sh} (warm frame):", "",
               "| scene | scalar_rgb | llvm_ad_rgb | warprt | scalar / llvm | warprt / llvm |", "|---|---:|---:|---:|---:|---:|"]
     for r in rows:

@@ -19,8 +19,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from warprt.scene import ObjectCache
-
 # Dr.Jit 1.5 needs an LLVM it can drive; Debian 12's libLLVM 15 crashes it ("Cannot select: fminimum").
 LLVM_PATH = "/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1"
 INTEGRATOR = "warprt_whitted"
@@ -407,13 +405,30 @@ class MitsubaScene:
         return np.array(image, dtype=np.float32)[:, :, :3]
 
 
-_scenes = ObjectCache(size=4)
+_scenes = None  # an ObjectCache, made on first use: a script that only renders (whitted_integrator) need not import warprt
 
 
 def mitsuba_scene(scene, smooth: bool = True) -> MitsubaScene:
     """The converted scene, built once per (Scene object, smooth) and kept for the next few calls
     (a comparison at several effect levels converts the scene once)."""
+    global _scenes
+    if _scenes is None:
+        from warprt.scene import ObjectCache
+
+        _scenes = ObjectCache(size=4)
     return _scenes.get((id(scene), bool(smooth)), scene, lambda: MitsubaScene(scene, smooth))
+
+
+def whitted_integrator(mi_scene, scene, object_of_shape: dict, switches: Switches = Switches()):
+    """The Whitted integrator for a Mitsuba scene a script built itself (its meshes read by Mitsuba's own
+    shape plugins, as a Mitsuba user's script does): ``scene`` gives lights, render.ambient,
+    render.background and materials as a warprt Scene names them, ``object_of_shape`` each shape's id
+    -> its index in scene.objects, whose .material names its material. No textures or vertex colours."""
+    mi, dr = mitsuba()
+    integrator = mi.load_dict({"type": INTEGRATOR})
+    integrator.tables = _Tables(mi, dr, mi_scene, scene, object_of_shape, attributes=False)
+    integrator.switches = switches
+    return integrator
 
 
 def render_mitsuba(scene, effects=None, disable=()) -> np.ndarray:

@@ -353,17 +353,34 @@ end_header
 """
 
 
-def test_a_trimesh_log_warning_with_its_traceback_is_one_line(work):
-    """trimesh logs a PLY's missing texture with its traceback, which logging's last resort would
-    print whole (in a subprocess: pytest's own log capture would hide it)."""
+def test_a_missing_ply_texture_is_one_warning_line(work):
+    """warprt reads PLY itself: a missing texture is its own one warning, not trimesh's log as well."""
     (work / "tex.ply").write_text(TEXTURED_PLY)
     r = run(["render", "tex.ply", "-o", "x.png", "--width", "16", "--height", "12"], work)
     assert r.returncode == 0
     lines = r.stderr.splitlines()
-    assert lines[0] == "warprt: warning: tex.ply: trimesh: unable to load image! (FileNotFoundError: missing.png)"
-    assert lines[1].startswith("warprt: warning: tex.ply: ") and "missing.png" in lines[1]  # warprt's own word on it
-    assert len(lines) == 3 and lines[2].startswith("wrote x.png (16x12")
+    assert lines[0].startswith("warprt: warning: tex.ply: comment TextureFile: ") and "missing.png" in lines[0]
+    assert len(lines) == 2 and lines[1].startswith("wrote x.png (16x12")
     assert run(["render", "tex.ply", "-o", "x.png", "-q"], work).stderr == ""
+
+
+LOG_WITH_TRACEBACK = textwrap.dedent("""\
+    import logging
+    from warprt.diagnostics import collecting
+    with collecting("m.stl"):
+        try:
+            raise FileNotFoundError("missing.png")
+        except FileNotFoundError:
+            logging.getLogger("trimesh.exchange").warning("unable to load image!", exc_info=True)
+    """)
+
+
+def test_a_trimesh_log_warning_with_its_traceback_is_one_line(work):
+    """trimesh (STL, OFF) logs some failures with their traceback, which logging's last resort would
+    print whole (in a subprocess: pytest's own log capture would hide it)."""
+    r = subprocess.run([sys.executable, "-c", LOG_WITH_TRACEBACK], capture_output=True, text=True, env=ENV, cwd=work)
+    assert r.returncode == 0
+    assert r.stderr.splitlines() == ["warprt: warning: m.stl: trimesh: unable to load image! (FileNotFoundError: missing.png)"]
 
 
 def test_a_failing_usd_file_is_its_error_line_alone(work, capfd):

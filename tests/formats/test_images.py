@@ -82,6 +82,20 @@ def test_png_is_srgb_8bit(outputs):
     np.testing.assert_array_equal(np.asarray(png, np.int64), srgb8(np.load(outputs / "out.npy")))
 
 
+@pytest.mark.parametrize("height,width", [(1, 1), (7, 37), (64, 300)])
+def test_png_decodes_to_the_formula_for_noise_at_any_size(tmp_path, height, width):
+    """Noise over the whole range (every neighbour difference wraps somewhere), out-of-range values,
+    odd sizes: PIL's decoder reads back the test's own sRGB encoding of the image, byte for byte."""
+    from PIL import Image
+
+    rng = np.random.default_rng(height * width)
+    image = rng.uniform(-0.1, 1.1, (height, width, 3)).astype(np.float32)
+    write_image(tmp_path / "n.png", image)
+    png = Image.open(tmp_path / "n.png")
+    assert png.mode == "RGB" and png.size == (width, height)
+    np.testing.assert_array_equal(np.asarray(png, np.int64), srgb8(image))
+
+
 def test_failed_write_leaves_no_file(tmp_path):
     """An image the encoder rejects: no output and no temporary file remain."""
     with pytest.raises(Exception):

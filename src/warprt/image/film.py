@@ -10,7 +10,9 @@ import glob
 import os
 import shutil
 import stat
+import struct
 import tempfile
+import zlib
 from pathlib import Path
 
 import numpy as np
@@ -20,7 +22,7 @@ from ..scene import srgb_to_linear
 from .aovs import AOVS, CHANNELS, IDS
 
 FORMATS = (".png", ".npy", ".exr", ".npz")
-PNG_LEVEL = 1
+PNG_LEVEL = 1  # zlib level 1: 640x480 in about a third of level 6's time, files ~1.4x as large
 
 
 def linear_to_srgb(x: np.ndarray) -> np.ndarray:
@@ -281,10 +283,8 @@ def write_image(path, image: np.ndarray, field: str = "output", aovs: dict | Non
 
     def write(tmp):
         if ext == ".png":
-            from PIL import Image
-
-            # zlib level 1: 640x480 in about a third of the default level 6's time, files ~1.4x as large
-            Image.fromarray(to_srgb8(image), "RGB").save(tmp, format="PNG", compress_level=PNG_LEVEL)
+            with open(tmp, "wb") as f:
+                f.write(png_bytes(to_srgb8(image)))
         elif ext == ".npy":
             a = np.ascontiguousarray(image, np.float32)
             with open(tmp, "wb") as f:
@@ -303,6 +303,25 @@ def write_image(path, image: np.ndarray, field: str = "output", aovs: dict | Non
     except OSError as e:  # a full disk, a folder removed meanwhile
         raise _cannot_write(path, field, e) from None
     return path
+
+
+def png_bytes(rgb8: np.ndarray) -> bytes:
+    """An (H, W, 3) uint8 image as a PNG file: every row filtered by 'Sub' (each byte less the one a pixel to
+    its left), one zlib stream at level PNG_LEVEL. Written here rather than by PIL, whose import and adaptive
+    filters cost a cold render about 20 ms more (1024x768) for a file of the same size."""
+    h, w, _ = rgb8.shape
+    rows = np.ascontiguousarray(rgb8, np.uint8).reshape(h, 3 * w)
+    filtered = np.empty((h, 1 + 3 * w), np.uint8)
+    filtered[:, 0] = 1  # the row's filter type: Sub
+    filtered[:, 1:4] = rows[:, :3]
+    np.subtract(rows[:, 3:], rows[:, :-3], out=filtered[:, 4:])  # modulo 256, as the filter is defined
+
+    def chunk(kind: bytes, data: bytes) -> bytes:
+        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data))
+
+    header = struct.pack(">IIBBBBB", w, h, 8, 2, 0, 0, 0)  # 8-bit RGB, deflate, no interlace
+    return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", header) + chunk(b"IDAT", zlib.compress(filtered.tobytes(), PNG_LEVEL))
+            + chunk(b"IEND", b""))
 
 
 def read_image(path) -> np.ndarray:
