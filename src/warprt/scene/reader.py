@@ -178,7 +178,7 @@ def read_light(source: str, t: dict, i: int) -> Light:
     else:
         position = r.vector("position")
     if kind == "point" and "direction" in t:
-        r.fail("direction", "a point light shines in every direction: give type = \"spot\" for a cone")
+        r.fail("direction", "a point light shines in every direction: a cone is a spot (type = \"spot\")")
     if "direction" in t and "target" in t:
         r.fail("target", "give direction or target, not both")
     direction = None

@@ -125,7 +125,7 @@ def _check_light(source, where, light, eye):
                                                           "float32 ray tests cannot reach it")
     if light.type == "point":
         if light.direction is not None:
-            raise SceneError(source, f"{where}.direction", "a point light shines in every direction: a cone is a spot")
+            raise SceneError(source, f"{where}.direction", "a point light shines in every direction: a cone is a spot (type = \"spot\")")
     elif not np.any(_check_vector(source, f"{where}.direction", light.direction)):
         raise SceneError(source, f"{where}.direction", "must not be the zero vector")
     cutoff, beam = light.cutoff_angle, light.beam_width
