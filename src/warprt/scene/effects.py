@@ -34,7 +34,7 @@ class EffectSet:
 
     @property
     def names(self) -> tuple[str, ...]:
-        """The effects on, by their names in EFFECTS (what render.effects and --disable take)."""
+        """The effects on, by their names in EFFECTS (what render.effects and render(disable=) take)."""
         return tuple(n for n in EFFECTS if getattr(self, n))
 
     @property
