@@ -114,7 +114,6 @@ def _check_light(source, where, light, eye):
     if light.falloff not in FALLOFFS:
         raise SceneError(source, f"{where}.falloff", f"expected one of {', '.join(map(repr, FALLOFFS))}, "
                                                      f"got {show(light.falloff)}")
-    _check_vector(source, f"{where}.color", light.color, nonneg=True)
     if light.type == "directional":
         if light.position is not None:
             raise SceneError(source, f"{where}.position", "a directional light has no position (it is infinitely far)")
@@ -123,6 +122,7 @@ def _check_light(source, where, light, eye):
         if np.abs(position - eye).max() > MAX_REACH:
             raise SceneError(source, f"{where}.position", f"is more than {MAX_REACH:g} from camera.eye; "
                                                           "float32 ray tests cannot reach it")
+    _check_vector(source, f"{where}.color", light.color, nonneg=True)
     if light.type == "point":
         if light.direction is not None:
             raise SceneError(source, f"{where}.direction", "a point light shines in every direction: a cone is a spot (type = \"spot\")")
