@@ -153,7 +153,7 @@ def _make_shade(AMBIENT: bool, DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool, TEX
                         dist = wp.length(to_light_o)
                         d = to_light_o / dist
                         if wp.static(LIGHT_MODEL):
-                            if directional:
+                            if directional:  # its position is NaN: the ray above is replaced
                                 d = L
                                 dist = FAR
                         out.shadow_rays += 1

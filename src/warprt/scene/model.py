@@ -90,7 +90,7 @@ class Light:
     direction: tuple | None = None  # unit vector the light travels along: spot axis, sun direction
     cutoff_angle: float = 20.0  # degrees, spot only (Mitsuba's default)
     beam_width: float | None = None  # degrees, spot only; None: 3/4 of cutoff_angle (Mitsuba's default)
-    falloff: str = "none"  # FALLOFFS
+    falloff: str = "none"  # FALLOFFS; a directional light has none, whatever it says (irradiance)
     name: str = ""  # the author's name for a light read from a file, "" otherwise
 
     def __post_init__(self):
