@@ -4,6 +4,8 @@ film, Embree intersection and ray spawning, sharing no tracing code with src/war
 Model (the seed's Figure 3, as warprt defines it), per colour channel, two-sided surfaces:
     I = C_amb ka + sum_l vis_l C_l (kd max(0, n.L) + ks max(0, r.v)^n) + k_r I(reflected),
 vis_l = 0 when n.L <= 0 or the shadow ray is blocked; a miss returns the background; max_depth ray levels.
+The lights are Mitsuba's own emitters (point, spot, directional): L, C_l with its spot profile and
+1/r^2, and the shadow ray's end come from their sample_direction, not from a copy of warprt's model.
 ka, kd and ks at a hit are the material's times its textures (Mitsuba's bilinear, repeating bitmap
 or its checkerboard, at the mesh's own uv) and, for ka and kd, the mesh's vertex colour attribute.
 With glass, + F I(reflected) + (1 - F) k_t I(refracted) at a dielectric, each segment inside weighted
@@ -97,7 +99,7 @@ class Switches:
 
 def _register_integrator(mi, dr):
     class WhittedIntegrator(mi.SamplingIntegrator):
-        """Whitted ray tracing with Phong shading, point lights, hard shadows and mirrors."""
+        """Whitted ray tracing with Phong shading, Mitsuba's point, spot and directional emitters, hard shadows and mirrors."""
 
         def __init__(self, props):
             super().__init__(props)
@@ -138,13 +140,20 @@ def _register_integrator(mi, dr):
                 color += t.ambient * ka
             if not (s.diffuse or s.specular):
                 return color
-            for light_pos, light_color in t.lights:
-                L = dr.normalize(light_pos - si.p)
+            for emitter, unscaled in t.lights:
+                # Mitsuba's light model: the direction to the light, its distance and C_l times the
+                # spot's profile (its falloff_curve) over r^2; a delta light ignores the sample.
+                ds, light_color = emitter.sample_direction(si, mi.Point2f(0.5, 0.5), active)
+                if unscaled:
+                    # warprt's falloff "none" (the seed's model): Mitsuba's weight times r^2, r its ds.dist.
+                    light_color = light_color * dr.square(ds.dist)
+                L = ds.d
                 n_dot_l = dr.dot(n, L)
                 lit = active & (n_dot_l > 0.0)
                 if s.shadows:
-                    # Mitsuba's own offset (spawn_ray_to) and any-hit query, not warprt's error bounds.
-                    lit &= ~scene.ray_test(si.spawn_ray_to(light_pos), lit)
+                    # Mitsuba's own offset (spawn_ray_to), to the emitter's sampled point (for a
+                    # directional light, beyond the scene's bounding sphere) and any-hit query.
+                    lit &= ~scene.ray_test(si.spawn_ray_to(ds.p), lit)
                 term = mi.Color3f(0.0)
                 if s.diffuse:
                     term += kd * n_dot_l
@@ -250,11 +259,15 @@ def _texture(mi, t):
 class _Tables:
     """Per-scene constants the integrator reads: materials keyed by shape, lights, C_amb, background."""
 
-    def __init__(self, mi, dr, mi_scene, scene, object_of_shape: dict, attributes: bool):
+    def __init__(self, mi, dr, mi_scene, scene, object_of_shape: dict, attributes: bool, emitters: list):
         self.jit = dr.is_jit_v(mi.Float)
         self.attributes = attributes  # whether the shapes carry Attributes BSDFs (textures, vertex colours)
         self.row_of_object = {}  # scene object index -> table row (its shape's registry index; row 0: a miss)
-        lights = [(np.asarray(l.position, np.float64), np.asarray(l.color, np.float64)) for l in scene.lights]
+        # Each light as Mitsuba's emitter (in the scene, so a directional one knows its bounds), and
+        # whether its falloff is warprt's "none", which Mitsuba's point and spot emitters do not have
+        # (a directional one's weight is its irradiance, with no distance in it).
+        self.lights = [(emitter, light.falloff == "none" and light.type != "directional")
+                       for emitter, light in zip(emitters, scene.lights)]
         mats = {sid: scene.materials[scene.objects[i].material] for sid, i in object_of_shape.items()}
         if self.jit:
             # Opaque: kernel inputs rather than literals, so the kernels are not specialised to these
@@ -262,7 +275,6 @@ class _Tables:
             def opaque(tp, v):
                 return dr.opaque(tp, [float(x) for x in v])
 
-            self.lights = [(opaque(mi.Point3f, p), opaque(mi.Color3f, c)) for p, c in lights]
             self.ambient = opaque(mi.Color3f, scene.render.ambient)
             self.background = opaque(mi.Color3f, scene.render.background)
             ids = {}
@@ -285,13 +297,30 @@ class _Tables:
             self.eta = mi.Float(eta.astype(np.float32))
             self.dielectric_rows = {int(r) for r in np.nonzero(eta > 0)[0]}
         else:
-            self.lights = [(mi.Point3f(*map(float, p)), mi.Color3f(*map(float, c))) for p, c in lights]
             self.ambient = mi.Color3f(*map(float, scene.render.ambient))
             self.background = mi.Color3f(*map(float, scene.render.background))
             col = lambda v: mi.Color3f(*map(float, v))
             self.by_id = {sid: (col(m.ka), col(m.kd), col(m.ks), col(m.reflectivity), mi.Float(m.shininess))
                           for sid, m in mats.items()}
             self.zero_material = (col((0, 0, 0)),) * 4 + (mi.Float(0.0),)
+
+
+def _emitter(mi, light):
+    """A warprt Light as Mitsuba's own emitter: ``point`` (position, intensity), ``spot`` (intensity,
+    cutoff_angle and beam_width in degrees, to_world looking along its direction) or ``directional``
+    (direction, irradiance); C_l is the intensity or irradiance."""
+    color = {"type": "rgb", "value": [float(c) for c in light.color]}
+    if light.type == "directional":
+        return mi.load_dict({"type": "directional", "direction": [float(x) for x in light.direction], "irradiance": color})
+    p = np.asarray(light.position, np.float64)
+    if light.type == "point":
+        return mi.load_dict({"type": "point", "position": p.tolist(), "intensity": color})
+    d = np.asarray(light.direction, np.float64)
+    up = np.eye(3)[int(np.argmin(np.abs(d)))]  # any axis not along d: the profile is symmetric about it
+    return mi.load_dict({"type": "spot", "intensity": color, "cutoff_angle": float(light.cutoff_angle),
+                         "beam_width": float(light.beam),
+                         "to_world": mi.ScalarTransform4f().look_at(origin=p.tolist(), target=(p + d).tolist(),
+                                                                    up=up.tolist())})
 
 
 def _mesh(mi, name: str, vertices: np.ndarray, faces: np.ndarray, normals: np.ndarray | None,
@@ -354,9 +383,12 @@ class MitsubaScene:
                 bsdf = mi.load_dict({"type": ATTRIBUTES, "colored": colors is not None, **maps})
             shapes[key] = _mesh(mi, key, obj.vertices, obj.faces, normals, uv, colors, bsdf)
             object_of_shape[key] = i
-        self.mi_scene = mi.load_dict({"type": "scene", **shapes})
+        emitters = [_emitter(mi, light) for light in scene.lights]
+        self.mi_scene = mi.load_dict({"type": "scene", **shapes,
+                                      **{f"light_{i:03d}": e for i, e in enumerate(emitters)}})
         self.integrator = mi.load_dict({"type": INTEGRATOR})
-        self.integrator.tables = _Tables(mi, dr, self.mi_scene, scene, object_of_shape, attributes)
+        self.integrator.tables = _Tables(mi, dr, self.mi_scene, scene, object_of_shape, attributes,
+                                           emitters)
         self._sensors = {}
         lo, hi = scene.bounds()
         self._extent = float(max(np.abs(hi - lo).max(), 1e-6))

@@ -215,3 +215,40 @@ def test_the_reference_finds_the_eyes_medium_with_its_own_rays():
     assert water in converted.integrator.tables.dielectric_rows
     assert eye_medium_row(converted, scene.camera.eye) == water
     assert eye_medium_row(converted, [0.0, 6.0, 9.0]) == 0
+
+
+# Mitsuba's own emitters, checked against the closed forms: the agreement of warprt's new lights with
+# the reference then means that both follow Mitsuba's light model, not that they share a mistake.
+SPOT = {"type": "spot", "position": [0.2, 0.1, 3.0], "direction": [0.0, 0.0, -1.0], "cutoff_angle": 25.0,
+        "beam_width": 10.0, "color": [1.0, 0.9, 0.8]}
+NEW_LIGHTS = {
+    "spot": SPOT,
+    "spot_inverse_square": {**SPOT, "falloff": "inverse_square"},
+    "spot_default_beam": {k: v for k, v in SPOT.items() if k != "beam_width"},
+    "point_inverse_square": {"position": [0.3, -0.2, 2.0], "color": [2.0, 1.5, 1.0], "falloff": "inverse_square"},
+    "directional": {"type": "directional", "direction": [0.3, -0.4, -1.0], "color": [0.8, 0.9, 1.0]},
+}
+
+
+@pytest.mark.parametrize("name", NEW_LIGHTS)
+def test_mitsubas_emitters_match_the_closed_forms(name):
+    """Mitsuba's spot, point (1/r^2, or times r^2 for falloff "none") and directional emitters through the
+    reference's integrator: the Phong terms with the oracle's light model, at every pixel."""
+    scene = make_scene([WALL], {"wall": WALL_MATERIAL}, [NEW_LIGHTS[name]], ambient=AMBIENT,
+                       camera={"width": 128, "height": 96})
+    image = render(scene, max_depth=1)
+    eye, d, p = wall_points(scene)
+    terms = phong_terms(p, np.array([0.0, 0.0, 1.0]), -d, scene.lights, WALL_MATERIAL, AMBIENT)
+    expected = terms["ambient"] + terms["diffuse"] + terms["specular"]
+    assert np.abs(image - expected).max() < 2e-5 * max(1.0, float(expected.max()))
+    assert (terms["diffuse"] > 1e-3).mean() > 0.1
+
+
+def test_a_spot_cone_3_degrees_wider_in_the_closed_form_fails_against_mitsuba():
+    """The negative control of the test above."""
+    scene = make_scene([WALL], {"wall": WALL_MATERIAL}, [SPOT], ambient=AMBIENT, camera={"width": 128, "height": 96})
+    eye, d, p = wall_points(scene)
+    wider = make_scene([WALL], {"wall": WALL_MATERIAL}, [{**SPOT, "cutoff_angle": 28.0}], ambient=AMBIENT,
+                       camera={"width": 128, "height": 96})
+    terms = phong_terms(p, np.array([0.0, 0.0, 1.0]), -d, wider.lights, WALL_MATERIAL, AMBIENT)
+    assert np.abs(render(scene, max_depth=1) - sum(terms.values())).max() > 1e-2

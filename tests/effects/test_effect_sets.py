@@ -146,6 +146,26 @@ def test_disabled_effect_code_is_absent_from_the_compiled_variant(off):
     assert all(MARKERS[e] in source for e in EFFECTS if e != off)
 
 
+@pytest.mark.parametrize("lights, general", [
+    ([LIGHT, {"position": [1.0, 2.0, 3.0], "falloff": "none"}], False),
+    ([LIGHT, {"position": [1.0, 2.0, 3.0], "falloff": "inverse_square"}], True),
+    ([{"type": "spot", "position": [0.0, 3.0, 4.0], "direction": [0.0, -1.0, -1.0]}], True),
+    ([{"type": "directional", "direction": [0.0, -1.0, -1.0]}], True),
+])
+def test_the_general_light_model_is_asked_for_only_by_lights_beyond_the_seeds(lights, general):
+    fx = fx_of(lights=lights)
+    assert fx.light_model == general and fx.names == fx_of().names  # not an effect one names or disables
+    assert resolve_effects(make_scene([WALL], {"m": PLAIN}, lights), disable=["specular"]).light_model == general
+
+
+def test_the_general_light_model_is_absent_from_the_seeds_variants():
+    """Scenes of point lights without falloff compile the seed's shading, without the spot profile or
+    the falloff (the same code as before the new lights, so their images are the same to the bit)."""
+    marker = "weight = light_weight(shape, to_light, L)"
+    assert marker not in _generated_source(EffectSet())
+    assert marker in _generated_source(EffectSet(light_model=True))
+
+
 # A line of each AOV's recording code, as above.
 AOV_MARKERS = {
     "depth": "a.depth[pixel] = a.depth[pixel] + wp.length(hit.p - o)",

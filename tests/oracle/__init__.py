@@ -10,13 +10,14 @@ Scene by its fields, and never calls warprt's geometry or shading.
 from .camera import Pinhole, camera_rays, pinhole, pixel_directions, ray_directions
 from .geometry import (TriangleHit, face_normals, nearest_triangle, ray_plane, ray_sphere_distance, ray_triangle,
                        vertex_normals, winding_number)
-from .shading import TERMS, light_direction, light_source, phong, phong_terms
+from .shading import TERMS, light_direction, light_intensity, light_source, phong, phong_terms, spot_profile
 from .transform import axis_rotation, rotation
 from .whitted import (MITSUBA_RAY_EPSILON, MITSUBA_SHADOW_EPSILON, OFFSET_SWEEP, Branch, PixelTrace, Whitted,
                       shade_triangles, texture_value)
 
 __all__ = ["Branch", "MITSUBA_RAY_EPSILON", "MITSUBA_SHADOW_EPSILON", "OFFSET_SWEEP", "Pinhole", "PixelTrace", "TERMS",
-           "TriangleHit", "Whitted", "axis_rotation", "camera_rays", "face_normals", "light_direction", "light_source",
+           "TriangleHit", "Whitted", "axis_rotation", "camera_rays", "face_normals", "light_direction", "light_intensity",
+           "light_source",
            "nearest_triangle", "phong", "phong_terms", "pinhole", "pixel_directions", "ray_directions", "ray_plane",
-           "ray_sphere_distance", "ray_triangle", "rotation", "shade_triangles", "texture_value", "vertex_normals",
+           "ray_sphere_distance", "ray_triangle", "rotation", "shade_triangles", "spot_profile", "texture_value", "vertex_normals",
            "winding_number"]

@@ -175,10 +175,14 @@ class Whitted:
                 visible[i] = True
                 if sw.shadows:
                     so = self._offset(offset, p, ng, L)
-                    to_light = light_source(light)[0] - so
-                    dist = float(np.linalg.norm(to_light))
-                    tmax = dist * (1.0 - MITSUBA_SHADOW_EPSILON) if offset == "mitsuba" else dist
-                    blocker, m = self._query(so, to_light / dist, tmax)
+                    if light_source(light)[0] is None:  # a directional light: the ray leaves the scene
+                        direction, tmax = L, math.inf
+                    else:
+                        to_light = light_source(light)[0] - so
+                        dist = float(np.linalg.norm(to_light))
+                        direction = to_light / dist
+                        tmax = dist * (1.0 - MITSUBA_SHADOW_EPSILON) if offset == "mitsuba" else dist
+                    blocker, m = self._query(so, direction, tmax)
                     margin = min(margin, m)
                     visible[i] = blocker is None
         local = phong(p, n, -d, scene.lights, {"ka": ka, "kd": kd, "ks": ks, "shininess": mat.shininess},
@@ -336,11 +340,11 @@ def shade_triangles(o, d, tris, face_mats, materials, lights, c_amb, background)
     n *= -np.sign(np.sum(n * d, -1))[..., None]
     visible = np.ones(p.shape[:-1] + (len(lights),), bool)
     for i, light in enumerate(lights):
+        L, _ = light_direction(p, n, light)
         position, _ = light_source(light)
-        to_light = position - p
-        dist = np.linalg.norm(to_light, axis=-1)
+        dist = np.linalg.norm(position - p, axis=-1) if position is not None else np.full(p.shape[:-1], np.inf)
         start = p + n * 1e-9 * (1.0 + np.abs(p).max(-1, keepdims=True))
-        tl, _, _ = nearest_triangle(start, to_light / dist[..., None], tris)
+        tl, _, _ = nearest_triangle(start, L, tris)
         visible[..., i] = tl >= dist
     for m, mat in enumerate(materials):
         here = (np.asarray(face_mats)[face] == m) & (face >= 0)

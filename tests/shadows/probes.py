@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from warprt.geometry import SceneData
+from warprt.geometry import LIGHT_DIRECTIONAL, SceneData
 from warprt.kernels import (CameraData, camera_data, camera_ray, grid_occluded, init_warp, make_surface,
                             offset_ray_origin, reflect, refract, triangle, unit_normal, wp)
 from warprt.scene import camera_basis
@@ -30,13 +30,22 @@ def frame_shadow_rays(s: SceneData, c: CameraData, max_depth: int, counts: wp.ar
             break
         hit = surface(s, q.face, q.u, q.v, q.normal, d)
         for l in range(s.num_lights):
-            L = wp.normalize(s.light_pos[l] - hit.p)
+            directional = s.light_shape[l].kind == LIGHT_DIRECTIONAL
+            L = -s.light_shape[l].direction
+            if not directional:
+                L = wp.normalize(s.light_pos[l] - hit.p)
             if wp.dot(hit.n, L) > 0.0:
                 so = offset_ray_origin(hit.p, hit.err, hit.ng, L)
-                to_light = s.light_pos[l] - so
-                dist = wp.length(to_light)
-                bvh = wp.mesh_query_ray_anyhit(s.mesh, so, to_light / dist, dist)
-                grid = grid_occluded(s, l, so, to_light / dist, dist)
+                # A spot's rays are a point light's (inside its cone or not: more rays to check); a
+                # directional light's go to infinity.
+                d = L
+                dist = 1.0e30
+                if not directional:
+                    to_light = s.light_pos[l] - so
+                    dist = wp.length(to_light)
+                    d = to_light / dist
+                bvh = wp.mesh_query_ray_anyhit(s.mesh, so, d, dist)
+                grid = grid_occluded(s, l, so, d, dist)
                 rays += 1
                 blocked += wp.where(bvh, 1, 0)
                 differ += wp.where(bvh != grid, 1, 0)
@@ -98,6 +107,8 @@ def stress_counts(geom, data: SceneData, lights: np.ndarray, targets: np.ndarray
     times as far from the light as the target): how many, and how many answers differ."""
     origins, which = [], []
     for l, light in enumerate(np.asarray(lights, np.float64)):
+        if not np.all(np.isfinite(light)):  # a directional light: no position to aim from
+            continue
         for scale in (1.05, 1.5, 3.0):
             o = (light + (targets - light) * scale).astype(np.float32)
             keep = np.linalg.norm(light.astype(np.float32) - o, axis=1) > 0

@@ -62,8 +62,9 @@ def test_rays_through_every_vertex_and_edge_midpoint_get_the_bvh_answer(path):
     targets = through_every_vertex_and_edge(geom, np.random.default_rng(1))
     counts = stress_counts(geom, geom.scene_data(scene, build.grid), lights, targets)
     print(path, counts)
-    # Three origins behind each target, for each light: none dropped (an origin at a light is).
-    assert counts["rays"] >= 0.99 * 3 * len(targets) * len(lights) and counts["blocked"] > 0
+    # Three origins behind each target, for each light with a position: none dropped (an origin at a light is).
+    placed = int(np.isfinite(lights).all(1).sum())
+    assert counts["rays"] >= 0.99 * 3 * len(targets) * placed and counts["blocked"] > 0
     assert counts["mismatches"] == 0
 
 
@@ -76,6 +77,43 @@ def test_without_its_margin_the_grid_misses_rays():
     build, lights = grid_of(geom, scene, delta_eps=0.0, uv_abs=0.0)
     targets = through_every_vertex_and_edge(geom, np.random.default_rng(1))
     assert stress_counts(geom, geom.scene_data(scene, build.grid), lights, targets)["mismatches"] > 0
+
+
+def test_without_its_margin_the_grid_misses_rays_of_spot_lights():
+    """The negative control for spots: the default scene's lights made spots aimed at its centre. Their
+    cube maps are the point lights', and the counter sees the margin-less grid's wrong answers there too."""
+    scene = at(None, 16)
+    centre = np.mean(scene.bounds(), axis=0)
+    scene = replace(scene, lights=[replace(light, type="spot", direction=tuple(centre - light.position))
+                                   for light in scene.lights])
+    geom = Geometry(scene)
+    build, lights = grid_of(geom, scene, delta_eps=0.0, uv_abs=0.0)
+    targets = through_every_vertex_and_edge(geom, np.random.default_rng(1))
+    assert stress_counts(geom, geom.scene_data(scene, build.grid), lights, targets)["mismatches"] > 0
+
+
+def test_spots_keep_their_cube_maps_and_directional_lights_go_to_the_bvh():
+    """A spot's shadow ray runs to its position like a point light's; a directional light's runs to
+    infinity, which no cube map around a position holds: its rays are traced."""
+    spots = at(ROOT / "scenes" / "spot_lit.toml", 16)
+    assert grid_of(Geometry(spots), spots)[0].light_ok.tolist() == [1, 1]
+    sun = at(ROOT / "scenes" / "sun.toml", 16)
+    assert [light.type for light in sun.lights] == ["directional", "point"]
+    assert grid_of(Geometry(sun), sun)[0].light_ok.tolist() == [0, 1]
+
+
+def test_a_scene_lit_only_by_the_sun_traces_its_shadow_rays():
+    """Only directional lights: no grid at all (its reason says why), the traced image to the bit."""
+    scene = make_scene([LAMP, FLOOR], {"m": {"kd": [0.7] * 3}},
+                       [{"type": "directional", "direction": [0.3, -1.0, 0.2]},
+                        {"type": "directional", "direction": [-0.5, -1.0, -0.1], "color": [0.3, 0.2, 0.1]}],
+                       camera={"eye": [0.0, 3.0, 6.0], "center": [0.0, 0.5, 0.0]}, ambient=[0.1] * 3)
+    build, _ = grid_of(Geometry(scene), scene)
+    assert build.grid is None and "directional" in build.reason
+    grid = warprt.render(scene, shadows="grid")
+    traced = warprt.render(scene, shadows="bvh")
+    assert grid.stats.shadows == "bvh" and traced.stats.rays["shadow"] > 0
+    assert np.array_equal(grid.image, traced.image) and grid.stats.rays == traced.stats.rays
 
 
 def test_each_cell_lists_its_triangles_nearest_the_light_first():

@@ -34,6 +34,38 @@ class TextureSlot:
     c1: wp.vec3
 
 
+LIGHT_POINT, LIGHT_SPOT, LIGHT_DIRECTIONAL = 0, 1, 2  # LightShape.kind, for Light.type
+
+
+@wp.struct
+class LightShape:
+    """What a light has beyond the seed's point light, read by shading's general light model: its kind,
+    the direction it travels along (spot axis, sun; unit), a spot's cone as Mitsuba's ``spot`` keeps it
+    (cos cutoff, cos beam, the cutoff and 1 / (cutoff - beam) in radians, 0 where there is no ramp) and
+    whether it falls off as 1 / r^2."""
+
+    kind: int
+    direction: wp.vec3
+    cos_cutoff: float
+    cos_beam: float
+    cutoff: float
+    inv_ramp: float
+    inverse_square: int
+
+
+def light_shape(light) -> LightShape:
+    """A scene Light's LightShape (the angles converted in float64, then rounded to float32)."""
+    shape = LightShape()
+    shape.kind = {"point": LIGHT_POINT, "spot": LIGHT_SPOT, "directional": LIGHT_DIRECTIONAL}[light.type]
+    shape.direction = wp.vec3(*(light.direction if light.direction is not None else (0.0, 0.0, 0.0)))
+    cutoff, beam = np.radians(light.cutoff_angle), np.radians(light.beam)
+    shape.cos_cutoff, shape.cos_beam = float(np.cos(cutoff)), float(np.cos(beam))
+    shape.cutoff = float(cutoff)
+    shape.inv_ramp = float(1.0 / (cutoff - beam)) if cutoff > beam else 0.0
+    shape.inverse_square = int(light.falloff == "inverse_square")
+    return shape
+
+
 @wp.struct
 class SceneData:
     mesh: wp.uint64
@@ -57,8 +89,9 @@ class SceneData:
     transmittance: wp.array(dtype=wp.vec3)  # k_t
     absorption: wp.array(dtype=wp.vec3)  # sigma per scene unit
     eye_medium: int  # the dielectric material holding the eye, -1: air
-    light_pos: wp.array(dtype=wp.vec3)  # relative to the frame origin
+    light_pos: wp.array(dtype=wp.vec3)  # relative to the frame origin; NaN for a directional light
     light_color: wp.array(dtype=wp.vec3)
+    light_shape: wp.array(dtype=LightShape)  # read only by the general light model (EffectSet.light_model)
     num_lights: int
     ambient: wp.vec3  # C_amb
     background: wp.vec3
@@ -150,9 +183,10 @@ class Geometry:
         return bool(np.abs(np.asarray(eye, np.float64) - self.origin).max() <= self.eye_reach)
 
     def light_positions(self, scene) -> np.ndarray:
-        """The kernels' light positions (L, 3): relative to the origin in float64, then float32."""
-        return np.asarray([np.asarray(l.position, np.float64) - self.origin for l in scene.lights],
-                          np.float32).reshape(-1, 3)
+        """The kernels' light positions (L, 3): relative to the origin in float64, then float32; NaN for a
+        directional light, which has none (the shadow grid then sends its rays to the BVH)."""
+        return np.asarray([np.asarray(l.position, np.float64) - self.origin if l.position is not None
+                           else np.full(3, np.nan) for l in scene.lights], np.float32).reshape(-1, 3)
 
     def scene_data(self, scene, shadow_grid: ShadowGrid | None = None) -> SceneData:
         """The kernels' view of these triangles for a frame of ``scene``: its materials and textures,
@@ -189,6 +223,7 @@ class Geometry:
         s.eye_medium = self.material_names.index(medium) if medium is not None else -1
         s.light_pos = vec(self.light_positions(scene) if lights else [[0, 0, 0]])
         s.light_color = vec([l.color for l in lights] or [[0, 0, 0]])
+        s.light_shape = wp.array([light_shape(l) for l in lights] or [LightShape()], dtype=LightShape, device=d)
         s.num_lights = len(lights)
         s.ambient = wp.vec3(*scene.render.ambient)
         s.background = wp.vec3(*scene.render.background)

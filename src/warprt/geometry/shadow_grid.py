@@ -20,6 +20,8 @@ than o, and so gives the same answer, provided each list holds every triangle Wo
   by dmin, so the query stops at the first entry beyond that.
 - A triangle within NEAR_LIGHT D of a light (where the margin stops making sense) sends every shadow
   ray of that light to the BVH; so does a structure beyond MAX_BYTES (the caller falls back).
+- A spot light's shadow rays are a point light's (o to its position): its cube map is the same. A
+  directional light has no position (NaN in ``lights``): its rays, to infinity, go to the BVH.
 
 The lists are filled by one CPU launch per light, whose threads Warp runs in order, so each cell keeps
 the triangles' sorted order; the structure is built on the CPU for every device and copied over.
@@ -246,7 +248,8 @@ class ShadowGridBuild:
         indices = np.ascontiguousarray(indices, np.int32)
         lights = np.asarray(lights, np.float64).reshape(-1, 3)
         tris, n_lights = len(indices) // 3, len(lights)
-        every = np.concatenate([points.astype(np.float64), lights])
+        placed = np.all(np.isfinite(lights), axis=1)  # directional lights have no position
+        every = np.concatenate([points.astype(np.float64), lights[placed]])
         D = float(np.linalg.norm(every.max(axis=0) - every.min(axis=0))) * 1.01 + 1e-30
         delta = delta_eps * D
         self.delta = delta
@@ -256,6 +259,10 @@ class ShadowGridBuild:
         ok = np.zeros(max(n_lights, 1), np.int32)
         dmins, orders = [], []
         for l in range(n_lights):
+            if not placed[l]:
+                dmins.append(None)
+                orders.append(None)
+                continue
             dm = wp.zeros(max(tris, 1), dtype=wp.float64, device="cpu")
             wp.launch(distance_kernel, dim=tris, inputs=[p_wp, i_wp, wp.vec3d(*lights[l]), dm], device="cpu")
             near = dm.numpy()[:tris]
@@ -280,7 +287,8 @@ class ShadowGridBuild:
             self.nbytes = int((cells + 1) * 4 + self.entries * 8 + ok.nbytes)
             self.grid, self.reason = None, ""
             if not on_grid:
-                self.reason = "every light has geometry within NEAR_LIGHT of it" if n_lights else "no lights"
+                self.reason = ("every light is directional or has geometry within NEAR_LIGHT of it" if n_lights
+                               else "no lights")
             elif self.nbytes > max_bytes or self.entries >= 2**31:
                 self.reason = f"{self.nbytes / 2**20:.0f} MiB would exceed the {max_bytes / 2**20:.0f} MiB budget"
             else:

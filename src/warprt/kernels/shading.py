@@ -1,7 +1,8 @@
 """Phong shading, the seed's Figure 3, per colour channel and light l, shared by every renderer:
     I = C_amb ka + sum_l vis_l C_l (kd max(0, n.L) + ks max(0, r.v)^n),   r = L mirrored about n
 with ka, kd and ks read at the hit by one function (coefficients): the material's, times its
-textures and the vertex colour where the scene has them.
+textures and the vertex colour where the scene has them. The general light model (spot and
+directional lights, inverse-square falloff) scales C_l by light_weight; the seed's lights compile without it.
 """
 
 from __future__ import annotations
@@ -9,7 +10,7 @@ from __future__ import annotations
 import functools
 
 from .._warp import wp
-from ..geometry import SceneData
+from ..geometry import LIGHT_DIRECTIONAL, LIGHT_SPOT, LightShape, SceneData
 from .interaction import Surface, offset_ray_origin, reflect
 from .shadow import make_occluded
 from .texture import texel
@@ -29,6 +30,32 @@ def phong_specular(ks: wp.vec3, shininess: float, n: wp.vec3, l: wp.vec3, v: wp.
     if r_dot_v <= 0.0:
         return wp.vec3(0.0)
     return ks * wp.pow(r_dot_v, shininess)
+
+
+FAR = 1.0e30  # a shadow ray towards a directional light ends nowhere (the tracer's no-limit convention)
+
+
+@wp.func
+def spot_profile(shape: LightShape, cos_theta: float) -> float:
+    """Mitsuba's ``spot`` falloff curve at angle theta off the axis: 1 within the beam, then linear in
+    theta down to 0 at the cutoff (beyond which nothing)."""
+    if cos_theta <= shape.cos_cutoff:
+        return 0.0
+    if cos_theta >= shape.cos_beam:
+        return 1.0
+    return (shape.cutoff - wp.acos(cos_theta)) * shape.inv_ramp
+
+
+@wp.func
+def light_weight(shape: LightShape, to_light: wp.vec3, L: wp.vec3) -> float:
+    """The factor of C_l at the point ``to_light`` away from the light (L its direction): the spot's
+    profile times 1 / r^2 for inverse_square, r measured from the hit point itself, as Mitsuba does."""
+    w = 1.0
+    if shape.kind == LIGHT_SPOT:
+        w = spot_profile(shape, -wp.dot(L, shape.direction))
+    if shape.inverse_square != 0:
+        w = w / wp.dot(to_light, to_light)
+    return w
 
 
 @wp.struct
@@ -76,12 +103,12 @@ def make_shade(fx, shadow_grid: bool = False):
     rays when fx.shadows, answered by the BVH or, with ``shadow_grid``, by the light-space grid (the
     same answers: kernels/shadow.py)."""
     return _make_shade(fx.ambient, fx.diffuse, fx.specular, fx.shadows, fx.texture, fx.vertex_color,
-                       fx.shadows and shadow_grid)
+                       fx.shadows and shadow_grid, fx.light_model)
 
 
 @functools.cache
 def _make_shade(AMBIENT: bool, DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool, TEXTURE: bool, VERTEX_COLOR: bool,
-                GRID: bool = False):
+                GRID: bool = False, LIGHT_MODEL: bool = False):
     coefficients = make_coefficients(TEXTURE, VERTEX_COLOR)
 
     # Disabled terms are absent from the generated code (wp.static).
@@ -102,8 +129,21 @@ def _make_shade(AMBIENT: bool, DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool, TEX
             out.color = wp.cw_mul(s.ambient, k.ka)
         if wp.static(DIFFUSE or SPECULAR):
             for l in range(s.num_lights):
-                to_light = s.light_pos[l] - p
-                L = wp.normalize(to_light)
+                C_l = s.light_color[l]
+                if wp.static(LIGHT_MODEL):
+                    shape = s.light_shape[l]
+                    directional = shape.kind == LIGHT_DIRECTIONAL
+                    to_light = -shape.direction
+                    if not directional:
+                        to_light = s.light_pos[l] - p
+                    L = wp.normalize(to_light)
+                    weight = light_weight(shape, to_light, L)
+                    if weight <= 0.0:  # outside a spot's cone: no light, so no shadow ray
+                        continue
+                    C_l = C_l * weight
+                else:
+                    to_light = s.light_pos[l] - p
+                    L = wp.normalize(to_light)
                 n_dot_l = wp.dot(n, L)
                 if n_dot_l > 0.0:
                     visible = True
@@ -111,15 +151,20 @@ def _make_shade(AMBIENT: bool, DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool, TEX
                         o = offset_ray_origin(p, err, ng, L)
                         to_light_o = s.light_pos[l] - o
                         dist = wp.length(to_light_o)
+                        d = to_light_o / dist
+                        if wp.static(LIGHT_MODEL):
+                            if directional:  # its position is NaN: the ray above is replaced
+                                d = L
+                                dist = FAR
                         out.shadow_rays += 1
-                        visible = not occluded(s, l, o, to_light_o / dist, dist)
+                        visible = not occluded(s, l, o, d, dist)
                     if visible:
                         lit = wp.vec3(0.0)
                         if wp.static(DIFFUSE):
                             lit = lit + phong_diffuse(k.kd, n_dot_l)
                         if wp.static(SPECULAR):
                             lit = lit + phong_specular(k.ks, s.shininess[m], n, L, v, n_dot_l)
-                        out.color = out.color + wp.cw_mul(s.light_color[l], lit)
+                        out.color = out.color + wp.cw_mul(C_l, lit)
         return out
 
     return shade

@@ -5,7 +5,7 @@ Each distinct EffectSet compiles to its own kernel variant with the disabled cod
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields, replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -28,18 +28,22 @@ class EffectSet:
     vertex_color: bool = False
     refraction: bool = False
     absorption: bool = False
+    # Not an effect one switches off: whether some light is not the seed's point light without falloff
+    # (a spot, a directional light, inverse_square), which needs the general light model in the kernels.
+    light_model: bool = False
 
     @property
     def names(self) -> tuple[str, ...]:
-        return tuple(f.name for f in fields(self) if getattr(self, f.name))
+        """The effects on, by their names in EFFECTS (what render.effects and render(disable=) take)."""
+        return tuple(n for n in EFFECTS if getattr(self, n))
 
     @property
     def variant(self) -> str:
         """A short stable name for the compiled kernel variant, e.g. 'trace_adsS_r'."""
         letters = {"ambient": "a", "diffuse": "d", "specular": "s", "shadows": "S",
                    "reflection": "r", "supersampling": "x", "smooth": "n", "texture": "t", "vertex_color": "c",
-                   "refraction": "T", "absorption": "b"}
-        return "".join(letters[n] for n in self.names) or "none"
+                   "refraction": "T", "absorption": "b", "light_model": "L"}
+        return "".join(letters[n] for n in self.names + ("light_model",) * self.light_model) or "none"
 
     def __str__(self) -> str:
         return ",".join(self.names) or "none"
@@ -67,6 +71,7 @@ def scene_effects(scene) -> EffectSet:
         # inside absorbing glass).
         refraction=scene.render.max_depth > 1 and any(m.dielectric for m in mats),
         absorption=any(m.dielectric and max(m.absorption) > 0 for m in mats),
+        light_model=not all(light.seed_point for light in scene.lights),
     )
 
 
@@ -96,7 +101,7 @@ def resolve_effects(scene, allow=None, disable=()) -> EffectSet:
     keep -= parse_effects(disable, None, "disable")
     on = {n: getattr(fx, n) and n in keep for n in EFFECTS}
     on["shadows"] = on["shadows"] and (on["diffuse"] or on["specular"])  # shadows only dim those terms
-    return EffectSet(**on)
+    return EffectSet(**on, light_model=fx.light_model)
 
 
 def zbuffer_effects(scene, effects=None, disable=()) -> EffectSet:

@@ -72,15 +72,46 @@ class RenderSettings:
             object.__setattr__(self, "effects", tuple(self.effects))
 
 
+LIGHT_TYPES = ("point", "spot", "directional")
+FALLOFFS = ("none", "inverse_square")
+
+
 @dataclass(frozen=True)
 class Light:
-    """A point light: position and colour C_l."""
+    """A Whitted light: point (position), spot (position, direction, cone) or directional (direction
+    only), of colour C_l: radiant intensity for point and spot, irradiance for directional. A spot's
+    profile is Mitsuba's ``spot``: 1 within beam_width of its axis, falling linearly in angle to 0 at
+    cutoff_angle; falloff "inverse_square" divides C_l by the squared distance, "none" (the seed's
+    model) does not."""
 
-    position: tuple
-    color: tuple = (1.0, 1.0, 1.0)
+    position: tuple | None = None  # required for point and spot, None for directional
+    color: tuple = (1.0, 1.0, 1.0)  # C_l
+    type: str = "point"  # LIGHT_TYPES
+    direction: tuple | None = None  # unit vector the light travels along: spot axis, sun direction
+    cutoff_angle: float = 20.0  # degrees, spot only (Mitsuba's default)
+    beam_width: float | None = None  # degrees, spot only; None: 3/4 of cutoff_angle (Mitsuba's default)
+    falloff: str = "none"  # FALLOFFS; a directional light has none, whatever it says (irradiance)
+    name: str = ""  # the author's name for a light read from a file, "" otherwise
 
     def __post_init__(self):
-        _convert(self, vectors=("position", "color"))
+        _convert(self, vectors=("position", "color", "direction"))
+        # Said once here for every reader (TOML target, glTF node -Z, Mitsuba to_world): a unit
+        # direction. A zero or non-finite one is left for validate.py to name.
+        d = self.direction
+        if d is not None and len(d) == 3:
+            norm = float(np.linalg.norm(np.asarray(d, np.float64)))
+            if np.isfinite(norm) and norm > 0.0:
+                object.__setattr__(self, "direction", tuple(float(x) / norm for x in d))
+
+    @property
+    def beam(self) -> float:
+        """beam_width in degrees, its default resolved."""
+        return 0.75 * self.cutoff_angle if self.beam_width is None else self.beam_width
+
+    @property
+    def seed_point(self) -> bool:
+        """Whether this is the seed's light: a point with no falloff (the kernels' fast path)."""
+        return self.type == "point" and self.falloff == "none"
 
 
 @dataclass(frozen=True)

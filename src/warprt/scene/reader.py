@@ -13,7 +13,7 @@ from ..errors import SceneError, one_line, show
 from . import shapes
 from .dielectric import warn_unclosed
 from .meshio import file_objects, read_mesh_file, warn_if_tiny, warn_if_unmapped
-from .model import DEFAULT_MATERIAL, Camera, Light, Material, RenderSettings, Scene, SceneObject
+from .model import DEFAULT_MATERIAL, FALLOFFS, LIGHT_TYPES, Camera, Light, Material, RenderSettings, Scene, SceneObject
 from .normals import resolve_normals
 from .texture import affine, checker_texture, image_texture
 from .validate import check_setting, validate_camera, validate_scene
@@ -21,7 +21,8 @@ from .validate import check_setting, validate_camera, validate_scene
 SECTIONS = {"camera", "render", "lights", "materials", "objects"}
 _CAMERA_KEYS = {"eye", "center", "up", "fovy", "near", "width", "height"}
 _RENDER_KEYS = {"ambient", "background", "max_depth", "shadows", "spp", "effects"}
-_LIGHT_KEYS = {"position", "color"}
+_LIGHT_KEYS = {"type", "position", "color", "direction", "target", "cutoff_angle", "beam_width", "falloff"}
+_SPOT_KEYS = ("target", "cutoff_angle", "beam_width")  # meaningful only for a spot
 _MATERIAL_KEYS = {"ka", "kd", "ks", "shininess", "reflectivity", "ka_texture", "kd_texture", "ks_texture", "ior",
                   "transmittance", "absorption"}
 _DIELECTRIC_KEYS = ("transmittance", "absorption")  # meaningful only with an ior
@@ -83,6 +84,12 @@ class _Reader:
             self.fail(key, "is required")
         if not isinstance(v, str):
             self.fail(key, f"expected a string, got {show(v)}")
+        return v
+
+    def choice(self, key, allowed: tuple, default=None) -> str:
+        v = self.string(key, default)
+        if v not in allowed:
+            self.fail(key, f"expected one of {', '.join(map(repr, allowed))}, got {show(v)}")
         return v
 
     def vector(self, key, default=None, n=3, nonneg=False, allow_scalar=False):
@@ -160,7 +167,32 @@ def read_render(source: str, t: dict) -> RenderSettings:
 def read_light(source: str, t: dict, i: int) -> Light:
     r = _Reader(source, t, f"lights[{i}]")
     r.check_keys(_LIGHT_KEYS)
-    return Light(position=r.vector("position"), color=r.vector("color", (1.0, 1.0, 1.0), nonneg=True))
+    kind = r.choice("type", LIGHT_TYPES, "point")
+    for key in _SPOT_KEYS:
+        if key in t and kind != "spot":
+            r.fail(key, f"only a spot light has it (this light's type is {kind})")
+    if kind == "directional":
+        if "position" in t:
+            r.fail("position", "a directional light has no position (it is infinitely far): give only its direction")
+        position = None
+    else:
+        position = r.vector("position")
+    if kind == "point" and "direction" in t:
+        r.fail("direction", "a point light shines in every direction: a cone is a spot (type = \"spot\")")
+    if "direction" in t and "target" in t:
+        r.fail("target", "give direction or target, not both")
+    direction = None
+    if "target" in t:
+        direction = tuple(np.subtract(r.vector("target"), position))
+        if not any(direction):
+            r.fail("target", "must differ from position (the spot's axis runs from position to target)")
+    elif kind != "point":
+        direction = r.vector("direction")
+    d = Light()
+    cutoff = r.number("cutoff_angle", d.cutoff_angle, lo=0.0, hi=180.0, lo_open=True, hi_open=True)
+    beam = r.number("beam_width", lo=0.0, hi=cutoff) if "beam_width" in t else None
+    return Light(position=position, color=r.vector("color", d.color, nonneg=True), type=kind, direction=direction,
+                 cutoff_angle=cutoff, beam_width=beam, falloff=r.choice("falloff", FALLOFFS, d.falloff))
 
 
 def read_material(source: str, name: str, t, base: Path = Path(".")) -> Material:

@@ -10,7 +10,7 @@ import weakref
 import numpy as np
 
 from ..errors import SceneError, show
-from .model import Camera, Scene
+from .model import FALLOFFS, LIGHT_TYPES, Camera, Light, Scene
 from .texture import Texture
 
 MAX_IMAGE_SIDE = 16384
@@ -106,6 +106,41 @@ def _check_texture(source, field_name, t):
               and np.all(np.isfinite(t.image)) and t.image.min() >= 0):
         raise SceneError(source, field_name, "expected an (H, W, 3) image of finite non-negative linear values")
     _checked_textures.add(t)
+def _check_light(source, where, light, eye):
+    """A light of LIGHT_TYPES: a position where it has one (within float32 reach), a direction where it has
+    one (not zero), a spot's cone (0 < beam_width <= cutoff_angle < 180 degrees), a falloff of FALLOFFS."""
+    if light.type not in LIGHT_TYPES:
+        raise SceneError(source, f"{where}.type", f"expected one of {', '.join(map(repr, LIGHT_TYPES))}, got {show(light.type)}")
+    if light.falloff not in FALLOFFS:
+        raise SceneError(source, f"{where}.falloff", f"expected one of {', '.join(map(repr, FALLOFFS))}, "
+                                                     f"got {show(light.falloff)}")
+    if light.type == "directional":
+        if light.position is not None:
+            raise SceneError(source, f"{where}.position", "a directional light has no position (it is infinitely far)")
+    else:
+        position = _check_vector(source, f"{where}.position", light.position)
+        if np.abs(position - eye).max() > MAX_REACH:
+            raise SceneError(source, f"{where}.position", f"is more than {MAX_REACH:g} from camera.eye; "
+                                                          "float32 ray tests cannot reach it")
+    _check_vector(source, f"{where}.color", light.color, nonneg=True)
+    if light.type == "point":
+        if light.direction is not None:
+            raise SceneError(source, f"{where}.direction", "a point light shines in every direction: a cone is a spot (type = \"spot\")")
+    elif not np.any(_check_vector(source, f"{where}.direction", light.direction)):
+        raise SceneError(source, f"{where}.direction", "must not be the zero vector")
+    cutoff, beam = light.cutoff_angle, light.beam_width
+    if light.type == "spot":
+        if not _is_real(cutoff) or not 0.0 < cutoff < 180.0:
+            raise SceneError(source, f"{where}.cutoff_angle", f"expected a number in (0, 180) degrees, got {_num(cutoff)}")
+        if beam is not None and (not _is_real(beam) or not 0.0 <= beam <= cutoff):
+            raise SceneError(source, f"{where}.beam_width", f"expected a number in [0, cutoff_angle = {cutoff:g}] "
+                                                            f"degrees, got {_num(beam)}")
+    else:
+        for key, v, default in (("cutoff_angle", cutoff, Light.cutoff_angle), ("beam_width", beam, None)):
+            if v != default:
+                raise SceneError(source, f"{where}.{key}", f"only a spot light has it (this light's type is {light.type})")
+
+
 def _check_dielectric(source, where, m):
     """ior > 0 makes a dielectric, whose reflection is its Fresnel term; k_t in [0, 1] and sigma >= 0
     belong to a dielectric only."""
@@ -140,11 +175,9 @@ def validate_scene(scene: Scene):
         check_setting(src, key, key, getattr(r, key.split(".")[1]))
     light_max = np.zeros(3)
     for i, light in enumerate(scene.lights):
-        position = _check_vector(src, f"lights[{i}].position", light.position)
-        light_max = light_max + _check_vector(src, f"lights[{i}].color", light.color, nonneg=True)
-        if np.abs(position - eye).max() > MAX_REACH:
-            raise SceneError(src, f"lights[{i}].position", f"is more than {MAX_REACH:g} from camera.eye; "
-                                                           "float32 ray tests cannot reach it")
+        _check_light(src, f"lights[{i}]", light, eye)
+        # inverse_square: C_l / r^2 has no bound short of the nearest surface; C_l is the bound at r >= 1.
+        light_max = light_max + np.asarray(light.color, np.float64)
     # Vertex colours multiply ka and kd: the brightest of them scales what a material can reflect.
     color_max = max([1.0] + [float(np.max(o.colors, initial=0.0)) for o in scene.objects
                              if getattr(o, "colors", None) is not None and np.all(np.isfinite(o.colors))])
