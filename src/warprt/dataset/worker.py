@@ -11,6 +11,7 @@ import tempfile
 import time
 import traceback
 from pathlib import Path
+from typing import NamedTuple
 
 from ..errors import SceneError
 from ..scene import load_scene, resolve_effects, sets_in_place, with_overrides
@@ -100,22 +101,48 @@ class FrameRenderer:
 
     def render_frame(self, task: dict) -> dict:
         """task: frame, overrides, outputs (relative to the output folder). Returns a result record;
-        bad input comes back as {"ok": False, "error": error_record(...)}."""
+        bad input comes back as {"ok": False, "error": error_record(...)}. A frame is render() then
+        write(): a worker with a writer thread runs write() of one frame during render() of the next."""
+        return self.write(self.render(task))
+
+    def render(self, task: dict):
+        """The frame's scene and image (a _Rendered), or the result record of a failure."""
         t0 = time.perf_counter()
         try:
             scene = self.scenes.scene(task["overrides"])
             t1 = time.perf_counter()
             result = self.image.render(scene, threads=self.threads, aovs=self.aovs)
-            t2 = time.perf_counter()
-            self.image.write_image(self.output_dir / task["outputs"]["color"], result.image, "output", result.aovs)
-            t3 = time.perf_counter()
         except SceneError as e:
             return {"ok": False, "frame": task["frame"], "error": error_record(e)}
-        except Exception as e:  # a bug, or a failed write (a full disk): not bad input
-            return {"ok": False, "frame": task["frame"], "internal": f"{type(e).__name__}: {e}",
-                    "traceback": traceback.format_exc()}
+        except Exception as e:  # a bug: not bad input
+            return _internal(task, e)
+        return _Rendered(task, result, {"scene": t1 - t0, "render": time.perf_counter() - t1})
+
+    def write(self, rendered) -> dict:
+        """The frame's files (image and AOVs, each renamed into place) and its result record."""
+        if isinstance(rendered, dict):
+            return rendered  # a failure, already a record
+        task, result, seconds = rendered
+        t = time.perf_counter()
+        try:
+            self.image.write_image(self.output_dir / task["outputs"]["color"], result.image, "output", result.aovs)
+        except SceneError as e:
+            return {"ok": False, "frame": task["frame"], "error": error_record(e)}
+        except Exception as e:  # a failed write (a full disk): not bad input
+            return _internal(task, e)
         self.frames_done += 1
         return {"ok": True, "frame": task["frame"], "stats": result.stats.to_dict(),
                 "worker": {"host": socket.gethostname(), "pid": os.getpid(), "threads": self.threads,
                            "frames_done": self.frames_done},
-                "seconds": {"scene": t1 - t0, "render": t2 - t1, "write": t3 - t2}}
+                "seconds": {**seconds, "write": time.perf_counter() - t}}
+
+
+class _Rendered(NamedTuple):
+    task: dict
+    result: object  # image.RenderResult
+    seconds: dict  # scene, render
+
+
+def _internal(task: dict, e: Exception) -> dict:
+    return {"ok": False, "frame": task["frame"], "internal": f"{type(e).__name__}: {e}",
+            "traceback": traceback.format_exc()}
