@@ -7,6 +7,7 @@ import os
 import signal
 import subprocess
 import sys
+import textwrap
 import time
 
 import numpy as np
@@ -147,3 +148,27 @@ def test_union_of_shards_is_the_unsharded_run(orbit_run, tmp_path):
     assert same_rows(union, rows)
     for r in union:
         assert (tmp_path / r["outputs"]["color"]).read_bytes() == (out / r["outputs"]["color"]).read_bytes()
+
+
+def test_workers_fork_from_a_driver_that_has_not_rendered_and_not_from_one_that_has(tmp_path):
+    """fork: a worker starts with warprt imported. Never from a process holding warprt's thread pool and
+    Warp's runtime (the child's first threaded frame would hang): that one starts a fork server."""
+    job = write_job(tmp_path, 'scene = "{scene}"\noutput = "f/{frame}.png"\n[orbit]\nframes = 2\n')
+    script = textwrap.dedent(f"""
+        import sys
+        import warprt
+        from warprt.dataset import batch, default_start_method
+        if __name__ == "__main__":
+            before = default_start_method()
+            batch({str(job)!r}, {str(tmp_path / "a")!r}, workers=1)
+            warprt.render(warprt.load_scene({str(SCENE)!r}), threads=2)
+            after = default_start_method()
+            rows = batch({str(job)!r}, {str(tmp_path / "b")!r}, workers=1)
+            print(before, after, len(rows))
+    """)
+    (tmp_path / "driver.py").write_text(script)
+    p = subprocess.run([sys.executable, str(tmp_path / "driver.py")], capture_output=True, text=True, timeout=300, cwd=ROOT)
+    assert p.returncode == 0, p.stderr
+    assert p.stdout.split() == ["fork", "forkserver", "2"]
+    for name in ("0.png", "1.png"):
+        assert (tmp_path / "a" / "f" / name).read_bytes() == (tmp_path / "b" / "f" / name).read_bytes()

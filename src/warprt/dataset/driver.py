@@ -17,13 +17,27 @@ from .worker import FrameScenes
 
 
 def default_start_method() -> str:
-    """forkserver where there is one (Linux): workers fork from a server that has imported warprt and
-    Warp (but started neither Warp's runtime nor a thread), about 1 s to boot against 3-7 s for a fresh
-    interpreter on a busy 2-core machine. Never "fork": a parent that has rendered holds warprt's thread
-    pool, whose threads do not exist in the child, and the child's first threaded frame hangs."""
+    """How worker processes start. "fork" where it is safe: Linux, and this process has one thread and has
+    not started Warp's runtime (`warprt batch` itself: the driver only reads scenes); a worker then starts
+    with warprt and Warp imported, in milliseconds. Otherwise "forkserver" where there is one: workers fork
+    from a server that imports warprt and Warp first (about 1 s, 4 s on a busy 2-core machine, in every
+    batch's start) but starts neither Warp's runtime nor a thread; else "spawn". Never "fork" from a process
+    that has rendered: it holds warprt's thread pool, whose threads do not exist in the child, and the
+    child's first threaded frame hangs (measured)."""
     import multiprocessing as mp
+    import threading
 
-    return "forkserver" if sys.platform.startswith("linux") and "forkserver" in mp.get_all_start_methods() else "spawn"
+    if not sys.platform.startswith("linux"):
+        return "spawn"
+    if threading.active_count() == 1 and ("warp" not in sys.modules or not _warp_started()):
+        return "fork"
+    return "forkserver" if "forkserver" in mp.get_all_start_methods() else "spawn"
+
+
+def _warp_started() -> bool:
+    from .._warp import warp_started
+
+    return warp_started()
 
 
 def check_frames(job: Job, frames: list[Frame]):
@@ -163,17 +177,23 @@ def batch(job, output_dir=None, *, workers: int | None = None, ray=None, shard=N
 
 
 def _start_local(j: Job, frames: int, workers: int | None, start_method: str | None):
-    """A LocalPool for ``frames`` frames, started on a thread (a Future): ``workers`` processes (default one
-    per core, at most one per frame), each rendering with cores // workers threads, so that workers x
-    threads = cores."""
-    from concurrent.futures import ThreadPoolExecutor
+    """A LocalPool for ``frames`` frames, as a Future: ``workers`` processes (default one per core, at most
+    one per frame), each rendering with cores // workers threads, so that workers x threads = cores.
+    Forked here and now (milliseconds, and only from this one thread), or else started on a thread,
+    since starting a fork server or spawning waits on a fresh interpreter's imports."""
+    from concurrent.futures import Future, ThreadPoolExecutor
 
     from .local import LocalPool
 
     n = workers or max(1, min(default_threads(), frames))
     threads = max(1, default_threads() // n)
+    method = start_method or default_start_method()
+    if method == "fork":
+        started = Future()
+        started.set_result(LocalPool(j.spec(), n, threads, start_method=method))
+        return started
     ex = ThreadPoolExecutor(1, thread_name_prefix="warprt-batch-start")
-    started = ex.submit(LocalPool, j.spec(), n, threads, start_method=start_method or default_start_method())
+    started = ex.submit(LocalPool, j.spec(), n, threads, start_method=method)
     ex.shutdown(wait=False)  # the thread ends with its one task
     return started
 

@@ -81,18 +81,28 @@ class FrameRenderer:
         self.output_dir = Path(spec["output_dir"])
         self.scenes = FrameScenes(spec["scene"])
         t = time.perf_counter()
-        # Warp's start (about 0.6 s) and every kernel variant the job's frames use, compiled or loaded
-        # now at 1x1 pixel rather than in the first frames; with first hits from the Z-buffer where
-        # render()'s policy takes them from there at the frame's own size.
+        # Warp's start (about 0.6 s) and the warm-up frames' scenes first, outside the lock: the
+        # workers do that at once. Then, one worker at a time, every kernel variant the job's frames
+        # use, compiled or loaded now at 1x1 pixel rather than in the first frames; with first hits
+        # from the Z-buffer where render()'s policy takes them from there at the frame's own size.
+        from .._warp import init_warp
+
+        init_warp()
+        tiny_frames = []
+        for overrides in spec["warmup"]:
+            try:
+                frame = self.scenes.scene(overrides)
+                cam, settings = frame.camera, frame.render
+                samples = cam.width * cam.height * (settings.spp if resolve_effects(frame).supersampling else 1)
+                primary = "zbuffer" if image.raster_is_cheaper(frame.triangle_count, samples) else "raytrace"
+                tiny_frames.append((frame.with_camera(width=1, height=1), primary))
+            except SceneError:
+                pass  # a bad frame reports itself when it is rendered
+        t_lock = time.perf_counter()
         with _warmup_lock():
-            self.lock_seconds = time.perf_counter() - t
-            for overrides in spec["warmup"]:
+            self.lock_seconds = time.perf_counter() - t_lock
+            for tiny, primary in tiny_frames:
                 try:
-                    frame = self.scenes.scene(overrides)
-                    cam, settings = frame.camera, frame.render
-                    samples = cam.width * cam.height * (settings.spp if resolve_effects(frame).supersampling else 1)
-                    primary = "zbuffer" if image.raster_is_cheaper(frame.triangle_count, samples) else "raytrace"
-                    tiny = frame.with_camera(width=1, height=1)
                     image.render(tiny, threads=threads, aovs=self.aovs, primary=primary)
                 except SceneError:
                     pass  # a bad frame reports itself when it is rendered
