@@ -80,9 +80,8 @@ def batch(job, output_dir=None, *, workers: int | None = None, ray=None, shard=N
         raise ArgumentError("batch", "workers", f"expected an integer >= 1, got {workers!r}")
     j = load_job(job, output_dir)
     out_dir = j.output_dir
-    pool = None
-    # Without resume every frame of the shard is to render, so the local workers (and the fork server)
-    # start now, on a thread, and boot while this thread checks the job; a bad job terminates them.
+    # Without resume every frame of the shard is to render, so the local workers start now (forked, or
+    # a fork server on a thread) and boot while this thread checks the job; a bad job terminates them.
     count = j.frame_count(shard)
     booting = _start_local(j, count, workers, start_method) if not ray and not resume and count else None
     manifest = None  # opened (and, without resume, emptied) only once the frames have been checked
