@@ -11,7 +11,7 @@ worker (host, pid, threads; node on Ray), seconds (scene, render, write on the w
 (the id of the run that rendered it), backend.
 
 A fresh (not resume) unsharded run removes every manifest*.jsonl in DIR; a fresh shard
-truncates its own file only. A line cut short by a crash is ignored when read, and --resume drops
+truncates its own file only. A line cut short by a crash is ignored when read, and a resumed run drops
 it from the file it appends to (rewritten whole, then renamed over it), so that the file stays JSON
 lines for pandas.read_json(lines=True) and jq; its frame, having no line, is rendered again.
 """
