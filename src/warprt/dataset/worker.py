@@ -4,6 +4,7 @@ frame's files written by warprt's own film writer."""
 
 from __future__ import annotations
 
+import itertools
 import json
 import os
 import socket
@@ -107,7 +108,7 @@ class FrameRenderer:
                 except SceneError:
                     pass  # a bad frame reports itself when it is rendered
         self.warmup_seconds = time.perf_counter() - t
-        self.frames_done = 0
+        self._done = itertools.count(1)  # next() is atomic: a Ray actor writes frames on two threads
 
     def render_frame(self, task: dict) -> dict:
         """task: frame, overrides, outputs (relative to the output folder). Returns a result record;
@@ -140,10 +141,9 @@ class FrameRenderer:
             return {"ok": False, "frame": task["frame"], "error": error_record(e)}
         except Exception as e:  # a failed write (a full disk): not bad input
             return _internal(task, e)
-        self.frames_done += 1
         return {"ok": True, "frame": task["frame"], "stats": result.stats.to_dict(),
                 "worker": {"host": socket.gethostname(), "pid": os.getpid(), "threads": self.threads,
-                           "frames_done": self.frames_done},
+                           "frames_done": next(self._done)},
                 "seconds": {**seconds, "write": time.perf_counter() - t}}
 
 
