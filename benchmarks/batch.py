@@ -45,6 +45,7 @@ frames = {frames}
 # Ray's simulated nodes: one CPU each, a small object store, no autoscaler or log monitor.
 NODE = {"num_cpus": 1, "object_store_memory": 96 * 2**20, "no_monitor": True, "include_log_monitor": False}
 POLL_S = 0.05  # how often the process tree's CPU times are read
+LONG_ONCE = 500  # a longer job runs once: minutes a run, its start paid once, so it varies less
 
 
 def run_one(config: str, job: Path, out: Path) -> dict:
@@ -165,8 +166,9 @@ def run_child(config: str, job: Path, out: Path, env=None) -> dict:
 
 def run(lengths=LENGTHS, width: int = 320, height: int = 240, repeat: int = 3, quick: bool = False,
         configs=CONFIGS, log=print) -> dict:
-    """Per job length, each configuration ``repeat`` times (the loop and the default local backend only
-    past the first length), alternated, each in a fresh process; the frames in a temporary folder."""
+    """Per job length, each configuration ``repeat`` times (once past LONG_ONCE frames; the loop and the
+    default local backend only past the first length), alternated, each in a fresh process; the frames in a
+    temporary folder."""
     if quick:
         lengths, width, height, repeat = (4, 8), 64, 48, 1
     results = []
@@ -179,7 +181,7 @@ def run(lengths=LENGTHS, width: int = 320, height: int = 240, repeat: int = 3, q
                                        "-q"], capture_output=True, text=True)  # fills Warp's kernel cache
                 if warm.returncode:
                     raise RuntimeError(f"warm-up run failed: {warm.stderr[-2000:]}")
-            for rep in range(repeat):
+            for rep in range(repeat if n <= LONG_ONCE else 1):
                 for config in configs if n == lengths[0] else [c for c in configs if c in LONG_CONFIGS]:
                     load = os.getloadavg()[0]
                     r = run_child(config, job, Path(tmp) / f"{config}-{n}-{rep}")
@@ -222,7 +224,7 @@ def report(data: dict) -> str:
         "## Many frames: `warprt batch`",
         "",
         f"{data['width']}x{data['height']} orbits of {data['scene']} written as PNGs, {cores} cores; each configuration "
-        f"in a fresh process, best of {data['repeat']} (median beside it). Seconds are the whole call (worker boot, "
+        f"in a fresh process, best of {data['repeat']} (median beside it; once past {LONG_ONCE} frames). Seconds are the whole call (worker boot, "
         "frame checks and manifest included); Ray's own start is apart. CPU use: user+sys of the process and all "
         f"under it within those seconds, over seconds x {cores} cores. Worker start: from batch() to a worker ready "
         "(scene loaded, kernels warm), the slowest worker; first frame: from the call to its first finished frame. "
