@@ -7,9 +7,10 @@ worker is stopped, every pending future fails) and multiprocessing.Pool never re
 a dead worker. Here a dead worker (os.kill, OOM killer) is noticed by its process sentinel, its frames
 go back to the front of the queue, and one new worker takes its place; the others keep going.
 
-Processes are started with "forkserver" (Linux) or "spawn"; never "fork": a parent that has rendered
-holds warprt's ThreadPoolExecutor, whose threads do not exist in a forked child, and the child's
-first multi-threaded frame hangs (measured).
+Processes are started as driver.default_start_method() says: forked from a driver that has one thread
+and has not started Warp (`warprt batch`), else from a fork server or spawned; never forked from a parent
+that has rendered: it holds warprt's ThreadPoolExecutor, whose threads do not exist in a forked child, and
+the child's first multi-threaded frame hangs (measured).
 """
 
 from __future__ import annotations
