@@ -86,15 +86,7 @@ def targets(h2h: dict, cast: dict, floor: dict | None = None, orbit: dict | None
     if many is not None:
         from . import batch
 
-        q = batch.ratios(many)
-        size = f"{many['frames']}-frame {many['width']}x{many['height']} orbit, {many['cores']} cores"
-        rows += [
-            ("`warprt batch`, local backend: >= 1.7x the frames per second of a Python loop calling `warprt.render`",
-             f"{q['local_over_loop']:.2f}x ({size}, 2 workers)", met(q["local_over_loop"] >= 1.7)),
-            ("`warprt batch --ray` on one machine: within 1.25x of the local backend's time",
-             f"{q['ray_over_local']:.2f}x (2 actors against 2 worker processes; Ray's start apart)",
-             met(q["ray_over_local"] <= 1.25)),
-        ]
+        rows += batch.targets(many, met)
     lines = ["## Targets", "", "Measured in this run; why the unmet ones are not met is in the last section "
              "(\"What was tried\").", "", "| target | measured | |", "|---|---|---|"]
     lines += [f"| {a} | {b} | {c} |" for a, b, c in rows]

@@ -1,13 +1,14 @@
-"""Frames per second of a many-frame job: a 48-frame 320x240 orbit of scenes/seed.toml written as PNGs,
-by a Python loop calling warprt.render per frame, by `warprt batch`'s local backend (1 and 2 worker
-processes), by Ray on this machine (1 and 2 actors) and by a simulated 2-node Ray cluster.
+"""Frames per second of a many-frame job against its length: a 320x240 orbit of scenes/seed.toml written as
+PNGs by a Python loop calling warprt.render per frame, and by `warprt batch` (local workers, Ray, a cluster).
 
-    python -m benchmarks.batch [--repeat 3] [--quick]   -> benchmarks/results/batch.md (+ .json)
+    python -m benchmarks.batch [--repeat 3] [--lengths 48,480,2400] [--quick]   -> benchmarks/results/batch.md (+ .json)
 
 Each configuration runs in a fresh process, so nothing stays warm from the one before (Warp's kernel
 cache on disk is warm: one untimed run of the job fills it first). Seconds are the whole call: for the
 backends batch() from start to return (worker boot, frame checks, manifest included); Ray's own start
-(ray.init, or the cluster's) is excluded and shown apart, as it is paid once per session.
+(ray.init, or the cluster's) is excluded and shown apart, as it is paid once per session. CPU use is the
+user+sys time of the process and every process under it (workers, the fork server, Ray's) within those
+seconds, read from /proc, over seconds x cores.
 """
 
 from __future__ import annotations
@@ -24,14 +25,17 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent
 SCENE = ROOT.parent / "scenes" / "seed.toml"
-CONFIGS = ("loop", "loop_reload", "local_1", "local_2", "ray_1", "ray_2", "cluster_2")
+LENGTHS = (48, 480, 2400)
+CONFIGS = ("loop", "loop_reload", "local", "local_1", "local_2", "ray_1", "ray_2", "cluster_2")
+LONG_CONFIGS = ("loop", "local")  # past the first length: the loop and batch()'s own choice only
 LABELS = {"loop": "Python loop: the scene loaded once, `with_camera` per frame, `warprt.render`, `write_image`",
           "loop_reload": "Python loop: `warprt.load_scene` per frame, `warprt.render`, `write_image`",
+          "local": "local backend, its default workers x threads",
           "local_1": "local backend, 1 worker process", "local_2": "local backend, 2 worker processes",
           "ray_1": "Ray on this machine, 1 actor", "ray_2": "Ray on this machine, 2 actors",
           "cluster_2": "Ray, simulated 2-node cluster (1 CPU each)"}
 JOB = """scene = "{scene}"
-output = "frames/{{frame:02d}}.png"
+output = "frames/{{frame:04d}}.png"
 [set]
 "camera.width" = {width}
 "camera.height" = {height}
@@ -40,10 +44,13 @@ frames = {frames}
 """
 # Ray's simulated nodes: one CPU each, a small object store, no autoscaler or log monitor.
 NODE = {"num_cpus": 1, "object_store_memory": 96 * 2**20, "no_monitor": True, "include_log_monitor": False}
+POLL_S = 0.05  # how often the process tree's CPU times are read
+LONG_ONCE = 500  # a longer job runs once: minutes a run, its start paid once, so it varies less
 
 
 def run_one(config: str, job: Path, out: Path) -> dict:
-    """One configuration, in this process: seconds, frames and where the time went."""
+    """One configuration, in this process: seconds (and their start and end on the monotonic clock, which
+    the parent's CPU sampling shares), frames and where the time went."""
     os.environ.setdefault("RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER", "0")  # loopback only, read when Ray is imported
     os.environ.setdefault("RAY_USAGE_STATS_ENABLED", "0")
     import warprt
@@ -56,7 +63,8 @@ def run_one(config: str, job: Path, out: Path) -> dict:
         base = check_scene(j)
         (out / "frames").mkdir(parents=True, exist_ok=True)
         t0 = time.perf_counter()
-        times = []
+        res["start"] = time.monotonic()
+        times, first = [], None
         for f in j.frames:
             if config == "loop_reload":
                 scene = warprt.load_scene(j.scene_path, f.overrides)
@@ -65,10 +73,11 @@ def run_one(config: str, job: Path, out: Path) -> dict:
             image, stats = warprt.render(scene, threads=default_threads())
             write_image(out / f.outputs["color"], image)
             times.append(stats.times)
-        res.update(seconds=time.perf_counter() - t0, frames=len(j.frames), workers=1, threads=default_threads(),
-                   frame_ms=frame_ms(times))
+            first = first or time.perf_counter() - t0
+        res.update(seconds=time.perf_counter() - t0, end=time.monotonic(), frames=len(j.frames), workers=1,
+                   threads=default_threads(), first_frame_seconds=first, frame_ms=frame_ms(times))
         return res
-    kind, workers = config.rsplit("_", 1)
+    kind, _, workers = config.partition("_")
     cluster, address = None, None
     if kind in ("ray", "cluster"):
         import ray
@@ -85,11 +94,14 @@ def run_one(config: str, job: Path, out: Path) -> dict:
             cluster.wait_for_nodes()
             address = cluster.address
         res["ray_start_seconds"] = time.perf_counter() - t
-    summary = {}
+    summary, first = {}, []
     t0 = time.perf_counter()
-    rows = batch(job, out, workers=int(workers), ray=address, summary=summary)
-    res.update(seconds=time.perf_counter() - t0, frames=len(rows), workers=summary["workers"], threads=summary["threads"],
-               render_seconds=summary["render_seconds"], boot_seconds=summary.get("boot_seconds"),
+    res["start"] = time.monotonic()
+    rows = batch(job, out, workers=int(workers) if workers else None, ray=address, summary=summary,
+                 on_frame=lambda row: first or first.append(time.perf_counter() - t0))
+    res.update(seconds=time.perf_counter() - t0, end=time.monotonic(), frames=len(rows), workers=summary["workers"],
+               threads=summary["threads"], render_seconds=summary["render_seconds"],
+               boot_seconds=summary.get("boot_seconds"), first_frame_seconds=first[0],
                nodes=len({r["worker"].get("node", r["worker"]["host"]) for r in rows}),
                frame_ms=frame_ms([r["stats"]["times"] for r in rows]))
     if kind in ("ray", "cluster"):
@@ -106,79 +118,142 @@ def frame_ms(times: list[dict]) -> dict:
     return {k: 1e3 * statistics.mean(t.get(k, 0.0) for t in times) for k in ("bvh", "trace", "total")}
 
 
-def run(frames: int = 48, width: int = 320, height: int = 240, repeat: int = 3, quick: bool = False,
+def _tree_cpu(root: int) -> dict:
+    """pid -> user+sys seconds of ``root`` and every process under it (Linux /proc)."""
+    tick = os.sysconf("SC_CLK_TCK")
+    parent, cpu = {}, {}
+    for name in os.listdir("/proc"):
+        if not name.isdigit():
+            continue
+        try:
+            with open(f"/proc/{name}/stat", "rb") as f:
+                fields = f.read().rsplit(b")", 1)[1].split()
+        except OSError:
+            continue  # gone meanwhile
+        parent[int(name)] = int(fields[1])
+        cpu[int(name)] = (int(fields[11]) + int(fields[12])) / tick
+    tree, todo = set(), [root]
+    while todo:
+        p = todo.pop()
+        tree.add(p)
+        todo += [c for c, pp in parent.items() if pp == p and c not in tree]
+    return {p: cpu[p] for p in tree if p in cpu}
+
+
+def run_child(config: str, job: Path, out: Path, env=None) -> dict:
+    """run_one in a fresh process, its process tree's CPU sampled every POLL_S: ``cpu_seconds`` is what the
+    tree used between the run's start and end (a process exiting between two samples loses its last POLL_S)."""
+    p = subprocess.Popen([sys.executable, "-m", "benchmarks.batch", "--one", config, "--job", str(job), "--out", str(out)],
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=ROOT.parent, env=env)
+    samples = []  # (monotonic time, pid -> cpu seconds)
+    while p.poll() is None:
+        samples.append((time.monotonic(), _tree_cpu(p.pid)))
+        time.sleep(POLL_S)
+    stdout, stderr = p.communicate()
+    if p.returncode:
+        raise RuntimeError(f"{config} failed: {stderr[-2000:]}")
+    r = json.loads(stdout.strip().splitlines()[-1])
+    before = next((s for t, s in reversed(samples) if t <= r["start"]), {})
+    used = {}
+    for t, s in samples:
+        if t <= r["end"]:
+            used.update(s)  # the last sample within the run of each process
+    r["cpu_seconds"] = sum(c - before.get(pid, 0.0) for pid, c in used.items())
+    r["cores"] = len(os.sched_getaffinity(0))
+    r["cpu_use"] = r["cpu_seconds"] / (r["seconds"] * r["cores"])
+    return r
+
+
+def run(lengths=LENGTHS, width: int = 320, height: int = 240, repeat: int = 3, quick: bool = False,
         configs=CONFIGS, log=print) -> dict:
-    """Every configuration ``repeat`` times, each in a fresh process; the job's frames in a temporary folder."""
+    """Per job length, each configuration ``repeat`` times (once past LONG_ONCE frames; the loop and the
+    default local backend only past the first length), alternated, each in a fresh process; the frames in a
+    temporary folder."""
     if quick:
-        frames, width, height, repeat = 4, 64, 48, 1
+        lengths, width, height, repeat = (4, 8), 64, 48, 1
     results = []
     with tempfile.TemporaryDirectory(prefix="warprt-bench-batch-") as tmp:
-        job = Path(tmp) / "orbit.toml"
-        job.write_text(JOB.format(scene=SCENE.as_posix(), width=width, height=height, frames=frames))
-        warm = subprocess.run([sys.executable, "-m", "warprt", "batch", str(job), "-o", str(Path(tmp) / "warm"), "-q"],
-                              capture_output=True, text=True)  # fills Warp's kernel cache
-        if warm.returncode:
-            raise RuntimeError(f"warm-up run failed: {warm.stderr[-2000:]}")
-        for rep in range(repeat):
-            for config in configs:
-                out = Path(tmp) / f"{config}-{rep}"
-                p = subprocess.run([sys.executable, "-m", "benchmarks.batch", "--one", config, "--job", str(job),
-                                    "--out", str(out)], capture_output=True, text=True, cwd=ROOT.parent, timeout=1800)
-                if p.returncode:
-                    raise RuntimeError(f"{config} failed: {p.stderr[-2000:]}")
-                r = json.loads(p.stdout.strip().splitlines()[-1])
-                r["load_before"] = os.getloadavg()[0]
-                results.append(r)
-                log(f"  {config:12s} {r['frames'] / r['seconds']:6.2f} frames/s ({r['seconds']:.1f} s"
-                    + (f", Ray start {r['ray_start_seconds']:.1f} s" if "ray_start_seconds" in r else "") + ")")
-    return {"frames": frames, "width": width, "height": height, "repeat": repeat, "scene": "scenes/seed.toml",
+        for n in lengths:
+            job = Path(tmp) / f"orbit{n}.toml"
+            job.write_text(JOB.format(scene=SCENE.as_posix(), width=width, height=height, frames=n))
+            if n == lengths[0]:
+                warm = subprocess.run([sys.executable, "-m", "warprt", "batch", str(job), "-o", str(Path(tmp) / "warm"),
+                                       "-q"], capture_output=True, text=True)  # fills Warp's kernel cache
+                if warm.returncode:
+                    raise RuntimeError(f"warm-up run failed: {warm.stderr[-2000:]}")
+            for rep in range(repeat if n <= LONG_ONCE else 1):
+                for config in configs if n == lengths[0] else [c for c in configs if c in LONG_CONFIGS]:
+                    load = os.getloadavg()[0]
+                    r = run_child(config, job, Path(tmp) / f"{config}-{n}-{rep}")
+                    r["load_before"] = load
+                    results.append(r)
+                    log(f"  {n:5d} frames {config:12s} {r['frames'] / r['seconds']:6.2f} frames/s ({r['seconds']:.1f} s, "
+                        f"CPU {r['cpu_use']:.0%}" + (f", Ray start {r['ray_start_seconds']:.1f} s" if "ray_start_seconds" in r
+                                                     else "") + ")")
+    return {"lengths": list(lengths), "width": width, "height": height, "repeat": repeat, "scene": "scenes/seed.toml",
             "cores": len(os.sched_getaffinity(0)), "results": results}
 
 
-def best(data: dict) -> dict:
-    """Per configuration, its fastest run (the one least disturbed by anything else on the machine)."""
+def best(data: dict, frames: int) -> dict:
+    """Per configuration, its fastest run at this job length (the one least disturbed by anything else)."""
     out = {}
     for r in data["results"]:
-        if r["config"] not in out or r["seconds"] < out[r["config"]]["seconds"]:
+        if r["frames"] == frames and (r["config"] not in out or r["seconds"] < out[r["config"]]["seconds"]):
             out[r["config"]] = r
     return out
 
 
 def ratios(data: dict) -> dict:
-    """The issue's two targets: local (2 workers) frames/s over the loop's, Ray (2 actors) time over local's."""
-    b = best(data)
-    fps = lambda c: b[c]["frames"] / b[c]["seconds"]
-    return {"local_over_loop": fps("local_2") / fps("loop"), "ray_over_local": b["ray_2"]["seconds"] / b["local_2"]["seconds"]}
+    """The targets' numbers. Per job length: the default local backend's frames/s over the loop's, and its
+    CPU use; at the first length, Ray (2 actors) time over local's (2 workers)."""
+    out = {"local_over_loop": {}, "cpu_use": {}}
+    for n in data["lengths"]:
+        b = best(data, n)
+        if "loop" in b and "local" in b:
+            out["local_over_loop"][n] = b["loop"]["seconds"] / b["local"]["seconds"]
+            out["cpu_use"][n] = b["local"]["cpu_use"]
+    b = best(data, data["lengths"][0])
+    if "ray_2" in b and "local_2" in b:
+        out["ray_over_local"] = b["ray_2"]["seconds"] / b["local_2"]["seconds"]
+    return out
 
 
 def report(data: dict) -> str:
-    b = best(data)
+    cores = data["cores"]
     lines = [
         "## Many frames: `warprt batch`",
         "",
-        f"A {data['frames']}-frame {data['width']}x{data['height']} orbit of {data['scene']} written as PNGs, "
-        f"{data['cores']} cores; each configuration in a fresh process, best of {data['repeat']} (median beside it). "
-        "Seconds are the whole call (worker boot, frame checks and manifest included); Ray's own start is apart. "
+        f"{data['width']}x{data['height']} orbits of {data['scene']} written as PNGs, {cores} cores; each configuration "
+        f"in a fresh process, best of {data['repeat']} (median beside it; once past {LONG_ONCE} frames). Seconds are the whole call (worker boot, "
+        "frame checks and manifest included); Ray's own start is apart. CPU use: user+sys of the process and all "
+        f"under it within those seconds, over seconds x {cores} cores. Worker start: from batch() to a worker ready "
+        "(scene loaded, kernels warm), the slowest worker; first frame: from the call to its first finished frame. "
         "Regenerate: `python -m benchmarks.batch`.",
         "",
-        "| configuration | frames/s | median frames/s | seconds | workers x threads | Ray start s | ms per frame: BVH / trace / total |",
-        "|---|---:|---:|---:|---|---:|---|",
+        "| frames | configuration | frames/s | median frames/s | seconds | CPU use | workers x threads | worker start s | "
+        "first frame s | Ray start s | ms per frame: BVH / trace / total |",
+        "|---:|---|---:|---:|---:|---:|---|---:|---:|---:|---|",
     ]
-    for config in CONFIGS:
-        if config not in b:
-            continue
-        r = b[config]
-        runs = [x["frames"] / x["seconds"] for x in data["results"] if x["config"] == config]
-        ray_start = f"{r['ray_start_seconds']:.1f}" if "ray_start_seconds" in r else ""
-        ms = r["frame_ms"]
-        lines.append(f"| {LABELS[config]} | {r['frames'] / r['seconds']:.2f} | {statistics.median(runs):.2f} | "
-                     f"{r['seconds']:.1f} | {r['workers']} x {r['threads']} | {ray_start} | "
-                     f"{ms['bvh']:.0f} / {ms['trace']:.0f} / {ms['total']:.0f} |")
+    for n in data["lengths"]:
+        b = best(data, n)
+        for config in CONFIGS:
+            if config not in b:
+                continue
+            r = b[config]
+            runs = [x["frames"] / x["seconds"] for x in data["results"] if x["config"] == config and x["frames"] == n]
+            boot = f"{max(r['boot_seconds']):.2f}" if r.get("boot_seconds") else ""
+            ray_start = f"{r['ray_start_seconds']:.1f}" if "ray_start_seconds" in r else ""
+            ms = r["frame_ms"]
+            lines.append(f"| {n} | {LABELS[config]} | {r['frames'] / r['seconds']:.2f} | {statistics.median(runs):.2f} | "
+                         f"{r['seconds']:.1f} | {r['cpu_use']:.0%} | {r['workers']} x {r['threads']} | {boot} | "
+                         f"{r['first_frame_seconds']:.2f} | {ray_start} | {ms['bvh']:.0f} / {ms['trace']:.0f} / {ms['total']:.0f} |")
     q = ratios(data)
+    lines += ["", "The local backend (its default workers x threads) against the loop: "
+              + ", ".join(f"{x:.2f}x the frames per second at {n} frames (CPU use {q['cpu_use'][n]:.0%})"
+                          for n, x in q["local_over_loop"].items()) + "."]
+    if "ray_over_local" in q:
+        lines[-1] += f" Ray on this machine (2 actors) takes {q['ray_over_local']:.2f}x the local backend's time (2 workers)."
     lines += [
-        "",
-        f"Local backend (2 workers) against the loop: {q['local_over_loop']:.2f}x the frames per second; Ray on this "
-        f"machine (2 actors) takes {q['ray_over_local']:.2f}x the local backend's time.",
         "",
         "On real machines: a cluster node renders with all its cores (here two simulated nodes share two), so "
         "frames per second grow with the nodes while the driver only sends small task records and receives stats; "
@@ -191,10 +266,32 @@ def report(data: dict) -> str:
     return "\n".join(lines)
 
 
+def targets(data: dict, met) -> list[tuple]:
+    """The Targets table's rows for batch: (target, measured, verdict); ``met(bool)`` words the verdict."""
+    q = ratios(data)
+    size = f"{data['width']}x{data['height']} orbit, {data['cores']} cores"
+    rows = []
+    for goal, n in ((1.0, data["lengths"][0]), (1.3, data["lengths"][1] if len(data["lengths"]) > 1 else None)):
+        if n in q["local_over_loop"]:
+            x = q["local_over_loop"][n]
+            rows.append((f"`warprt batch`, local backend: >= {goal:.1f}x the frames per second of a Python loop calling "
+                         f"`warprt.render`, {n} frames", f"{x:.2f}x ({n}-frame {size})", met(x >= goal)))
+    if q["cpu_use"]:
+        use = min(q["cpu_use"].values())
+        rows.append(("`warprt batch`, local backend: CPU use >= 90% of the cores during the job",
+                     ", ".join(f"{u:.0%} at {n} frames" for n, u in q["cpu_use"].items()), met(use >= 0.9)))
+    if "ray_over_local" in q:
+        rows.append(("`warprt batch --ray` on one machine: within 1.25x of the local backend's time",
+                     f"{q['ray_over_local']:.2f}x (2 actors against 2 worker processes; Ray's start apart)",
+                     met(q["ray_over_local"] <= 1.25)))
+    return rows
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--repeat", type=int, default=3)
-    ap.add_argument("--quick", action="store_true", help="4 frames at 64x48, once: a smoke run")
+    ap.add_argument("--lengths", default=",".join(map(str, LENGTHS)), help="job lengths in frames (default: %(default)s)")
+    ap.add_argument("--quick", action="store_true", help="4 and 8 frames at 64x48, once: a smoke run")
     ap.add_argument("-o", "--output", default=str(ROOT / "results" / "batch.md"))
     ap.add_argument("--one", choices=CONFIGS, help=argparse.SUPPRESS)  # one configuration, in this process
     ap.add_argument("--job", help=argparse.SUPPRESS)
@@ -206,7 +303,7 @@ def main(argv=None):
         os._exit(0)  # Ray's and Warp's native teardown only costs time
     from benchmarks.output import save
 
-    data = run(repeat=args.repeat, quick=args.quick)
+    data = run(lengths=tuple(int(x) for x in args.lengths.split(",")), repeat=args.repeat, quick=args.quick)
     print(f"wrote {save(args.output, data, report(data))}")
 
 

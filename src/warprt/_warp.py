@@ -35,6 +35,18 @@ def init_warp():
     _initialized = True
 
 
+def warp_started() -> bool:
+    """Whether this process has started Warp's runtime (init_warp, or a wp.init() of its own): such a
+    process must not fork workers. Where Warp's internals have moved and it cannot tell, it says yes."""
+    if _initialized:
+        return True
+    try:
+        from warp._src import context
+    except ImportError:
+        return True
+    return getattr(context, "runtime", True) is not None
+
+
 def kernel_cache_dir() -> str:
     """Where Warp will cache compiled kernels: warp.config.kernel_cache_dir if set, else
     WARP_CACHE_PATH, else the user's cache folder (~/.cache/warp/<version> on Linux)."""

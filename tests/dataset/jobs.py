@@ -1,5 +1,6 @@
 """Job files, the `warprt batch` command and Ray for the batch tests: frames are tiny (tiny.toml, 32x24)."""
 
+import json
 import subprocess
 import sys
 import textwrap
@@ -32,3 +33,13 @@ def require_ray():
     except ImportError:
         pytest.fail("the Ray tests need Ray: pip install -e '.[test,ray]' (make test installs it)", pytrace=False)
     return ray
+
+
+def every_line_is_json(path) -> bool:
+    """What pandas.read_json(lines=True) and jq need of a manifest: each line one JSON value."""
+    try:
+        for line in Path(path).read_text().splitlines():
+            json.loads(line)
+    except json.JSONDecodeError:
+        return False
+    return True

@@ -100,6 +100,20 @@ def test_shards_partition_the_frames(job_dir):
     assert [f.index for f in parts[1]] == [1, 4]
 
 
+def test_frame_count_and_worker_spec_are_known_before_an_orbit_is_expanded(job_dir):
+    """The workers start before check_scene(): what they are given must not need it."""
+    job = load_job(write_job(job_dir, 'scene = "{scene}"\noutput = "{frame}_{render.spp}_{sweep}.png"\n[orbit]\nframes = 5\n'
+                                      '[sweep]\n"render.spp" = [1, 4]\n"lights[0].color" = [[1, 1, 1], [0.5, 0.5, 0.5]]\n'))
+    counts = [job.frame_count(s) for s in (None, (0, 3), (1, 3), (2, 3))]
+    spec = job.spec()
+    check_scene(job)  # expands the orbit: 2 x 2 sweep combinations x 5 eyes
+    assert counts == [len(job.frames)] + [len(select_shard(job.frames, (i, 3))) for i in range(3)] == [20, 7, 7, 6]
+    first_of_each = {}
+    for f in job.frames:  # per render.* setting, its first frame, the orbit's eye aside
+        first_of_each.setdefault(f.overrides["render.spp"], {k: v for k, v in f.overrides.items() if k != "camera.eye"})
+    assert spec["warmup"] == list(first_of_each.values())
+
+
 @pytest.mark.parametrize("text, env, expected", [
     ("1/4", {}, (1, 4)),
     ("auto", {"SLURM_ARRAY_TASK_ID": "5", "SLURM_ARRAY_TASK_MIN": "4", "SLURM_ARRAY_TASK_COUNT": "3"}, (1, 3)),

@@ -6,15 +6,37 @@ import io
 import warprt
 from warprt.dataset import Manifest, done, load_job, progress_bar, read_rows
 
-from dataset.jobs import write_job
+from dataset.jobs import every_line_is_json, write_job
 
 
-def test_a_line_cut_short_is_ignored_and_not_glued_to_the_next(tmp_path):
-    (tmp_path / "manifest.jsonl").write_text('{"frame": 0, "key": "a"}\n{"frame": 1, "ke')
+TORN = '{"frame": 0, "key": "a"}\n{"frame": 1, "key": "b"}\n{"frame": 2, "ke'  # killed mid-append
+
+
+def test_resume_drops_a_line_cut_short_and_the_file_stays_json_lines(tmp_path):
+    (tmp_path / "manifest.jsonl").write_text(TORN)
     m = Manifest(tmp_path, resume=True)
     m.append({"frame": 2, "key": "c"})
     m.close()
-    assert [r["frame"] for r in read_rows(tmp_path)] == [0, 2]
+    assert every_line_is_json(tmp_path / "manifest.jsonl")
+    assert [r["frame"] for r in read_rows(tmp_path)] == [0, 1, 2]
+    assert [p.name for p in tmp_path.iterdir()] == ["manifest.jsonl"]  # no temporary file left
+
+
+def test_the_check_fails_on_a_torn_line_kept_as_before(tmp_path):
+    """The negative control: the torn line kept and a newline glued to it, as resume used to leave it."""
+    (tmp_path / "manifest.jsonl").write_text(TORN + '\n{"frame": 2, "key": "c"}\n')
+    assert not every_line_is_json(tmp_path / "manifest.jsonl")
+    assert [r["frame"] for r in read_rows(tmp_path)] == [0, 1, 2]  # the reader skips it; pandas and jq do not
+
+
+def test_resume_rewrites_an_earlier_glued_torn_line_and_leaves_a_whole_file_untouched(tmp_path):
+    path = tmp_path / "manifest.jsonl"
+    path.write_text(TORN + '\n{"frame": 2, "key": "c"}\n')
+    Manifest(tmp_path, resume=True).close()
+    assert every_line_is_json(path) and [r["frame"] for r in read_rows(tmp_path)] == [0, 1, 2]
+    inode = path.stat().st_ino
+    Manifest(tmp_path, resume=True).close()
+    assert path.stat().st_ino == inode  # nothing to drop: not rewritten
 
 
 def test_a_fresh_unsharded_run_replaces_every_manifest_a_shard_only_its_own(tmp_path):

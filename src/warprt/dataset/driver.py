@@ -17,13 +17,27 @@ from .worker import FrameScenes
 
 
 def default_start_method() -> str:
-    """forkserver where there is one (Linux): workers fork from a server that has imported warprt and
-    Warp (but started neither Warp's runtime nor a thread), about 1 s to boot against 3-7 s for a fresh
-    interpreter on a busy 2-core machine. Never "fork": a parent that has rendered holds warprt's thread
-    pool, whose threads do not exist in the child, and the child's first threaded frame hangs."""
+    """How worker processes start. "fork" where it is safe: Linux, and this process has one thread and has
+    not started Warp's runtime (`warprt batch` itself: the driver only reads scenes); a worker then starts
+    with warprt and Warp imported, in milliseconds. Otherwise "forkserver" where there is one: workers fork
+    from a server that imports warprt and Warp first (about 1 s, 4 s on a busy 2-core machine, in every
+    batch's start) but starts neither Warp's runtime nor a thread; else "spawn". Never "fork" from a process
+    that has rendered: it holds warprt's thread pool, whose threads do not exist in the child, and the
+    child's first threaded frame hangs (measured)."""
     import multiprocessing as mp
+    import threading
 
-    return "forkserver" if sys.platform.startswith("linux") and "forkserver" in mp.get_all_start_methods() else "spawn"
+    if not sys.platform.startswith("linux"):
+        return "spawn"
+    if threading.active_count() == 1 and ("warp" not in sys.modules or not _warp_started()):
+        return "fork"
+    return "forkserver" if "forkserver" in mp.get_all_start_methods() else "spawn"
+
+
+def _warp_started() -> bool:
+    from .._warp import warp_started
+
+    return warp_started()
 
 
 def check_frames(job: Job, frames: list[Frame]):
@@ -66,34 +80,39 @@ def batch(job, output_dir=None, *, workers: int | None = None, ray=None, shard=N
         raise ArgumentError("batch", "workers", f"expected an integer >= 1, got {workers!r}")
     j = load_job(job, output_dir)
     out_dir = j.output_dir
-    t_check = time.perf_counter()
-    check_scene(j)  # the base scene, [set] and every swept value, before any worker starts
-    frames = select_shard(j.frames, shard)
-    previous = done(read_rows(out_dir), frames, out_dir) if resume and out_dir.is_dir() else {}
-    todo = [f for f in frames if f.index not in previous]
-    by_index = {f.index: f for f in frames}
-    run_id = uuid.uuid4().hex[:12]
-    backend_name = "ray" if ray else "local"
-    rows = dict(previous)
-    stats = {"frames": len(frames), "skipped": len(previous), "rendered": 0, "backend": backend_name,
-             "check_seconds": time.perf_counter() - t_check}
+    # Without resume every frame of the shard is to render, so the local workers start now (forked, or
+    # a fork server on a thread) and boot while this thread checks the job; a bad job terminates them.
+    count = j.frame_count(shard)
+    booting = _start_local(j, count, workers, start_method) if not ray and not resume and count else None
     manifest = None  # opened (and, without resume, emptied) only once the frames have been checked
-
-    def prepare():
-        t = time.perf_counter()
-        if check:
-            check_frames(j, todo)
-        _make_folders(j, out_dir, todo)
-        stats["frame_check_seconds"] = time.perf_counter() - t
-
+    stats = {}
     try:
+        t_check = time.perf_counter()
+        check_scene(j)  # the base scene, [set] and every swept value, before any frame renders
+        frames = select_shard(j.frames, shard)
+        previous = done(read_rows(out_dir), frames, out_dir) if resume and out_dir.is_dir() else {}
+        todo = [f for f in frames if f.index not in previous]
+        by_index = {f.index: f for f in frames}
+        run_id = uuid.uuid4().hex[:12]
+        backend_name = "ray" if ray else "local"
+        rows = dict(previous)
+        stats.update(frames=len(frames), skipped=len(previous), rendered=0, backend=backend_name,
+                     check_seconds=time.perf_counter() - t_check)
+
+        def prepare():
+            t = time.perf_counter()
+            if check:
+                check_frames(j, todo)
+            _make_folders(j, out_dir, todo)
+            stats["frame_check_seconds"] = time.perf_counter() - t
+
         if todo:
             if not ray:
-                from .local import LocalPool
-
-                n = workers or min(default_threads(), len(todo))
-                threads = max(1, default_threads() // n)
-                pool = LocalPool(j.spec(), n, threads, start_method=start_method or default_start_method())
+                if booting is None:
+                    booting = _start_local(j, len(todo), workers, start_method)
+                prepare()  # while the workers boot
+                pool = booting.result()
+                n, threads = pool.n, pool.threads
             else:
                 prepare()  # first: starting or joining Ray takes seconds, a bad job should not wait for it
                 from .ray_pool import RayPool
@@ -103,8 +122,6 @@ def batch(job, output_dir=None, *, workers: int | None = None, ray=None, shard=N
             stats.update(workers=n, threads=threads)
             ok = False
             try:
-                if not ray:
-                    prepare()  # while the workers boot
                 manifest = Manifest(out_dir, shard, resume=resume)
                 tasks = [{"frame": f.index, "overrides": f.overrides, "outputs": f.outputs} for f in todo]
                 bar = progress_bar(len(todo), quiet)
@@ -138,18 +155,46 @@ def batch(job, output_dir=None, *, workers: int | None = None, ray=None, shard=N
                 (pool.close if ok else pool.terminate)()
                 if getattr(pool, "boot_seconds", None):
                     stats["boot_seconds"] = list(pool.boot_seconds)
+                booting = None
                 # A worker killed while writing leaves its temporary file; its frame was written again.
                 for f in todo:
                     for rel in f.outputs.values():
                         for stale in partial_files(out_dir / rel):
                             stale.unlink(missing_ok=True)
     finally:
+        if booting is not None:  # started, never used: the job failed its checks
+            try:
+                booting.result().terminate()
+            except Exception:
+                pass  # it failed to start: there is nothing to stop, and the job's own error is the one to show
         if manifest is not None:
             manifest.close()
         stats["seconds"] = time.perf_counter() - t0
         if summary is not None:
             summary.update(stats)
     return [rows[k] for k in sorted(rows)]
+
+
+def _start_local(j: Job, frames: int, workers: int | None, start_method: str | None):
+    """A LocalPool for ``frames`` frames, as a Future: ``workers`` processes (default one per core, at most
+    one per frame), each rendering with cores // workers threads, so that workers x threads = cores.
+    Forked here and now (milliseconds, and only from this one thread), or else started on a thread,
+    since starting a fork server or spawning waits on a fresh interpreter's imports."""
+    from concurrent.futures import Future, ThreadPoolExecutor
+
+    from .local import LocalPool
+
+    n = workers or max(1, min(default_threads(), frames))
+    threads = max(1, default_threads() // n)
+    method = start_method or default_start_method()
+    if method == "fork":
+        started = Future()
+        started.set_result(LocalPool(j.spec(), n, threads, start_method=method))
+        return started
+    ex = ThreadPoolExecutor(1, thread_name_prefix="warprt-batch-start")
+    started = ex.submit(LocalPool, j.spec(), n, threads, start_method=method)
+    ex.shutdown(wait=False)  # the thread ends with its one task
+    return started
 
 
 def _make_folders(j: Job, out_dir: Path, frames):

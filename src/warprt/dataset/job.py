@@ -82,15 +82,25 @@ class Job:
     def spec(self) -> dict:
         """What a worker needs to hold the scene (picklable, small). ``warmup``: the overrides of one frame
         for each distinct set of render.* values (the first few), whose kernel variants a worker loads
-        before its first frame."""
+        before its first frame. Made from the job file alone (the first camera as the file gives it, an
+        orbit's none: its eyes change no kernel), so workers can start before check_scene()."""
+        first = self.cameras[0] if self.sequence in ("cameras", "path") else {}
         warmup, seen = [], set()
-        for f in self.frames:
-            settings = json.dumps({k: v for k, v in f.overrides.items() if k.startswith("render.")}, sort_keys=True)
-            if settings not in seen and len(warmup) < WARMUP_VARIANTS:
+        for combo in itertools.product(*self.sweep.values()):
+            overrides = {**self.base_overrides, **{f"camera.{f}": v for f, v in first.items()}, **dict(zip(self.sweep, combo))}
+            settings = json.dumps({k: v for k, v in overrides.items() if k.startswith("render.")}, sort_keys=True)
+            if settings not in seen:
                 seen.add(settings)
-                warmup.append(dict(f.overrides))
+                warmup.append(overrides)
+                if len(warmup) == WARMUP_VARIANTS:
+                    break
         return {"scene": str(self.scene_path), "aovs": list(self.aovs), "output_dir": str(self.output_dir),
                 "warmup": warmup}
+
+    def frame_count(self, shard: tuple[int, int] | None = None) -> int:
+        """How many frames the job (or its shard) has, known before check_scene() expands an orbit."""
+        n = self.n_cameras * math.prod(len(v) for v in self.sweep.values())
+        return n if shard is None else len(range(shard[0], n, shard[1]))
 
 
 def _hint(key, allowed) -> str:

@@ -1,14 +1,16 @@
 """The local backend: N worker processes, each holding a FrameRenderer (scene loaded once, Warp
-initialized once, kernels and geometry warm), fed one frame at a time over a pipe.
+initialized once, kernels and geometry warm), fed two frames at a time over a pipe, writing one frame's
+files on a second thread while rendering the next.
 
 Not concurrent.futures.ProcessPoolExecutor: a worker that dies there breaks the whole pool (every
 worker is stopped, every pending future fails) and multiprocessing.Pool never returns the task of
-a dead worker. Here a dead worker (os.kill, OOM killer) is noticed by its process sentinel, its frame
-goes back to the front of the queue, and one new worker takes its place; the others keep going.
+a dead worker. Here a dead worker (os.kill, OOM killer) is noticed by its process sentinel, its frames
+go back to the front of the queue, and one new worker takes its place; the others keep going.
 
-Processes are started with "forkserver" (Linux) or "spawn"; never "fork": a parent that has rendered
-holds warprt's ThreadPoolExecutor, whose threads do not exist in a forked child, and the child's
-first multi-threaded frame hangs (measured).
+Processes are started as driver.default_start_method() says: forked from a driver that has one thread
+and has not started Warp (`warprt batch`), else from a fork server or spawned; never forked from a parent
+that has rendered: it holds warprt's ThreadPoolExecutor, whose threads do not exist in a forked child, and
+the child's first multi-threaded frame hangs (measured).
 """
 
 from __future__ import annotations
@@ -16,12 +18,17 @@ from __future__ import annotations
 import collections
 import multiprocessing as mp
 import os
+import queue
 import signal
+import threading
 import time
 from multiprocessing.connection import wait
 
 from ..errors import SceneError
 from .worker import FrameRenderer, error_record
+
+IN_FLIGHT = 2  # frames sent to a worker at a time: one rendering, one waiting in its pipe, so that it
+# starts the next frame at once rather than after the driver has read the result and written its line
 
 
 def _worker_main(conn, spec, threads):
@@ -32,6 +39,20 @@ def _worker_main(conn, spec, threads):
         conn.send(("init_error", error_record(e)))
         return
     conn.send(("ready", os.getpid()))
+    # The writer thread encodes and writes a frame's files and sends its result while this thread
+    # renders the next one (Warp's launches, zlib and the file writes all release the GIL). One
+    # frame waits for it at most: a slow disk holds the renders back rather than filling memory.
+    rendered = queue.Queue(maxsize=1)
+
+    def write():
+        while (item := rendered.get()) is not None:
+            try:
+                conn.send(("result", r.write(item)))
+            except OSError:  # the driver is gone: the main thread finds the pipe closed too
+                pass
+
+    writer = threading.Thread(target=write, name="warprt-batch-writer", daemon=True)
+    writer.start()
     while True:
         try:
             task = conn.recv()
@@ -39,7 +60,9 @@ def _worker_main(conn, spec, threads):
             break
         if task is None:
             break
-        conn.send(("result", r.render_frame(task)))
+        rendered.put(r.render(task))
+    rendered.put(None)
+    writer.join()
     conn.close()
     os._exit(0)  # every file is written and renamed; tearing down Warp/LLVM only costs time
 
@@ -59,7 +82,7 @@ class _Worker:
         self.proc = ctx.Process(target=_worker_main, args=(child, spec, threads), daemon=True, name="warprt-batch-worker")
         self.proc.start()
         child.close()
-        self.task = None  # the frame it is rendering
+        self.tasks = collections.deque()  # the frames sent to it, oldest first: results come back in order
         self.ready = False
         self.t_start = time.perf_counter()
         self.boot_seconds = None
@@ -91,25 +114,26 @@ class LocalPool:
     def run(self, tasks: list[dict], on_result, label_of):
         """Render every task; on_result(result) in the driver for each finished frame. A frame
         whose worker dies is rendered again (max_attempts in all); bad input raises SceneError."""
-        queue = collections.deque(tasks)
+        todo = collections.deque(tasks)
         attempts = collections.Counter()
         remaining = {t["frame"] for t in tasks}
         while remaining:
             for w in self.workers:
-                if w.task is None and queue:
-                    w.task = queue.popleft()
-                    attempts[w.task["frame"]] += 1
+                while todo and len(w.tasks) < IN_FLIGHT:
+                    task = todo.popleft()
+                    w.tasks.append(task)
+                    attempts[task["frame"]] += 1
                     try:
-                        w.conn.send(w.task)
+                        w.conn.send(task)
                     except (BrokenPipeError, OSError):
-                        pass  # it died: its sentinel says so below
+                        break  # it died: its sentinel says so below
             handles = {}
             for w in self.workers:
                 handles[w.conn] = w
                 handles[w.proc.sentinel] = w
             ready = wait(list(handles), timeout=self.stall_timeout)
             if not ready:
-                busy = [label_of(w.task["frame"]) for w in self.workers if w.task is not None]
+                busy = [label_of(w.tasks[0]["frame"]) for w in self.workers if w.tasks]
                 raise RuntimeError(f"no worker reported for {self.stall_timeout:.0f} s (WARPRT_BATCH_STALL_TIMEOUT); "
                                    f"rendering: {', '.join(busy) or 'nothing'}")
             for h in ready:
@@ -125,7 +149,7 @@ class LocalPool:
                 if msg is None:  # death: sentinel fired, or the pipe closed under recv
                     if w.proc.is_alive() and h is w.conn:
                         w.proc.join(timeout=5)
-                    self._replace(w, queue, attempts, label_of)
+                    self._replace(w, todo, attempts, label_of)
                     continue
                 kind, payload = msg
                 if kind == "ready":
@@ -135,25 +159,25 @@ class LocalPool:
                 elif kind == "init_error":
                     raise SceneError(payload["source"], payload["field"], payload["message"])
                 elif kind == "result":
-                    w.task = None
+                    w.tasks.popleft()
                     if payload["frame"] in remaining:
                         remaining.discard(payload["frame"])
                         payload["attempt"] = attempts[payload["frame"]]
                         on_result(payload)
 
-    def _replace(self, w, queue, attempts, label_of):
+    def _replace(self, w, todo, attempts, label_of):
         self.deaths += 1
         i = self.workers.index(w)
         if w.proc.is_alive():
             w.proc.kill()
             w.proc.join(timeout=5)
         w.conn.close()
-        if w.task is not None:
-            k = w.task["frame"]
+        for task in w.tasks:
+            k = task["frame"]
             if attempts[k] >= self.max_attempts:
                 raise RuntimeError(f"{label_of(k)}: its worker process died {attempts[k]} times "
                                    f"(last exit code {w.proc.exitcode})")
-            queue.appendleft(w.task)
+        todo.extendleft(reversed(w.tasks))  # its frames first, in their order
         if self.deaths > 3 * self.n + 10:
             raise RuntimeError(f"worker processes keep dying ({self.deaths} so far, last exit code {w.proc.exitcode})")
         self.workers[i] = _Worker(self.ctx, self.spec, self.threads)

@@ -11,8 +11,9 @@ worker (host, pid, threads; node on Ray), seconds (scene, render, write on the w
 (the id of the run that rendered it), backend.
 
 A fresh (not resume) unsharded run removes every manifest*.jsonl in DIR; a fresh shard
-truncates its own file only. A line cut short by a crash is ignored when read, and a newline
-is added before the next line is appended after it.
+truncates its own file only. A line cut short by a crash is ignored when read, and a resumed run drops
+it from the file it appends to (rewritten whole, then renamed over it), so that the file stays JSON
+lines for pandas.read_json(lines=True) and jq; its frame, having no line, is rendered again.
 """
 
 from __future__ import annotations
@@ -67,7 +68,7 @@ def done(rows: list[dict], frames, out_dir) -> dict:
 
 class Manifest:
     """The run's manifest file, opened for appending: emptied first unless resuming (an unsharded run
-    removes every manifest*.jsonl, a shard only its own)."""
+    removes every manifest*.jsonl, a shard only its own); when resuming, whole lines only."""
 
     def __init__(self, out_dir, shard=None, resume=False):
         self.out_dir = Path(out_dir)
@@ -76,13 +77,9 @@ class Manifest:
             stale = manifest_files(self.out_dir) if shard is None else [self.path]
             for p in stale:
                 p.unlink(missing_ok=True)
-        self._f = open(self.path, "a+b")
-        self._f.seek(0, os.SEEK_END)
-        if self._f.tell() > 0:
-            self._f.seek(-1, os.SEEK_END)
-            if self._f.read(1) != b"\n":
-                self._f.write(b"\n")  # after a line cut short
-        self._f.seek(0, os.SEEK_END)
+        elif self.path.exists():
+            keep_whole_lines(self.path)
+        self._f = open(self.path, "ab")
 
     def append(self, row: dict):
         """One line, on the disk when this returns (a crash right after keeps it)."""
@@ -92,3 +89,33 @@ class Manifest:
 
     def close(self):
         self._f.close()
+
+
+def keep_whole_lines(path: Path):
+    """Rewrite ``path`` without the lines that are not JSON (a line cut short by a crash mid-append, or
+    one an earlier version glued a newline to), if it has any: the lines kept go to a temporary file,
+    on the disk before it is renamed over ``path``, so a crash here leaves the old file or the new one."""
+    data = path.read_bytes()
+    lines = data.split(b"\n")
+    keep = [line for line in lines if _is_json(line)]
+    if data.endswith(b"\n") and len(keep) == len(lines) - 1:
+        return  # every line whole (the empty string after the last newline aside)
+    tmp = path.with_name(path.name + ".tmp")  # not manifest*.jsonl: never read as a manifest
+    with open(tmp, "wb") as f:
+        f.write(b"".join(line + b"\n" for line in keep))
+        f.flush()
+        os.fsync(f.fileno())
+    os.replace(tmp, path)
+    if hasattr(os, "O_DIRECTORY"):  # the rename itself on the disk (POSIX; Windows has no directory fsync)
+        fd = os.open(path.parent, os.O_RDONLY | os.O_DIRECTORY)
+        try:
+            os.fsync(fd)
+        finally:
+            os.close(fd)
+
+
+def _is_json(line: bytes) -> bool:
+    try:
+        return isinstance(json.loads(line), dict)
+    except ValueError:  # JSONDecodeError, or bytes that are not UTF-8
+        return False

@@ -23,6 +23,7 @@ import collections
 import logging
 import os
 import sys
+import threading
 
 from ..errors import ArgumentError, SceneError
 from ..image import default_threads
@@ -116,7 +117,8 @@ def _probe(address: str, timeout: float = 5.0):
 
 class RayFrameWorker:
     """The actor. Bad input in the base scene is kept and reported, not raised (a raising
-    __init__ would be restarted, and SceneError does not pickle)."""
+    __init__ would be restarted, and SceneError does not pickle). It runs INFLIGHT_PER_ACTOR tasks on
+    as many threads, one rendering at a time: a frame's files are written while the next renders."""
 
     def __init__(self, spec, threads):
         import socket
@@ -126,6 +128,7 @@ class RayFrameWorker:
         from .worker import FrameRenderer, error_record
 
         self.host, self.pid = socket.gethostname(), os.getpid()
+        self.rendering = threading.Lock()
         self.node = ray.get_runtime_context().get_node_id()
         self.init_error = None
         try:
@@ -139,7 +142,9 @@ class RayFrameWorker:
     def render(self, task):
         if self.init_error is not None:
             return {"ok": False, "frame": task["frame"], "error": self.init_error}
-        res = self.r.render_frame(task)
+        with self.rendering:
+            rendered = self.r.render(task)
+        res = self.r.write(rendered)
         if res["ok"]:
             res["worker"]["node"] = self.node
         return res
@@ -161,8 +166,8 @@ class RayPool:
         total = max(1, int(ray.cluster_resources().get("CPU", 1)))
         self.n = workers or total
         self.threads = max(1, min(max(node_cpus), total // self.n))
-        self.actor_cls = ray.remote(num_cpus=self.threads, max_restarts=MAX_RESTARTS,
-                                    max_task_retries=MAX_RESTARTS)(RayFrameWorker)
+        self.actor_cls = ray.remote(num_cpus=self.threads, max_restarts=MAX_RESTARTS, max_task_retries=MAX_RESTARTS,
+                                    max_concurrency=INFLIGHT_PER_ACTOR)(RayFrameWorker)
         self.actors = [self._new_actor() for _ in range(self.n)]  # they boot while the driver validates
 
     def _new_actor(self):

@@ -4,6 +4,7 @@ frame's files written by warprt's own film writer."""
 
 from __future__ import annotations
 
+import itertools
 import json
 import os
 import socket
@@ -11,6 +12,7 @@ import tempfile
 import time
 import traceback
 from pathlib import Path
+from typing import NamedTuple
 
 from ..errors import SceneError
 from ..scene import load_scene, resolve_effects, sets_in_place, with_overrides
@@ -80,42 +82,77 @@ class FrameRenderer:
         self.output_dir = Path(spec["output_dir"])
         self.scenes = FrameScenes(spec["scene"])
         t = time.perf_counter()
-        # Warp's start (about 0.6 s) and every kernel variant the job's frames use, compiled or loaded
-        # now at 1x1 pixel rather than in the first frames; with first hits from the Z-buffer where
-        # render()'s policy takes them from there at the frame's own size.
+        # Warp's start (about 0.6 s) and the warm-up frames' scenes first, outside the lock: the
+        # workers do that at once. Then, one worker at a time, every kernel variant the job's frames
+        # use, compiled or loaded now at 1x1 pixel rather than in the first frames; with first hits
+        # from the Z-buffer where render()'s policy takes them from there at the frame's own size.
+        from .._warp import init_warp
+
+        init_warp()
+        tiny_frames = []
+        for overrides in spec["warmup"]:
+            try:
+                frame = self.scenes.scene(overrides)
+                cam, settings = frame.camera, frame.render
+                samples = cam.width * cam.height * (settings.spp if resolve_effects(frame).supersampling else 1)
+                primary = "zbuffer" if image.raster_is_cheaper(frame.triangle_count, samples) else "raytrace"
+                tiny_frames.append((frame.with_camera(width=1, height=1), primary))
+            except SceneError:
+                pass  # a bad frame reports itself when it is rendered
+        t_lock = time.perf_counter()
         with _warmup_lock():
-            self.lock_seconds = time.perf_counter() - t
-            for overrides in spec["warmup"]:
+            self.lock_seconds = time.perf_counter() - t_lock
+            for tiny, primary in tiny_frames:
                 try:
-                    frame = self.scenes.scene(overrides)
-                    cam, settings = frame.camera, frame.render
-                    samples = cam.width * cam.height * (settings.spp if resolve_effects(frame).supersampling else 1)
-                    primary = "zbuffer" if image.raster_is_cheaper(frame.triangle_count, samples) else "raytrace"
-                    tiny = frame.with_camera(width=1, height=1)
                     image.render(tiny, threads=threads, aovs=self.aovs, primary=primary)
                 except SceneError:
                     pass  # a bad frame reports itself when it is rendered
         self.warmup_seconds = time.perf_counter() - t
-        self.frames_done = 0
+        self._done = itertools.count(1)  # next() is atomic: a Ray actor writes frames on two threads
 
     def render_frame(self, task: dict) -> dict:
         """task: frame, overrides, outputs (relative to the output folder). Returns a result record;
-        bad input comes back as {"ok": False, "error": error_record(...)}."""
+        bad input comes back as {"ok": False, "error": error_record(...)}. A frame is render() then
+        write(): a worker with a writer thread runs write() of one frame during render() of the next."""
+        return self.write(self.render(task))
+
+    def render(self, task: dict):
+        """The frame's scene and image (a _Rendered), or the result record of a failure."""
         t0 = time.perf_counter()
         try:
             scene = self.scenes.scene(task["overrides"])
             t1 = time.perf_counter()
             result = self.image.render(scene, threads=self.threads, aovs=self.aovs)
-            t2 = time.perf_counter()
-            self.image.write_image(self.output_dir / task["outputs"]["color"], result.image, "output", result.aovs)
-            t3 = time.perf_counter()
         except SceneError as e:
             return {"ok": False, "frame": task["frame"], "error": error_record(e)}
-        except Exception as e:  # a bug, or a failed write (a full disk): not bad input
-            return {"ok": False, "frame": task["frame"], "internal": f"{type(e).__name__}: {e}",
-                    "traceback": traceback.format_exc()}
-        self.frames_done += 1
+        except Exception as e:  # a bug: not bad input
+            return _internal(task, e)
+        return _Rendered(task, result, {"scene": t1 - t0, "render": time.perf_counter() - t1})
+
+    def write(self, rendered) -> dict:
+        """The frame's files (image and AOVs, each renamed into place) and its result record."""
+        if isinstance(rendered, dict):
+            return rendered  # a failure, already a record
+        task, result, seconds = rendered
+        t = time.perf_counter()
+        try:
+            self.image.write_image(self.output_dir / task["outputs"]["color"], result.image, "output", result.aovs)
+        except SceneError as e:
+            return {"ok": False, "frame": task["frame"], "error": error_record(e)}
+        except Exception as e:  # a failed write (a full disk): not bad input
+            return _internal(task, e)
         return {"ok": True, "frame": task["frame"], "stats": result.stats.to_dict(),
                 "worker": {"host": socket.gethostname(), "pid": os.getpid(), "threads": self.threads,
-                           "frames_done": self.frames_done},
-                "seconds": {"scene": t1 - t0, "render": t2 - t1, "write": t3 - t2}}
+                           "frames_done": next(self._done)},
+                "seconds": {**seconds, "write": time.perf_counter() - t}}
+
+
+class _Rendered(NamedTuple):
+    task: dict
+    result: object  # image.RenderResult
+    seconds: dict  # scene, render
+
+
+def _internal(task: dict, e: Exception) -> dict:
+    return {"ok": False, "frame": task["frame"], "internal": f"{type(e).__name__}: {e}",
+            "traceback": traceback.format_exc()}
