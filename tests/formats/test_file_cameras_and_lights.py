@@ -326,3 +326,42 @@ def test_usd_lux_lights(tmp_path):
     np.testing.assert_allclose(lamp.position, [0.0, 3.0, 0.0])
     np.testing.assert_allclose(lamp.direction, [0.0, -1.0, 0.0], atol=1e-7)  # -z turned -90 degrees about x
     assert lamp.cutoff_angle == pytest.approx(30.0) and lamp.beam_width == pytest.approx(30.0 * 0.75)
+
+
+# --- glTF's default material ----------------------------------------------------------------------------
+
+
+def test_gltf_primitive_without_material_gets_the_specifications_default(tmp_path):
+    """The glTF 2.0 spec: a primitive without a material uses the default one, whose base colour is 1
+    (metallic 1, roughness 1: no Phong highlight). Lit by a point light at the eye (C_l 1, no ambient),
+    a face-on quad is kd (n . l) = cos of the angle to the eye, not warprt's grey 0.7 with a highlight."""
+    from oracle import camera_rays, ray_plane
+
+    g = Gltf()
+    g.node(mesh=g.mesh([[-2, -2, 0], [2, -2, 0], [2, 2, 0], [-2, 2, 0]], [[0, 1, 2], [0, 2, 3]]))
+    g.write(tmp_path / "q.gltf")
+    (tmp_path / "s.toml").write_text(textwrap.dedent("""
+        [camera]
+        eye = [0.0, 0.0, 4.0]
+        center = [0.0, 0.0, 0.0]
+        width = 64
+        height = 48
+        [render]
+        ambient = [0.0, 0.0, 0.0]
+        max_depth = 1
+        [[lights]]
+        position = [0.0, 0.0, 4.0]
+        [[objects]]
+        mesh = "q.gltf"
+        """))
+    scene = warprt.load_scene(tmp_path / "s.toml")
+    (obj,) = scene.objects
+    material = scene.materials[obj.material]
+    assert material.kd == (1.0, 1.0, 1.0) and material.ks == (0.0, 0.0, 0.0)
+    image, _ = warprt.render(scene)
+    eye, d = camera_rays(scene.camera)
+    p = eye + ray_plane(eye, d, np.zeros(3), np.array([0.0, 0.0, 1.0]))[..., None] * d
+    on = (np.abs(p[..., :2]) < 1.98).all(-1)
+    to_light = eye - p
+    cos = to_light[..., 2] / np.linalg.norm(to_light, axis=-1)
+    np.testing.assert_allclose(image[on], np.repeat(cos[on][:, None], 3, 1), atol=2e-6)
