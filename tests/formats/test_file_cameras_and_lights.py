@@ -365,3 +365,15 @@ def test_gltf_primitive_without_material_gets_the_specifications_default(tmp_pat
     to_light = eye - p
     cos = to_light[..., 2] / np.linalg.norm(to_light, axis=-1)
     np.testing.assert_allclose(image[on], np.repeat(cos[on][:, None], 3, 1), atol=2e-6)
+
+
+def test_a_file_light_out_of_reach_is_the_files_error_not_the_framings(tmp_path):
+    from warprt.scene import MAX_REACH
+
+    g = Gltf()
+    g.node(mesh=g.mesh(*box([0, 0, 0], [1, 1, 1])))
+    g.node(name="Far", translation=[0.0, 10 * MAX_REACH, 0.0],
+           extensions={"KHR_lights_punctual": {"light": g.light({"type": "point"})}})
+    with pytest.raises(warprt.SceneError) as e:
+        warprt.load_scene(g.write(tmp_path / "far.gltf"))
+    assert str(e.value).startswith(f"{tmp_path / 'far.gltf'}: lights[0].position: ") and "frame" not in str(e.value)

@@ -167,6 +167,10 @@ def _load_mesh_scene(path: Path, overrides, up, view=None) -> Scene:
         framed = e.field is not None and e.field.split("[")[0] in ("lights", "camera.eye", "camera.center", "camera.near")
         if not framed or any(k.split("[")[0] == e.field.split("[")[0] for k in overrides or ()):
             raise
+        # The file's own camera and lights (named, where the framing's are not) are the file's to answer for.
+        if (e.field.startswith("camera") and scene.cameras and view != "auto") or \
+                (e.field.startswith("lights") and any(light.name for light in scene.lights)):
+            raise
         # The file did not name that field: the framing made it, from a mesh too large or too far out.
         lo, hi = scene.bounds()
         raise SceneError(source, None, f"cannot frame the mesh, which spans {lo.tolist()} .. {hi.tolist()}: "

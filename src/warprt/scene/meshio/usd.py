@@ -175,6 +175,8 @@ class _Stage:
         if not (focal > 0 and vertical > 0 and horizontal > 0):
             raise SceneError(self.src, f"{where}.focalLength", f"expected a focal length and apertures > 0, got "
                                                                f"{focal:g}, {horizontal:g} x {vertical:g}")
+        if cam.GetHorizontalApertureOffsetAttr().Get(t) or cam.GetVerticalApertureOffsetAttr().Get(t):
+            warn(self.src, where, "the aperture offset (lens shift) is not read: the view is centred")
         near = float(cam.GetClippingRangeAttr().Get(t)[0]) * self.meters
         authored = cam.GetHorizontalApertureAttr().HasAuthoredValue() or cam.GetVerticalApertureAttr().HasAuthoredValue()
         kind = "orthographic" if cam.GetProjectionAttr().Get(t) == UsdGeom.Tokens.orthographic else "perspective"
