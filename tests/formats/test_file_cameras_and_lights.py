@@ -305,6 +305,9 @@ def test_usd_lux_lights(tmp_path):
     shaping.CreateShapingConeSoftnessAttr(0.25)
     UsdGeom.Xformable(disk).AddTranslateOp().Set(Gf.Vec3d(0.0, 3.0, 0.0))
     UsdGeom.Xformable(disk).AddRotateXOp().Set(-90.0)
+    point = UsdLux.SphereLight.Define(stage, "/World/Dot")  # treatAsPoint: a point by its author, no warning
+    point.CreateTreatAsPointAttr(True)
+    UsdGeom.Xformable(point).AddTranslateOp().Set(Gf.Vec3d(0.0, 9.0, 0.0))
     UsdLux.RectLight.Define(stage, "/World/Panel")
     UsdLux.DomeLight.Define(stage, "/World/Sky")
     stage.GetRootLayer().Save()
@@ -315,7 +318,9 @@ def test_usd_lux_lights(tmp_path):
     assert sum("/World/Bulb" in m and "approximated by a point" in m for m in messages) == 1
     assert sum("/World/Panel" in m and "RectLight is not a Whitted light: skipped" in m for m in messages) == 1
     assert sum("/World/Sky" in m and "DomeLight is not a Whitted light: skipped" in m for m in messages) == 1
-    bulb, sun, lamp = lights
+    assert not any("/World/Dot" in m for m in messages)
+    bulb, sun, lamp, dot = lights
+    np.testing.assert_allclose(dot.position, [0.0, 9.0, 0.0])
     assert (bulb.type, bulb.name, bulb.falloff) == ("point", "Bulb", "inverse_square")
     np.testing.assert_allclose(bulb.position, [1.0, 5.0, -2.0])
     np.testing.assert_allclose(bulb.color, np.array([1.0, 0.5, 0.25]) * 30.0 * 2.0 ** 2)
@@ -377,3 +382,46 @@ def test_a_file_light_out_of_reach_is_the_files_error_not_the_framings(tmp_path)
     with pytest.raises(warprt.SceneError) as e:
         warprt.load_scene(g.write(tmp_path / "far.gltf"))
     assert str(e.value).startswith(f"{tmp_path / 'far.gltf'}: lights[0].position: ") and "frame" not in str(e.value)
+
+
+def segment_hits_box(p, q, lo, hi) -> np.ndarray:
+    """Slab test: whether the segments p -> q (N, 3) pass through the box [lo, hi]."""
+    d = q - p
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t0, t1 = (lo - p) / d, (hi - p) / d
+    near = np.nanmax(np.minimum(t0, t1), -1)
+    far = np.nanmin(np.maximum(t0, t1), -1)
+    return (near <= far) & (far >= 0) & (near <= 1)
+
+
+def test_bare_gltf_is_rendered_from_its_camera_with_its_point_light(tmp_path):
+    """A box on a floor, seen from the file's camera and lit by the file's point light: a floor pixel
+    is shadowed (C_amb ka, the framing's ambient 0.15 times glTF's default base colour 1) exactly where
+    the segment from its point to the light at the file's position passes through the box, lit (brighter)
+    elsewhere, whatever the light's falloff."""
+    from oracle import camera_rays, ray_plane
+
+    light = np.array([1.5, 3.0, 0.5])
+    g = Gltf()
+    g.node(mesh=g.mesh([[-4, 0, -4], [4, 0, -4], [4, 0, 4], [-4, 0, 4]], [[0, 2, 1], [0, 3, 2]]))
+    g.node(mesh=g.mesh(*box([0, 0.5, 0], [1, 1, 1])))
+    g.node(name="Key", translation=light.tolist(),
+           extensions={"KHR_lights_punctual": {"light": g.light({"type": "point", "intensity": 40.0})}})
+    cam = g.add("cameras", {"type": "perspective", "perspective": {"yfov": 0.9, "znear": 0.1}})
+    g.node(name="Top", camera=cam, translation=[0.0, 7.0, 3.0], rotation=quaternion([1, 0, 0], -65.0))
+    scene = warprt.load_scene(g.write(tmp_path / "lit.gltf"), {"camera.width": 80, "camera.height": 60})
+    image, _ = warprt.render(scene, effects=["ambient", "diffuse", "shadows"])
+    eye, d = camera_rays(scene.camera)
+    p = eye + ray_plane(eye, d, np.zeros(3), np.array([0.0, 1.0, 0.0]))[..., None] * d
+    floor = (np.abs(p[..., 0]) < 3.9) & (np.abs(p[..., 2]) < 3.9) & ~((np.abs(p[..., 0]) < 0.55) & (np.abs(p[..., 2]) < 0.55))
+    # seen past the box? the camera ray must miss it too
+    seen = ~segment_hits_box(np.broadcast_to(eye, p.shape).reshape(-1, 3), p.reshape(-1, 3),
+                             np.array([-0.52, 0.0, -0.52]), np.array([0.52, 1.02, 0.52])).reshape(p.shape[:2])
+    pts = p.reshape(-1, 3)
+    to = np.broadcast_to(light, pts.shape)
+    shadowed = segment_hits_box(pts, to, np.array([-0.48, 0.02, -0.48]), np.array([0.48, 0.98, 0.48])).reshape(p.shape[:2])
+    lit = ~segment_hits_box(pts, to, np.array([-0.52, -0.02, -0.52]), np.array([0.52, 1.02, 0.52])).reshape(p.shape[:2])
+    dark, bright = floor & seen & shadowed, floor & seen & lit
+    assert dark.sum() > 50 and bright.sum() > 500
+    np.testing.assert_allclose(image[dark], 0.15, atol=1e-6)
+    assert image[bright].min() > 0.2

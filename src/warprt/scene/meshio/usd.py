@@ -206,8 +206,10 @@ class _Stage:
         if not (prim.IsA(UsdLux.SphereLight) or prim.IsA(UsdLux.DiskLight)):
             warn(self.src, where, f"a {prim.GetTypeName()} is not a Whitted light: skipped")
             return None
-        radius = (UsdLux.SphereLight(prim) if prim.IsA(UsdLux.SphereLight) else UsdLux.DiskLight(prim)).GetRadiusAttr().Get(t)
-        if radius and float(radius) > 0:
+        shape = UsdLux.SphereLight(prim) if prim.IsA(UsdLux.SphereLight) else UsdLux.DiskLight(prim)
+        radius = shape.GetRadiusAttr().Get(t)
+        as_point = prim.IsA(UsdLux.SphereLight) and shape.GetTreatAsPointAttr().Get(t)  # the author's own point
+        if radius and float(radius) > 0 and not as_point:
             warn(self.src, where, f"a {prim.GetTypeName()} of radius {float(radius):g} is approximated by a point")
         position = tuple(float(x) for x in m[:3, 3])
         shaping = UsdLux.ShapingAPI(prim)
