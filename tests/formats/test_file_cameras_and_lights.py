@@ -425,3 +425,18 @@ def test_bare_gltf_is_rendered_from_its_camera_with_its_point_light(tmp_path):
     assert dark.sum() > 50 and bright.sum() > 500
     np.testing.assert_allclose(image[dark], 0.15, atol=1e-6)
     assert image[bright].min() > 0.2
+
+
+def test_scene_file_camera_from_a_z_up_stage_is_turned_with_its_objects(tmp_path):
+    """An [[objects]] entry turns a z-up stage so that its z is the scene's y: (x, y, z) -> (x, z, -y).
+    The camera taken from it is turned the same way, so it sees the object as the author framed it."""
+    camera_usd(tmp_path / "c.usda", up_axis="Z")
+    (tmp_path / "s.toml").write_text('camera = { from = "c.usda", name = "Shot", width = 300, height = 200 }\n'
+                                     '[[objects]]\nmesh = "c.usda"\n')
+    scene = warprt.load_scene(tmp_path / "s.toml")
+    r = rotation_matrix([0, 1, 0], YAW) @ rotation_matrix([1, 0, 0], PITCH)
+    z_to_y = lambda v: np.array([v[0], v[2], -v[1]])  # noqa: E731
+    assert_camera(scene.camera, z_to_y([2.0, 3.0, 7.0]), z_to_y(r @ [0, 0, -1.0]), z_to_y(r @ [0, 1.0, 0]),
+                  math.degrees(2 * math.atan(12 / 35)), float(np.float32(0.1)))
+    lo, hi = scene.bounds()  # and the box, z from -0.5 to 0.5 in the file, has that as its y here
+    np.testing.assert_allclose([lo[1], hi[1]], [-0.5, 0.5], atol=1e-12)

@@ -147,8 +147,8 @@ class _CameraFile(NamedTuple):
 
 def _file_camera(source: str, t: dict, base: Path):
     """The [camera] table with ``from`` (a model file: glTF, USD) and ``name`` (one of its cameras, by name
-    or index; default its first) as that camera's fields, the table's own fields over them; the file
-    camera and its file."""
+    or index; default its first) as that camera's fields, placed as an object of the file is by default,
+    the table's own fields over them; the file camera and its file."""
     if "from" not in t:
         if "name" in t:
             raise SceneError(source, "camera.name", "names a camera of a model file: give the file as camera.from")
@@ -163,8 +163,13 @@ def _file_camera(source: str, t: dict, base: Path):
         cam = find_camera(mesh.cameras, choice)
     except LookupError as e:
         raise SceneError(source, "camera.name" if choice is not None else "camera.from", f"{path}: {e}") from None
+    # Where an [[objects]] entry places the file by default: its up axis turned to y (a z-up USD stage), no
+    # more (an object's own scale, rotate and translate are that object's, not the file's).
+    turn = up_rotation(mesh.up_axis or "y")
+    placed = {k: [float(x) for x in turn @ np.asarray(v, np.float64)] if k in ("eye", "center", "up") else v
+              for k, v in cam.fields().items()}
     own = {k: v for k, v in t.items() if k not in ("from", "name")}
-    return {**cam.fields(), **own}, cam, _CameraFile((path,), tuple(mesh.cameras))
+    return {**placed, **own}, cam, _CameraFile((path,), tuple(mesh.cameras))
 
 
 def read_render(source: str, t: dict) -> RenderSettings:
