@@ -440,3 +440,11 @@ def test_scene_file_camera_from_a_z_up_stage_is_turned_with_its_objects(tmp_path
                   math.degrees(2 * math.atan(12 / 35)), float(np.float32(0.1)))
     lo, hi = scene.bounds()  # and the box, z from -0.5 to 0.5 in the file, has that as its y here
     np.testing.assert_allclose([lo[1], hi[1]], [-0.5, 0.5], atol=1e-12)
+
+
+def test_file_camera_center_is_at_the_models_depth(tmp_path):
+    """The center (what an orbit turns about) lies on the view axis at the depth of the model's centre."""
+    scene = warprt.load_scene(camera_gltf(tmp_path / "c.gltf"))
+    eye, forward, _ = expected_main()
+    middle = np.array([0.0, 1.0, 0.0])  # the floor spans y 0..0 and x, z -4..4; the tall box reaches y = 2
+    np.testing.assert_allclose(scene.camera.center, eye + forward * np.dot(middle - eye, forward), atol=1e-12)

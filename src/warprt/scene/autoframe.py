@@ -56,7 +56,7 @@ def scene_for_mesh(path: Path, camera: dict | None = None, up: str | None = None
     if file_camera is None:
         camera = read_camera(source, _framed(dict(camera or {}), center, radius, to_up))
     else:
-        camera = read_camera(source, {**file_camera.fields(), "width": DEFAULT_SIZE[0], "height": DEFAULT_SIZE[1],
+        camera = read_camera(source, {**file_camera.fields(center), "width": DEFAULT_SIZE[0], "height": DEFAULT_SIZE[1],
                                       **(camera or {})})
         note = aspect_note(file_camera, camera.width, camera.height)
         if note:

@@ -60,9 +60,15 @@ class FileCamera(NamedTuple):
     near: float
     aspect: float | None = None
 
-    def fields(self) -> dict:
-        """The camera table (TOML vocabulary) it sets: the image size stays the user's."""
-        return {"eye": list(self.eye), "center": list(self.center), "up": list(self.up), "fovy": self.fovy,
+    def fields(self, subject=None) -> dict:
+        """The camera table (TOML vocabulary) it sets: the image size stays the user's. ``subject``: a point
+        (the model's centre) whose depth along the view the center is put at, so that an orbit about the
+        center turns about the model; else the center is one unit ahead."""
+        eye, center = np.asarray(self.eye), np.asarray(self.center)
+        if subject is not None:
+            forward = (center - eye) / np.linalg.norm(center - eye)
+            center = eye + forward * max(float(np.dot(np.asarray(subject, np.float64) - eye, forward)), self.near)
+        return {"eye": list(self.eye), "center": [float(x) for x in center], "up": list(self.up), "fovy": self.fovy,
                 "near": self.near}
 
 

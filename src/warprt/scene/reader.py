@@ -167,9 +167,15 @@ def _file_camera(source: str, t: dict, base: Path):
     # more (an object's own scale, rotate and translate are that object's, not the file's).
     turn = up_rotation(mesh.up_axis or "y")
     placed = {k: [float(x) for x in turn @ np.asarray(v, np.float64)] if k in ("eye", "center", "up") else v
-              for k, v in cam.fields().items()}
+              for k, v in cam.fields(_middle(mesh)).items()}
     own = {k: v for k, v in t.items() if k not in ("from", "name")}
     return {**placed, **own}, cam, _CameraFile((path,), tuple(mesh.cameras))
+
+
+def _middle(mesh) -> np.ndarray:
+    """The centre of a file's bounding box, in the file's space."""
+    vertices = np.concatenate([p.vertices for p in mesh.parts])
+    return 0.5 * (vertices.min(0) + vertices.max(0))
 
 
 def read_render(source: str, t: dict) -> RenderSettings:
