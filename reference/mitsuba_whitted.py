@@ -6,7 +6,7 @@ Model (the seed's Figure 3, as warprt defines it), per colour channel, two-sided
 vis_l = 0 when n.L <= 0 or the shadow ray is blocked; a miss returns the background; max_depth ray levels.
 The lights are Mitsuba's own emitters (point, spot, directional): L, C_l with its spot profile and
 1/r^2, and the shadow ray's end come from their sample_direction, not from a copy of warprt's model.
-ka, kd and ks at a hit are the material's times its textures (Mitsuba's bilinear, repeating bitmap
+ka, kd and ks at a hit are the material's times its textures (Mitsuba's bilinear bitmap with its wrap
 or its checkerboard, at the mesh's own uv) and, for ka and kd, the mesh's vertex colour attribute.
 With glass, + F I(reflected) + (1 - F) k_t I(refracted) at a dielectric, each segment inside weighted
 by exp(-sigma d): the ray tree of ray_tree.py, level by level, which mi.render cannot branch into.
@@ -241,7 +241,7 @@ def _register_integrator(mi, dr):
 
 
 def _texture(mi, t):
-    """A warprt Texture as Mitsuba's: a bilinear, repeating bitmap of the same linear texels (row 0 at
+    """A warprt Texture as Mitsuba's: a bilinear bitmap with its wrap mode of the same linear texels (row 0 at
     v = 0, as Mitsuba's bitmaps are), or its checkerboard, whose 2 x 2 checks per unit uv become one
     per unit by halving the uv map; constant 1 where there is none."""
     if t is None:
@@ -252,8 +252,12 @@ def _texture(mi, t):
         return mi.load_dict({"type": "checkerboard", "to_uv": mi.ScalarTransform4f().scale([0.5, 0.5, 1.0]) @ to_uv,
                              "color0": {"type": "rgb", "value": list(map(float, t.checker[0]))},
                              "color1": {"type": "rgb", "value": list(map(float, t.checker[1]))}})
+    # Mitsuba's bitmap has one wrap mode for both axes (its repeat, clamp and mirror are OpenGL's, as Warp's are).
+    if t.wrap[0] != t.wrap[1]:
+        raise ValueError(f"{t.source}: wrap {t.wrap[0]} along u and {t.wrap[1]} along v: Mitsuba's bitmap has one "
+                         "wrap mode for both axes")
     return mi.load_dict({"type": "bitmap", "bitmap": mi.Bitmap(np.array(t.image, np.float32)),  # a writable copy
-                         "filter_type": "bilinear", "wrap_mode": "repeat", "raw": True, "to_uv": to_uv})
+                         "filter_type": "bilinear", "wrap_mode": t.wrap[0], "raw": True, "to_uv": to_uv})
 
 
 class _Tables:

@@ -26,6 +26,7 @@ EXAMPLES = """examples:
                                               textures and colours: .obj (+.mtl) .ply .stl .off .glb .gltf
                                               .usd .usda .usdc .usdz
   warprt render part.stl --up z               a z-up mesh (most CAD and robotics files); --up=-y for -y
+  warprt render model.glb --camera Camera.001 one of the file's cameras (default: its first; auto: framed)
   warprt render s.toml -o s.exr --stats-file s.json -q
                                               linear float EXR (or .npy), statistics as JSON, nothing on stderr
   warprt render s.toml --spp 16 --max-depth 5 --width 1024 --height 768
@@ -51,7 +52,7 @@ Bad input is one line on stderr naming the file and the field, exit status 2, an
 FLAGS = {
     "render": {"threads": "--threads", "device": "--device", "effects": "--effects", "algorithm": "--algorithm",
                "primary": "--primary", "shadows": "--shadow-rays", "reflections": "--reflection-rays", "aovs": "--aov"},
-    "load_scene": {"up": "--up"},
+    "load_scene": {"up": "--up", "camera": "--camera"},
     "batch": {"workers": "--workers", "ray": "--ray", "shard": "--shard"},
 }
 
@@ -89,6 +90,8 @@ def _add_scene_options(p: argparse.ArgumentParser):
     p.add_argument("--no-shadows", action="store_true", help="switch shadow rays off")
     p.add_argument("--up", metavar="AXIS", help="a mesh file's up axis: x, y, z, -x, -y or -z (write --up=-z); "
                                                "default: what the file says (USD, glTF), else y")
+    p.add_argument("--camera", metavar="NAME|INDEX", help="a model file's camera to render from (glTF, USD; default: "
+                                                          "its first), or 'auto' to frame the mesh")
 
 
 def _load(args):
@@ -103,7 +106,7 @@ def _load(args):
             overrides[key] = check_setting("command line", "--" + flag.replace("_", "-"), key, v)
     if args.no_shadows:
         overrides["render.shadows"] = False
-    return load_scene(args.scene, overrides, up=args.up)
+    return load_scene(args.scene, overrides, up=args.up, camera=args.camera)
 
 
 def _check_device(device: str):
@@ -165,6 +168,27 @@ def _inputs(scene) -> list:
             for i, f in enumerate(files)]
 
 
+def _rounded(v) -> list:
+    return [round(float(x), 6) for x in v]
+
+
+def _describe_light(light) -> str:
+    """One line of `warprt info`: the light's name, type and key numbers."""
+    kind = light.type
+    words = [f"{light.name or '-':<16} {kind:<11}"]
+    if light.position is not None:
+        words.append(f"at {_rounded(light.position)}")
+    if kind != "point" and light.direction is not None:
+        words.append(f"along {_rounded(light.direction)}")
+    words.append(f"color {_rounded(light.color)}")
+    if kind == "spot":
+        beam = light.beam_width if light.beam_width is not None else 0.75 * light.cutoff_angle
+        words.append(f"cone {light.cutoff_angle:.4g} deg, beam {beam:.4g} deg")
+    if light.falloff != "none":
+        words.append(f"falloff {light.falloff}")
+    return " ".join(words)
+
+
 def cmd_info(args) -> int:
     from .scene import scene_effects
 
@@ -186,6 +210,14 @@ def cmd_info(args) -> int:
         for key, t in scene.materials[name].textures.items():
             print(f"  {name:<16} {key} x {t.describe()}")
     print(f"lights     {len(scene.lights)}")
+    for light in scene.lights:
+        print(f"  {_describe_light(light)}")
+    if scene.cameras:
+        print(f"cameras    {len(scene.cameras)} in the file")
+        for c in scene.cameras:
+            aspect = f" aspect {c.aspect:.4g}" if c.aspect else ""
+            print(f"  {c.name:<16} {c.kind} fovy {c.fovy:.4g} near {c.near:.4g}{aspect} eye {_rounded(c.eye)} "
+                  f"looking {_rounded(b - a for a, b in zip(c.eye, c.center))}")
     print(f"bounds     {[round(float(x), 6) for x in lo]} .. {[round(float(x), 6) for x in hi]}")
     print(f"effects    {scene_effects(scene)}")
     # The geometry as a render builds it: its arrays and BVH, measured rather than estimated.

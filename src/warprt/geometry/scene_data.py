@@ -18,6 +18,9 @@ from ..scene import eye_medium, vertex_normals
 from .bvh import build_mesh, eye_reach, frame_origin, objects_center
 from .shadow_grid import ShadowGrid, empty_grid
 
+_REPEAT = ("repeat", "repeat")
+_ADDRESS = {"repeat": wp.TextureAddressMode.WRAP, "clamp": wp.TextureAddressMode.CLAMP,
+            "mirror": wp.TextureAddressMode.MIRROR}  # scene.Texture.wrap -> Warp's address modes
 CHECKER = -1  # TextureSlot.image: the procedural checker instead of an image
 
 
@@ -84,7 +87,7 @@ class SceneData:
     ka_map: wp.array(dtype=TextureSlot)  # per material
     kd_map: wp.array(dtype=TextureSlot)
     ks_map: wp.array(dtype=TextureSlot)
-    textures: wp.array(dtype=wp.Texture2D)  # bilinear, repeat; slot 0 a 1x1 white one
+    textures: wp.array(dtype=wp.Texture2D)  # bilinear, each with its wrap per axis; slot 0 a 1x1 white one
     ior: wp.array(dtype=float)  # eta of a dielectric, 0 for an opaque material
     transmittance: wp.array(dtype=wp.vec3)  # k_t
     absorption: wp.array(dtype=wp.vec3)  # sigma per scene unit
@@ -252,7 +255,7 @@ class Geometry:
         else:
             self.__dict__.setdefault("_no_uvs", wp.zeros(1, dtype=wp.vec2, device=device))
             s.uvs = self._no_uvs
-        images, index = [np.ones((1, 1, 3), np.float32)], {}  # slot 0: white
+        images, index = [(np.ones((1, 1, 3), np.float32), _REPEAT)], {}  # slot 0: white
         slots = {"ka": [], "kd": [], "ks": []}
         for mat in materials or [None]:
             for key, rows in slots.items():
@@ -266,27 +269,29 @@ class Geometry:
                     if t.checker is not None:
                         slot.image, slot.c0, slot.c1 = CHECKER, wp.vec3(*t.checker[0]), wp.vec3(*t.checker[1])
                     else:
-                        if id(t.image) not in index:  # an image several materials share is held once
-                            index[id(t.image)] = len(images)
-                            images.append(t.image)
-                        slot.image = index[id(t.image)]
+                        key = (id(t.image), t.wrap)  # an image several materials share (same wrap) is held once
+                        if key not in index:
+                            index[key] = len(images)
+                            images.append((t.image, t.wrap))
+                        slot.image = index[key]
                 rows.append(slot)
         s.ka_map, s.kd_map, s.ks_map = (wp.array(slots[k], dtype=TextureSlot, device=device) for k in ("ka", "kd", "ks"))
         # Warp's textures hold 1, 2 or 4 channels: RGB is padded to RGBA. The cache holds the image
         # itself with its texture, so its id cannot be reused by another image while it is a key.
         cache = self.__dict__.setdefault("_texture_cache", {})
         objects = []
-        for a in images:
-            if id(a) not in cache:
+        for a, wrap in images:
+            if (id(a), wrap) not in cache:
                 rgba = np.ascontiguousarray(np.concatenate([a, np.ones(a.shape[:2] + (1,), np.float32)], -1))
-                cache[id(a)] = (a, wp.Texture2D(rgba, filter_mode=wp.TextureFilterMode.LINEAR,
-                                                address_mode=wp.TextureAddressMode.WRAP, normalized_coords=True,
-                                                device=device))
-            objects.append(cache[id(a)][1])
-        for key in [k for k in cache if k not in {id(a) for a in images}]:  # images no longer in use
+                # Per axis: glTF's wrapS and wrapT, USD's, MTL's -clamp; repeat unless the file says otherwise.
+                cache[(id(a), wrap)] = (a, wp.Texture2D(rgba, filter_mode=wp.TextureFilterMode.LINEAR,
+                                                        address_mode_u=_ADDRESS[wrap[0]], address_mode_v=_ADDRESS[wrap[1]],
+                                                        normalized_coords=True, device=device))
+            objects.append(cache[(id(a), wrap)][1])
+        for key in [k for k in cache if k not in {(id(a), w) for a, w in images}]:  # images no longer in use
             del cache[key]
         s.textures = wp.array(objects, dtype=wp.Texture2D, device=device)
-        self.texture_bytes = int(sum(a.shape[0] * a.shape[1] * 16 for a in images))
+        self.texture_bytes = int(sum(a.shape[0] * a.shape[1] * 16 for a, _ in images))
         return objects
 
     def object_tables(self):

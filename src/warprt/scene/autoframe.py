@@ -1,5 +1,6 @@
 """A scene for a bare mesh file: the mesh with its own materials (a default one elsewhere), shaded
-"auto", two lights and a camera that frames it for the final image size, along the file's up axis."""
+"auto", the file's lights (else two) and its first camera (else one that frames it for the final image
+size, along the file's up axis)."""
 
 from __future__ import annotations
 
@@ -8,7 +9,9 @@ from pathlib import Path
 
 import numpy as np
 
+from ..diagnostics import warn
 from ..errors import ArgumentError, SceneError
+from .camera import aspect_note, find_camera
 from .dielectric import warn_unclosed
 from .meshio import file_objects, read_mesh_file, warn_if_tiny, warn_if_unmapped
 from .model import Light, Material, RenderSettings, Scene
@@ -19,12 +22,21 @@ DEFAULT_FOVY = 40.0
 MARGIN = 1.1  # the bounding sphere fills the narrower field of view to 1 / MARGIN
 
 
-def scene_for_mesh(path: Path, camera: dict | None = None, up: str | None = None) -> Scene:
+def scene_for_mesh(path: Path, camera: dict | None = None, up: str | None = None, view=None) -> Scene:
     """The framed scene. ``camera``: the camera fields the user set (TOML values, checked here), the
-    rest framed for them; ``up``: the file's up axis ("x", "-z", ...), else the one the file declares
-    (USD's upAxis, glTF's y), else y."""
+    rest the file camera's or framed for them; ``up``: the file's up axis ("x", "-z", ...), else the one
+    the file declares (USD's upAxis, glTF's y), else y; ``view``: which of the file's cameras (its name
+    or index; None: the first, if it has any), or "auto" for the framing."""
     source = str(path)
     mesh = read_mesh_file(path)
+    file_camera = None
+    if view != "auto" and (mesh.cameras or view is not None):
+        try:
+            file_camera = find_camera(mesh.cameras, view)
+        except LookupError as e:
+            if view is None:
+                raise SceneError(source, None, f"{e} (render with camera 'auto' to frame the mesh instead)") from None
+            raise ArgumentError("load_scene", "camera", f"{source}: {e}") from None
     if up is not None and up.lower() not in UP_AXES:
         raise ArgumentError("load_scene", "up", f"expected one of {', '.join(UP_AXES)}, got '{up}'")
     axis = (up or mesh.up_axis or "y").lower()
@@ -41,8 +53,15 @@ def scene_for_mesh(path: Path, camera: dict | None = None, up: str | None = None
     radius = 0.5 * float(np.linalg.norm(hi - lo))
     if not radius > 0.0:
         raise SceneError(source, "mesh", "the mesh has zero extent")
-    camera = read_camera(source, _framed(dict(camera or {}), center, radius, to_up))
-    lights = [
+    if file_camera is None:
+        camera = read_camera(source, _framed(dict(camera or {}), center, radius, to_up))
+    else:
+        camera = read_camera(source, {**file_camera.fields(center), "width": DEFAULT_SIZE[0], "height": DEFAULT_SIZE[1],
+                                      **(camera or {})})
+        note = aspect_note(file_camera, camera.width, camera.height)
+        if note:
+            warn(source, None, note)
+    lights = list(mesh.lights) or [
         Light(position=_floats(center + radius * (to_up @ [4.0, 6.0, 4.0])), color=(0.8, 0.8, 0.8)),
         Light(position=_floats(center + radius * (to_up @ [-5.0, 3.0, 2.0])), color=(0.3, 0.3, 0.35)),
     ]
@@ -51,7 +70,7 @@ def scene_for_mesh(path: Path, camera: dict | None = None, up: str | None = None
     mirrors = any(max(m.reflectivity) > 0 for _, m in mesh.materials)
     glass = any(m.dielectric for _, m in mesh.materials)
     scene = Scene(camera, RenderSettings(ambient=(0.15, 0.15, 0.15), max_depth=6 if glass else 3 if mirrors else 1),
-                  lights, materials, objects, source)
+                  lights, materials, objects, source, cameras=tuple(mesh.cameras))
     warn_unclosed(scene)
     return scene
 

@@ -21,13 +21,14 @@ from .validate import validate_scene
 _IN_PLACE = {"camera": {f.name for f in fields(Camera)}, "render": {f.name for f in fields(RenderSettings)}}
 
 
-def load_scene(path=None, overrides: dict | None = None, up: str | None = None) -> Scene:
-    """Read a scene: a TOML scene file, any mesh file trimesh reads (framed automatically for the
-    overridden camera and image size; only camera.* and render.* can be overridden; ``up``: the
-    file's up axis), or None for the built-in default scene."""
+def load_scene(path=None, overrides: dict | None = None, up: str | None = None, camera=None) -> Scene:
+    """Read a scene: a TOML scene file, any mesh file trimesh reads (seen from its first camera, else
+    framed automatically for the overridden camera and image size; only camera.* and render.* can be
+    overridden; ``up``: the file's up axis; ``camera``: one of the file's cameras by name or index, or
+    "auto" for the framing), or None for the built-in default scene."""
     times: dict = {}
     with timed(times, "load"), collecting(str(path) if path is not None else "default scene"):
-        scene = _load_scene(path, overrides, up)
+        scene = _load_scene(path, overrides, up, camera)
     scene.files = (Path(path if path is not None else default_scene_path()), *scene.files)
     scene.load_seconds = times["load"]
     return scene
@@ -103,13 +104,16 @@ def _set_camera_render(scene: Scene, overrides: dict, source: str) -> Scene:
     return replace(scene, camera=read_camera(source, doc["camera"]), render=read_render(source, doc["render"]))
 
 
-def _load_scene(path, overrides, up) -> Scene:
+def _load_scene(path, overrides, up, camera=None) -> Scene:
     if path is None:
         path = default_scene_path()
     path = Path(path)
     source = str(path)
     if path.suffix.lower() != ".toml":
-        return _load_mesh_scene(path, overrides, up)
+        return _load_mesh_scene(path, overrides, up, camera)
+    if camera is not None:
+        raise ArgumentError("load_scene", "camera", "applies to a mesh file; in a scene file, write "
+                                                    "camera = { from = \"model.glb\", name = \"Camera\" }")
     if up is not None:
         raise ArgumentError("load_scene", "up", "applies to a mesh file; in a scene file, give the object "
                                                 "up = \"z\" (or x, y, -x, -y, -z)")
@@ -135,7 +139,7 @@ def _load_scene(path, overrides, up) -> Scene:
     return scene_from_dict(data, source, path.parent)
 
 
-def _load_mesh_scene(path: Path, overrides, up) -> Scene:
+def _load_mesh_scene(path: Path, overrides, up, view=None) -> Scene:
     """A bare mesh: the overrides through the file reader's checks, then the mesh framed for them."""
     source = str(path)
     if path.is_dir():
@@ -151,7 +155,7 @@ def _load_mesh_scene(path: Path, overrides, up) -> Scene:
         doc = apply_overrides(doc, overrides, source)
     if doc["camera"]:
         read_camera(source, {**asdict(Camera()), **{k: v for k, v in doc["camera"].items() if k not in ("eye", "center", "up")}})
-    scene = scene_for_mesh(path, doc["camera"], up)
+    scene = scene_for_mesh(path, doc["camera"], up, view)
     if doc["render"]:
         base = {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(scene.render).items() if v is not None}
         scene.render = read_render(source, {**base, **doc["render"]})
@@ -162,6 +166,10 @@ def _load_mesh_scene(path: Path, overrides, up) -> Scene:
     except SceneError as e:
         framed = e.field is not None and e.field.split("[")[0] in ("lights", "camera.eye", "camera.center", "camera.near")
         if not framed or any(k.split("[")[0] == e.field.split("[")[0] for k in overrides or ()):
+            raise
+        # The file's own camera and lights (named, where the framing's are not) are the file's to answer for.
+        if (e.field.startswith("camera") and scene.cameras and view != "auto") or \
+                (e.field.startswith("lights") and any(light.name for light in scene.lights)):
             raise
         # The file did not name that field: the framing made it, from a mesh too large or too far out.
         lo, hi = scene.bounds()

@@ -201,6 +201,7 @@ class Scene:
     source: str = "<scene>"
     load_seconds: float | None = None  # time load_scene spent reading and validating
     files: tuple = ()  # the files it was read from: the scene file, then the mesh files it names
+    cameras: tuple = ()  # the cameras the mesh files define (camera.FileCamera), for `warprt info`
 
     @property
     def triangle_count(self) -> int:

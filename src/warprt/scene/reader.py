@@ -6,11 +6,14 @@ from __future__ import annotations
 import difflib
 import math
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
+from ..diagnostics import warn
 from ..errors import SceneError, one_line, show
 from . import shapes
+from .camera import aspect_note, find_camera
 from .dielectric import warn_unclosed
 from .meshio import file_objects, read_mesh_file, warn_if_tiny, warn_if_unmapped
 from .model import DEFAULT_MATERIAL, FALLOFFS, LIGHT_TYPES, Camera, Light, Material, RenderSettings, Scene, SceneObject
@@ -142,6 +145,44 @@ def read_camera(source: str, t: dict) -> Camera:
     )
     validate_camera(cam, source)
     return cam
+
+
+class _CameraFile(NamedTuple):
+    files: tuple = ()  # the model file camera.from names
+    cameras: tuple = ()  # its cameras (FileCamera), for `warprt info`
+
+
+def _file_camera(source: str, t: dict, base: Path):
+    """The [camera] table with ``from`` (a model file: glTF, USD) and ``name`` (one of its cameras, by name
+    or index; default its first) as that camera's fields, placed as an object of the file is by default,
+    the table's own fields over them; the file camera and its file."""
+    if "from" not in t:
+        if "name" in t:
+            raise SceneError(source, "camera.name", "names a camera of a model file: give the file as camera.from")
+        return t, None, _CameraFile()
+    r = _Reader(source, t, "camera")
+    path = base / r.string("from")
+    choice = t.get("name")
+    if choice is not None and (isinstance(choice, bool) or not isinstance(choice, (str, int))):
+        r.fail("name", f"expected a camera's name or index, got {show(choice)}")
+    mesh = _load_mesh_file(source, "camera.from", path)
+    try:
+        cam = find_camera(mesh.cameras, choice)
+    except LookupError as e:
+        raise SceneError(source, "camera.name" if choice is not None else "camera.from", f"{path}: {e}") from None
+    # Where an [[objects]] entry places the file by default: its up axis turned to y (a z-up USD stage), no
+    # more (an object's own scale, rotate and translate are that object's, not the file's).
+    turn = up_rotation(mesh.up_axis or "y")
+    placed = {k: [float(x) for x in turn @ np.asarray(v, np.float64)] if k in ("eye", "center", "up") else v
+              for k, v in cam.fields(_middle(mesh)).items()}
+    own = {k: v for k, v in t.items() if k not in ("from", "name")}
+    return {**placed, **own}, cam, _CameraFile((path,), tuple(mesh.cameras))
+
+
+def _middle(mesh) -> np.ndarray:
+    """The centre of a file's bounding box, in the file's space."""
+    vertices = np.concatenate([p.vertices for p in mesh.parts])
+    return 0.5 * (vertices.min(0) + vertices.max(0))
 
 
 def read_render(source: str, t: dict) -> RenderSettings:
@@ -461,7 +502,12 @@ def scene_from_dict(data: dict, source: str = "<scene>", base: Path | None = Non
             close = difflib.get_close_matches(key, sorted(SECTIONS), n=1)
             hint = f" (did you mean '{close[0]}'?)" if close else f" (expected: {', '.join(sorted(SECTIONS))})"
             raise SceneError(source, key, f"unknown section{hint}")
-    camera = read_camera(source, _table(source, data, "camera"))
+    camera_table, file_camera, camera_file = _file_camera(source, _table(source, data, "camera"), base)
+    camera = read_camera(source, camera_table)
+    if file_camera is not None:
+        note = aspect_note(file_camera, camera.width, camera.height)
+        if note:
+            warn(source, "camera.from", note)
     render = read_render(source, _table(source, data, "render"))
     lights = [read_light(source, t, i) for i, t in enumerate(_array_of_tables(source, data, "lights"))]
     materials = {"default": DEFAULT_MATERIAL}
@@ -470,7 +516,8 @@ def scene_from_dict(data: dict, source: str = "<scene>", base: Path | None = Non
     objects = [o for i, t in enumerate(_array_of_tables(source, data, "objects"))
                for o in read_object(source, base, t, i, materials)]
     meshes = tuple(base / t["mesh"] for t in _array_of_tables(source, data, "objects") if isinstance(t.get("mesh"), str))
-    scene = Scene(camera, render, lights, materials, objects, source, files=meshes)
+    scene = Scene(camera, render, lights, materials, objects, source, files=meshes + camera_file.files,
+                  cameras=camera_file.cameras)
     validate_scene(scene)  # what needs the whole scene: reach from the eye, float32 overflow
     warn_unclosed(scene)
     return scene

@@ -3,7 +3,8 @@ filtering), or the procedural checker, with the affine map from a surface's uv t
 
 Conventions, shared with the kernels and the Mitsuba reference: uv as OBJ, USD and Mitsuba give it
 (v = 0 at the image's bottom row), images stored with row 0 at v = 0 (flipped once on load), texel
-(i, j) centred at ((i + 0.5) / W, (j + 0.5) / H), bilinear filtering and repeat wrap.
+(i, j) centred at ((i + 0.5) / W, (j + 0.5) / H), bilinear filtering, and per axis the file's wrap:
+repeat (the default), clamp (to the edge texels) or mirror (mirrored repeat), applied to the mapped uv.
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ import numpy as np
 from ..errors import SceneError, one_line
 
 IDENTITY_UV = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0)  # u' = a u + b v + c, v' = d u + e v + f
+WRAP_MODES = ("repeat", "clamp", "mirror")
 _MAGIC_EXR = b"\x76\x2f\x31\x01"
 
 
@@ -31,6 +33,11 @@ class Texture:
     checker: tuple | None = None  # ((r, g, b), (r, g, b))
     uv_transform: tuple = IDENTITY_UV
     source: str = ""  # the file, for messages and `warprt info`
+    wrap: tuple = ("repeat", "repeat")  # along u and v: one of WRAP_MODES each (images; the checker repeats)
+
+    def __post_init__(self):
+        if len(self.wrap) != 2 or any(w not in WRAP_MODES for w in self.wrap):
+            raise ValueError(f"wrap: expected two of {WRAP_MODES}, got {self.wrap!r}")
 
     @property
     def peak(self) -> float:
@@ -43,11 +50,16 @@ class Texture:
         if self.checker is not None:
             return f"checker {list(self.checker[0])}/{list(self.checker[1])} x{self.uv_transform[0]:g}"
         h, w = self.image.shape[:2]
-        return f"{Path(self.source).name} {w}x{h}"
+        wrap = "" if self.wrap == ("repeat", "repeat") else f" wrap {self.wrap[0]}/{self.wrap[1]}"
+        return f"{Path(self.source).name} {w}x{h}{wrap}"
 
     def mapped(self, uv_transform: tuple) -> "Texture":
         """The same image with another uv map (an MTL's -s/-o, glTF's KHR_texture_transform)."""
-        return Texture(self.image, self.checker, tuple(float(x) for x in uv_transform), self.source)
+        return Texture(self.image, self.checker, tuple(float(x) for x in uv_transform), self.source, self.wrap)
+
+    def wrapped(self, wrap_u: str, wrap_v: str) -> "Texture":
+        """The same image sampled with other wrap modes outside [0, 1) (glTF's sampler, MTL's -clamp)."""
+        return Texture(self.image, self.checker, self.uv_transform, self.source, (wrap_u, wrap_v))
 
 
 def checker_texture(c0, c1, scale=(1.0, 1.0), offset=(0.0, 0.0)) -> Texture:

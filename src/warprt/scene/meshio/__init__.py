@@ -48,6 +48,8 @@ class MeshFile:
     parts: list[MeshPart]
     materials: list[tuple[str, Material]] = field(default_factory=list)  # the file's own, by name
     up_axis: str | None = None  # the up direction the file declares ("Y", "Z"), None where it says nothing
+    cameras: list = field(default_factory=list)  # camera.FileCamera, in the file's world space, as placed
+    lights: list = field(default_factory=list)  # model.Light, in the file's world space
 
     @property
     def triangle_count(self) -> int:

@@ -4,7 +4,9 @@ normalized integer attributes raw and ignores KHR_texture_transform).
 What is read: the default scene's node tree (matrix or TRS; each node using a mesh is a placed copy,
 EXT_mesh_gpu_instancing too), triangle, strip and fan primitives, POSITION, NORMAL, TEXCOORD_n,
 COLOR_0 (linear, as the spec says), and per material baseColorFactor times baseColorTexture (embedded,
-data URI or file; sRGB) with KHR_texture_transform. glTF is y-up and in metres by its spec.
+data URI or file; sRGB) with KHR_texture_transform and the sampler's wrapS/wrapT; primitives without a
+material get the specification's default; perspective cameras and KHR_lights_punctual lights placed
+by their nodes. glTF is y-up and in metres by its spec.
 """
 
 from __future__ import annotations
@@ -22,13 +24,17 @@ import numpy as np
 from ...diagnostics import warn
 from ...errors import SceneError, one_line
 from ..dielectric_formats import dielectric_from_gltf
-from ..model import Material
+from ..camera import FileCamera, look_from_matrix
+from ..model import Light, Material
 from ..texture import image_texture
 from . import MeshFile, MeshPart, unique_name, unit_rows, weld_corners
 
 _COMPONENT = {5120: np.int8, 5121: np.uint8, 5122: np.int16, 5123: np.uint16, 5125: np.uint32, 5126: np.float32}
 _WIDTH = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT2": 4, "MAT3": 9, "MAT4": 16}
-_WRAP = {10497: "repeat", 33071: "clamp to edge", 33648: "mirrored repeat"}
+_WRAP = {10497: "repeat", 33071: "clamp", 33648: "mirror"}  # the sampler's wrapS / wrapT as Texture.wrap
+# What the specification gives a primitive without a material: base colour 1, metallic 1, roughness 1.
+# A rough metal has no highlight to speak of, and Phong has no metallic term: kd 1 and no ks.
+GLTF_DEFAULT_MATERIAL = Material(kd=(1.0, 1.0, 1.0), ka=(1.0, 1.0, 1.0), ks=(0.0, 0.0, 0.0))
 _UNREAD_MATERIAL_EXTENSIONS = {"KHR_materials_volume": "volume",
                                "KHR_materials_clearcoat": "clearcoat", "KHR_materials_sheen": "sheen",
                                "KHR_materials_emissive_strength": "emission"}
@@ -84,6 +90,7 @@ class _Document:
         self.buffers = [binary if "uri" not in b and i == 0 else self._uri(b["uri"])
                         for i, b in enumerate(doc.get("buffers", []))]
         self._accessors = {}
+        self._range_warned = False
 
     def _uri(self, uri: str) -> bytes:
         if uri.startswith("data:"):
@@ -148,22 +155,26 @@ class _Document:
             warn(self.src, where, f"texture {index} is in a format not read here ({formats}); the material is untextured")
             return None
         sampler = self.doc.get("samplers", [{}])[t["sampler"]] if "sampler" in t else {}
+        wrap = []
         for axis in ("wrapS", "wrapT"):
-            mode = _WRAP.get(sampler.get(axis, 10497), "repeat")
-            if mode != "repeat":
-                warn(self.src, where, f"texture wrap '{mode}' is sampled as repeat")
+            code = sampler.get(axis, 10497)
+            if code not in _WRAP:
+                warn(self.src, where, f"sampler {axis} {code} is not a glTF wrap mode; sampled as repeat")
+            wrap.append(_WRAP.get(code, "repeat"))
         image = self.doc["images"][source]
         try:
             if "bufferView" in image:
                 raw, _ = self.view(image["bufferView"])
-                return image_texture(bytes(raw), srgb=True, source=f"{self.src}: images[{source}]")
-            uri = image["uri"]
-            if uri.startswith("data:"):
-                return image_texture(self._uri(uri), srgb=True, source=f"{self.src}: images[{source}]")
-            return image_texture(self.path.parent / unquote(uri), srgb=True)
+                texture = image_texture(bytes(raw), srgb=True, source=f"{self.src}: images[{source}]")
+            elif image["uri"].startswith("data:"):
+                texture = image_texture(self._uri(image["uri"]), srgb=True, source=f"{self.src}: images[{source}]")
+            else:
+                texture = image_texture(self.path.parent / unquote(image["uri"]), srgb=True)
         except SceneError as e:
             warn(self.src, where, f"{e}; the material is untextured")
             return None
+        # wrapT acts on the glTF v, which runs down the image, ours up: clamp and mirror commute with v -> 1 - v.
+        return texture.wrapped(*wrap)
 
     def material(self, i: int) -> tuple[Material, int]:
         """materials[i] as Phong (the base colour, times its texture, is kd and ka; metallic-roughness
@@ -206,13 +217,18 @@ class _Document:
             tex_coords.append(tex_coord)
         scenes = doc.get("scenes")
         roots = scenes[doc.get("scene", 0)].get("nodes", []) if scenes else _roots(doc)
-        parts = []
+        parts, cameras, lights = [], [], []
         stack = [(n, np.eye(4)) for n in roots]
         while stack:
             ni, parent = stack.pop(0)
             node = doc["nodes"][ni]
             world = parent @ _node_matrix(node)
             stack += [(c, world) for c in node.get("children", [])]
+            if "camera" in node:
+                cameras.append((ni, node, world))
+            punctual = node.get("extensions", {}).get("KHR_lights_punctual")
+            if punctual is not None and "light" in punctual:
+                lights.append((ni, self._light(node, ni, punctual["light"], world)))
             if "mesh" not in node:
                 continue
             label = node.get("name") or f"nodes[{ni}]"
@@ -223,7 +239,71 @@ class _Document:
                                            f"{label}/{pi}" + (f"[{k}]" if k else ""))
                     if part is not None:
                         parts.append(part)
-        return MeshFile(self.path, parts, materials, up_axis="Y")
+        if any((p.face_material < 0).any() for p in parts):  # the specification's default material
+            materials.append((unique_name("default", names), GLTF_DEFAULT_MATERIAL))
+            for p in parts:
+                p.face_material[p.face_material < 0] = len(materials) - 1
+        # In the order of their nodes in the file (the first camera is the first the file lists), not of the tree walk.
+        placed = []
+        for ni, node, world in sorted(cameras, key=lambda c: c[0]):
+            placed.append(self._camera(node, ni, world, [c.name for c in placed]))
+        lights = [light for _, light in sorted(lights, key=lambda x: x[0])]
+        return MeshFile(self.path, parts, materials, up_axis="Y", cameras=placed, lights=lights)
+
+    def _camera(self, node, ni: int, world: np.ndarray, taken) -> FileCamera:
+        """A node's camera: it looks down the node's -z with +y up; yfov is vertical (radians)."""
+        ci = node["camera"]
+        cam = self.doc["cameras"][ci]
+        name = unique_name(node.get("name") or cam.get("name") or f"cameras[{ci}]", taken)
+        kind = cam.get("type", "perspective")
+        if kind == "perspective":
+            p = cam.get("perspective", {})
+            if "yfov" not in p:
+                raise SceneError(self.src, f"cameras[{ci}].perspective.yfov", "is required")
+            yfov, znear = p["yfov"], p.get("znear", 1.0)
+            if not (isinstance(yfov, (int, float)) and 0 < yfov < math.pi):
+                raise SceneError(self.src, f"cameras[{ci}].perspective.yfov", f"expected radians in (0, pi), got {yfov!r}")
+            if not (isinstance(znear, (int, float)) and znear > 0):
+                raise SceneError(self.src, f"cameras[{ci}].perspective.znear", f"expected a number > 0, got {znear!r}")
+            return look_from_matrix(world, name, kind, math.degrees(yfov), znear, p.get("aspectRatio"))
+        return look_from_matrix(world, name, "orthographic", 45.0, 1.0)
+
+    def _light(self, node, ni: int, li: int, world: np.ndarray) -> Light:
+        """A KHR_lights_punctual light placed by its node: it shines down the node's -z. Its colour
+        times intensity is C_l (candela for point and spot, lux for directional); its falloff the
+        physical inverse square."""
+        try:
+            light = self.doc["extensions"]["KHR_lights_punctual"]["lights"][li]
+        except (KeyError, IndexError, TypeError):
+            raise SceneError(self.src, f"nodes[{ni}].extensions.KHR_lights_punctual.light",
+                             f"there is no light {li} in the file's KHR_lights_punctual lights") from None
+        where = f"KHR_lights_punctual.lights[{li}]"
+        name = node.get("name") or light.get("name") or where
+        kind = light.get("type")
+        if kind not in ("point", "spot", "directional"):
+            raise SceneError(self.src, f"{where}.type", f"expected point, spot or directional, got {kind!r}")
+        intensity = float(light.get("intensity", 1.0))
+        color = tuple(float(c) * intensity for c in light.get("color", [1.0, 1.0, 1.0])[:3])
+        if "range" in light and not self._range_warned:  # once a file: Blender writes it on every light
+            warn(self.src, where, "a light's range is ignored: warprt's lights reach every distance")
+            self._range_warned = True
+        axis = world[:3, :3] @ [0.0, 0.0, -1.0]
+        direction = tuple(float(x) for x in axis / np.linalg.norm(axis))
+        position = tuple(float(x) for x in world[:3, 3])
+        if kind == "directional":
+            return Light(position=None, color=color, type=kind, direction=direction, falloff="inverse_square",
+                         name=name)
+        if kind == "point":
+            return Light(position=position, color=color, falloff="inverse_square", name=name)
+        spot = light.get("spot", {})
+        outer = float(spot.get("outerConeAngle", math.pi / 4))
+        inner = float(spot.get("innerConeAngle", 0.0))
+        if not 0.0 <= inner < outer <= math.pi / 2:
+            raise SceneError(self.src, f"{where}.spot", f"expected 0 <= innerConeAngle < outerConeAngle <= pi/2, "
+                                                        f"got {inner:g} and {outer:g}")
+        return Light(position=position, color=color, type="spot", direction=direction,
+                     cutoff_angle=math.degrees(outer), beam_width=math.degrees(inner), falloff="inverse_square",
+                     name=name)
 
     def _instances(self, node) -> list[np.ndarray]:
         ext = node.get("extensions", {}).get("EXT_mesh_gpu_instancing")

@@ -2,7 +2,7 @@
 groups, per-corner normals, map_Kd with options, 0-255 vertex colours, and files that are not UTF-8.
 
 What is read: v (with r g b colours), vt, vn, f (any of v, v/vt, v//vn, v/vt/vn, negative indices,
-polygons fanned), s, usemtl, mtllib; from the MTL Ka Kd Ks Ns illum map_Ka map_Kd map_Ks (-s -o).
+polygons fanned), s, usemtl, mtllib; from the MTL Ka Kd Ks Ns illum map_Ka map_Kd map_Ks (-s -o -clamp).
 The rest is ignored with one warning. Materials are read as Blender's importer reads them.
 """
 
@@ -411,10 +411,11 @@ def _number(src: str, name: str, key: str, rest: str) -> float:
 
 
 def _map(src: str, folder: Path, name: str, key: str, rest: str):
-    """A map_K? statement as a Texture (its -s scale and -o offset as the uv map), or None with a warning."""
+    """A map_K? statement as a Texture (its -s scale and -o offset as the uv map, -clamp on as clamp to edge),
+    or None with a warning."""
     options, file_name = parse_map(rest)
     where = f"newmtl {name}: {key}"
-    ignored = sorted(set(options) - {"-s", "-o"})
+    ignored = sorted(set(options) - {"-s", "-o", "-clamp"})
     if ignored:
         warn(src, where, f"options not read: {' '.join(ignored)}")
     found = find_file(folder, file_name)
@@ -424,8 +425,10 @@ def _map(src: str, folder: Path, name: str, key: str, rest: str):
     s, o = options.get("-s", [1.0, 1.0]), options.get("-o", [0.0, 0.0])
     scale = (s[0], s[1] if len(s) > 1 else s[0]) if s else (1.0, 1.0)
     offset = (o[0], o[1] if len(o) > 1 else 0.0) if o else (0.0, 0.0)
+    clamp = str((options.get("-clamp") or ["off"])[0]).lower() == "on"  # the MTL spec: uv clamped to [0, 1]
     try:
-        return image_texture(found, uv_transform=affine(scale, offset))
+        texture = image_texture(found, uv_transform=affine(scale, offset))
+        return texture.wrapped("clamp", "clamp") if clamp else texture
     except SceneError as e:
         warn(src, where, f"{e}; the material is untextured")
         return None

@@ -5,11 +5,13 @@ What is read: points, faceVertexCounts/Indices, holeIndices (polygons fanned as 
 orientation, the prim's world transform; the st primvar a bound UsdUVTexture reads (through its
 UsdPrimvarReader), normals (primvars:normals before the normals attribute) and displayColor, each of
 any interpolation, indexed or not; diffuseColor (a value, or a UsdUVTexture with its scale and
-bias), per prim and per GeomSubset; metersPerUnit and upAxis where the stage authors them.
+bias), per prim and per GeomSubset; metersPerUnit and upAxis where the stage authors them; UsdGeomCamera
+prims as cameras and UsdLux sphere, disk and distant lights (ShapingAPI cones as spots) as lights.
 """
 
 from __future__ import annotations
 
+import math
 import re
 from dataclasses import replace
 from pathlib import Path
@@ -19,7 +21,8 @@ import numpy as np
 from ...diagnostics import native_stderr, usd_messages, warn
 from ...errors import SceneError, one_line
 from ..dielectric_formats import dielectric_from_usd
-from ..model import Material
+from ..camera import FileCamera, look_from_matrix
+from ..model import Light, Material
 from ..texture import Texture, image_texture
 from .usdcrate import MAGIC as CRATE_MAGIC, check_crate
 from . import MeshFile, MeshPart, dedupe, fan_corners, unique_name, unit_rows, weld_corners
@@ -97,7 +100,7 @@ class _Stage:
         self._index: dict[str, int] = {}
 
     def mesh_file(self) -> MeshFile:
-        from pxr import Usd, UsdGeom
+        from pxr import Usd, UsdGeom, UsdLux
 
         prototypes, instancers = set(), []
         for prim in self.stage.Traverse(Usd.TraverseInstanceProxies()):
@@ -139,7 +142,83 @@ class _Stage:
                         part = self._mesh(prim, local @ placements[k] @ world, f"{prim.GetPath()}[{k}]")
                         if part is not None:
                             parts.append(part)
-        return MeshFile(self.path, parts, self.materials, up_axis=self.up)
+        cameras, lights = [], []
+        for prim in self.stage.Traverse(Usd.TraverseInstanceProxies()):
+            is_camera, is_light = prim.IsA(UsdGeom.Camera), prim.HasAPI(UsdLux.LightAPI)
+            if not (is_camera or is_light) or is_prototype(prim) or not self._drawn(prim):
+                continue
+            if is_camera:
+                cameras.append(self._camera(prim, [c.name for c in cameras]))
+            else:
+                light = self._light(prim)
+                if light is not None:
+                    lights.append(light)
+        return MeshFile(self.path, parts, self.materials, up_axis=self.up, cameras=cameras, lights=lights)
+
+    def _placement(self, prim) -> np.ndarray:
+        """The prim's local-to-world transform as column vectors (p' = M p), its translation in metres."""
+        m = np.asarray(self.xforms.GetLocalToWorldTransform(prim), np.float64).T.copy()
+        m[:3, 3] *= self.meters
+        return m
+
+    def _camera(self, prim, taken) -> FileCamera:
+        """A UsdGeomCamera: it looks down its -z with +y up; its vertical field of view is
+        2 atan(verticalAperture / (2 focalLength)) (both in the same tenths of a unit)."""
+        from pxr import UsdGeom
+
+        cam, t = UsdGeom.Camera(prim), self.time
+        name = unique_name(prim.GetName(), taken)
+        where = str(prim.GetPath())
+        focal = float(cam.GetFocalLengthAttr().Get(t))
+        vertical = float(cam.GetVerticalApertureAttr().Get(t))
+        horizontal = float(cam.GetHorizontalApertureAttr().Get(t))
+        if not (focal > 0 and vertical > 0 and horizontal > 0):
+            raise SceneError(self.src, f"{where}.focalLength", f"expected a focal length and apertures > 0, got "
+                                                               f"{focal:g}, {horizontal:g} x {vertical:g}")
+        if cam.GetHorizontalApertureOffsetAttr().Get(t) or cam.GetVerticalApertureOffsetAttr().Get(t):
+            warn(self.src, where, "the aperture offset (lens shift) is not read: the view is centred")
+        near = float(cam.GetClippingRangeAttr().Get(t)[0]) * self.meters
+        authored = cam.GetHorizontalApertureAttr().HasAuthoredValue() or cam.GetVerticalApertureAttr().HasAuthoredValue()
+        kind = "orthographic" if cam.GetProjectionAttr().Get(t) == UsdGeom.Tokens.orthographic else "perspective"
+        fovy = math.degrees(2.0 * math.atan(vertical / (2.0 * focal)))
+        return look_from_matrix(self._placement(prim), name, kind, fovy, near if near > 0 else 1.0,
+                                horizontal / vertical if authored else None)
+
+    def _light(self, prim) -> Light | None:
+        """A UsdLux light as a Whitted one: C_l = intensity x 2^exposure x colour; sphere and disk lights
+        a point at their centre, distant lights directional along the prim's -z, a ShapingAPI cone a spot
+        (cone:angle the cutoff, cone:softness the share of it the profile falls over)."""
+        from pxr import UsdLux
+
+        where, t = str(prim.GetPath()), self.time
+        api = UsdLux.LightAPI(prim)
+        color = np.asarray(api.GetColorAttr().Get(t), np.float64)
+        c_l = tuple(float(x) for x in color * float(api.GetIntensityAttr().Get(t)) * 2.0 ** float(api.GetExposureAttr().Get(t)))
+        if api.GetEnableColorTemperatureAttr().Get(t):
+            warn(self.src, where, "colour temperature is not read; the light's colour is used")
+        m = self._placement(prim)
+        axis = m[:3, :3] @ [0.0, 0.0, -1.0]
+        direction = tuple(float(x) for x in axis / np.linalg.norm(axis))
+        name = prim.GetName()
+        if prim.IsA(UsdLux.DistantLight):
+            return Light(position=None, color=c_l, type="directional", direction=direction, falloff="inverse_square",
+                         name=name)
+        if not (prim.IsA(UsdLux.SphereLight) or prim.IsA(UsdLux.DiskLight)):
+            warn(self.src, where, f"a {prim.GetTypeName()} is not a Whitted light: skipped")
+            return None
+        shape = UsdLux.SphereLight(prim) if prim.IsA(UsdLux.SphereLight) else UsdLux.DiskLight(prim)
+        radius = shape.GetRadiusAttr().Get(t)
+        as_point = prim.IsA(UsdLux.SphereLight) and shape.GetTreatAsPointAttr().Get(t)  # the author's own point
+        if radius and float(radius) > 0 and not as_point:
+            warn(self.src, where, f"a {prim.GetTypeName()} of radius {float(radius):g} is approximated by a point")
+        position = tuple(float(x) for x in m[:3, 3])
+        shaping = UsdLux.ShapingAPI(prim)
+        angle = shaping.GetShapingConeAngleAttr().Get(t) if prim.HasAPI(UsdLux.ShapingAPI) else None
+        if angle is None or float(angle) >= 90.0:  # a 90-degree cone (the default) shapes nothing
+            return Light(position=position, color=c_l, falloff="inverse_square", name=name)
+        softness = min(max(float(shaping.GetShapingConeSoftnessAttr().Get(t) or 0.0), 0.0), 1.0)
+        return Light(position=position, color=c_l, type="spot", direction=direction, cutoff_angle=float(angle),
+                     beam_width=float(angle) * (1.0 - softness), falloff="inverse_square", name=name)
 
     def _drawn(self, prim, under=None) -> bool:
         from pxr import UsdGeom
@@ -338,10 +417,12 @@ class _Stage:
         except SceneError as e:
             warn(self.src, where, f"{e}; the material is untextured")
             return None, None
+        wrap = []
         for axis in ("wrapS", "wrapT"):
             mode = str(_value(shader, axis) or "useMetadata")
-            if mode not in ("repeat", "useMetadata"):
+            if mode not in ("repeat", "clamp", "mirror", "useMetadata"):
                 warn(self.src, where, f"texture {axis} '{mode}' is sampled as repeat")
+            wrap.append(mode if mode in ("clamp", "mirror") else "repeat")
         if output not in (None, "rgb"):
             warn(self.src, where, f"diffuseColor reads the texture's '{output}' output; its rgb is used")
         scale, bias = _value(shader, "scale"), _value(shader, "bias")
@@ -351,6 +432,7 @@ class _Stage:
             # An affine map per texel commutes with bilinear filtering: applied once, here.
             image = np.ascontiguousarray(np.maximum(texture.image * s + b, 0.0), np.float32)
             texture = Texture(image=image, source=texture.source)
+        texture = texture.wrapped(*wrap)
         uv_name = "st"
         st = shader.GetInput("st")
         if st:
