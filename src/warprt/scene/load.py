@@ -90,7 +90,7 @@ def sets_in_place(key: str, path=None) -> bool:
     """Whether with_overrides sets the dotted field ``key`` on a scene loaded from ``path``: camera.* and
     render.* of a scene file; of a bare mesh only render.*, as its framing follows its camera."""
     section, _, name = key.partition(".")
-    if path is not None and Path(path).suffix.lower() != ".toml" and section == "camera":
+    if path is not None and Path(path).suffix.lower() not in (".toml", ".xml") and section == "camera":
         return False
     return section in _IN_PLACE and name.isidentifier()  # unknown names too: the reader reports them
 
@@ -108,6 +108,8 @@ def _load_scene(path, overrides, up) -> Scene:
         path = default_scene_path()
     path = Path(path)
     source = str(path)
+    if path.suffix.lower() == ".xml":
+        return _load_mitsuba_scene(path, overrides, up)
     if path.suffix.lower() != ".toml":
         return _load_mesh_scene(path, overrides, up)
     if up is not None:
@@ -133,6 +135,23 @@ def _load_scene(path, overrides, up) -> Scene:
     if overrides:
         data = apply_overrides(data, overrides, source)
     return scene_from_dict(data, source, path.parent)
+
+
+def _load_mitsuba_scene(path: Path, overrides, up) -> Scene:
+    """A Mitsuba scene file through Mitsuba's parser, then camera.* and render.* overrides as a scene file's."""
+    from .mitsuba_xml import read_mitsuba_xml  # imports Mitsuba only when such a file is read
+
+    source = str(path)
+    if up is not None:
+        raise ArgumentError("load_scene", "up", "applies to a mesh file; a Mitsuba scene places its shapes itself")
+    for k in overrides or {}:
+        if k.split(".")[0] not in ("camera", "render"):
+            raise SceneError(source, k, "only camera.* and render.* can be set for a Mitsuba scene file")
+    scene = read_mitsuba_xml(path)
+    if overrides:
+        scene = _set_camera_render(scene, overrides, source)
+    validate_scene(scene)
+    return scene
 
 
 def _load_mesh_scene(path: Path, overrides, up) -> Scene:
