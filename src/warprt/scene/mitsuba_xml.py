@@ -103,6 +103,14 @@ def read_mitsuba_xml(path, params: dict | None = None) -> Scene:
     return Scene(camera=camera, render=render, lights=lights, materials=materials, objects=objects, source=source)
 
 
+_TESSELLATED = ("Sphere", "Disk", "Cylinder")
+
+
+def reads_mitsuba_shape(shape) -> bool:
+    """Whether the reader makes an object of this loaded Mitsuba shape (the others are warned and skipped)."""
+    return bool(shape.is_mesh()) or str(shape).split("[")[0] in _TESSELLATED
+
+
 def _array(v) -> np.ndarray:
     return np.array(v, np.float64)
 
@@ -189,7 +197,7 @@ class _Reader:
             f = np.array(shape.faces_buffer(), np.int64).reshape(-1, 3)
             n = _array(shape.vertex_normals_buffer()).reshape(-1, 3) if shape.has_vertex_normals() else None
             uv = _array(shape.vertex_texcoords_buffer()).reshape(-1, 2) if shape.has_vertex_texcoords() else None
-        elif kind in ("Sphere", "Disk", "Cylinder"):
+        elif reads_mitsuba_shape(shape):
             m = _matrix(self.mi.traverse(shape)["to_world"])
             v, f, n, uv = {"Sphere": _sphere, "Disk": _disk, "Cylinder": _cylinder}[kind]()
             v = v @ m[:3, :3].T + m[:3, 3]
