@@ -115,6 +115,11 @@ def _array(v) -> np.ndarray:
     return np.array(v, np.float64)
 
 
+def _scalar(v) -> float:
+    """A Mitsuba parameter's one number, whatever the variant holds it in (float, or a JIT array)."""
+    return float(np.ravel(_array(v))[0])
+
+
 def _rgb(v) -> tuple:
     """A Mitsuba spectrum parameter (a float for a uniform one, Color3f for RGB) as three floats."""
     return tuple(float(x) for x in np.broadcast_to(np.ravel(_array(v)), (3,)))
@@ -175,15 +180,15 @@ class _Reader:
         if tuple(int(v) for v in sensor.film().crop_size()) != (width, height):
             warn(self.source, "sensor.film", "crop window ignored: the whole film is rendered")
         for key in ("principal_point_offset_x", "principal_point_offset_y"):
-            if key in p and float(p[key]) != 0.0:
+            if key in p and _scalar(p[key]) != 0.0:
                 warn(self.source, f"sensor.{key}", "off-centre principal point ignored")
         # x_fov is Mitsuba's own reading of fov and fov_axis (x, y, diagonal, smaller, larger).
-        x_fov = math.radians(float(p["x_fov"]))
+        x_fov = math.radians(_scalar(p["x_fov"]))
         fovy = math.degrees(2.0 * math.atan(math.tan(0.5 * x_fov) * height / width))
         up = y / np.linalg.norm(y)
         forward = z / np.linalg.norm(z)
         return Camera(eye=tuple(eye), center=tuple(eye + forward), up=tuple(up), fovy=fovy,
-                      near=float(p["near_clip"]), width=width, height=height)
+                      near=_scalar(p["near_clip"]), width=width, height=height)
 
     # ---- shapes ----
     def shape(self, i: int, shape, materials: dict) -> SceneObject | None:
@@ -254,22 +259,22 @@ class _Reader:
             return Material(kd=tuple(np.array(kd) / math.pi), ks=black, kd_texture=tex)
         if kind in ("plastic", "roughplastic"):
             kd, tex = self._texture(p, "diffuse_reflectance", text, field)
-            f0 = _fresnel_dielectric_normal(float(_array(p["eta"])))
+            f0 = _fresnel_dielectric_normal(_scalar(p["eta"]))
             spec = np.array(self._constant(p, "specular_reflectance", (1.0, 1.0, 1.0), field)) * f0
             kd = tuple(np.array(kd) / math.pi)
             if kind == "plastic":  # a smooth coating: a mirror reflection, no highlight from a point light
                 return Material(kd=kd, ks=black, reflectivity=tuple(spec), kd_texture=tex)
-            n = phong_shininess(float(_array(p["alpha"]).ravel()[0]))
+            n = phong_shininess(_scalar(p["alpha"]))
             return Material(kd=kd, ks=tuple(spec * (n + 2.0) / (2.0 * math.pi)), shininess=n, kd_texture=tex)
         if kind in ("conductor", "roughconductor"):
-            f0 = _fresnel_conductor_normal(_array(p["eta.value"]), _array(p["k.value"]))
+            f0 = _fresnel_conductor_normal(_rgb(p["eta.value"]), _rgb(p["k.value"]))
             spec = np.array(self._constant(p, "specular_reflectance", (1.0, 1.0, 1.0), field))
             return Material(kd=black, ks=black, reflectivity=tuple(np.broadcast_to(f0 * spec, (3,))))
         if kind in ("dielectric", "thindielectric"):
             if kind == "thindielectric":
                 self.warn_once("thin", field, "thindielectric: rendered as a solid dielectric of the same index")
             kt = self._constant(p, "specular_transmittance", (1.0, 1.0, 1.0), field)
-            return Material(kd=black, ks=black, ior=float(_array(p["eta"])), transmittance=kt)
+            return Material(kd=black, ks=black, ior=_scalar(p["eta"]), transmittance=kt)
         raise _Unread(f"a {kind} BSDF is not read (diffuse, plastic, roughplastic, conductor, roughconductor, "
                       "dielectric, thindielectric, twosided are)")
 
@@ -333,8 +338,8 @@ class _Reader:
                     self.warn_once("spottex", f"emitter {name}", "a spot's texture is not read")
                 axis = m[:3, 2] / np.linalg.norm(m[:3, 2])  # Mitsuba's spot shines along its local +z
                 lights.append(Light(position=tuple(m[:3, 3]), color=_rgb(p["intensity.value"]), type="spot",
-                                    direction=tuple(axis), cutoff_angle=float(p["cutoff_angle"]),
-                                    beam_width=float(p["beam_width"]), falloff="inverse_square", name=name))
+                                    direction=tuple(axis), cutoff_angle=_scalar(p["cutoff_angle"]),
+                                    beam_width=_scalar(p["beam_width"]), falloff="inverse_square", name=name))
             elif kind == "DirectionalEmitter":
                 m = _matrix(p["to_world"])
                 lights.append(Light(color=_rgb(p["irradiance.value"]), type="directional",
