@@ -1,24 +1,5 @@
 """A Mitsuba 3 scene file (scene.xml) read by Mitsuba's own parser, so that <default>, $param, <include>,
 <ref> and transforms mean what they mean there; the loaded sensor, shapes, BSDFs and emitters become a Scene.
-
-Units: Mitsuba's diffuse BRDF is reflectance / pi and its point and spot lights give radiant intensity
-(directional: irradiance), so kd = reflectance / pi and C_l = the emitter's intensity with inverse-square
-falloff: a diffuse surface under a point light is then the radiance Mitsuba computes, not pi times it.
-A `constant` emitter of radiance L is the background (L) and the ambient C_amb = pi L (C_amb kd = the
-light an unoccluded diffuse surface reflects from it, reflectance x L). Read and not read, in detail:
-
-    sensor      perspective (thinlens: as a pinhole, warned): to_world, Mitsuba's x_fov (whatever fov_axis
-                said) -> vertical fovy, film size, near_clip -> camera.near; orthographic and others: error
-    shapes      every Mesh (ply, obj, serialized, rectangle, cube, merged): positions, faces, normals, uv;
-                sphere, disk, cylinder tessellated through their to_world; others: warned, skipped
-    bsdfs       diffuse -> kd; plastic -> kd + mirror k_r = F(0); roughplastic -> kd + Phong ks, shininess
-                from alpha (SHININESS_NOTE); conductor, roughconductor -> mirror k_r = specular_reflectance
-                x F(0) from eta, k (roughness ignored); dielectric, thindielectric -> glass, ior = int_ior /
-                ext_ior; twosided -> its front BSDF; textures: bitmap (Mitsuba's own decoded texels, to_uv),
-                checkerboard; others: one warning each, Mitsuba's default diffuse (reflectance 0.5)
-    emitters    point, spot, directional -> lights (inverse_square); constant -> background and ambient;
-                area, envmap and others: one warning each, not lights
-    not read    integrator, sampler (warprt's spp and max_depth apply), media, film crop and filter
 """
 
 from __future__ import annotations
@@ -35,6 +16,27 @@ from ..errors import SceneError, one_line
 from .model import Camera, Light, Material, RenderSettings, Scene, SceneObject
 from .texture import Texture
 
+# Units. Mitsuba's diffuse BRDF is reflectance / pi and its point and spot lights give radiant intensity
+# (directional: irradiance), so kd = reflectance / pi and C_l = the emitter's intensity with inverse-square
+# falloff: a diffuse surface under a point light is then the radiance Mitsuba computes, not pi times it.
+# A `constant` emitter of radiance L is the background (L) and the ambient C_amb = pi L (C_amb kd = the
+# light an unoccluded diffuse surface reflects from it, reflectance x L).
+#
+# What is read:
+#   sensor    perspective (thinlens as a pinhole, warned): to_world, Mitsuba's x_fov (whatever fov_axis
+#             said) -> vertical fovy, film size, near_clip -> camera.near; orthographic and others: an error
+#   shapes    every Mesh (ply, obj, serialized, rectangle, cube): positions, faces, normals, uv; sphere,
+#             disk and cylinder tessellated through their to_world; others (instances, curves): warned, skipped
+#   bsdfs     diffuse -> kd; plastic -> kd + mirror k_r = F(0); roughplastic -> kd + Phong ks (phong_shininess);
+#             conductor, roughconductor -> mirror k_r = specular_reflectance x F(0) from eta, k (roughness
+#             ignored); dielectric, thindielectric -> glass, ior = int_ior / ext_ior; twosided -> its front
+#             BSDF; textures: bitmap (Mitsuba's own texels, to_uv), checkerboard; other BSDFs: one warning
+#             each, Mitsuba's default diffuse (reflectance 0.5)
+#   emitters  point, spot, directional -> lights (inverse_square); constant -> background and ambient;
+#             area, envmap and others: one warning each, not lights
+# Not read: the integrator and sampler (warprt's spp and max_depth apply), media, film crop and filter,
+# bitmap filter and wrap modes (warprt's bilinear repeat), textured specular or conductor colours.
+
 # Dr.Jit's LLVM backend, if a JIT variant is set later (the reference), must find an LLVM it can drive;
 # Debian 12's libLLVM 15 crashes it. The same path as reference/mitsuba_whitted.py's LLVM_PATH.
 _LLVM_PATH = "/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1"
@@ -42,9 +44,6 @@ _LLVM_PATH = "/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1"
 SPHERE_SEGMENTS = (128, 256)  # rings (pole to pole), sectors
 DISK_SECTORS = 256
 CYLINDER_SECTORS = 256
-SHININESS_NOTE = ("roughplastic's GGX/Beckmann alpha as a Blinn-Phong exponent 2 / alpha^2 - 2 (Walter et al. "
-                  "2007), a quarter of it for warprt's Phong (r.v)^n, whose lobe about r is twice as wide as "
-                  "Blinn-Phong's about n; ks = F(0) x specular_reflectance x (n + 2) / (2 pi), the normalised lobe's peak")
 _BSDF_KIND = {"SmoothDiffuse": "diffuse", "SmoothPlastic": "plastic", "RoughPlastic": "roughplastic",
               "SmoothConductor": "conductor", "RoughConductor": "roughconductor", "SmoothDielectric": "dielectric",
               "ThinDielectric": "thindielectric", "TwoSided": "twosided"}
@@ -140,7 +139,10 @@ def _fresnel_dielectric_normal(eta: float) -> float:
 
 
 def phong_shininess(alpha: float) -> float:
-    """warprt's Phong exponent for a microfacet roughness alpha (SHININESS_NOTE)."""
+    """warprt's Phong exponent for a microfacet roughness alpha: the Blinn-Phong exponent 2 / alpha^2 - 2
+    that matches a Beckmann lobe (Walter et al. 2007), a quarter of it, since the Phong lobe (r.v)^n about
+    the mirror direction is about twice as wide as Blinn-Phong's (n.h)^n about the normal. roughplastic's
+    ks is then F(0) x specular_reflectance x (n + 2) / (2 pi), the normalised Phong lobe's peak."""
     alpha = max(float(alpha), 1e-4)
     return max((2.0 / (alpha * alpha) - 2.0) / 4.0, 1.0)
 
