@@ -10,6 +10,7 @@ within that of its silhouette (checked with the sphere's closed form).
 """
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -205,3 +206,14 @@ def test_disk_and_cylinder_are_tessellated_where_mitsuba_puts_them(mi, tmp_path)
     cos_in = np.abs(np.sum(m["geo_normal"] * view, -1))
     tol = np.where(m["object"] == 1, 0.3 * (1 - math.cos(math.pi / 256)), 0.0) / np.maximum(cos_in, 0.2) + 1e-5
     assert (np.abs(a["depth"] - m["depth"]) <= tol)[same].all()
+
+
+def test_compare_command_on_a_scene_file(mi, tmp_path, capsys):
+    from warprt.cli import main
+
+    path = mf.write(tmp_path, "cornell.xml", mf.cornell_box(mi, width=100, height=75))
+    code = main(["compare", str(path), "-o", str(tmp_path / "cmp.png")])
+    out, err = capsys.readouterr()
+    assert code == 0, err
+    assert float(re.search(r"SSIM\s+([0-9.]+)", out).group(1)) >= SSIM_MIN
+    assert (tmp_path / "cmp.png").exists() and "area emitter" in err

@@ -234,3 +234,19 @@ def test_load_scene_overrides_and_rejects_other_keys(tmp_path):
     assert scene.camera.width == 40 and scene.render.spp == 4
     with pytest.raises(SceneError, match="only camera.. and render.. can be set"):
         load_scene(path, {"lights[0].color": [1, 1, 1]})
+
+
+@pytest.mark.parametrize("ext", ["obj", "ply"])
+def test_mesh_files_are_placed_by_their_to_world(tmp_path, ext):
+    import trimesh
+
+    box = trimesh.creation.box(extents=[1.0, 2.0, 0.5])
+    box.export(tmp_path / f"box.{ext}")
+    to_world = mi.ScalarTransform4f().translate([0.5, -1.0, 2.0]) @ mi.ScalarTransform4f().rotate([0, 1, 0], 30.0)
+    d = {"type": "scene", "sensor": mf.sensor(mi, (0, 1, 6), (0, 0, 0)),
+         "box": {"type": ext, "filename": str(tmp_path / f"box.{ext}"), "to_world": to_world}}
+    scene, warned = read(mf.write(tmp_path, "mesh.xml", d))
+    (obj,) = scene.objects
+    expected = transform(to_world, box.vertices)
+    assert np.allclose(np.sort(np.unique(obj.vertices.round(5), axis=0), 0), np.sort(np.unique(expected.round(5), axis=0), 0), atol=1e-5)
+    assert len(obj.faces) == 12 and not warned
