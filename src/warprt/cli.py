@@ -25,7 +25,7 @@ EXAMPLES = """examples:
   warprt render bunny.obj -o bunny.png        a mesh file, framed automatically, with its own materials,
                                               textures and colours: .obj (+.mtl) .ply .stl .off .glb .gltf
                                               .usd .usda .usdc .usdz
-  warprt render scene.xml -o s.png             a Mitsuba 3 scene file, read by Mitsuba's parser (warprt[mitsuba])
+  warprt render scene.xml -o s.png            a Mitsuba 3 scene file, read by Mitsuba's parser (warprt[mitsuba])
   warprt render part.stl --up z               a z-up mesh (most CAD and robotics files); --up=-y for -y
   warprt render s.toml -o s.exr --stats-file s.json -q
                                               linear float EXR (or .npy), statistics as JSON, nothing on stderr
