@@ -14,7 +14,8 @@ _TAGS = {"scene": "scene", "perspective": "sensor", "thinlens": "sensor", "ortho
          "path": "integrator", "direct": "integrator", "aov": "integrator",
          "area": "emitter", "point": "emitter", "spot": "emitter", "directional": "emitter", "constant": "emitter",
          "diffuse": "bsdf", "plastic": "bsdf", "roughplastic": "bsdf", "conductor": "bsdf", "roughconductor": "bsdf",
-         "dielectric": "bsdf", "thindielectric": "bsdf", "twosided": "bsdf", "principled": "bsdf",
+         "dielectric": "bsdf", "thindielectric": "bsdf", "twosided": "bsdf", "principled": "bsdf", "mask": "bsdf",
+         "normalmap": "bsdf", "bumpmap": "bsdf",
          "rectangle": "shape", "cube": "shape", "sphere": "shape", "disk": "shape", "cylinder": "shape",
          "ply": "shape", "obj": "shape", "bitmap": "texture", "checkerboard": "texture"}
 

@@ -250,3 +250,18 @@ def test_mesh_files_are_placed_by_their_to_world(tmp_path, ext):
     expected = transform(to_world, box.vertices)
     assert np.allclose(np.sort(np.unique(obj.vertices.round(5), axis=0), 0), np.sort(np.unique(expected.round(5), axis=0), 0), atol=1e-5)
     assert len(obj.faces) == 12 and not warned
+
+
+def test_wrapped_bsdfs_are_read_through_with_one_warning_each(tmp_path):
+    paint = {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.3, 0.6, 0.9]}}
+    d = {"type": "scene", "sensor": mf.sensor(mi, (0, 1, 3), (0, 0, 0)),
+         "masked": {"type": "mask", "opacity": 0.5, "b": paint},
+         "bumped": {"type": "twosided", "b": {"type": "normalmap", "normalmap": {"type": "bitmap", "raw": True,
+                    "filename": str(mf.checker_png(tmp_path / "n.png"))}, "b": paint}}}
+    for i, name in enumerate(["masked", "bumped", "masked"]):
+        d[f"s{i}"] = {"type": "sphere", "center": [3.0 * i, 0, 0], "bsdf": {"type": "ref", "id": name}}
+    scene, warned = read(mf.write(tmp_path, "wrapped.xml", d))
+    assert [o.material for o in scene.objects] == ["masked", "bumped", "masked"]
+    for name in ("masked", "bumped"):
+        assert np.allclose(scene.materials[name].kd, np.array([0.3, 0.6, 0.9]) / math.pi)
+    assert len(warned) == 2 and "mask: its opacity" in warned[0] and "normalmap" in warned[1]

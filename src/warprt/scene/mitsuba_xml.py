@@ -30,8 +30,8 @@ from .texture import Texture
 #   bsdfs     diffuse -> kd; plastic -> kd + mirror k_r = F(0); roughplastic -> kd + Phong ks (phong_shininess);
 #             conductor, roughconductor -> mirror k_r = specular_reflectance x F(0) from eta, k (roughness
 #             ignored); dielectric, thindielectric -> glass, ior = int_ior / ext_ior; twosided -> its front
-#             BSDF; textures: bitmap (Mitsuba's own texels, to_uv), checkerboard; other BSDFs: one warning
-#             each, Mitsuba's default diffuse (reflectance 0.5)
+#             BSDF; mask, bumpmap, normalmap -> the BSDF inside (warned); textures: bitmap (Mitsuba's own
+#             texels, to_uv), checkerboard; other BSDFs: one warning each, Mitsuba's default diffuse (0.5)
 #   emitters  point, spot, directional -> lights (inverse_square); constant -> background and ambient;
 #             area, envmap and others: one warning each, not lights
 # Not read: the integrator and sampler (warprt's spp and max_depth apply), media, film crop and filter,
@@ -44,9 +44,22 @@ _LLVM_PATH = "/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1"
 SPHERE_SEGMENTS = (128, 256)  # rings (pole to pole), sectors
 DISK_SECTORS = 256
 CYLINDER_SECTORS = 256
+# Mitsuba's BSDF classes (as a loaded BSDF describes itself) by the plugin names a file uses.
 _BSDF_KIND = {"SmoothDiffuse": "diffuse", "SmoothPlastic": "plastic", "RoughPlastic": "roughplastic",
               "SmoothConductor": "conductor", "RoughConductor": "roughconductor", "SmoothDielectric": "dielectric",
-              "ThinDielectric": "thindielectric", "TwoSided": "twosided"}
+              "ThinDielectric": "thindielectric", "TwoSided": "twosided", "Mask": "mask", "BumpMap": "bumpmap",
+              "NormalMap": "normalmap"}
+# BSDFs that wrap another: the parameter prefix of the one inside, and what is lost by reading it alone.
+_WRAPPERS = {"twosided": ("brdf_0.", None),
+             "mask": ("nested_bsdf.", "mask: its opacity is not read (the BSDF inside is, fully opaque)"),
+             "bumpmap": ("nested_bsdf.", "bumpmap: the bump map is not read (the BSDF inside is)"),
+             "normalmap": ("nested_bsdf.", "normalmap: the normal map is not read (the BSDF inside is)")}
+
+
+def _kind(text: str) -> str:
+    """The plugin name of the BSDF a description (str(bsdf)) begins with."""
+    cls = text.split("[", 1)[0].strip()
+    return _BSDF_KIND.get(cls, cls)
 
 
 def mitsuba_module(source: str = "Mitsuba scene file"):
@@ -153,6 +166,7 @@ class _Reader:
         self.source = source
         self.warned: set = set()
         self.names: set = set()
+        self.converted: dict = {}  # (BSDF id, its description) -> material name
 
     def warn_once(self, key, field, message):
         if key not in self.warned:
@@ -231,16 +245,23 @@ class _Reader:
 
     # ---- BSDFs ----
     def material(self, bsdf, field: str, materials: dict) -> str:
+        """The name of the material made of this BSDF, converted once however many shapes <ref> it."""
         text = str(bsdf)
-        kind = _BSDF_KIND.get(text.split("[")[0].strip(), text.split("[")[0].strip())
+        key = (bsdf.id(), text)
+        if key in self.converted:
+            return self.converted[key]
+        kind = _kind(text)
         params = dict(self.mi.traverse(bsdf).items())
-        if kind == "twosided":
-            # Both sides the same BSDF (the usual case): its parameters under brdf_0.
-            inner = re.search(r"brdf\[0\]\s*=\s*(\w+)\[", text)
-            kind = _BSDF_KIND.get(inner.group(1), inner.group(1)) if inner else "?"
-            if re.search(r"brdf\[1\]\s*=", text) and "brdf_1." in "".join(params):
+        while kind in _WRAPPERS:  # twosided, mask, bumpmap, normalmap: the BSDF inside
+            prefix, note = _WRAPPERS[kind]
+            if note:
+                self.warn_once(("wrapper", kind), field, note)
+            if kind == "twosided" and any(k.startswith("brdf_1.") for k in params):
                 self.warn_once("twosided2", field, "twosided with a different back BSDF: its front BSDF on both sides")
-            params = {k.split(".", 1)[1]: v for k, v in params.items() if k.startswith("brdf_0.")}
+            inner = re.search(re.escape(prefix.replace("_0.", "[0]").rstrip(".")) + r"\s*=\s*(?=\w+\[)", text)
+            text = text[inner.end():] if inner else "?["
+            params = {k[len(prefix):]: v for k, v in params.items() if k.startswith(prefix)}
+            kind = _kind(text)
         try:
             m = self._convert(kind, params, text, field)
         except _Unread as e:
@@ -248,10 +269,10 @@ class _Reader:
             m = Material(kd=(0.5 / math.pi,) * 3, ks=(0.0, 0.0, 0.0))
         name = bsdf.id() or kind
         base, k = name, 1
-        while name in materials and materials[name] != m:
+        while name in materials:
             k += 1
             name = f"{base}.{k}"
-        materials[name] = m
+        materials[name], self.converted[key] = m, name
         return name
 
     def _convert(self, kind: str, p: dict, text: str, field: str) -> Material:
