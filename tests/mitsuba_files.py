@@ -12,7 +12,7 @@ import numpy as np
 _TAGS = {"scene": "scene", "perspective": "sensor", "thinlens": "sensor", "orthographic": "sensor",
          "hdrfilm": "film", "independent": "sampler", "stratified": "sampler", "gaussian": "rfilter", "box": "rfilter",
          "path": "integrator", "direct": "integrator", "aov": "integrator",
-         "area": "emitter", "point": "emitter", "spot": "emitter", "directional": "emitter", "constant": "emitter",
+         "area": "emitter", "envmap": "emitter", "point": "emitter", "spot": "emitter", "directional": "emitter", "constant": "emitter",
          "diffuse": "bsdf", "plastic": "bsdf", "roughplastic": "bsdf", "conductor": "bsdf", "roughconductor": "bsdf",
          "dielectric": "bsdf", "thindielectric": "bsdf", "twosided": "bsdf", "principled": "bsdf", "mask": "bsdf",
          "normalmap": "bsdf", "bumpmap": "bsdf",

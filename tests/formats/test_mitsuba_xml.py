@@ -265,3 +265,14 @@ def test_wrapped_bsdfs_are_read_through_with_one_warning_each(tmp_path):
     for name in ("masked", "bumped"):
         assert np.allclose(scene.materials[name].kd, np.array([0.3, 0.6, 0.9]) / math.pi)
     assert len(warned) == 2 and "mask: its opacity" in warned[0] and "normalmap" in warned[1]
+
+
+def test_area_emitters_and_environment_maps_are_one_warning_each(tmp_path):
+    mi.Bitmap(np.ones((4, 8, 3), np.float32)).write(str(tmp_path / "sky.exr"))
+    glow = {"type": "area", "radiance": {"type": "rgb", "value": [5.0, 5.0, 5.0]}}
+    d = {"type": "scene", "sensor": mf.sensor(mi, (0, 1, 3), (0, 0, 0)),
+         "sky": {"type": "envmap", "filename": str(tmp_path / "sky.exr")},
+         "a": {**mf.floor(mi), "emitter": glow}, "b": {**mf.floor(mi), "emitter": dict(glow)}}
+    scene, warned = read(mf.write(tmp_path, "glow.xml", d))
+    assert scene.lights == [] and len(scene.objects) == 2
+    assert len(warned) == 2 and "area emitters" in warned[0] and "not a Whitted light" in warned[1]

@@ -182,7 +182,7 @@ class _Reader:
         sensor = sensors[0]
         kind = str(sensor).split("[")[0]
         if kind not in ("PerspectiveCamera", "ThinLensCamera"):
-            raise SceneError(self.source, "sensor", f"a {kind}: warprt's camera is a pinhole (perspective)")
+            raise SceneError(self.source, "sensor", f"{kind}: warprt's camera is a pinhole (perspective)")
         if kind == "ThinLensCamera":
             warn(self.source, "sensor", "thinlens: read as a pinhole; depth of field is not rendered")
         p = self.mi.traverse(sensor)
@@ -228,7 +228,7 @@ class _Reader:
             if np.linalg.det(m[:3, :3]) < 0.0:  # a mirroring transform turns the winding inside out
                 f = f[:, ::-1]
         else:
-            self.warn_once(("shape", kind), field, f"a {kind} is not read (meshes, rectangle, cube, sphere, disk, "
+            self.warn_once(("shape", kind), field, f"{kind} is not read (meshes, rectangle, cube, sphere, disk, "
                                                    "cylinder are): skipped")
             return None
         material = self.material(shape.bsdf(), field, materials)
@@ -298,7 +298,7 @@ class _Reader:
                 self.warn_once("thin", field, "thindielectric: rendered as a solid dielectric of the same index")
             kt = self._constant(p, "specular_transmittance", (1.0, 1.0, 1.0), field)
             return Material(kd=black, ks=black, ior=_scalar(p["eta"]), transmittance=kt)
-        raise _Unread(f"a {kind} BSDF is not read (diffuse, plastic, roughplastic, conductor, roughconductor, "
+        raise _Unread(f"BSDF {kind} is not read (diffuse, plastic, roughplastic, conductor, roughconductor, "
                       "dielectric, thindielectric, twosided are)")
 
     def _constant(self, p: dict, name: str, default, field) -> tuple:
@@ -372,7 +372,7 @@ class _Reader:
             elif kind == "AreaLight":
                 pass  # warned with its shape
             else:
-                self.warn_once(("emitter", kind), f"emitter {name}", f"a {kind} is not a Whitted light: skipped")
+                self.warn_once(("emitter", kind), f"emitter {name}", f"{kind} is not a Whitted light: skipped")
         return lights, radiance
 
 
