@@ -56,10 +56,15 @@ _WRAPPERS = {"twosided": ("brdf_0.", None),
              "normalmap": ("nested_bsdf.", "normalmap: the normal map is not read (the BSDF inside is)")}
 
 
+def _class(described) -> str:
+    """The class a Mitsuba object's description (str(obj)) begins with: "SmoothDiffuse[...", "Principled BSDF :..."."""
+    m = re.match(r"\s*(\w+)", str(described))
+    return m.group(1) if m else "?"
+
+
 def _kind(text: str) -> str:
-    """The plugin name of the BSDF a description (str(bsdf)) begins with."""
-    cls = text.split("[", 1)[0].strip()
-    return _BSDF_KIND.get(cls, cls)
+    """The plugin name of the BSDF a description begins with (its class where it has none here)."""
+    return _BSDF_KIND.get(_class(text), _class(text))
 
 
 def mitsuba_module(source: str = "Mitsuba scene file"):
@@ -120,7 +125,7 @@ _TESSELLATED = ("Sphere", "Disk", "Cylinder")
 
 def reads_mitsuba_shape(shape) -> bool:
     """Whether the reader makes an object of this loaded Mitsuba shape (the others are warned and skipped)."""
-    return bool(shape.is_mesh()) or str(shape).split("[")[0] in _TESSELLATED
+    return bool(shape.is_mesh()) or _class(shape) in _TESSELLATED
 
 
 def _array(v) -> np.ndarray:
@@ -180,7 +185,7 @@ class _Reader:
         if len(sensors) > 1:
             warn(self.source, "sensor", f"{len(sensors)} sensors: the first is used")
         sensor = sensors[0]
-        kind = str(sensor).split("[")[0]
+        kind = _class(sensor)
         if kind not in ("PerspectiveCamera", "ThinLensCamera"):
             raise SceneError(self.source, "sensor", f"{kind}: warprt's camera is a pinhole (perspective)")
         if kind == "ThinLensCamera":
@@ -208,7 +213,7 @@ class _Reader:
 
     # ---- shapes ----
     def shape(self, i: int, shape, materials: dict) -> SceneObject | None:
-        kind = str(shape).split("[")[0]
+        kind = _class(shape)
         name = self._name(shape.id() or f"{kind.lower()}_{i}")
         field = f"shape {name}"
         if shape.is_emitter():
@@ -299,7 +304,7 @@ class _Reader:
             kt = self._constant(p, "specular_transmittance", (1.0, 1.0, 1.0), field)
             return Material(kd=black, ks=black, ior=_scalar(p["eta"]), transmittance=kt)
         raise _Unread(f"BSDF {kind} is not read (diffuse, plastic, roughplastic, conductor, roughconductor, "
-                      "dielectric, thindielectric, twosided are)")
+                      "dielectric, thindielectric and, through to the BSDF inside, twosided, mask, bumpmap, normalmap are)")
 
     def _constant(self, p: dict, name: str, default, field) -> tuple:
         if f"{name}.value" in p:
@@ -349,7 +354,7 @@ class _Reader:
     def emitters(self, emitters) -> tuple[list[Light], np.ndarray]:
         lights, radiance = [], np.zeros(3)
         for i, e in enumerate(emitters):
-            kind = str(e).split("[")[0]
+            kind = _class(e)
             name = e.id() or f"emitter_{i}"
             p = self.mi.traverse(e)
             if kind == "PointLight":
