@@ -35,7 +35,8 @@ from .texture import Texture
 #   emitters  point, spot, directional -> lights (inverse_square); constant -> background and ambient;
 #             area, envmap and others: one warning each, not lights
 # Not read: the integrator and sampler (warprt's spp and max_depth apply), media, film crop and filter,
-# bitmap filter and wrap modes (warprt's bilinear repeat), textured specular or conductor colours.
+# bitmap filter and wrap modes (warprt's bilinear repeat), textured specular or conductor colours (their
+# defaults, warned), mesh attributes (vertex colours), a spot's texture (warned), several sensors (the first).
 
 # Dr.Jit's LLVM backend, if a JIT variant is set later (the reference), must find an LLVM it can drive;
 # Debian 12's libLLVM 15 crashes it. The same path as reference/mitsuba_whitted.py's LLVM_PATH.
@@ -295,7 +296,9 @@ class _Reader:
             n = phong_shininess(_scalar(p["alpha"]))
             return Material(kd=kd, ks=tuple(spec * (n + 2.0) / (2.0 * math.pi)), shininess=n, kd_texture=tex)
         if kind in ("conductor", "roughconductor"):
-            f0 = _fresnel_conductor_normal(_rgb(p["eta.value"]), _rgb(p["k.value"]))
+            # Mitsuba's default conductor (material "none") is eta 0, k 1: F(0) = 1, a perfect mirror.
+            f0 = _fresnel_conductor_normal(self._constant(p, "eta", (0.0, 0.0, 0.0), field),
+                                           self._constant(p, "k", (1.0, 1.0, 1.0), field))
             spec = np.array(self._constant(p, "specular_reflectance", (1.0, 1.0, 1.0), field))
             return Material(kd=black, ks=black, reflectivity=tuple(np.broadcast_to(f0 * spec, (3,))))
         if kind in ("dielectric", "thindielectric"):
