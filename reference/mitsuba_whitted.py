@@ -423,14 +423,16 @@ class MitsubaFileScene(MitsubaScene):
     """The scene Mitsuba itself loads from a Mitsuba scene file (its shapes, transforms, analytic spheres,
     its own textures), rendered with the same integrator: the materials and lights are warprt's reading
     of the file (``scene``), matched to the shapes in the order the reader reads them, and the camera is
-    the file's sensor (to_world, Mitsuba's x_fov) while ``scene``'s camera is the reader's own."""
+    the file's sensor (to_world, Mitsuba's x_fov) wherever ``scene``'s camera is the reader's reading of
+    it (not changed by overrides such as --width)."""
 
     def __init__(self, scene, path, smooth: bool = True):
-        from warprt.scene import load_mitsuba_file, reads_mitsuba_shape
+        from warprt.scene import load_mitsuba_file, mitsuba_camera, reads_mitsuba_shape
 
         mi, dr = self.mi, self.dr = mitsuba()
-        self.scene, self.smooth, self.camera = scene, smooth, scene.camera
+        self.scene, self.smooth = scene, smooth
         self.mi_scene = load_mitsuba_file(path)
+        self.camera = mitsuba_camera(self.mi_scene, str(path))
         object_of_shape, k = {}, 0
         for j, shape in enumerate(self.mi_scene.shapes()):
             # scene.objects[k] is the k-th shape the reader reads; the rest (skipped, warned) keep no material.

@@ -121,6 +121,11 @@ def read_mitsuba_xml(path, params: dict | None = None) -> Scene:
     return Scene(camera=camera, render=render, lights=lights, materials=materials, objects=objects, source=source)
 
 
+def mitsuba_camera(mi_scene, source: str) -> Camera:
+    """The camera read_mitsuba_xml makes of a loaded Mitsuba scene's first sensor."""
+    return _Reader(mitsuba_module(source), source).camera(mi_scene.sensors())
+
+
 _TESSELLATED = ("Sphere", "Disk", "Cylinder")
 
 
