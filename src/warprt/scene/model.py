@@ -75,15 +75,14 @@ class RenderSettings:
 @dataclass(frozen=True)
 class Light:
     """A Whitted light: point (position), spot (position, direction, cone) or directional (direction only)."""
-
-    position: tuple | None = None  # float64 xyz; required for point and spot, absent (None) for directional
-    color: tuple = (1.0, 1.0, 1.0)  # C_l: intensity (point/spot: radiant intensity; directional: irradiance)
-    type: str = "point"  # "point" | "spot" | "directional"
-    direction: tuple | None = None  # unit vector the light travels along (spot axis / sun direction)
-    cutoff_angle: float = 20.0  # degrees, spot only (Mitsuba's `spot` default 20)
-    beam_width: float | None = None  # degrees, spot only; None -> 3/4 of cutoff_angle (Mitsuba's default)
-    falloff: str = "none"  # "none" | "inverse_square"
-    name: str = ""  # the author's name for a light read from a file (for `warprt info`)
+    position: tuple | None = None          # float64 xyz; required for point and spot, absent (None) for directional
+    color: tuple = (1.0, 1.0, 1.0)         # C_l: intensity (point/spot: radiant intensity; directional: irradiance) per channel
+    type: str = "point"                    # "point" | "spot" | "directional"
+    direction: tuple | None = None         # unit vector the light travels along (spot axis / sun direction); spot may give `target` in TOML instead
+    cutoff_angle: float = 20.0             # degrees, spot only (Mitsuba's `spot` default 20)
+    beam_width: float | None = None        # degrees, spot only; None -> 3/4 of cutoff_angle (Mitsuba's default)
+    falloff: str = "none"                  # "none" | "inverse_square"; scene files default "none" (the seed's model), lights read from model files default "inverse_square"
+    name: str = ""                         # the author's name for a light read from a file (for `warprt info`), "" otherwise
 
     def __post_init__(self):
         _convert(self, vectors=("position", "color", "direction"))
