@@ -48,7 +48,9 @@ for i, o in enumerate(doc["objects"]):
     shapes[f"object_{i}"] = {"type": Path(o["mesh"]).suffix[1:], "filename": str(path.parent / o["mesh"]),
                              "to_world": to_world, "face_normals": not o.get("smooth", False)}
     objects.append(NS(material=o["material"]))
-scene = mi.load_dict({"type": "scene", **shapes})
+emitters = {f"light_{i:03d}": {"type": "point", "position": l["position"], "intensity": {"type": "rgb", "value": l["color"]}}
+            for i, l in enumerate(doc["lights"])}
+scene = mi.load_dict({"type": "scene", **shapes, **emitters})
 c, r = doc["camera"], doc["render"]
 sensor = mi.load_dict({"type": "perspective", "fov_axis": "y", "fov": c["fovy"], "near_clip": 1e-3, "far_clip": 1e4,
                        "to_world": mi.ScalarTransform4f().look_at(origin=c["eye"], target=c["center"], up=c["up"]),
@@ -57,7 +59,7 @@ sensor = mi.load_dict({"type": "perspective", "fov_axis": "y", "fov": c["fovy"],
                        "sampler": {"type": "stratified", "sample_count": 1, "jitter": False}})
 material = lambda m: NS(ka=m.get("ka", m["kd"]), kd=m["kd"], ks=m["ks"], shininess=m["shininess"],
                         reflectivity=[m.get("reflectivity", 0.0)] * 3, ior=None, textures={})
-tables = NS(lights=[NS(position=l["position"], color=l["color"]) for l in doc["lights"]],
+tables = NS(lights=[NS(position=l["position"], color=l["color"], type="point", falloff="none") for l in doc["lights"]],
             render=NS(ambient=r["ambient"], background=r["background"]),
             materials={k: material(m) for k, m in doc["materials"].items()}, objects=objects)
 integrator = whitted_integrator(scene, tables, {f"object_{i}": i for i in range(len(objects))},

@@ -46,8 +46,9 @@ def render_mitsuba_aovs(scene, spp: int = 1) -> dict:
     out["depth"] = np.where(out["hit"], out["depth"] + sensor.near_clip() / np.where(out["hit"], cos_theta, 1.0), 0.0)
 
     registry = {}
-    for shape in ms.mi_scene.shapes():  # object_00007 is scene.objects[7]
-        registry[int(dr.reinterpret_array(mi.UInt32, mi.ShapePtr(shape))[0])] = int(shape.id().split("_")[1])
+    for shape in ms.mi_scene.shapes():  # object_00007 is scene.objects[7]; a file's unread shapes are not objects
+        if shape.id().startswith("object_"):
+            registry[int(dr.reinterpret_array(mi.UInt32, mi.ShapePtr(shape))[0])] = int(shape.id().split("_")[1])
     index = np.rint(out["object"]).astype(np.int64)
     out["object"] = np.where(out["hit"], np.vectorize(lambda i: registry.get(i, -2))(index), -1)
     out["face"] = np.where(out["hit"], np.rint(out["face"]).astype(np.int64), -1)

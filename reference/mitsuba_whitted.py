@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import math
 import os
+import re
 import sys
 from dataclasses import dataclass
 
@@ -121,6 +122,11 @@ def _register_integrator(mi, dr):
                 return t.zero_material
             else:
                 ka, kd, ks, kr, shininess = t.by_id[si.shape.id()]
+            if t.own_textures and s.texture:
+                # A scene file's own BSDFs: Mitsuba's evaluation of the diffuse texture the file gave.
+                albedo = si.bsdf().eval_diffuse_reflectance(si, active)
+                textured = dr.gather(mi.Bool, t.textured, idx, active) if t.jit else t.textured_ids.get(si.shape.id(), False)
+                ka, kd = dr.select(textured, ka * albedo, ka), dr.select(textured, kd * albedo, kd)
             if t.attributes and s.texture:
                 bsdf = si.bsdf()
                 ka = ka * bsdf.eval_attribute_3("ka", si, active)
@@ -175,7 +181,7 @@ def _register_integrator(mi, dr):
             depth = mi.UInt32(0)
             # Without the UV flag, si.uv holds the triangle's barycentrics, not the mesh's texture coordinates.
             flags = mi.RayFlags.Minimal | mi.RayFlags.ShadingFrame
-            if t.attributes:
+            if t.attributes or t.own_textures:
                 flags = flags | mi.RayFlags.UV
             while active:
                 si = scene.ray_intersect(ray, ray_flags=flags, coherent=depth == 0, active=active)
@@ -263,9 +269,14 @@ def _texture(mi, t):
 class _Tables:
     """Per-scene constants the integrator reads: materials keyed by shape, lights, C_amb, background."""
 
-    def __init__(self, mi, dr, mi_scene, scene, object_of_shape: dict, attributes: bool, emitters: list):
+    def __init__(self, mi, dr, mi_scene, scene, object_of_shape: dict, attributes: bool, emitters: list,
+                 own_textures: bool = False):
         self.jit = dr.is_jit_v(mi.Float)
         self.attributes = attributes  # whether the shapes carry Attributes BSDFs (textures, vertex colours)
+        # Whether textured materials take their texture from the shape's own Mitsuba BSDF (a scene file's).
+        self.own_textures = own_textures
+        textured_ids = {sid for sid, i in object_of_shape.items() if scene.materials[scene.objects[i].material].textures}
+        self.textured_ids = {sid: True for sid in textured_ids}
         self.row_of_object = {}  # scene object index -> table row (its shape's registry index; row 0: a miss)
         # Each light as Mitsuba's emitter (in the scene, so a directional one knows its bounds), and
         # whether its falloff is warprt's "none", which Mitsuba's point and spot emitters do not have
@@ -300,6 +311,9 @@ class _Tables:
             self.shininess = mi.Float(shininess.astype(np.float32))
             self.eta = mi.Float(eta.astype(np.float32))
             self.dielectric_rows = {int(r) for r in np.nonzero(eta > 0)[0]}
+            textured = np.zeros(rows, bool)
+            textured[[ids[sid] for sid in textured_ids]] = True
+            self.textured = mi.Bool(textured)
         else:
             self.ambient = mi.Color3f(*map(float, scene.render.ambient))
             self.background = mi.Color3f(*map(float, scene.render.background))
@@ -441,6 +455,68 @@ class MitsubaScene:
         return np.array(image, dtype=np.float32)[:, :, :3]
 
 
+class MitsubaFileScene(MitsubaScene):
+    """The scene Mitsuba itself loads from a Mitsuba scene file (its shapes, transforms, analytic spheres,
+    its own textures), rendered with the same integrator: the materials and lights are warprt's reading
+    of the file (``scene``), matched to the shapes in the order the reader reads them, and the camera is
+    the file's sensor (to_world, Mitsuba's x_fov) wherever ``scene``'s camera is the reader's reading of
+    it (not changed by overrides such as --width)."""
+
+    def __init__(self, scene, path, smooth: bool = True):
+        from warprt.scene import load_mitsuba_file, mitsuba_camera, reads_mitsuba_shape
+
+        mi, dr = self.mi, self.dr = mitsuba()
+        self.scene, self.smooth = scene, smooth
+        self.mi_scene = load_mitsuba_file(path)
+        self.camera = mitsuba_camera(self.mi_scene, str(path))
+        object_of_shape, k = {}, 0
+        for j, shape in enumerate(self.mi_scene.shapes()):
+            # scene.objects[k] is the k-th shape the reader reads; the rest (skipped, warned) keep no material.
+            key = f"object_{k:05d}" if reads_mitsuba_shape(shape) else f"unread_{j:05d}"
+            shape.set_id(key)
+            if key.startswith("object_"):
+                object_of_shape[key], k = k, k + 1
+        if k != len(scene.objects):
+            raise ValueError(f"{path}: Mitsuba loads {k} shapes warprt reads, the scene has {len(scene.objects)} objects")
+        self.integrator = mi.load_dict({"type": INTEGRATOR})
+        own = any(m.textures for m in scene.materials.values())
+        # The file's own point, spot and directional emitters, in the order the reader reads them into
+        # scene.lights (its area, constant and other emitters are not Whitted lights).
+        emitters = [e for e in self.mi_scene.emitters()
+                    if re.match(r"\s*(PointLight|SpotLight|DirectionalEmitter)\b", str(e))]
+        if len(emitters) != len(scene.lights):
+            raise ValueError(f"{path}: Mitsuba loads {len(emitters)} Whitted lights, the scene has {len(scene.lights)}")
+        self.integrator.tables = _Tables(mi, dr, self.mi_scene, scene, object_of_shape, False, emitters,
+                                         own_textures=own)
+        self._sensors = {}
+        lo, hi = scene.bounds()
+        self._extent = float(max(np.abs(hi - lo).max(), 1e-6))
+
+    def sensor(self, camera, spp: int = 1):
+        """For the file's own camera, the file's sensor as Mitsuba reads it (to_world, x_fov, film size)
+        with the reference's sampler, filter and clip planes; any other camera as MitsubaScene's."""
+        if camera != self.camera:
+            return super().sensor(camera, spp)
+        key = ("file", spp)
+        if key not in self._sensors:
+            mi = self.mi
+            p = mi.traverse(self.mi_scene.sensors()[0])
+            base = super().sensor(camera, spp)  # the clip planes warprt's rays need
+            self._sensors[key] = mi.load_dict({
+                "type": "perspective", "fov_axis": "x", "fov": float(np.ravel(np.array(p["x_fov"]))[0]),
+                "near_clip": base.near_clip(), "far_clip": base.far_clip(),
+                "to_world": mi.ScalarTransform4f(np.array(p["to_world"].matrix, np.float64).reshape(4, 4)),
+                "film": {"type": "hdrfilm", "width": int(camera.width), "height": int(camera.height),
+                         "rfilter": {"type": "box"}, "pixel_format": "rgb", "component_format": "float32"},
+                "sampler": {"type": "stratified", "sample_count": int(spp), "jitter": False},
+            })
+        return self._sensors[key]
+
+    def render(self, switches: Switches = Switches(), camera=None) -> np.ndarray:
+        # Mitsuba's own normals, whatever the smooth switch (a file's shapes have no flat variant here).
+        return super().render(Switches(**{**switches.__dict__, "smooth": self.smooth}), camera)
+
+
 _scenes = None  # an ObjectCache, made on first use: a script that only renders (whitted_integrator) need not import warprt
 
 
@@ -452,6 +528,8 @@ def mitsuba_scene(scene, smooth: bool = True) -> MitsubaScene:
         from warprt.scene import ObjectCache
 
         _scenes = ObjectCache(size=4)
+    if str(scene.source).lower().endswith(".xml"):  # a Mitsuba scene file: the scene Mitsuba loads from it
+        return _scenes.get((id(scene), bool(smooth)), scene, lambda: MitsubaFileScene(scene, scene.source, smooth))
     return _scenes.get((id(scene), bool(smooth)), scene, lambda: MitsubaScene(scene, smooth))
 
 
@@ -462,7 +540,8 @@ def whitted_integrator(mi_scene, scene, object_of_shape: dict, switches: Switche
     -> its index in scene.objects, whose .material names its material. No textures or vertex colours."""
     mi, dr = mitsuba()
     integrator = mi.load_dict({"type": INTEGRATOR})
-    integrator.tables = _Tables(mi, dr, mi_scene, scene, object_of_shape, attributes=False)
+    # The script's emitters are its lights, in the order scene.lights lists them.
+    integrator.tables = _Tables(mi, dr, mi_scene, scene, object_of_shape, False, list(mi_scene.emitters()))
     integrator.switches = switches
     return integrator
 

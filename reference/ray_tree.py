@@ -115,7 +115,7 @@ def render_tree(ms, switches, camera=None, record=None) -> TreeResult:
     records = [] if want is not None else None
     counts = []
     flags = mi.RayFlags.Minimal | mi.RayFlags.ShadingFrame
-    if t.attributes:  # textures read the mesh's uv, not the barycentrics
+    if t.attributes or t.own_textures:  # textures read the mesh's uv, not the barycentrics
         flags = flags | mi.RayFlags.UV
     zero = mi.Color3f(0.0)
 

@@ -25,6 +25,7 @@ EXAMPLES = """examples:
   warprt render bunny.obj -o bunny.png        a mesh file, framed automatically, with its own materials,
                                               textures and colours: .obj (+.mtl) .ply .stl .off .glb .gltf
                                               .usd .usda .usdc .usdz
+  warprt render scene.xml -o s.png            a Mitsuba 3 scene file, read by Mitsuba's parser (warprt[mitsuba])
   warprt render part.stl --up z               a z-up mesh (most CAD and robotics files); --up=-y for -y
   warprt render model.glb --camera Camera.001 one of the file's cameras (default: its first; auto: framed)
   warprt render s.toml -o s.exr --stats-file s.json -q
@@ -80,7 +81,7 @@ def _parse_set(items) -> dict:
 
 
 def _add_scene_options(p: argparse.ArgumentParser):
-    p.add_argument("scene", nargs="?", help="scene file (.toml) or mesh file; default: the built-in scene")
+    p.add_argument("scene", nargs="?", help="scene file (.toml), Mitsuba scene (.xml) or mesh file; default: the built-in scene")
     p.add_argument("--set", action="append", metavar="SECTION.KEY=VALUE",
                    help="override any scene field, value in TOML syntax: camera.fovy=30, 'lights[0].color=[1,1,1]' (repeatable)")
     p.add_argument("--width", type=int, metavar="PIXELS", help="image width in pixels")
@@ -164,7 +165,7 @@ def cmd_render(args) -> int:
 def _inputs(scene) -> list:
     """The files a scene was read from, as check_distinct names them."""
     files = list(scene.files)
-    return [("scene file" if i == 0 and Path(f).suffix.lower() == ".toml" else "mesh file", f)
+    return [("scene file" if i == 0 and Path(f).suffix.lower() in (".toml", ".xml") else "mesh file", f)
             for i, f in enumerate(files)]
 
 

@@ -15,6 +15,7 @@ from .dielectric_formats import DEFAULT_IOR, dielectric_from_gltf, dielectric_fr
 from .effects import EFFECTS, EffectSet, resolve_effects, scene_effects, zbuffer_effects
 from .load import apply_overrides, default_scene_path, load_scene, sets_in_place, with_overrides
 from .meshio import FORMATS as MESH_FORMATS, MeshFile, fan_triangulate, load_mesh, read_mesh_file
+from .mitsuba_xml import load_mitsuba_file, mitsuba_camera, read_mitsuba_xml, reads_mitsuba_shape
 from .model import DEFAULT_MATERIAL, Camera, Light, Material, RenderSettings, Scene, SceneObject
 from .normals import AUTO_CREASE_DEGREES, corner_normals, resolve_normals, vertex_normals
 from .reader import UP_AXES, rotation, scene_from_dict, up_rotation
@@ -25,8 +26,8 @@ __all__ = ["apply_overrides", "AUTO_CREASE_DEGREES", "Camera", "camera_basis", "
            "checker_texture", "corner_normals", "DEFAULT_IOR", "DEFAULT_MATERIAL", "default_scene_path",
            "dielectric_from_gltf", "dielectric_from_mtl", "dielectric_from_usd", "EFFECTS", "EffectSet",
            "eye_medium", "fan_triangulate", "image_texture", "Light", "load_mesh", "load_scene", "Material",
-           "MAX_IMAGE_SIDE", "MAX_REACH", "MESH_FORMATS", "MeshFile", "ObjectCache", "open_edges",
-           "pixel_ray_directions", "read_mesh_file", "RenderSettings", "resolve_effects", "resolve_normals",
+           "load_mitsuba_file", "MAX_IMAGE_SIDE", "MAX_REACH", "MESH_FORMATS", "MeshFile", "mitsuba_camera", "ObjectCache", "open_edges",
+           "pixel_ray_directions", "read_mesh_file", "read_mitsuba_xml", "reads_mitsuba_shape", "RenderSettings", "resolve_effects", "resolve_normals",
            "rotation", "Scene", "scene_effects", "scene_from_dict", "SceneObject", "sets_in_place", "shapes",
            "signed_volume", "srgb_to_linear", "Texture", "UP_AXES", "up_rotation", "validate_camera",
            "validate_scene", "vertex_normals", "warn_unclosed", "winding_number", "with_overrides",

@@ -91,7 +91,7 @@ def sets_in_place(key: str, path=None) -> bool:
     """Whether with_overrides sets the dotted field ``key`` on a scene loaded from ``path``: camera.* and
     render.* of a scene file; of a bare mesh only render.*, as its framing follows its camera."""
     section, _, name = key.partition(".")
-    if path is not None and Path(path).suffix.lower() != ".toml" and section == "camera":
+    if path is not None and Path(path).suffix.lower() not in (".toml", ".xml") and section == "camera":
         return False
     return section in _IN_PLACE and name.isidentifier()  # unknown names too: the reader reports them
 
@@ -109,6 +109,8 @@ def _load_scene(path, overrides, up, camera=None) -> Scene:
         path = default_scene_path()
     path = Path(path)
     source = str(path)
+    if path.suffix.lower() == ".xml":
+        return _load_mitsuba_scene(path, overrides, up)
     if path.suffix.lower() != ".toml":
         return _load_mesh_scene(path, overrides, up, camera)
     if camera is not None:
@@ -137,6 +139,23 @@ def _load_scene(path, overrides, up, camera=None) -> Scene:
     if overrides:
         data = apply_overrides(data, overrides, source)
     return scene_from_dict(data, source, path.parent)
+
+
+def _load_mitsuba_scene(path: Path, overrides, up) -> Scene:
+    """A Mitsuba scene file through Mitsuba's parser, then camera.* and render.* overrides as a scene file's."""
+    from .mitsuba_xml import read_mitsuba_xml  # imports Mitsuba only when such a file is read
+
+    source = str(path)
+    if up is not None:
+        raise ArgumentError("load_scene", "up", "applies to a mesh file; a Mitsuba scene places its shapes itself")
+    for k in overrides or {}:
+        if k.split(".")[0] not in ("camera", "render"):
+            raise SceneError(source, k, "only camera.* and render.* can be set for a Mitsuba scene file")
+    scene = read_mitsuba_xml(path)
+    if overrides:
+        scene = _set_camera_render(scene, overrides, source)
+    validate_scene(scene)
+    return scene
 
 
 def _load_mesh_scene(path: Path, overrides, up, view=None) -> Scene:
