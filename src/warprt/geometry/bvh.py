@@ -35,6 +35,13 @@ BOUNDS_PAD = 16.0 * EPS32
 EYE_REACH = 8.0
 
 
+@wp.func
+def face_vertices(indices: wp.array(dtype=wp.int32), f: int):
+    """The vertex indices i0, i1, i2 of face f of the triangle set (its points are points[i0] ...):
+    the one definition of the layout every kernel reads a triangle through."""
+    return indices[f * 3 + 0], indices[f * 3 + 1], indices[f * 3 + 2]
+
+
 def eye_reach(points: np.ndarray) -> float:
     """E: how far (per axis) from the frame origin an eye may be for padded_bounds to hold."""
     return EYE_REACH * float(np.abs(np.asarray(points, np.float64)).max(initial=0.0))

@@ -36,6 +36,7 @@ import numpy as np
 from .._warp import wp
 from ..floats import EPS32
 from ..timing import timed
+from .bvh import face_vertices
 
 DELTA_EPS = 64.0 * EPS32  # delta = DELTA_EPS * D: the depth margin, ~7x the bound above
 UV_ABS = 1.0e-5  # covers the float32 cell lookup's rounding of (u, v), ~1e-7
@@ -106,17 +107,23 @@ def closest_distance(p: wp.vec3d, a: wp.vec3d, b: wp.vec3d, c: wp.vec3d) -> wp.f
 
 
 @wp.func
-def corner(points: wp.array(dtype=wp.vec3), indices: wp.array(dtype=wp.int32), f: int, k: int) -> wp.vec3d:
-    p = points[indices[f * 3 + k]]
+def to_f64(p: wp.vec3) -> wp.vec3d:
     return wp.vec3d(wp.float64(p[0]), wp.float64(p[1]), wp.float64(p[2]))
+
+
+@wp.func
+def corners(points: wp.array(dtype=wp.vec3), indices: wp.array(dtype=wp.int32), f: int):
+    """Face f's vertices, in float64."""
+    i0, i1, i2 = face_vertices(indices, f)
+    return to_f64(points[i0]), to_f64(points[i1]), to_f64(points[i2])
 
 
 @wp.kernel(enable_backward=False)
 def distance_kernel(points: wp.array(dtype=wp.vec3), indices: wp.array(dtype=wp.int32), light: wp.vec3d,
                     out: wp.array(dtype=wp.float64)):
     f = wp.tid()
-    out[f] = closest_distance(light, corner(points, indices, f, 0), corner(points, indices, f, 1),
-                              corner(points, indices, f, 2))
+    a, b, c = corners(points, indices, f)
+    out[f] = closest_distance(light, a, b, c)
 
 
 @wp.func
@@ -151,9 +158,11 @@ def bin_kernel(points: wp.array(dtype=wp.vec3), indices: wp.array(dtype=wp.int32
     (fill = 1) in every cell of light l its widened projection may cover."""
     f = order[wp.tid()]
     dm = dmin[f]
+    q0, q1, q2 = corners(points, indices, f)
     verts = wp.mat33d()
-    for k in range(3):
-        verts[k] = corner(points, indices, f, k) - light
+    verts[0] = q0 - light
+    verts[1] = q1 - light
+    verts[2] = q2 - light
     margin = wp.float64(8.0) * delta / dm + uv_abs
     # Points of the triangle that a face's frustum holds lie at depth >= dm / sqrt(3) along its axis:
     # clipping at dm / 2 keeps them all and keeps the projection finite.

@@ -11,6 +11,7 @@ import numpy as np
 
 from .._warp import wp
 from ..geometry import MAX_GROUPS, mirrored_geometry, planar_groups
+from ..geometry.planar import reflect_points
 from ..kernels import MAX_BOUNCES, MIRROR_MARGIN_PX, Mirrors, camera_data, gather_kernel, probe_kernel, raster_camera
 from ..scene import camera_basis
 from .launch import launch_bands
@@ -61,10 +62,6 @@ def tiles_seen(tri: np.ndarray, basis, eye: np.ndarray, tile: int) -> np.ndarray
     return seen.reshape(-1)
 
 
-def reflected(points: np.ndarray, plane: np.ndarray) -> np.ndarray:
-    return points - 2.0 * ((points @ plane[:3]) - plane[3])[..., None] * plane[:3]
-
-
 class MirrorFrame:
     """The virtual cameras of one frame: ``chains`` (groups, side, tiles, triangles of the unfolded
     scene), ``mirrors`` (the kernel's record; None when no chain was worth a raster), ``nbytes``."""
@@ -98,7 +95,7 @@ class MirrorFrame:
                 # the level-1 rays leave the first mirror on the eye's side: the second, seen through it
                 there = group_tri(chain[1])
                 there = there[np.any(np.sign(p[0, :3] @ eye - p[0, 3]) * (there @ p[0, :3] - p[0, 3]) > 0.0, axis=1)]
-                seen &= tiles_seen(reflected(there, p[0]), basis, eye, tile)
+                seen &= tiles_seen(reflect_points(there, p[0]), basis, eye, tile)
             seen &= where  # (deeper chains: where their probes went)
             if side != 0.0 and seen.any():
                 candidates.append((chain, p, side, seen, probes))

@@ -12,6 +12,7 @@ import functools
 
 from .._warp import wp
 from ..geometry import SceneData
+from ..geometry.bvh import face_vertices
 from .interaction import Surface
 from .shading import make_coefficients
 
@@ -77,8 +78,8 @@ def make_record_first_hit(names: tuple, texture: bool = False, vertex_color: boo
             w = 1.0 - u - v
             uv = wp.vec2(v, w)
             if a.object_has_uv[a.tri_object[f]] != 0:
-                uv = (a.vertex_uv[s.indices[f * 3 + 0]] * u + a.vertex_uv[s.indices[f * 3 + 1]] * v
-                      + a.vertex_uv[s.indices[f * 3 + 2]] * w)
+                j0, j1, j2 = face_vertices(s.indices, f)
+                uv = a.vertex_uv[j0] * u + a.vertex_uv[j1] * v + a.vertex_uv[j2] * w
             a.uv[pixel] = a.uv[pixel] + uv
         if wp.static(OBJECT or MATERIAL or FACE):
             if sample == a.id_sample:

@@ -51,6 +51,14 @@ def sample_offset(sample: int, k: int) -> wp.vec2:
     return wp.vec2(sx, sy)
 
 
+@wp.func
+def sample_position(pixel: int, i: int, step: wp.float64) -> wp.float64:
+    """Where stratum i of a pixel's k strata along one axis has its centre, in float64 pixel units:
+    pixel + (i + 1/2) / k, with step = 1 / k. Where the rasterizer samples, and the ideal line a
+    mirror's ray is measured against."""
+    return wp.float64(pixel) + (wp.float64(i) * step + wp.float64(0.5) * step)
+
+
 @wp.struct
 class RasterCamera:
     """The camera basis in float64 and the projection onto continuous pixel coordinates

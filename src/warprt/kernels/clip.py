@@ -78,11 +78,12 @@ def clip_edge(a: ClipVertex, b: ClipVertex, z_clip: wp.float64) -> ClipVertex:
 
 
 @wp.func
-def clip_triangle(c: RasterCamera, points: wp.array(dtype=wp.vec3), indices: wp.array(dtype=wp.int32), f: int) -> Polygon:
-    """Sutherland-Hodgman against the one plane z = z_clip, in camera space (before the divide)."""
-    a = clip_vertex(c, points[indices[f * 3 + 0]], wp.vec2(1.0, 0.0))
-    b = clip_vertex(c, points[indices[f * 3 + 1]], wp.vec2(0.0, 1.0))
-    d = clip_vertex(c, points[indices[f * 3 + 2]], wp.vec2(0.0, 0.0))
+def clip_triangle(c: RasterCamera, q0: wp.vec3, q1: wp.vec3, q2: wp.vec3) -> Polygon:
+    """Sutherland-Hodgman against the one plane z = z_clip, in camera space (before the divide), of the
+    triangle q0 q1 q2 (kernels/triangle.py)."""
+    a = clip_vertex(c, q0, wp.vec2(1.0, 0.0))
+    b = clip_vertex(c, q1, wp.vec2(0.0, 1.0))
+    d = clip_vertex(c, q2, wp.vec2(0.0, 0.0))
     in_a = a.c[2] >= c.z_clip
     in_b = b.c[2] >= c.z_clip
     in_d = d.c[2] >= c.z_clip

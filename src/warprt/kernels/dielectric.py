@@ -1,5 +1,6 @@
 """A dielectric interface, Whitted's transmitted ray: the exact unpolarized Fresnel reflectance and
-Snell's law in vector form (pbrt-v4's FrDielectric and Refract), and Beer's law inside the medium.
+Snell's law in vector form (pbrt-v4's FrDielectric and Refract), the two children a hit spawns, and
+Beer's law inside the medium.
 
 eta is always n_t / n_i, the index past the surface over the index before it. Both functions compute
 sin^2(theta_t) = (1 - cos_i^2) / eta^2 the same way, so they agree on total internal reflection.
@@ -8,6 +9,9 @@ sin^2(theta_t) = (1 - cos_i^2) / eta^2 the same way, so they agree on total inte
 from __future__ import annotations
 
 from .._warp import wp
+from ..geometry import SceneData
+from .interaction import Surface, reflect
+from .triangle import triangle, unit_normal
 
 
 @wp.func
@@ -41,6 +45,56 @@ def refract(d: wp.vec3, n: wp.vec3, eta: float):
         return d, False
     cos_t = wp.sqrt(1.0 - sin2_t)
     return d / eta + (cos_i / eta - cos_t) * n, True
+
+
+@wp.struct
+class Children:
+    """The reflected and the refracted ray of a dielectric hit: direction, weight, the medium each
+    travels in (the hit's material inside the glass, -1 outside) and whether it carries anything."""
+
+    d_r: wp.vec3
+    w_r: wp.vec3
+    medium_r: int
+    has_r: bool
+    d_t: wp.vec3
+    w_t: wp.vec3
+    medium_t: int
+    has_t: bool
+
+
+@wp.func
+def dielectric_children(s: SceneData, f: int, hit: Surface, d: wp.vec3, weight: wp.vec3, eta: float) -> Children:
+    """pbrt's SpecularReflect and SpecularTransmit at once: the Fresnel split of ``weight`` arriving
+    along d at face f (material index eta) between the mirrored and the Snell-refracted direction."""
+    # hit.ng faces the ray; the ray enters where that is the winding's outward normal.
+    p0, p1, p2 = triangle(s, f)
+    entering = wp.dot(hit.ng, unit_normal(p0, p1, p2)) > 0.0
+    outward = hit.ng
+    eta_rel = eta
+    if not entering:
+        outward = -hit.ng
+        eta_rel = 1.0 / eta
+    # Fresnel and Snell about the shading normal on the ray's side, or the geometric one where the
+    # shading normal is tilted past the ray.
+    m = hit.n
+    if wp.dot(m, hit.ng) < 0.0:
+        m = -m
+    if not (wp.dot(d, m) * wp.dot(d, hit.ng) > 0.0):
+        m = hit.ng
+    cos_i = -wp.dot(d, m)
+    F = fresnel_dielectric(wp.where(entering, cos_i, -cos_i), eta)
+    t, transmits = refract(d, m, eta_rel)
+    out = Children()
+    out.w_r = weight * F
+    out.w_t = wp.cw_mul(weight, s.transmittance[hit.material]) * (1.0 - F)
+    out.has_r = wp.max(out.w_r) > 0.0
+    out.has_t = transmits and wp.max(out.w_t) > 0.0
+    # A child is inside the glass where it leaves against the outward normal.
+    out.d_r = wp.normalize(reflect(d, m))
+    out.medium_r = wp.where(wp.dot(out.d_r, outward) < 0.0, hit.material, -1)
+    out.d_t = wp.normalize(t)
+    out.medium_t = wp.where(wp.dot(out.d_t, outward) < 0.0, hit.material, -1)
+    return out
 
 
 @wp.func

@@ -21,6 +21,7 @@ import functools
 from .._warp import wp
 from ..floats import gamma
 from ..geometry import SceneData
+from ..geometry.bvh import face_vertices
 from .triangle import triangle, unit_normal
 
 GAMMA_POINT = gamma(7)
@@ -62,6 +63,22 @@ def offset_ray_origin(p: wp.vec3, err: wp.vec3, ng: wp.vec3, w: wp.vec3) -> wp.v
     return p + offset
 
 
+@wp.struct
+class Ray:
+    o: wp.vec3
+    d: wp.vec3  # unit
+
+
+@wp.func
+def spawn_ray(hit: Surface, d: wp.vec3) -> Ray:
+    """pbrt's SpawnRay, Mitsuba's spawn_ray: the ray leaving the hit along d, its origin offset
+    off the surface so it cannot find the triangle it leaves."""
+    r = Ray()
+    r.o = offset_ray_origin(hit.p, hit.err, hit.ng, d)
+    r.d = d
+    return r
+
+
 @wp.func
 def reflect(d: wp.vec3, n: wp.vec3) -> wp.vec3:
     """d mirrored about the plane of normal n: d - 2 (d.n) n."""
@@ -92,17 +109,13 @@ def make_surface(smooth: bool, texture: bool = False, vertex_color: bool = False
         out.n = out.ng
         if wp.static(smooth):
             if s.tri_smooth[f] != 0:
-                i0 = s.indices[f * 3 + 0]
-                i1 = s.indices[f * 3 + 1]
-                i2 = s.indices[f * 3 + 2]
+                i0, i1, i2 = face_vertices(s.indices, f)
                 ns = s.normals[i0] * u + s.normals[i1] * v + s.normals[i2] * w
                 if wp.length(ns) > 0.0:
                     out.n = wp.normalize(ns) * side
         if wp.static(texture or vertex_color):
             # Warp's barycentrics, as for p: weight u on the face's first vertex, v on its second.
-            j0 = s.indices[f * 3 + 0]
-            j1 = s.indices[f * 3 + 1]
-            j2 = s.indices[f * 3 + 2]
+            j0, j1, j2 = face_vertices(s.indices, f)
             if wp.static(texture):
                 out.uv = s.uvs[j0] * u + s.uvs[j1] * v + s.uvs[j2] * w
             if wp.static(vertex_color):

@@ -14,11 +14,11 @@ from __future__ import annotations
 
 from .._warp import wp
 from ..geometry import SceneData
-from .camera import CameraData, RasterCamera, camera_ray, sample_offset
+from .camera import CameraData, RasterCamera, camera_ray, sample_position
 from .hybrid import TIE_REL, uncertain
-from .interaction import reflect
+from .interaction import make_surface, reflect, spawn_ray
 from .raster import Fragments
-from .triangle import query_normal, triangle, woop_hit
+from .triangle import triangle, woop_hit
 
 MARGIN_PX = 0.03
 MAX_DEV_PX = 0.027
@@ -26,6 +26,7 @@ GRAZE = 1.0e-3
 NO_CHAIN = -2  # a ray whose bounces so far were not all off planar mirrors with a raster
 FROM_CAMERA = -1  # no bounce yet
 MAX_BOUNCES = 8  # the longest chain of planar mirrors with a virtual camera
+flat_surface = make_surface(False)  # the probe's hit record: position, error bound, face normal
 
 
 @wp.struct
@@ -114,11 +115,10 @@ def mirror_hit(s: SceneData, m: Mirrors, level: int, o: wp.vec3, d: wp.vec3, cha
         plane = m.plane[wp.static(MAX_BOUNCES) * chain + level - 1 - j]
         po = mirrored(po, plane)
         pd = mirrored(pd, wp.vec4d(plane[0], plane[1], plane[2], wp.float64(0.0)))
-    offset = wp.vec2(0.5, 0.5)
-    if m.samples > 1:
-        offset = sample_offset(sample, m.k)
-    ideal = wp.normalize((wp.float64(x) + wp.float64(offset[0]) - c.c_x) / c.f_x * c.x_e
-                         + (wp.float64(y) + wp.float64(offset[1]) - c.c_y) / c.f_y * c.y_e - c.z_e)
+    k = wp.where(m.samples > 1, m.k, 1)  # the raster's strata per axis
+    step = wp.float64(1.0) / wp.float64(k)
+    ideal = wp.normalize((sample_position(x, sample % k, step) - c.c_x) / c.f_x * c.x_e
+                         + (sample_position(y, sample / k, step) - c.c_y) / c.f_y * c.y_e - c.z_e)
     rel = po - c.eye
     along = wp.dot(rel, ideal)
     z_mirror = -wp.dot(rel, c.z_e)  # the depth of the mirror point, as the raster measures depth
@@ -211,8 +211,7 @@ def probe_kernel(s: SceneData, c: CameraData, group: wp.array(dtype=wp.int32), p
             pl = planes[g]
             out[i, 1 + 2 * level] = g
             out[i, 2 + 2 * level] = wp.where(wp.dot(wp.vec3(pl[0], pl[1], pl[2]), o) > pl[3], 1, -1)
-            p0, p1, p2 = triangle(s, q.face)
-            n = query_normal(p0, p1, p2)
-            p = p0 * q.u + p1 * q.v + p2 * (1.0 - q.u - q.v)
-            d = wp.normalize(reflect(d, n))
-            o = p + n * (1.0e-4 * wp.length(p - c.eye)) * wp.sign(wp.dot(d, n))
+            hit = flat_surface(s, q.face, q.u, q.v, q.normal, d)
+            ray = spawn_ray(hit, wp.normalize(reflect(d, hit.ng)))
+            o = ray.o
+            d = ray.d

@@ -8,8 +8,9 @@ from __future__ import annotations
 
 from .._warp import wp
 from ..geometry import SceneData
-from .camera import RasterCamera
+from .camera import RasterCamera, sample_position
 from .clip import ScreenVertex, clip_triangle, project
+from .triangle import triangle
 
 
 @wp.struct
@@ -110,17 +111,16 @@ def raster_triangle(s0: ScreenVertex, s1: ScreenVertex, s2: ScreenVertex, f: int
     e1 = make_edge(s2, s0, orientation, c.margin)
     e2 = make_edge(s0, s1, orientation, c.margin)
     step = one / wp.float64(k)
-    half = wp.float64(0.5) * step
     for y in range(y0, y1 + 1):
         row = c.height - 1 - y
         for j in range(k):  # sample rows: sample index j k + i sits at (x + (i + 1/2)/k, y + (j + 1/2)/k)
-            py = wp.float64(y) + (wp.float64(j) * step + half)
+            py = sample_position(y, j, step)
             r0 = e0.dx * (py - e0.ay)
             r1 = e1.dx * (py - e1.ay)
             r2 = e2.dx * (py - e2.ay)
             for x in range(x0, x1 + 1):
                 for i in range(k):
-                    px = wp.float64(x) + (wp.float64(i) * step + half)
+                    px = sample_position(x, i, step)
                     v0 = edge_at(e0, r0, px)
                     v1 = edge_at(e1, r1, px)
                     v2 = edge_at(e2, r2, px)
@@ -174,7 +174,8 @@ def project_kernel(s: SceneData, c: RasterCamera, k: int, first: int, bounds: wp
     may cover; x0 > x1 when it can cover none (behind the eye, off the image, or so small that it
     falls between samples, the fate of most triangles of a mesh finer than the pixels)."""
     f = first + wp.tid()
-    poly = clip_triangle(c, s.points, s.indices, f)
+    p0, p1, p2 = triangle(s, f)
+    poly = clip_triangle(c, p0, p1, p2)
     out = wp.vec4i(1, 0, 1, 0)
     if poly.n > 0:
         a = project(c, poly.v0)
@@ -210,7 +211,8 @@ def raster_kernel(s: SceneData, c: RasterCamera, tile_start: wp.array(dtype=wp.i
     y_hi = wp.min(y_lo + tile, c.height) - 1
     for j in range(tile_start[t], tile_start[t + 1]):
         f = tile_faces[j]
-        poly = clip_triangle(c, s.points, s.indices, f)
+        p0, p1, p2 = triangle(s, f)
+        poly = clip_triangle(c, p0, p1, p2)
         a = project(c, poly.v0)
         b = project(c, poly.v1)
         d = project(c, poly.v2)

@@ -11,7 +11,7 @@ import functools
 
 from .._warp import wp
 from ..geometry import LIGHT_DIRECTIONAL, LIGHT_SPOT, LightShape, SceneData
-from .interaction import Surface, offset_ray_origin, reflect
+from .interaction import Surface, reflect, spawn_ray
 from .shadow import make_occluded
 from .texture import texel
 
@@ -122,8 +122,6 @@ def _make_shade(AMBIENT: bool, DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool, TEX
         k = coefficients(s, hit)
         m = hit.material
         p = hit.p
-        err = hit.err
-        ng = hit.ng
         n = hit.n
         if wp.static(AMBIENT):
             out.color = wp.cw_mul(s.ambient, k.ka)
@@ -148,7 +146,7 @@ def _make_shade(AMBIENT: bool, DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool, TEX
                 if n_dot_l > 0.0:
                     visible = True
                     if wp.static(SHADOWS):
-                        o = offset_ray_origin(p, err, ng, L)
+                        o = spawn_ray(hit, L).o  # towards the light, from its origin
                         to_light_o = s.light_pos[l] - o
                         dist = wp.length(to_light_o)
                         d = to_light_o / dist

@@ -6,22 +6,20 @@ weighted by k_r, up to max_depth ray levels. With refraction, Whitted's full ray
 dielectric both the reflected and the refracted ray, depth first, one of them kept on a small stack.
 """
 
-from __future__ import annotations
-
-import functools
+import functools  # no "from __future__ import annotations": the ray stack's types are a factory's locals
 
 from .._warp import wp
 from ..errors import SceneError
 from ..geometry import SceneData
 from .aov import AovBuffers, make_record_first_hit
 from .camera import CameraData, camera_ray, sample_offset
-from .dielectric import beer, beer_forever, fresnel_dielectric, refract
+from .dielectric import beer, beer_forever, dielectric_children
 from .hybrid import uncertain
-from .interaction import make_surface, offset_ray_origin, reflect
+from .interaction import Ray, Surface, make_surface, reflect, spawn_ray
 from .mirror import FROM_CAMERA, NO_CHAIN, Mirrors, mirror_chain, mirror_hit
 from .raster import Fragments
 from .shading import make_shade
-from .triangle import query_normal, triangle, unit_normal, woop_hit
+from .triangle import query_normal, triangle, woop_hit
 
 # The ray tree is walked depth first: at a dielectric hit one child waits on the stack while the
 # other is followed. A waiting ray is always one level deeper than those below it, so max_depth
@@ -55,6 +53,122 @@ def tile_order_pixel(i: int, width: int, height: int, tile_w: int, tile_h: int) 
     return wp.vec2i(col * tile_w + within % tw, strip * tile_h + within / tw)
 
 
+@wp.struct
+class TreeRay:
+    """A ray of the tree and what it carries: its weight, where its segment began (the eye or its
+    parent's hit point, not offset: Beer's law measures from there), its level, its medium (-1: air),
+    and with planar mirrors the chain of them it bounced off and the face it leaves."""
+
+    ray: Ray
+    weight: wp.vec3
+    start: wp.vec3
+    depth: int
+    medium: int
+    chain: int
+    src: int
+
+
+@wp.func
+def absorbed(s: SceneData, weight: wp.vec3, medium: int, start: wp.vec3, hit: Surface) -> wp.vec3:
+    """The weight of a ray that went from start to the hit through medium (-1: air, which absorbs nothing)."""
+    if medium >= 0:
+        weight = beer(weight, s.absorption[medium], wp.length(hit.p - start))
+    return weight
+
+
+@wp.struct
+class Hit:
+    """A ray's nearest hit, whichever way it was found: face (-1: none), Warp's barycentrics, and the
+    face normal as wp.mesh_query_ray reports it."""
+
+    face: int
+    u: float
+    v: float
+    normal: wp.vec3
+
+
+@functools.cache
+def make_first_hit(raster: bool, mirrors: bool):
+    """The nearest hit of a ray: with ``raster``, a camera ray's from the Z-buffer where that is certain
+    to be the query's (hybrid.uncertain); with ``mirrors``, a reflection ray's from its chain's virtual
+    camera where certain (kernels/mirror.py); every other ray's from the BVH. The same record to the bit."""
+
+    @wp.func
+    def first_hit(s: SceneData, frags: Fragments, mir: Mirrors, r: TreeRay, i: int, n_s: int, x: int, row: int,
+                  sample: int) -> Hit:
+        ray = r.ray
+        out = Hit()
+        out.face = -1
+        found = False
+        if wp.static(raster):
+            if r.depth == 0 and not uncertain(frags.inv_depth[n_s], frags.rival_inv_depth[n_s]):
+                f = frags.face[n_s]
+                found = f < 0  # a certain miss
+                if f >= 0:
+                    p0, p1, p2 = triangle(s, f)
+                    h = woop_hit(ray.o, ray.d, p0, p1, p2)
+                    if h[0] >= 0.0:  # else never seen: a certain sample is well inside its triangle
+                        found = True
+                        out = Hit(f, h[1], h[2], query_normal(p0, p1, p2))
+        if wp.static(mirrors):
+            if r.depth > 0:
+                mh = mirror_hit(s, mir, r.depth, ray.o, ray.d, r.chain, x, row, sample, r.src)
+                if mh.found:
+                    found = True
+                    out = Hit(mh.face, mh.u, mh.v, wp.vec3(0.0))
+                    if mh.face >= 0:
+                        p0, p1, p2 = triangle(s, mh.face)
+                        out.normal = query_normal(p0, p1, p2)
+                    mir.decided[i] = mir.decided[i] + 1
+        if not found:
+            q = wp.mesh_query_ray(s.mesh, ray.o, ray.d, 1.0e30)
+            if q.result:
+                out = Hit(q.face, q.u, q.v, q.normal)
+        return out
+
+    return first_hit
+
+
+@functools.cache
+def make_ray_stack(size: int):
+    """RayStack (the rays of the tree waiting to be traced, ``size`` at most, in registers and local
+    memory), push and pop. Warp passes structs by value, so both return the stack."""
+    vec3s = wp.types.matrix(shape=(size, 3), dtype=float)
+    ints = wp.types.vector(length=size, dtype=int)
+
+    @wp.struct
+    class RayStack:
+        o: vec3s  # entry j: TreeRay j's fields
+        d: vec3s
+        weight: vec3s
+        start: vec3s
+        depth: ints
+        medium: ints
+        top: int  # entries in use
+
+    @wp.func
+    def push(stack: RayStack, r: TreeRay) -> RayStack:
+        out = stack
+        out.o[stack.top] = r.ray.o
+        out.d[stack.top] = r.ray.d
+        out.weight[stack.top] = r.weight
+        out.start[stack.top] = r.start
+        out.depth[stack.top] = r.depth
+        out.medium[stack.top] = r.medium
+        out.top = stack.top + 1
+        return out
+
+    @wp.func
+    def pop(stack: RayStack):
+        out = stack
+        out.top = stack.top - 1
+        j = out.top
+        return out, TreeRay(Ray(out.o[j], out.d[j]), out.weight[j], out.start[j], out.depth[j], out.medium[j],
+                            NO_CHAIN, -1)
+
+    return RayStack, push, pop
+
+
 @functools.cache
 def make_trace_kernel(fx, raster_primary: bool = False, stack: int = 0, report_truncated: bool = False,
                       aovs: tuple = (), shadow_grid: bool = False, mirrors: bool = False):
@@ -73,15 +187,13 @@ def make_trace_kernel(fx, raster_primary: bool = False, stack: int = 0, report_t
     shade = make_shade(fx, shadow_grid)
     surface = make_surface(fx.smooth, fx.texture, fx.vertex_color)
     record_first_hit = make_record_first_hit(tuple(aovs), fx.texture, fx.vertex_color)
-    REFLECTION, SUPERSAMPLING, RASTER, AOVS = fx.reflection, fx.supersampling, raster_primary, bool(aovs)
-    REFRACTION, ABSORPTION, TRUNCATED = fx.refraction, fx.absorption, report_truncated
-    MEDIUM = REFRACTION or ABSORPTION
     MIRRORS = fx.reflection and mirrors
+    first_hit = make_first_hit(raster_primary, MIRRORS)
+    REFLECTION, SUPERSAMPLING, AOVS = fx.reflection, fx.supersampling, bool(aovs)
+    REFRACTION, ABSORPTION, TRUNCATED = fx.refraction, fx.absorption, report_truncated
     if REFRACTION and stack < 1:
         raise ValueError("a kernel with refraction needs a stack: stack_size(max_depth)")
-    STACK = max(stack, 1)
-    StackVec3 = wp.types.matrix(shape=(STACK, 3), dtype=float)
-    StackInt = wp.types.vector(length=STACK, dtype=int)
+    RayStack, push, pop = make_ray_stack(max(stack, 1))
     COUNTS = wp.vec4i if REFRACTION else wp.vec3i
 
     @wp.kernel(module="unique", enable_backward=False)
@@ -94,207 +206,82 @@ def make_trace_kernel(fx, raster_primary: bool = False, stack: int = 0, report_t
         row = xy[1]
         pixel = row * c.width + x
         total = wp.vec3(0.0)
-        shadow_rays = int(0)
-        reflection_rays = int(0)
-        if wp.static(REFRACTION):
-            refraction_rays = int(0)
-        if wp.static(TRUNCATED):
-            truncated = wp.vec3(0.0)
+        truncated = wp.vec3(0.0)  # the weight cut off at max_depth (with report_truncated)
+        rays = COUNTS()  # samples, shadow, reflection and (with refraction) refraction rays
         samples = int(1)
         if wp.static(SUPERSAMPLING):
             samples = k * k
         for sample in range(samples):
-            offset = wp.vec2(0.5, 0.5)
+            offset = wp.vec2(0.5, 0.5)  # the pixel's centre, or with supersampling a k x k grid
             if wp.static(SUPERSAMPLING):
                 offset = sample_offset(sample, k)
-            o = c.eye
-            d = camera_ray(c, x, row, offset[0], offset[1])
-            weight = wp.vec3(1.0)
+            r = TreeRay(Ray(c.eye, camera_ray(c, x, row, offset[0], offset[1])), wp.vec3(1.0), c.eye, 0,
+                        s.eye_medium, FROM_CAMERA, -1)
             color = wp.vec3(0.0)
-            depth = int(0)
-            if wp.static(MEDIUM):
-                medium = s.eye_medium  # the dielectric material the ray travels in, -1: air
-                start = o  # where its segment began: the eye, or its parent's hit point (not offset)
-            if wp.static(REFRACTION):
-                # The rays waiting to be traced: origin, direction, weight, segment start, level, medium.
-                top = int(0)
-                stack_o = StackVec3()
-                stack_d = StackVec3()
-                stack_w = StackVec3()
-                stack_start = StackVec3()
-                stack_depth = StackInt()
-                stack_medium = StackInt()
-            if wp.static(MIRRORS):
-                src = int(-1)  # the face a reflection ray leaves
-                chain = int(FROM_CAMERA)  # the planar mirrors it bounced off
-            while depth < max_depth:
-                f = int(-1)
-                u = float(0.0)
-                v = float(0.0)
-                face_normal = wp.vec3(0.0)
-                rasterized = False
-                if wp.static(RASTER):
-                    n_s = pixel * samples + sample
-                    if depth == 0 and not uncertain(frags.inv_depth[n_s], frags.rival_inv_depth[n_s]):
-                        rasterized = True
-                        f = frags.face[n_s]
-                        if f >= 0:
-                            p0, p1, p2 = triangle(s, f)
-                            h = woop_hit(o, d, p0, p1, p2)
-                            if h[0] >= 0.0:
-                                u = h[1]
-                                v = h[2]
-                                face_normal = query_normal(p0, p1, p2)
-                            else:  # never seen: a certain sample is well inside its triangle
-                                rasterized = False
-                                f = -1
-                if wp.static(MIRRORS):
-                    if depth > 0:
-                        mh = mirror_hit(s, mir, depth, o, d, chain, x, row, sample, src)
-                        if mh.found:
-                            rasterized = True
-                            f = mh.face
-                            u = mh.u
-                            v = mh.v
-                            if f >= 0:
-                                p0, p1, p2 = triangle(s, f)
-                                face_normal = query_normal(p0, p1, p2)
-                            mir.decided[i] = mir.decided[i] + 1
-                if not rasterized:
-                    q = wp.mesh_query_ray(s.mesh, o, d, 1.0e30)
-                    if q.result:
-                        f = q.face
-                        u = q.u
-                        v = q.v
-                        face_normal = q.normal
-                if f < 0:
+            stack = RayStack()
+            while r.depth < max_depth:
+                # ---- nearest hit ----
+                h = first_hit(s, frags, mir, r, i, pixel * samples + sample, x, row, sample)
+                if h.face < 0:
                     if wp.static(ABSORPTION):
-                        if medium >= 0:
-                            weight = beer_forever(weight, s.absorption[medium])
-                    color = color + wp.cw_mul(weight, s.background)
-                    if wp.static(REFRACTION):
-                        if top > 0:  # the next waiting ray of the tree
-                            top -= 1
-                            o = stack_o[top]
-                            d = stack_d[top]
-                            weight = stack_w[top]
-                            start = stack_start[top]
-                            depth = stack_depth[top]
-                            medium = stack_medium[top]
-                            if wp.static(MIRRORS):
-                                chain = int(NO_CHAIN)
-                            continue
-                    break
-                hit = surface(s, f, u, v, face_normal, d)
-                if wp.static(ABSORPTION):
-                    if medium >= 0:
-                        weight = beer(weight, s.absorption[medium], wp.length(hit.p - start))
-                if wp.static(AOVS):
-                    if depth == 0:
-                        record_first_hit(aov, s, pixel, sample, f, u, v, hit, o)
-                r = shade(s, hit, -d)
-                color = color + wp.cw_mul(weight, r.color)
-                shadow_rays += r.shadow_rays
-                depth += 1
-                if wp.static(REFLECTION):
-                    kr = s.kr[hit.material]
-                    if depth < max_depth and wp.max(kr) > 0.0:
-                        weight = wp.cw_mul(weight, kr)
-                        d = wp.normalize(reflect(d, hit.n))
-                        o = offset_ray_origin(hit.p, hit.err, hit.ng, d)
-                        reflection_rays += 1
-                        if wp.static(MEDIUM):
-                            start = hit.p  # a mirror's ray stays in the medium it came through
-                        if wp.static(MIRRORS):
-                            chain = mirror_chain(mir, chain, f)
-                            src = f
-                        continue
-                    if wp.static(TRUNCATED):
-                        if depth >= max_depth:
-                            truncated = truncated + wp.cw_mul(weight, kr)
-                if wp.static(REFRACTION):
-                    eta = s.ior[hit.material]
-                    if eta > 0.0:
-                        # hit.ng faces the ray; the ray enters where that is the winding's outward normal.
-                        p0, p1, p2 = triangle(s, f)
-                        entering = wp.dot(hit.ng, unit_normal(p0, p1, p2)) > 0.0
-                        outward = hit.ng
-                        eta_rel = eta
-                        if not entering:
-                            outward = -hit.ng
-                            eta_rel = 1.0 / eta
-                        # Fresnel and Snell about the shading normal on the ray's side, or the geometric
-                        # one where the shading normal is tilted past the ray.
-                        m = hit.n
-                        if wp.dot(m, hit.ng) < 0.0:
-                            m = -m
-                        if not (wp.dot(d, m) * wp.dot(d, hit.ng) > 0.0):
-                            m = hit.ng
-                        cos_i = -wp.dot(d, m)
-                        F = fresnel_dielectric(wp.where(entering, cos_i, -cos_i), eta)
-                        t, transmits = refract(d, m, eta_rel)
-                        w_r = weight * F
-                        w_t = wp.cw_mul(weight, s.transmittance[hit.material]) * (1.0 - F)
-                        has_r = wp.max(w_r) > 0.0
-                        has_t = transmits and wp.max(w_t) > 0.0
-                        if depth < max_depth:
-                            d_r = wp.normalize(reflect(d, m))
-                            # A child is inside the glass where it leaves against the outward normal.
-                            medium_r = wp.where(wp.dot(d_r, outward) < 0.0, hit.material, -1)
-                            if has_r and has_t:  # the reflected ray waits, the refracted one goes on
-                                stack_o[top] = offset_ray_origin(hit.p, hit.err, hit.ng, d_r)
-                                stack_d[top] = d_r
-                                stack_w[top] = w_r
-                                stack_start[top] = hit.p
-                                stack_depth[top] = depth
-                                stack_medium[top] = medium_r
-                                top += 1
-                                reflection_rays += 1
-                            if has_t:
-                                d = wp.normalize(t)
-                                o = offset_ray_origin(hit.p, hit.err, hit.ng, d)
-                                weight = w_t
-                                start = hit.p
-                                medium = wp.where(wp.dot(d, outward) < 0.0, hit.material, -1)
-                                refraction_rays += 1
-                                if wp.static(MIRRORS):
-                                    chain = int(NO_CHAIN)
-                                continue
-                            if has_r:  # total internal reflection, or nothing transmitted
-                                d = d_r
-                                o = offset_ray_origin(hit.p, hit.err, hit.ng, d)
-                                weight = w_r
-                                start = hit.p
-                                medium = medium_r
-                                reflection_rays += 1
-                                if wp.static(MIRRORS):
-                                    chain = int(NO_CHAIN)
-                                continue
-                        else:
-                            if wp.static(TRUNCATED):
-                                if has_r:
-                                    truncated = truncated + w_r
-                                if has_t:
-                                    truncated = truncated + w_t
-                    if top > 0:  # this path has ended: the next waiting ray of the tree
-                        top -= 1
-                        o = stack_o[top]
-                        d = stack_d[top]
-                        weight = stack_w[top]
-                        start = stack_start[top]
-                        depth = stack_depth[top]
-                        medium = stack_medium[top]
-                        if wp.static(MIRRORS):
+                        if r.medium >= 0:
+                            r.weight = beer_forever(r.weight, s.absorption[r.medium])
+                    color = color + wp.cw_mul(r.weight, s.background)
+                else:
+                    hit = surface(s, h.face, h.u, h.v, h.normal, r.ray.d)
+                    if wp.static(ABSORPTION):
+                        r.weight = absorbed(s, r.weight, r.medium, r.start, hit)
+                    if wp.static(AOVS):
+                        if r.depth == 0:
+                            record_first_hit(aov, s, pixel, sample, h.face, h.u, h.v, hit, r.ray.o)
+                    # ---- local shading ----
+                    lit = shade(s, hit, -r.ray.d)
+                    color = color + wp.cw_mul(r.weight, lit.color)
+                    rays[1] += lit.shadow_rays
+                    level = r.depth + 1  # the children's
+                    # ---- mirror ----
+                    if wp.static(REFLECTION):
+                        kr = s.kr[hit.material]
+                        if level < max_depth and wp.max(kr) > 0.0:
                             chain = int(NO_CHAIN)
+                            if wp.static(MIRRORS):
+                                chain = mirror_chain(mir, r.chain, h.face)
+                            # a mirror's ray stays in the medium it came through
+                            r = TreeRay(spawn_ray(hit, wp.normalize(reflect(r.ray.d, hit.n))), wp.cw_mul(r.weight, kr),
+                                        hit.p, level, r.medium, chain, h.face)
+                            rays[2] += 1
+                            continue
+                        if wp.static(TRUNCATED):
+                            if level >= max_depth:
+                                truncated = truncated + wp.cw_mul(r.weight, kr)
+                    # ---- dielectric ----
+                    if wp.static(REFRACTION):
+                        eta = s.ior[hit.material]
+                        if eta > 0.0:
+                            ch = dielectric_children(s, h.face, hit, r.ray.d, r.weight, eta)
+                            if level < max_depth and (ch.has_r or ch.has_t):
+                                r = TreeRay(spawn_ray(hit, ch.d_r), ch.w_r, hit.p, level, ch.medium_r, NO_CHAIN, -1)
+                                if ch.has_t:  # else total internal reflection, or nothing transmitted
+                                    if ch.has_r:  # the reflected ray waits, the refracted one goes on
+                                        stack = push(stack, r)
+                                    r = TreeRay(spawn_ray(hit, ch.d_t), ch.w_t, hit.p, level, ch.medium_t, NO_CHAIN, -1)
+                                rays[2] += wp.where(ch.has_r, 1, 0)
+                                rays[3] += wp.where(ch.has_t, 1, 0)
+                                continue
+                            if wp.static(TRUNCATED):
+                                if level >= max_depth:  # a child that carries nothing has weight +0
+                                    truncated = truncated + ch.w_r + ch.w_t
+                # ---- next ray ----
+                if wp.static(REFRACTION):
+                    if stack.top > 0:  # this path has ended: the next waiting ray of the tree
+                        stack, r = pop(stack)
                         continue
                 break
             total = total + color
         image[pixel] = total / float(samples)
         if wp.static(TRUNCATED):
             image[c.width * c.height + pixel] = truncated / float(samples)
-        if wp.static(REFRACTION):
-            counts[i] = COUNTS(samples, shadow_rays, reflection_rays, refraction_rays)
-        else:
-            counts[i] = wp.vec3i(samples, shadow_rays, reflection_rays)  # in tile order: a band's counts are contiguous
+        rays[0] = samples
+        counts[i] = rays  # in tile order: a band's counts are contiguous
 
     return trace

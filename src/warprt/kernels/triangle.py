@@ -5,12 +5,14 @@ from __future__ import annotations
 
 from .._warp import wp
 from ..geometry import SceneData
+from ..geometry.bvh import face_vertices
 
 
 @wp.func
 def triangle(s: SceneData, f: int):
     """The vertices p0, p1, p2 of face f (float32, relative to the frame origin)."""
-    return s.points[s.indices[f * 3 + 0]], s.points[s.indices[f * 3 + 1]], s.points[s.indices[f * 3 + 2]]
+    i0, i1, i2 = face_vertices(s.indices, f)
+    return s.points[i0], s.points[i1], s.points[i2]
 
 
 @wp.func
