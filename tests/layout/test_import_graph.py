@@ -161,3 +161,25 @@ def test_a_planted_flag_is_found(tmp_path):
     launch.write_text(launch.read_text() + '\n\ndef _planted(t):\n    """As --threads says."""\n'
                       '    raise ValueError(f"command line: --threads: got {t}")\n')
     assert [(f, flag) for f, _, flag in flags_mentioned(pkg)] == [("image/launch.py", "--threads")] * 2
+
+
+def warp_imported_by(statement: str) -> bool:
+    """Whether ``statement``, run in a fresh interpreter, leaves Warp in sys.modules."""
+    import subprocess
+    import sys
+
+    code = f"import sys\n{statement}\nprint('warp' in sys.modules)"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=ROOT)
+    return out.stdout.split()[-1] == "True"
+
+
+@pytest.mark.parametrize("statement", ["import warprt", "import warprt.scene", "import reference",
+                                       "import warprt; warprt.load_scene('scenes/cornell.toml')"])
+def test_reading_scenes_does_not_import_warp(statement):
+    """Cold start: warprt/__init__.py defers render and batch, the one place Warp's import waits."""
+    assert not warp_imported_by(statement)
+
+
+def test_rendering_imports_warp():
+    """The negative control: the same check sees Warp once render is asked for."""
+    assert warp_imported_by("import warprt; warprt.render")
