@@ -6,7 +6,6 @@ image. An eye outside the region the BVH's padding covers (bvh.EYE_REACH) gets a
 and the stats say which and why."""
 
 from dataclasses import replace
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -14,18 +13,12 @@ import pytest
 import warprt
 from accuracy.harness import OFF_MAX, PSNR_MIN, SSIM_MIN
 from reference.compare import metrics
+from shortcuts import IDS, SCENES, at_width
 from warprt.geometry import Geometry
 from warprt.scene import Light, Material
 
-ROOT = Path(__file__).resolve().parents[2]
-SCENES = [None] + sorted((ROOT / "scenes").glob("*.toml"))
-IDS = ["default"] + [p.stem for p in SCENES[1:]]
-
-
 def small(path, width=96):
-    scene = warprt.load_scene(path)
-    height = max(8, round(width * scene.camera.height / scene.camera.width))
-    return scene.with_camera(width=width, height=height)
+    return at_width(warprt.load_scene(path), width)
 
 
 def orbit(scene, degrees):

@@ -2,16 +2,10 @@
 them (measured here: the rasters cost about what the queries they replace do, benchmarks/ATTEMPTS.md).
 The stats give the chains, the rays decided and their share, and the memory; the flag is checked."""
 
-import json
-import subprocess
-import sys
-from pathlib import Path
-
 import pytest
 
 import warprt
-
-ROOT = Path(__file__).resolve().parents[2]
+from shortcuts import ROOT, command_stats
 
 
 def test_mirrors_decide_most_reflection_rays_of_the_default_scene():
@@ -40,9 +34,6 @@ def test_unknown_reflection_query_is_a_scene_error():
 
 
 def test_the_command_line_flag_and_stats(tmp_path):
-    r = subprocess.run([sys.executable, "-m", "warprt", "render", "-o", str(tmp_path / "o.png"), "--width", "64",
-                        "--height", "48", "--reflection-rays", "mirrors", "--stats"], capture_output=True, text=True)
-    assert r.returncode == 0, r.stderr
-    stats = json.loads(r.stdout)
+    stats = command_stats(tmp_path, "--reflection-rays", "mirrors")
     assert stats["reflections"] == "mirrors" and stats["mirrors"]["decided"] > 0
     assert {"groups", "tiles", "triangles"} <= set(stats["mirrors"]["chains"][0])

@@ -2,15 +2,12 @@
 than the frame saves, otherwise from the second frame with those lights on;
 the grid is kept with the geometry, its memory counted in the stats, and the flag is checked."""
 
-import json
-import subprocess
-import sys
-
 from dataclasses import replace
 
 import pytest
 
 import warprt
+from shortcuts import command_stats
 from warprt.geometry import Geometry
 from warprt.image import light_history, shadows_from_grid
 from warprt.scene import resolve_effects
@@ -71,9 +68,6 @@ def test_unknown_shadow_query_is_a_scene_error():
 
 
 def test_the_command_line_flag_and_stats(tmp_path):
-    r = subprocess.run([sys.executable, "-m", "warprt", "render", "-o", str(tmp_path / "o.png"), "--width", "64",
-                        "--height", "48", "--shadow-rays", "grid", "--stats"], capture_output=True, text=True)
-    assert r.returncode == 0, r.stderr
-    stats = json.loads(r.stdout)
+    stats = command_stats(tmp_path, "--shadow-rays", "grid")
     assert stats["shadows"] == "grid" and stats["shadow_grid"]["lights_on_grid"] == 2
     assert stats["shadow_grid"]["cells"] == 256 and stats["memory"]["shadow_grid"] > 0
