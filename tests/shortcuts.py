@@ -12,12 +12,15 @@ from pathlib import Path
 import numpy as np
 
 import warprt
+from marks import quick_cases
 from warprt.kernels import CameraData, camera_data, camera_ray, sample_offset, wp
 from warprt.scene import camera_basis, resolve_effects
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENES = [None] + sorted((ROOT / "scenes").glob("*.toml"))  # None: the default scene
 IDS = ["default"] + [p.stem for p in SCENES[1:]]
+SCENE_CASES = quick_cases(SCENES, {"cornell", "tilted"}, IDS)  # the quick loop's two cheap scenes
+SEEDS = quick_cases(range(12), {0, 2})  # random scenes (accuracy.test_random_scenes): two in the quick loop
 
 
 def at_width(scene, width: int):

@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 import warprt
+from marks import slow
 from oracle import camera_rays, ray_plane
 from scenekit import write_scene
 from warprt.scene import read_mesh_file
@@ -102,6 +103,7 @@ def test_crease_angle_on_a_cylinder_smooths_its_side_and_not_its_rims(tmp_path):
     np.testing.assert_allclose(side, radial, atol=1e-12)  # at a vertex, the two side faces' mean: radial
 
 
+@slow
 def test_negative_and_zero_ns_load_as_no_highlight_with_one_warning(tmp_path):
     """Blender's exporter writes 'Ns -1.960784' and 'Ns 0': neither is refused, both mean no highlight."""
     (tmp_path / "n.obj").write_text("mtllib n.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\nusemtl b\nf 1 3 2\n")
@@ -146,6 +148,7 @@ def test_up_z_on_an_object_turns_the_file_upright(tmp_path):
     np.testing.assert_allclose(extent, [0.4, 3.0, 0.6], atol=1e-6)  # z -> y, y -> -z
 
 
+@slow
 def test_up_z_frames_a_bare_stl_along_z(tmp_path):
     write_stl(tmp_path / "t.stl", tall_z_box())
     for up, camera_up in ((None, (0.0, 1.0, 0.0)), ("z", (0.0, 0.0, 1.0)), ("-z", (0.0, 0.0, -1.0))):
@@ -185,6 +188,7 @@ def test_up_on_a_scene_file_is_refused(tmp_path):
     assert r.stderr.startswith("warprt: error: command line: --up: applies to a mesh file")
 
 
+@slow
 def test_width_and_height_reframe_a_bare_mesh(tmp_path):
     """Framing comes after the overrides: a tall narrow image still holds the whole mesh."""
     import trimesh
@@ -268,6 +272,7 @@ def test_gltf_nodes_reusing_a_mesh_are_placed_copies():
     assert mesh.parts[0].colors is None and mesh.parts[1].colors is not None  # COLOR_0 on the second only
 
 
+@slow
 def test_warnings_are_one_line_each_and_silenced_by_q(tmp_path):
     (tmp_path / "w.obj").write_text("mtllib w.mtl\nmtllib gone.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\n"
                                     "usemtl glass\nf 1 2 3\nusemtl nowhere\nf 1 3 2\nfoo 1 2\n")
@@ -286,6 +291,7 @@ def test_warnings_are_one_line_each_and_silenced_by_q(tmp_path):
     assert quiet.returncode == 0 and quiet.stderr == ""
 
 
+@slow
 def test_usd_diagnostics_become_one_warning_line(tmp_path):
     """pxr prints its C++ diagnostics straight to stderr, several lines each: they arrive as one
     warprt warning, and the stage still loads."""

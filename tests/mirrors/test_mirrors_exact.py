@@ -11,9 +11,11 @@ import pytest
 
 import warprt
 from accuracy.test_random_scenes import random_scene
-from shortcuts import IDS, SCENES, at_width, same_as_traced
+from marks import slow
+from shortcuts import IDS, SCENE_CASES, SCENES, SEEDS, at_width, same_as_traced
 from tests.scenekit import make_scene
-from tests.zbuffer.test_hybrid_exact import CASES, case_scene
+from tests.zbuffer.test_agreement import QUICK_CASES
+from tests.zbuffer.test_hybrid_exact import case_scene
 from warprt.geometry import Geometry
 from warprt.image import MirrorFrame
 from warprt.scene import resolve_effects
@@ -35,7 +37,7 @@ def counts(scene, **options):
     return level_counts(scene, geom, data, frame.mirrors), frame
 
 
-@pytest.mark.parametrize("path", SCENES, ids=IDS)
+@pytest.mark.parametrize("path", SCENE_CASES)
 def test_every_reflection_ray_the_mirrors_decide_gets_the_bvh_answer(path):
     """At 160 pixels across; at 1024x768 the share decided was 97.7-99.6 % of the first and second
     reflection levels of the scenes with planar mirrors (92 % on the knot's floor, under 524,288 small
@@ -83,12 +85,13 @@ def test_without_their_margins_the_mirrors_get_rays_wrong():
     assert c[0, 2] > 0
 
 
+@slow
 def test_the_edge_grid_image_is_the_traced_image():
     _, mirrors = same_as_traced(edge_grid_scene(1e-5), "reflections", "mirrors")
     assert mirrors.stats.reflections == "mirrors" and mirrors.stats.mirrors["decided"] > 500
 
 
-@pytest.mark.parametrize("path", SCENES, ids=IDS)
+@pytest.mark.parametrize("path", SCENE_CASES)
 def test_mirror_reflections_give_the_traced_image_on_every_scene(path):
     scene = at(path, 200, spp=4)
     _, mirrors = same_as_traced(scene, "reflections", "mirrors", primary="raytrace")
@@ -97,11 +100,11 @@ def test_mirror_reflections_give_the_traced_image_on_every_scene(path):
     assert mirrors.stats.reflections == ("mirrors" if flat_mirror else "bvh")
 
 
-@pytest.mark.parametrize("name", CASES)
+@pytest.mark.parametrize("name", QUICK_CASES)
 def test_mirror_reflections_give_the_traced_image_on_the_zbuffer_hard_cases(name):
     same_as_traced(case_scene(name).with_render(max_depth=3), "reflections", "mirrors", primary="raytrace")
 
 
-@pytest.mark.parametrize("seed", range(12))
+@pytest.mark.parametrize("seed", SEEDS)
 def test_mirror_reflections_give_the_traced_image_on_random_scenes(seed):
     same_as_traced(random_scene(seed), "reflections", "mirrors", primary="raytrace")

@@ -5,6 +5,7 @@ The stats give the chains, the rays decided and their share, and the memory; the
 import pytest
 
 import warprt
+from marks import slow
 from shortcuts import ROOT, command_stats
 
 
@@ -33,6 +34,7 @@ def test_unknown_reflection_query_is_a_scene_error():
         warprt.render(warprt.load_scene().with_camera(width=8, height=6), reflections="portals")
 
 
+@slow
 def test_the_command_line_flag_and_stats(tmp_path):
     stats = command_stats(tmp_path, "--reflection-rays", "mirrors")
     assert stats["reflections"] == "mirrors" and stats["mirrors"]["decided"] > 0

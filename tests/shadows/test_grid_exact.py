@@ -12,9 +12,10 @@ import pytest
 
 import warprt
 from accuracy.test_random_scenes import random_scene
-from shortcuts import IDS, SCENES, at_width, same_as_traced
+from shortcuts import IDS, SCENE_CASES, SCENES, SEEDS, at_width, same_as_traced
 from tests.scenekit import make_scene
-from tests.zbuffer.test_hybrid_exact import CASES, case_scene
+from tests.zbuffer.test_agreement import QUICK_CASES
+from tests.zbuffer.test_hybrid_exact import case_scene
 from warprt.geometry import Geometry, ShadowGridBuild, cells_for
 from warprt.scene import Light
 
@@ -37,7 +38,7 @@ def grid_of(geom, scene, **kw):
     return ShadowGridBuild(geom.points_np, geom.indices_np, lights, cells_for(geom.triangle_count), **kw), lights
 
 
-@pytest.mark.parametrize("path", SCENES, ids=IDS)
+@pytest.mark.parametrize("path", SCENE_CASES)
 def test_every_shadow_ray_of_every_scene_gets_the_bvh_answer(path):
     scene = at(path, 160)
     geom = Geometry(scene)
@@ -49,7 +50,7 @@ def test_every_shadow_ray_of_every_scene_gets_the_bvh_answer(path):
     assert counts["mismatches"] == 0
 
 
-@pytest.mark.parametrize("path", SCENES, ids=IDS)
+@pytest.mark.parametrize("path", SCENE_CASES)
 def test_rays_through_every_vertex_and_edge_midpoint_get_the_bvh_answer(path):
     scene = at(path, 16)
     geom = Geometry(scene)
@@ -105,14 +106,14 @@ def test_a_grid_over_its_memory_budget_is_not_built():
     assert build.grid is None and "budget" in build.reason and build.nbytes > 1 << 20
 
 
-@pytest.mark.parametrize("name", CASES)
+@pytest.mark.parametrize("name", QUICK_CASES)
 def test_grid_shadows_give_the_traced_image_on_the_zbuffer_hard_cases(name):
     scene = case_scene(name)
     traced, grid = same_as_traced(scene, "shadows", "grid", primary="raytrace")
     assert grid.stats.shadows == ("grid" if traced.stats.rays["shadow"] and scene.triangle_count else "bvh")
 
 
-@pytest.mark.parametrize("path", SCENES, ids=IDS)
+@pytest.mark.parametrize("path", SCENE_CASES)
 def test_grid_shadows_give_the_traced_image_on_every_scene(path):
     scene = at(path, 200).with_render(spp=4)
     traced, grid = same_as_traced(scene, "shadows", "grid", primary="raytrace", reflections="bvh")
@@ -122,6 +123,6 @@ def test_grid_shadows_give_the_traced_image_on_every_scene(path):
     assert grid.stats.variant.endswith("_gshadow") == (grid.stats.shadows == "grid")
 
 
-@pytest.mark.parametrize("seed", range(12))
+@pytest.mark.parametrize("seed", SEEDS)
 def test_grid_shadows_give_the_traced_image_on_random_scenes(seed):
     same_as_traced(random_scene(seed), "shadows", "grid", primary="raytrace")

@@ -7,6 +7,7 @@ from dataclasses import replace
 import pytest
 
 import warprt
+from marks import slow
 from shortcuts import command_stats
 from warprt.geometry import Geometry
 from warprt.image import light_history, shadows_from_grid
@@ -56,6 +57,7 @@ def test_the_grid_is_kept_for_the_next_frame_with_the_same_lights():
     assert again["grid"] == "reused" and again["entries"] == first["entries"]
 
 
+@slow
 def test_a_scene_without_shadow_rays_builds_no_grid():
     scene = warprt.load_scene().with_camera(width=64, height=48).with_render(shadows=False)
     stats = warprt.render(scene, shadows="grid").stats
@@ -67,6 +69,7 @@ def test_unknown_shadow_query_is_a_scene_error():
         warprt.render(warprt.load_scene().with_camera(width=8, height=6), shadows="photons")
 
 
+@slow
 def test_the_command_line_flag_and_stats(tmp_path):
     stats = command_stats(tmp_path, "--shadow-rays", "grid")
     assert stats["shadows"] == "grid" and stats["shadow_grid"]["lights_on_grid"] == 2
