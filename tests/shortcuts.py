@@ -10,6 +10,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 import warprt
 from marks import quick_cases
@@ -35,6 +36,12 @@ def same_as_traced(scene, option: str, shortcut: str, **choices):
     fast = warprt.render(scene, **{option: shortcut}, **choices)
     assert np.array_equal(fast.image, traced.image) and fast.stats.rays == traced.stats.rays
     return traced, fast
+
+
+def assert_unknown_choice_refused(option: str, value: str):
+    """render(``option``=``value``) for a value render() does not know: a SceneError naming the argument."""
+    with pytest.raises(warprt.SceneError, match=rf"render\(\): {option}: unknown"):
+        warprt.render(warprt.load_scene().with_camera(width=8, height=6), **{option: value})
 
 
 def command_stats(tmp_path, *flags) -> dict:

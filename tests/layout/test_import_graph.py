@@ -87,13 +87,19 @@ def test_src_has_no_import_circle():
     assert circles(import_graph(PACKAGE)) == []
 
 
-def test_a_planted_circle_is_found(tmp_path):
-    """The negative control: the same check on a copy of the package with one import turned back up."""
+def package_copy(tmp_path) -> Path:
+    """A copy of the package's modules under tmp_path/warprt, for a negative control to plant a fault in."""
     pkg = tmp_path / "warprt"
     for p in PACKAGE.rglob("*.py"):
         dest = pkg / p.relative_to(PACKAGE)
         dest.parent.mkdir(parents=True, exist_ok=True)
         dest.write_text(p.read_text())
+    return pkg
+
+
+def test_a_planted_circle_is_found(tmp_path):
+    """The negative control: the same check on a copy of the package with one import turned back up."""
+    pkg = package_copy(tmp_path)
     model = pkg / "scene" / "model.py"
     model.write_text(model.read_text() + "\n\ndef _planted():\n    from ..image import renderer\n")
     found = circles(import_graph(pkg))
@@ -152,11 +158,7 @@ def test_only_the_command_line_mentions_its_flags():
 
 def test_a_planted_flag_is_found(tmp_path):
     """The negative control: a copy of the package with a flag in one error message and one docstring."""
-    pkg = tmp_path / "warprt"
-    for p in PACKAGE.rglob("*.py"):
-        dest = pkg / p.relative_to(PACKAGE)
-        dest.parent.mkdir(parents=True, exist_ok=True)
-        dest.write_text(p.read_text())
+    pkg = package_copy(tmp_path)
     launch = pkg / "image" / "launch.py"
     launch.write_text(launch.read_text() + '\n\ndef _planted(t):\n    """As --threads says."""\n'
                       '    raise ValueError(f"command line: --threads: got {t}")\n')

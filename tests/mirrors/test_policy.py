@@ -2,11 +2,9 @@
 them (measured here: the rasters cost about what the queries they replace do, benchmarks/ATTEMPTS.md).
 The stats give the chains, the rays decided and their share, and the memory; the flag is checked."""
 
-import pytest
-
 import warprt
 from marks import slow
-from shortcuts import ROOT, command_stats
+from shortcuts import ROOT, assert_unknown_choice_refused, command_stats
 
 
 def test_mirrors_decide_most_reflection_rays_of_the_default_scene():
@@ -30,8 +28,7 @@ def test_a_scene_without_planar_mirrors_traces_its_reflections():
 
 
 def test_unknown_reflection_query_is_a_scene_error():
-    with pytest.raises(warprt.SceneError, match=r"render\(\): reflections: unknown"):
-        warprt.render(warprt.load_scene().with_camera(width=8, height=6), reflections="portals")
+    assert_unknown_choice_refused("reflections", "portals")
 
 
 @slow

@@ -4,11 +4,9 @@ the grid is kept with the geometry, its memory counted in the stats, and the fla
 
 from dataclasses import replace
 
-import pytest
-
 import warprt
 from marks import slow
-from shortcuts import command_stats
+from shortcuts import assert_unknown_choice_refused, command_stats
 from warprt.geometry import Geometry
 from warprt.image import light_history, shadows_from_grid
 from warprt.scene import resolve_effects
@@ -65,8 +63,7 @@ def test_a_scene_without_shadow_rays_builds_no_grid():
 
 
 def test_unknown_shadow_query_is_a_scene_error():
-    with pytest.raises(warprt.SceneError, match=r"render\(\): shadows: unknown"):
-        warprt.render(warprt.load_scene().with_camera(width=8, height=6), shadows="photons")
+    assert_unknown_choice_refused("shadows", "photons")
 
 
 @slow
