@@ -2,6 +2,7 @@
 image -> dataset -> cli), with no import circle, and tests, benchmarks and reference/ use the package's faces."""
 
 import ast
+import functools
 import re
 from pathlib import Path
 
@@ -47,6 +48,7 @@ def imports_of(name: str, path: Path, modules: dict) -> set[str]:
     return found
 
 
+@functools.cache  # one parse of the package for every test that reads its graph
 def import_graph(package: Path) -> dict[str, set[str]]:
     modules = module_files(package)
     return {m: imports_of(m, p, modules) for m, p in modules.items()}
