@@ -4,7 +4,7 @@ LLVM ?= /usr/lib/x86_64-linux-gnu/libLLVM.so.19.1
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 export DRJIT_LIBLLVM_PATH ?= $(LLVM)
 
-.PHONY: install install-extras llvm demo test figures benchmark
+.PHONY: install install-extras llvm demo test quick figures benchmark
 
 # The package alone: rendering an image needs neither pytest, Mitsuba nor Ray.
 install:
@@ -26,6 +26,10 @@ demo: install
 TEST_WORKERS ?= 2
 test: install-extras llvm
 	$(PYTHON) -m pytest -q -n $(TEST_WORKERS) --dist loadfile
+
+# The inner loop: every test not marked slow (pyproject.toml's markers), under a minute on 2 cores.
+quick: install-extras llvm
+	$(PYTHON) -m pytest -q -n $(TEST_WORKERS) -m "not slow"
 
 # The seed's Figures 6-8 and the cost-growth plot, into benchmarks/figures/.
 figures: install-extras

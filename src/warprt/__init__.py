@@ -9,29 +9,29 @@ triangles relative to the objects' centre, BVH) -> kernels/ (Warp functions) -> 
 frames) -> cli.py.
 """
 
+from typing import TYPE_CHECKING
+
 from .errors import SceneError, SceneWarning
-from .scene import Camera, EffectSet, Light, Material, RenderSettings, Scene, SceneObject, load_scene
+from .scene import Camera, Light, Material, RenderSettings, Scene, SceneObject, load_scene
+
+if TYPE_CHECKING:
+    from .dataset import batch
+    from .image import render
 
 __version__ = "0.1.0"
 
-__all__ = ["Camera", "EffectSet", "Light", "Material", "RenderResult", "RenderSettings", "RenderStats",
-           "Scene", "SceneError", "SceneObject", "SceneWarning", "batch", "load_scene", "render", "__version__"]
-
-_RENDERER_NAMES = ("render", "RenderResult", "RenderStats")
+__all__ = ["Camera", "Light", "Material", "RenderSettings", "Scene", "SceneError", "SceneObject", "SceneWarning",
+           "batch", "load_scene", "render", "__version__"]
 
 
 def __getattr__(name):
-    """The renderer (and batch, which uses it) is imported on first use: importing Warp takes about
-    0.4 s, which reading or checking a scene file (and Mitsuba's reference) should not pay."""
-    if name in _RENDERER_NAMES:
-        from . import image
-
-        for n in _RENDERER_NAMES:
-            globals()[n] = getattr(image, n)
-        return globals()[name]
-    if name == "batch":  # the function; the subpackage it lives in is warprt.dataset
-        from .dataset import batch
-
-        globals()["batch"] = batch
-        return batch
-    raise AttributeError(f"module 'warprt' has no attribute '{name}'")
+    """render and batch, imported on first use: the one place warprt defers Warp's import (about
+    0.2 s), which reading or checking a scene (warprt info, Mitsuba's reference) does not need."""
+    if name == "render":
+        from .image import render as value
+    elif name == "batch":
+        from .dataset import batch as value
+    else:
+        raise AttributeError(f"module 'warprt' has no attribute '{name}'")
+    globals()[name] = value
+    return value

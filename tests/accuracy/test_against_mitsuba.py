@@ -6,6 +6,7 @@ import pytest
 import warprt
 
 from accuracy.harness import ROOT, SCENES, check, record, small
+from marks import quick_cases
 
 pytestmark = pytest.mark.accuracy
 
@@ -26,14 +27,14 @@ def test_scenes_exist():
     assert SCENES, "scenes/*.toml is empty: the suite would check nothing"
 
 
-@pytest.mark.parametrize("path", SCENES, ids=[p.stem for p in SCENES])
+@pytest.mark.parametrize("path", quick_cases(SCENES, {"cornell", "tilted"}, [p.stem for p in SCENES]))
 def test_scene_matches_mitsuba(path):
     """Each scene as its file describes it (effects, ray levels, spp), at a small size."""
     result = check(f"scene_{path.stem}", small(path))
     print(f"\n{path.stem}: {record(result)}")
 
 
-@pytest.mark.parametrize("path", SCENES, ids=[p.stem for p in SCENES])
+@pytest.mark.parametrize("path", quick_cases(SCENES, {"cornell", "tilted"}, [p.stem for p in SCENES]))
 def test_hybrid_rendering_matches_mitsuba(path):
     """Primary hits from the Z-buffer, shadows and reflections traced: held to the same thresholds,
     every differing pixel explained by the same float64 oracle."""

@@ -23,6 +23,7 @@ from reference.mitsuba_whitted import Switches
 from warprt.scene import resolve_effects
 
 from accuracy.harness import ROOT, SCENES, TIE_MARGIN, small
+from marks import quick_cases
 from oracle import Whitted
 
 pytestmark = pytest.mark.accuracy
@@ -90,7 +91,7 @@ def errors(scene, a, m, where):
             "normal": angle(a["normal"], normal)[where]}
 
 
-@pytest.mark.parametrize("path", SCENES, ids=[p.stem for p in SCENES])
+@pytest.mark.parametrize("path", quick_cases(SCENES, {"cornell", "tilted"}, [p.stem for p in SCENES]))
 def test_scene_aovs_match_mitsubas_aov_integrator(path):
     scene = small(path, **{"render.spp": 1})
     a = warprt.render(scene, aovs=AOVS).aovs

@@ -15,6 +15,7 @@ from pathlib import Path
 
 import pytest
 
+from marks import slow
 from warprt.scene import shapes
 
 SHAPE_TABLE = shapes.SHAPES
@@ -230,6 +231,7 @@ def test_corpus_is_large_enough():
     assert len({name for name, _, _ in CASES}) == len(CASES)
 
 
+@slow
 @pytest.mark.parametrize("name,argv,message", CASES, ids=[c[0] for c in CASES])
 def test_bad_input_gives_its_message(outcomes, name, argv, message):
     result, before, after = outcomes[name]
@@ -241,6 +243,7 @@ def test_bad_input_gives_its_message(outcomes, name, argv, message):
     assert after == before
 
 
+@slow
 def test_unavailable_device_is_a_bad_input(tmp_path):
     import warp as wp
 
@@ -258,6 +261,7 @@ def test_unavailable_device_is_a_bad_input(tmp_path):
     assert _listing(tmp_path / "c") == before
 
 
+@slow
 def test_debug_shows_the_traceback(tmp_path):
     shutil.copytree(CORPUS, tmp_path / "c")
     for argv in (["render", "--debug", "missing_mesh.toml"], ["--debug", "render", "missing_mesh.toml"]):
@@ -267,6 +271,7 @@ def test_debug_shows_the_traceback(tmp_path):
         assert r.stderr.rstrip().endswith("missing_mesh.toml: objects[0].mesh: meshes/nothere.obj: mesh file not found")
 
 
+@slow
 def test_a_failed_render_keeps_the_earlier_image(tmp_path):
     """The output is replaced only by a complete new image: a bad input leaves the old one intact."""
     shutil.copytree(CORPUS, tmp_path / "c")

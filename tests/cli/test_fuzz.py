@@ -15,55 +15,26 @@ from pathlib import Path
 
 import pytest
 
+from marks import slow
+from scenekit import to_toml
 from warprt.cli import main
 from warprt.image import read_image
 
 CASES_PER_SEED = 24
 SECONDS_PER_CASE = 20  # a hang is a failure; the slowest cases (a first kernel compile) take a few seconds
 
-SCENE = textwrap.dedent("""\
-    [camera]
-    eye = [2.0, 1.5, 4.0]
-    center = [0.0, 0.0, 0.0]
-    up = [0.0, 1.0, 0.0]
-    fovy = 45.0
-    near = 1.0
-    width = 8
-    height = 6
-
-    [render]
-    ambient = [0.1, 0.1, 0.1]
-    max_depth = 2
-    spp = 1
-
-    [[lights]]
-    position = [4.0, 6.0, 4.0]
-    color = [1.0, 1.0, 1.0]
-
-    [materials.red]
-    kd = [0.7, 0.1, 0.1]
-    ks = [0.3, 0.3, 0.3]
-    shininess = 32.0
-    reflectivity = 0.2
-
-    [[objects]]
-    shape = "sphere"
-    radius = 0.5
-    subdivisions = 1
-    material = "red"
-    translate = [0.5, 0.0, 0.0]
-
-    [[objects]]
-    mesh = "tri.obj"
-    material = "red"
-    scale = [1.0, 2.0, 1.0]
-    rotate = [0.0, 30.0, 0.0]
-
-    [[objects]]
-    shape = "triangles"
-    vertices = [[-1.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]
-    faces = [[0, 1, 2]]
-    """)
+SCENE = to_toml({
+    "camera": {"eye": [2.0, 1.5, 4.0], "center": [0.0, 0.0, 0.0], "up": [0.0, 1.0, 0.0], "fovy": 45.0, "near": 1.0,
+               "width": 8, "height": 6},
+    "render": {"ambient": [0.1, 0.1, 0.1], "max_depth": 2, "spp": 1},
+    "lights": [{"position": [4.0, 6.0, 4.0], "color": [1.0, 1.0, 1.0]}],
+    "materials": {"red": {"kd": [0.7, 0.1, 0.1], "ks": [0.3, 0.3, 0.3], "shininess": 32.0, "reflectivity": 0.2}},
+    "objects": [
+        {"shape": "sphere", "radius": 0.5, "subdivisions": 1, "material": "red", "translate": [0.5, 0.0, 0.0]},
+        {"mesh": "tri.obj", "material": "red", "scale": [1.0, 2.0, 1.0], "rotate": [0.0, 30.0, 0.0]},
+        {"shape": "triangles", "vertices": [[-1.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], "faces": [[0, 1, 2]]},
+    ],
+})
 
 OBJ = "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvn 0 0 1\nusemtl paint\nf 1//1 2//1 3//1\nusemtl mirror\nf 1//1 3//1 4//1\n"
 MTL = "newmtl paint\nKa 0.1 0.1 0.1\nKd 0.8 0.2 0.2\nKs 0.5 0.5 0.5\nNs 40\nillum 2\nnewmtl mirror\nKd 0.1 0.1 0.1\nKs 0.9 0.9 0.9\nillum 3\n"
@@ -262,6 +233,7 @@ def _files(folder: Path) -> set:
     return {p.name for p in folder.iterdir()}
 
 
+@slow
 def test_the_seeds_render(seeds, tmp_path, capfd):
     """The negative control: unmutated, every seed renders, so a refusal below is the mutation's."""
     for name, (data, companions) in seeds.items():

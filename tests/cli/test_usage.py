@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from marks import slow
 from scenekit import write_scene
 from warprt.image import read_image
 
@@ -89,6 +90,7 @@ def scene_file(tmp_path):
     return write_scene(tmp_path, SCENE, "s.toml")
 
 
+@slow
 def test_flags_reach_the_render(scene_file, tmp_path):
     out = tmp_path / "o.npy"
     r = run("render", str(scene_file), "-o", str(out), "--width", "20", "--height", "10", "--spp", "4",
@@ -102,6 +104,7 @@ def test_flags_reach_the_render(scene_file, tmp_path):
     assert np.load(out).shape == (10, 20, 3)
 
 
+@slow
 def test_stats_file_matches_stats_and_reports_memory(scene_file, tmp_path):
     r = run("render", str(scene_file), "-o", str(tmp_path / "o.png"), "--stats", "--stats-file", str(tmp_path / "s.json"))
     assert r.returncode == 0, r.stderr
@@ -118,6 +121,7 @@ def test_stats_file_matches_stats_and_reports_memory(scene_file, tmp_path):
     assert read_image(tmp_path / "o.png").shape == (32, 48, 3)
 
 
+@slow
 def test_info_summarises_the_scene(scene_file):
     r = run("info", str(scene_file))
     assert r.returncode == 0, r.stderr
@@ -132,6 +136,7 @@ def test_info_summarises_the_scene(scene_file):
     assert re.match(r"[\d.]+ (B|KiB|MiB) geometry: vertices .*, indices .*, bvh .*; peak RSS [\d.]+ MiB", lines["memory"])
 
 
+@slow
 def test_mesh_file_renders_with_stats_file_and_quiet(tmp_path):
     """A bare mesh, framed automatically; -q prints nothing at all."""
     (tmp_path / "t.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
@@ -147,6 +152,7 @@ def test_mesh_file_renders_with_stats_file_and_quiet(tmp_path):
 LONG = ["--width", "640", "--height", "480", "--spp", "9", "--threads", "1"]  # ~10 M rays: seconds on one core
 
 
+@slow
 def test_progress_line_on_a_terminal(tmp_path):
     code, err, out = run_on_terminal("render", "-o", str(tmp_path / "p.png"), *LONG)
     assert code == 0, err
@@ -160,12 +166,14 @@ def test_progress_line_on_a_terminal(tmp_path):
     assert err.rstrip().splitlines()[-1].split("\x1b[K")[-1].startswith("wrote ")  # the bar is cleared at the end
 
 
+@slow
 def test_no_progress_for_a_short_render_on_a_terminal(tmp_path):
     code, err, _ = run_on_terminal("render", "-o", str(tmp_path / "p.png"), "--width", "16", "--height", "12")
     assert code == 0
     assert "tiles" not in err and err.startswith("wrote ")
 
 
+@slow
 @pytest.mark.parametrize("where", ["pipe", "quiet"])
 def test_progress_silent_off_terminal_and_with_quiet(tmp_path, where):
     """Even with the line due at once (WARPRT_PROGRESS_AFTER=0): a pipe gets none, -q gets nothing."""
@@ -182,6 +190,7 @@ def test_progress_silent_off_terminal_and_with_quiet(tmp_path, where):
     assert code == 0 and "tiles" in err
 
 
+@slow
 def test_an_open_glass_mesh_is_one_warning_line_and_the_render_goes_on(tmp_path):
     """A dielectric must be closed for its inside to be known; an open one still renders (each crossing
     switches the medium by the winding), with one line on stderr saying so."""

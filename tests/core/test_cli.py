@@ -9,6 +9,7 @@ import numpy as np
 import trimesh
 
 import warprt
+from marks import slow
 from warprt.image import read_image
 
 
@@ -21,6 +22,7 @@ def run(*args, cwd=None):
     return subprocess.run([sys.executable, "-m", "warprt", *args], capture_output=True, text=True, cwd=cwd, env=env)
 
 
+@slow
 def test_render_default_scene_png_matches_api(tmp_path):
     out = tmp_path / "default.png"
     r = run("render", "-o", str(out), "--width", "80", "--height", "60")
@@ -32,12 +34,14 @@ def test_render_default_scene_png_matches_api(tmp_path):
     assert np.abs(png - np.clip(image, 0, 1)).max() < 0.01
 
 
+@slow
 def test_render_without_output_writes_warprt_png(tmp_path):
     r = run("render", "--width", "32", "--height", "24", cwd=tmp_path)
     assert r.returncode == 0, r.stderr
     assert read_image(tmp_path / "warprt.png").shape == (24, 32, 3)
 
 
+@slow
 def test_render_a_bare_mesh_frames_it(tmp_path):
     mesh = trimesh.creation.torus(major_radius=30.0, minor_radius=8.0)
     mesh.apply_translation([100.0, -50.0, 20.0])

@@ -3,8 +3,10 @@
 import numpy as np
 
 import warprt
+from marks import slow
 
 
+@slow
 def test_bit_identical_across_runs_threads_and_bands():
     scene = warprt.load_scene().with_camera(width=96, height=72).with_render(spp=4)
     first, stats = warprt.render(scene, threads=2)

@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 
 import warprt
+from marks import slow
 from warprt.image import raster_is_cheaper
 from core.test_shading import wall_scene, wall_terms
 
@@ -17,6 +18,7 @@ def test_hybrid_gives_the_closed_form_phong_terms():
     np.testing.assert_allclose(image, expect, rtol=2e-4, atol=2e-6)
 
 
+@slow
 def test_hybrid_is_bit_identical_across_threads_and_bands():
     scene = warprt.load_scene().with_camera(width=96, height=72).with_render(spp=4)
     first, stats = warprt.render(scene, primary="zbuffer", threads=2)
@@ -35,6 +37,7 @@ def test_auto_rasterizes_only_where_it_is_cheaper():
     assert not raster_is_cheaper(10, 10_000, device="cuda")
 
 
+@slow
 def test_auto_traces_a_frame_whose_raster_buffers_would_be_large():
     """28 bytes per sample: 1920x1080 at 9 spp (18.7 M samples, 522 MB) still rasterizes, 16 spp (33 M,
     929 MB) is traced; the memory stats count the buffers when they exist."""

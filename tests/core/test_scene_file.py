@@ -8,60 +8,30 @@ import trimesh
 
 import warprt
 from oracle import rotation, vertex_normals
+from scenekit import write_scene
 
-EXAMPLE = """
-[camera]
-eye = [0.0, 1.5, 5.0]
-center = [0.0, 0.8, 0.0]
-up = [0.0, 1.0, 0.0]
-fovy = 45.0
-near = 1.0
-width = 64
-height = 48
-
-[render]
-ambient = [0.1, 0.1, 0.1]
-background = [0.0, 0.0, 0.0]
-max_depth = 3
-shadows = true
-spp = 1
-
-[[lights]]
-position = [4.0, 6.0, 4.0]
-color = [1.0, 1.0, 1.0]
-
-[materials.red]
-ka = [0.2, 0.02, 0.02]
-kd = [0.7, 0.1, 0.1]
-ks = [0.5, 0.5, 0.5]
-shininess = 32.0
-reflectivity = 0.0
-
-[materials.plain]
-kd = [0.3, 0.4, 0.5]
-reflectivity = 0.25
-
-[[objects]]
-mesh = "meshes/thing.ply"
-material = "red"
-scale = 2.0
-rotate = [0.0, 90.0, 0.0]
-translate = [1.0, 0.0, 0.0]
-smooth = false
-
-[[objects]]
-shape = "box"
-size = [1.0, 2.0, 3.0]
-material = "plain"
-"""
+EXAMPLE = {
+    "camera": {"eye": [0.0, 1.5, 5.0], "center": [0.0, 0.8, 0.0], "up": [0.0, 1.0, 0.0], "fovy": 45.0, "near": 1.0,
+               "width": 64, "height": 48},
+    "render": {"ambient": [0.1, 0.1, 0.1], "background": [0.0, 0.0, 0.0], "max_depth": 3, "shadows": True, "spp": 1},
+    "lights": [{"position": [4.0, 6.0, 4.0], "color": [1.0, 1.0, 1.0]}],
+    "materials": {
+        "red": {"ka": [0.2, 0.02, 0.02], "kd": [0.7, 0.1, 0.1], "ks": [0.5, 0.5, 0.5], "shininess": 32.0, "reflectivity": 0.0},
+        "plain": {"kd": [0.3, 0.4, 0.5], "reflectivity": 0.25},
+    },
+    "objects": [
+        {"mesh": "meshes/thing.ply", "material": "red", "scale": 2.0, "rotate": [0.0, 90.0, 0.0],
+         "translate": [1.0, 0.0, 0.0], "smooth": False},
+        {"shape": "box", "size": [1.0, 2.0, 3.0], "material": "plain"},
+    ],
+}
 
 
 def test_example_scene_parses(tmp_path):
     (tmp_path / "meshes").mkdir()
     tri = trimesh.Trimesh(vertices=[[0, 0, 0], [1, 0, 0], [0, 1, 0]], faces=[[0, 1, 2]], process=False)
     tri.export(tmp_path / "meshes" / "thing.ply")
-    (tmp_path / "scene.toml").write_text(EXAMPLE)
-    scene = warprt.load_scene(tmp_path / "scene.toml")
+    scene = warprt.load_scene(write_scene(tmp_path, EXAMPLE))
     assert scene.camera.fovy == 45.0 and scene.camera.width == 64
     assert scene.render.max_depth == 3 and scene.render.shadows is True
     assert scene.lights[0].position == (4.0, 6.0, 4.0)

@@ -5,6 +5,8 @@ import json
 
 import pytest
 
+from marks import slow
+
 from dataset.jobs import SCENE, cli, require_ray, write_job
 
 BAD = [
@@ -48,6 +50,7 @@ def test_bad_input_is_one_line_exit_2(tmp_path, capsys, body, expected):
     assert not manifest.exists() or manifest.read_text() == ""
 
 
+@slow
 def test_the_command_exits_2_with_the_one_line(tmp_path):
     job = write_job(tmp_path, BAD[-1][0])
     r = cli("batch", job, "-o", tmp_path / "out", "-q")
@@ -69,6 +72,7 @@ def test_bad_options_are_one_line_exit_2(tmp_path, capsys, args, expected):
     assert code == 2 and len(err.splitlines()) == 1 and expected in err, err
 
 
+@slow
 def test_cli_run_writes_frames_and_manifest(tmp_path):
     job = write_job(tmp_path, 'scene = "{scene}"\noutput = "f/{frame:02d}.png"\n[orbit]\nframes = 3\n')
     r = cli("batch", job, "--workers", "1", "-q")  # default output folder: the job file's

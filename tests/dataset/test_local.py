@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 import warprt
+from marks import slow
 from warprt.dataset import batch, read_rows
 from warprt.image import read_aovs, read_image
 
@@ -56,6 +57,7 @@ def test_frames_and_aovs_are_bit_identical_to_direct_renders(orbit_run):
         assert r["stats"]["rays"] == direct.stats.rays and r["stats"]["spp"] == r["sweep"]["render.spp"]
 
 
+@slow
 def test_png_and_exr_frames_are_the_files_warprt_render_writes(tmp_path):
     """The same bytes as the command writes with --set for the frame's overrides: PNG, its AOV files, EXR."""
     for ext in ("png", "exr"):
@@ -76,6 +78,7 @@ def test_png_and_exr_frames_are_the_files_warprt_render_writes(tmp_path):
             assert (tmp_path / ext / r["outputs"][name]).read_bytes() == path.read_bytes(), (ext, name)
 
 
+@slow
 def test_killed_worker_leaves_every_frame_once(tmp_path):
     job = write_job(tmp_path, 'scene = "{scene}"\noutput = "f/{frame:02d}.png"\naovs = ["depth", "normal", "object"]\n'
                               '[set]\n"camera.width" = 64\n"camera.height" = 48\n"render.spp" = 4\n[orbit]\nframes = 12\n')
@@ -99,6 +102,7 @@ def test_killed_worker_leaves_every_frame_once(tmp_path):
         assert read_aovs(tmp_path / "out" / r["outputs"]["color"])["depth"].shape == (48, 64)
 
 
+@slow
 def test_resume_after_an_interrupt_renders_only_what_is_missing(tmp_path):
     n = 16
     job = write_job(tmp_path, 'scene = "{scene}"\noutput = "f/{frame:02d}.png"\n'

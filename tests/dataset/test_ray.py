@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 import warprt
+from marks import slow
 from warprt import SceneError
 from warprt.dataset import RAY_MESSAGES, batch, connect_ray, read_rows
 from warprt.image import read_aovs, read_image
@@ -30,6 +31,7 @@ def ray():
     ray.shutdown()
 
 
+@slow
 def test_ray_frames_match_direct_renders(ray, tmp_path):
     job = write_job(tmp_path, f'scene = "{{scene}}"\noutput = "f/{{frame}}_{{render.spp}}.npz"\naovs = {AOVS}\n'
                               '[orbit]\nframes = 3\n[sweep]\n"render.spp" = [1, 4]\n')
@@ -45,6 +47,7 @@ def test_ray_frames_match_direct_renders(ray, tmp_path):
         assert all(np.array_equal(a, direct.aovs[n]) for n, a in read_aovs(path).items())
 
 
+@slow
 def test_killed_actor_leaves_every_frame_once(ray, tmp_path, capfd):
     n = 12
     job = write_job(tmp_path, 'scene = "{scene}"\noutput = "f/{frame:02d}.npz"\n'
@@ -69,6 +72,7 @@ def test_killed_actor_leaves_every_frame_once(ray, tmp_path, capfd):
     assert "(raylet)" not in out + err  # Ray's "a worker died ... will be retried" kept off the terminal
 
 
+@slow
 def test_bad_frame_on_a_ray_worker_fails_the_job_naming_it(ray, tmp_path):
     job = write_job(tmp_path, 'scene = "{scene}"\noutput = "f/{frame}.npz"\n'
                               '[[cameras]]\neye = [0.0, 1.5, 5.0]\n[[cameras]]\neye = [0.0, 0.6, 0.0]\n')

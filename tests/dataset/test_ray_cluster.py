@@ -4,12 +4,14 @@ a job; batch(ray=ADDRESS) joins it as `warprt batch --ray ADDRESS` does."""
 import numpy as np
 
 import warprt
+from marks import slow
 from warprt.dataset import batch
 from warprt.image import read_image
 
 from dataset.jobs import SCENE, require_ray, write_job
 
 
+@slow
 def test_two_node_cluster_runs_a_job(tmp_path):
     ray = require_ray()
     from ray.cluster_utils import Cluster

@@ -10,6 +10,7 @@ import pytest
 import warp as wp
 
 import warprt
+from marks import slow
 from scenekit import make_scene, write_scene
 from warprt.kernels import init_warp, make_trace_kernel, stack_size
 from warprt.scene import EFFECTS, EffectSet, resolve_effects, scene_effects
@@ -91,6 +92,7 @@ def test_absorption_acts_on_the_first_ray_level_too():
     assert fx.absorption and not fx.refraction
 
 
+@slow
 def test_scene_file_effects_setting_and_cli_flags(tmp_path):
     path = write_scene(tmp_path, {
         "camera": {"eye": [0, 0, 5], "center": [0, 0, 0], "width": 16, "height": 12},
@@ -137,6 +139,7 @@ MARKERS = {
 }
 
 
+@slow
 @pytest.mark.parametrize("off", EFFECTS)
 def test_disabled_effect_code_is_absent_from_the_compiled_variant(off):
     full = EffectSet(supersampling=True, smooth=True, texture=True, vertex_color=True, refraction=True, absorption=True)
@@ -174,6 +177,7 @@ AOV_MARKERS = {
 }
 
 
+@slow
 def test_aov_code_is_compiled_in_only_for_the_aovs_asked_for():
     fx = EffectSet()
     plain = _generated_source(fx)
@@ -184,6 +188,7 @@ def test_aov_code_is_compiled_in_only_for_the_aovs_asked_for():
     assert all(m in _generated_source(fx, aovs=tuple(AOV_MARKERS)) for m in AOV_MARKERS.values())
 
 
+@slow
 def test_a_second_process_loads_the_variant_from_the_disk_cache(tmp_path):
     """Warp caches compiled modules on disk: the second process start must not compile again."""
     script = textwrap.dedent(f"""

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 import warprt
+from marks import slow
 from scenekit import write_scene
 from warprt.image import AOVS, read_aovs, read_image
 
@@ -41,6 +42,7 @@ def written(tmp_path_factory):
     return folder, warprt.render(warprt.load_scene(scene_path), aovs=list(AOVS))
 
 
+@slow
 def test_npz_holds_the_colour_and_every_aov_exactly(written):
     folder, result = written
     with np.load(folder / "all.npz") as z:
@@ -50,6 +52,7 @@ def test_npz_holds_the_colour_and_every_aov_exactly(written):
             assert z[name].dtype == result.aovs[name].dtype and np.array_equal(z[name], result.aovs[name]), name
 
 
+@slow
 def test_exr_is_one_file_of_named_channels(written):
     import OpenEXR
 
@@ -71,6 +74,7 @@ def test_exr_is_one_file_of_named_channels(written):
         assert np.array_equal(aovs[name], expected), name
 
 
+@slow
 def test_png_is_unchanged_and_each_aov_is_an_exr_beside_it(written):
     import OpenEXR
 
@@ -85,6 +89,7 @@ def test_png_is_unchanged_and_each_aov_is_an_exr_beside_it(written):
     assert all(np.array_equal(aovs[n], result.aovs[n]) for n in aovs)
 
 
+@slow
 def test_no_temporary_file_is_left(written):
     folder, _ = written
     assert sorted(p.name for p in folder.iterdir() if p.name.startswith(".")) == []

@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from marks import slow
 from scenekit import write_scene
 from warprt.image import read_image, to_srgb8, write_image
 
@@ -48,6 +49,7 @@ def outputs(tmp_path_factory):
     return folder
 
 
+@slow
 def test_npy_is_the_linear_image(outputs):
     image = np.load(outputs / "out.npy")
     assert image.dtype == np.float32 and image.shape == (20, 40, 3)
@@ -58,6 +60,7 @@ def test_npy_is_the_linear_image(outputs):
     np.testing.assert_allclose(image[0, 0], [0.25, 0.5, 0.75], rtol=1e-6)
 
 
+@slow
 def test_exr_is_linear_float_and_exact(outputs):
     import OpenEXR
 
@@ -74,6 +77,7 @@ def test_exr_is_linear_float_and_exact(outputs):
     np.testing.assert_array_equal(read_image(outputs / "out.exr"), rgb)
 
 
+@slow
 def test_png_is_srgb_8bit(outputs):
     from PIL import Image
 

@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
+from marks import slow
 from scenekit import write_scene
 
 SRC = str(Path(__file__).resolve().parents[2] / "src")
@@ -39,6 +40,7 @@ def write_heightfield_ply(path: Path, n: int) -> int:
     return len(f)
 
 
+@slow
 def test_two_million_triangles_render_and_report_memory(tmp_path):
     n_tri = write_heightfield_ply(tmp_path / "field.ply", N)
     write_scene(tmp_path, {"camera": {"eye": [0.0, 2.0, 2.5], "center": [0.0, 0.0, 0.0], "width": 64, "height": 48},

@@ -13,7 +13,9 @@ import numpy as np
 import pytest
 
 import warprt
+from marks import slow
 from oracle import camera_rays, ray_plane
+from scenekit import write_scene
 from warprt.scene import read_mesh_file
 
 SRC = str(Path(__file__).resolve().parents[2] / "src")
@@ -24,15 +26,12 @@ def run(*args, cwd):
     return subprocess.run([sys.executable, "-m", "warprt", *args], capture_output=True, text=True, cwd=cwd, env=env)
 
 
-def load(tmp_path, objects: str, materials: str = "", render: str = ""):
-    (tmp_path / "s.toml").write_text(textwrap.dedent("""
-        [camera]
-        eye = [0.0, 0.0, 6.0]
-        center = [0.0, 0.0, 0.0]
-        width = 48
-        height = 36
-        """) + textwrap.dedent(render) + textwrap.dedent(materials) + textwrap.dedent(objects))
-    return warprt.load_scene(tmp_path / "s.toml")
+def load(tmp_path, objects: list, **tables):
+    """The scene read back from a real scene file: a camera on +z, ``objects``, and the file's other
+    tables (lights, materials, render) as given."""
+    doc = {"camera": {"eye": [0.0, 0.0, 6.0], "center": [0.0, 0.0, 0.0], "width": 48, "height": 36}, **tables,
+           "objects": objects}
+    return warprt.load_scene(write_scene(tmp_path, doc, "s.toml"))
 
 
 def face_normals(o):
@@ -49,7 +48,7 @@ CAPS = "f 3 7 5 1\nf 2 6 8 4\n"
 
 def test_obj_smoothing_groups_smooth_within_and_flat_off(tmp_path):
     (tmp_path / "c.obj").write_text(CUBE_V + "s 1\n" + SIDES + "s off\n" + CAPS)
-    (o,) = load(tmp_path, '[[objects]]\nmesh = "c.obj"\nsmooth = "auto"\n').objects
+    (o,) = load(tmp_path, [{"mesh": "c.obj", "smooth": "auto"}]).objects
     assert o.smooth and o.normals is not None
     n_corner = o.normals[o.faces]
     caps = np.abs(face_normals(o)[:, 2]) > 0.5  # the faces facing z ('s off')
@@ -66,34 +65,24 @@ def test_obj_vn_are_the_normals_with_auto_and_ignored_when_flat(tmp_path):
     """A face-on quad whose vn all lean (0, 0.6, 0.8), lit from straight ahead: with smooth = "auto"
     every pixel is kd (n . L) for that n; with smooth = false the face's own +z."""
     (tmp_path / "q.obj").write_text("v -9 -9 0\nv 9 -9 0\nv 9 9 0\nv -9 9 0\nvn 0 0.6 0.8\nf 1//1 2//1 3//1 4//1\n")
-    light = '[[lights]]\nposition = [0.0, 0.0, 1000.0]\n'
-    materials = '[materials.m]\nkd = [1.0, 1.0, 1.0]\nka = [0.0, 0.0, 0.0]\n'
-
     def render(smooth):
-        scene = load(tmp_path, light + f'[[objects]]\nmesh = "q.obj"\nmaterial = "m"\nsmooth = {smooth}\n', materials,
-                     "[render]\nambient = [0.0, 0.0, 0.0]\nshadows = false\nmax_depth = 1\n")
+        scene = load(tmp_path, [{"mesh": "q.obj", "material": "m", "smooth": smooth}],
+                     lights=[{"position": [0.0, 0.0, 1000.0]}], materials={"m": {"kd": [1.0, 1.0, 1.0], "ka": [0.0, 0.0, 0.0]}},
+                     render={"ambient": [0.0, 0.0, 0.0], "shadows": False, "max_depth": 1})
         eye, d = camera_rays(scene.camera)
         p = eye + ray_plane(eye, d, np.zeros(3), np.array([0.0, 0.0, 1.0]))[..., None] * d
         to_light = np.array([0.0, 0.0, 1000.0]) - p
         return warprt.render(scene).image, to_light / np.linalg.norm(to_light, axis=-1, keepdims=True)
 
-    image, L = render('"auto"')
+    image, L = render("auto")
     np.testing.assert_allclose(image[..., 0], L @ np.array([0.0, 0.6, 0.8]), atol=1e-5)
-    image, L = render("false")
+    image, L = render(False)
     np.testing.assert_allclose(image[..., 0], L @ np.array([0.0, 0.0, 1.0]), atol=1e-5)
 
 
 def test_crease_angle_splits_a_cube_and_keeps_a_sphere_smooth(tmp_path):
-    scene = load(tmp_path, """
-        [[objects]]
-        shape = "box"
-        smooth = 30
-        [[objects]]
-        shape = "sphere"
-        subdivisions = 2
-        smooth = 30
-        translate = [3.0, 0.0, 0.0]
-        """)
+    scene = load(tmp_path, [{"shape": "box", "smooth": 30},
+                            {"shape": "sphere", "subdivisions": 2, "smooth": 30, "translate": [3.0, 0.0, 0.0]}])
     box, ball = scene.objects
     assert len(box.vertices) == 24  # 8 corners, each on 3 flat sides
     np.testing.assert_allclose(box.normals[box.faces], np.repeat(face_normals(box)[:, None], 3, 1), atol=1e-12)
@@ -103,7 +92,7 @@ def test_crease_angle_splits_a_cube_and_keeps_a_sphere_smooth(tmp_path):
 
 
 def test_crease_angle_on_a_cylinder_smooths_its_side_and_not_its_rims(tmp_path):
-    (o,) = load(tmp_path, '[[objects]]\nshape = "cylinder"\nsections = 16\nsmooth = 30\n').objects
+    (o,) = load(tmp_path, [{"shape": "cylinder", "sections": 16, "smooth": 30}]).objects
     n_corner = o.normals[o.faces]
     cap = np.abs(face_normals(o)[:, 1]) > 0.99
     np.testing.assert_allclose(np.abs(n_corner[cap][..., 1]), 1.0, atol=1e-12)  # flat caps
@@ -114,6 +103,7 @@ def test_crease_angle_on_a_cylinder_smooths_its_side_and_not_its_rims(tmp_path):
     np.testing.assert_allclose(side, radial, atol=1e-12)  # at a vertex, the two side faces' mean: radial
 
 
+@slow
 def test_negative_and_zero_ns_load_as_no_highlight_with_one_warning(tmp_path):
     """Blender's exporter writes 'Ns -1.960784' and 'Ns 0': neither is refused, both mean no highlight."""
     (tmp_path / "n.obj").write_text("mtllib n.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\nusemtl b\nf 1 3 2\n")
@@ -153,11 +143,12 @@ def tall_z_box():
 
 def test_up_z_on_an_object_turns_the_file_upright(tmp_path):
     write_stl(tmp_path / "t.stl", tall_z_box())
-    (o,) = load(tmp_path, '[[objects]]\nmesh = "t.stl"\nup = "z"\n').objects
+    (o,) = load(tmp_path, [{"mesh": "t.stl", "up": "z"}]).objects
     extent = o.vertices.max(0) - o.vertices.min(0)
     np.testing.assert_allclose(extent, [0.4, 3.0, 0.6], atol=1e-6)  # z -> y, y -> -z
 
 
+@slow
 def test_up_z_frames_a_bare_stl_along_z(tmp_path):
     write_stl(tmp_path / "t.stl", tall_z_box())
     for up, camera_up in ((None, (0.0, 1.0, 0.0)), ("z", (0.0, 0.0, 1.0)), ("-z", (0.0, 0.0, -1.0))):
@@ -184,9 +175,9 @@ def test_a_z_up_usd_stage_stands_upright_in_a_scene_unless_told(tmp_path):
     m.CreateFaceVertexCountsAttr([3])
     m.CreateFaceVertexIndicesAttr([0, 1, 2])
     stage.GetRootLayer().Save()
-    (o,) = load(tmp_path, '[[objects]]\nmesh = "z.usda"\n').objects
+    (o,) = load(tmp_path, [{"mesh": "z.usda"}]).objects
     np.testing.assert_allclose(np.ptp(o.vertices, axis=0), [0.1, 2.0, 0.0], atol=1e-12)
-    (o,) = load(tmp_path, '[[objects]]\nmesh = "z.usda"\nup = "y"\n').objects
+    (o,) = load(tmp_path, [{"mesh": "z.usda", "up": "y"}]).objects
     np.testing.assert_allclose(np.ptp(o.vertices, axis=0), [0.1, 0.0, 2.0], atol=1e-12)
 
 
@@ -197,6 +188,7 @@ def test_up_on_a_scene_file_is_refused(tmp_path):
     assert r.stderr.startswith("warprt: error: command line: --up: applies to a mesh file")
 
 
+@slow
 def test_width_and_height_reframe_a_bare_mesh(tmp_path):
     """Framing comes after the overrides: a tall narrow image still holds the whole mesh."""
     import trimesh
@@ -265,8 +257,7 @@ def test_usd_without_authored_meters_per_unit_is_not_scaled(tmp_path):
 def test_usd_face_varying_normals_make_a_flat_cube(tmp_path):
     """The committed flat-shaded USD cube: 6 sides of 4 corners each, every corner's normal its side's."""
     path = Path(__file__).resolve().parents[2] / "scenes" / "meshes" / "cube_flat.usda"
-    (tmp_path / "s.toml").write_text(f'[[objects]]\nmesh = "{path}"\nsmooth = "auto"\n')
-    (o,) = warprt.load_scene(tmp_path / "s.toml").objects
+    (o,) = warprt.load_scene(write_scene(tmp_path, {"objects": [{"mesh": str(path), "smooth": "auto"}]})).objects
     assert len(o.vertices) == 24
     np.testing.assert_allclose(o.normals[o.faces], np.repeat(face_normals(o)[:, None], 3, 1), atol=1e-6)
 
@@ -281,6 +272,7 @@ def test_gltf_nodes_reusing_a_mesh_are_placed_copies():
     assert mesh.parts[0].colors is None and mesh.parts[1].colors is not None  # COLOR_0 on the second only
 
 
+@slow
 def test_warnings_are_one_line_each_and_silenced_by_q(tmp_path):
     (tmp_path / "w.obj").write_text("mtllib w.mtl\nmtllib gone.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\n"
                                     "usemtl glass\nf 1 2 3\nusemtl nowhere\nf 1 3 2\nfoo 1 2\n")
@@ -299,6 +291,7 @@ def test_warnings_are_one_line_each_and_silenced_by_q(tmp_path):
     assert quiet.returncode == 0 and quiet.stderr == ""
 
 
+@slow
 def test_usd_diagnostics_become_one_warning_line(tmp_path):
     """pxr prints its C++ diagnostics straight to stderr, several lines each: they arrive as one
     warprt warning, and the stage still loads."""

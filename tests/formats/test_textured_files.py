@@ -7,7 +7,6 @@ lights: a pixel is ka, which is kd with kd's texture (times the file's factor) w
 
 import json
 import struct
-import textwrap
 
 import numpy as np
 import pytest
@@ -15,6 +14,7 @@ from PIL import Image
 
 import warprt
 from oracle import camera_rays, ray_plane
+from scenekit import write_scene
 
 S = 2.0  # the quad's half size: it spans [-2, 2]^2 in z = 0 and uv [0, 1]^2
 BLOCKS, TEXELS = 4, 8  # 4 x 4 blocks of 8 x 8 texels
@@ -31,19 +31,11 @@ def write_png(path):
     Image.fromarray(np.kron(BLOCK_RGB8, np.ones((TEXELS, TEXELS, 1), np.uint8))).save(path)
 
 
-def scene_file(tmp_path, objects: str, materials: str = "", width=64, height=48):
-    (tmp_path / "s.toml").write_text(textwrap.dedent(f"""
-        [camera]
-        eye = [0.0, 0.0, 5.0]
-        center = [0.0, 0.0, 0.0]
-        fovy = 60.0
-        width = {width}
-        height = {height}
-        [render]
-        ambient = [1.0, 1.0, 1.0]
-        max_depth = 1
-        """) + textwrap.dedent(materials) + textwrap.dedent(objects))
-    return warprt.load_scene(tmp_path / "s.toml")
+def scene_file(tmp_path, objects: list, materials: dict | None = None, width=64, height=48):
+    """The scene read back from a real scene file: a face-on camera, C_amb = 1, no lights."""
+    doc = {"camera": {"eye": [0.0, 0.0, 5.0], "center": [0.0, 0.0, 0.0], "fovy": 60.0, "width": width, "height": height},
+           "render": {"ambient": [1.0, 1.0, 1.0], "max_depth": 1}, "materials": materials or {}, "objects": objects}
+    return warprt.load_scene(write_scene(tmp_path, doc, "s.toml"))
 
 
 def quad_blocks(scene, margin_texels: float = 1.5):
@@ -77,7 +69,7 @@ def test_obj_mtl_png_map_kd_replaces_kd(tmp_path):
     write_png(tmp_path / "blocks.png")
     (tmp_path / "q.obj").write_text("mtllib q.mtl\n" + QUAD_OBJ + "usemtl tex\nf 1/1 2/2 3/3 4/4\n")
     (tmp_path / "q.mtl").write_text("newmtl tex\nKd 0.8 0.8 0.8\nmap_Kd blocks.png\n")
-    assert_blocks(scene_file(tmp_path, '[[objects]]\nmesh = "q.obj"\n'))
+    assert_blocks(scene_file(tmp_path, [{"mesh": "q.obj"}]))
 
 
 def test_mtl_map_scale_and_offset_options(tmp_path):
@@ -86,7 +78,7 @@ def test_mtl_map_scale_and_offset_options(tmp_path):
     write_png(tmp_path / "blocks.png")
     (tmp_path / "q.obj").write_text("mtllib q.mtl\n" + QUAD_OBJ + "usemtl tex\nf 1/1 2/2 3/3 4/4\n")
     (tmp_path / "q.mtl").write_text("newmtl tex\nmap_Kd -s 2 2 1 -o 0.5 0 0 blocks.png\n")
-    scene = scene_file(tmp_path, '[[objects]]\nmesh = "q.obj"\n', width=128, height=96)
+    scene = scene_file(tmp_path, [{"mesh": "q.obj"}], width=128, height=96)
     image, _ = warprt.render(scene)
     eye, d = camera_rays(scene.camera)
     p = eye + ray_plane(eye, d, np.zeros(3), np.array([0.0, 0.0, 1.0]))[..., None] * d
@@ -138,7 +130,7 @@ def test_glb_embedded_texture_times_base_color_factor(tmp_path):
     Image.fromarray(np.kron(BLOCK_RGB8, np.ones((TEXELS, TEXELS, 1), np.uint8))).save(buf, "PNG")
     factor = (0.123, 0.5, 1.0)
     write_glb(tmp_path / "q.glb", factor, buf.getvalue())
-    assert_blocks(scene_file(tmp_path, '[[objects]]\nmesh = "q.glb"\n'), factor)
+    assert_blocks(scene_file(tmp_path, [{"mesh": "q.glb"}]), factor)
 
 
 def test_usd_preview_surface_with_uv_texture(tmp_path):
@@ -177,23 +169,15 @@ def test_usd_preview_surface_with_uv_texture(tmp_path):
     mat.CreateSurfaceOutput().ConnectToSource(surface.ConnectableAPI(), "surface")
     UsdShade.MaterialBindingAPI.Apply(mesh.GetPrim()).Bind(mat)
     stage.GetRootLayer().Save()
-    assert_blocks(scene_file(tmp_path, '[[objects]]\nmesh = "q.usda"\n'), (0.5, 0.5, 0.5))
+    assert_blocks(scene_file(tmp_path, [{"mesh": "q.usda"}]), (0.5, 0.5, 0.5))
 
 
 def test_scene_file_image_texture_on_a_plane(tmp_path):
     """kd_texture = "file.png" on the plane shape: uv ((x + sx) / 2sx, (sz - z) / 2sz), here turned by
     90 degrees about x to face the camera ((x, 0, z) -> (x, -z, 0)): the quad's uv, the image upright."""
     write_png(tmp_path / "blocks.png")
-    scene = scene_file(tmp_path, """
-        [[objects]]
-        shape = "plane"
-        size = [4.0, 4.0]
-        rotate = [90.0, 0.0, 0.0]
-        material = "tiles"
-        """, """
-        [materials.tiles]
-        kd_texture = "blocks.png"
-        """)
+    scene = scene_file(tmp_path, [{"shape": "plane", "size": [4.0, 4.0], "rotate": [90.0, 0.0, 0.0], "material": "tiles"}],
+                       {"tiles": {"kd_texture": "blocks.png"}})
     assert_blocks(scene)
 
 
@@ -201,16 +185,8 @@ def test_scene_file_checker(tmp_path):
     """{checker = [c0, c1], scale = 4}: 4 x 4 checks over the plane's uv square, c0 where
     floor(4u) + floor(4v) is even."""
     c0, c1 = [0.9, 0.5, 0.1], [0.05, 0.2, 0.7]
-    scene = scene_file(tmp_path, """
-        [[objects]]
-        shape = "plane"
-        size = [4.0, 4.0]
-        rotate = [90.0, 0.0, 0.0]
-        material = "checks"
-        """, f"""
-        [materials.checks]
-        kd_texture = {{ checker = [{c0}, {c1}], scale = 4 }}
-        """)
+    scene = scene_file(tmp_path, [{"shape": "plane", "size": [4.0, 4.0], "rotate": [90.0, 0.0, 0.0], "material": "checks"}],
+                       {"checks": {"kd_texture": {"checker": [c0, c1], "scale": 4}}})
     image, _ = warprt.render(scene)
     pixels = quad_blocks(scene, margin_texels=0.5)
     expected = np.array([c0 if ((BLOCKS - 1 - i) + j) % 2 == 0 else c1 for _, _, i, j in pixels])
@@ -233,8 +209,7 @@ def test_vertex_coloured_ply(tmp_path):
               "property float z\nproperty uchar red\nproperty uchar green\nproperty uchar blue\nelement face 1\n"
               "property list uchar int vertex_indices\nend_header\n")
     (tmp_path / "t.ply").write_bytes(header.encode() + rec.tobytes() + face.tobytes())
-    scene = scene_file(tmp_path, '[[objects]]\nmesh = "t.ply"\nmaterial = "white"\n',
-                       '[materials.white]\nkd = [1.0, 1.0, 1.0]\n')
+    scene = scene_file(tmp_path, [{"mesh": "t.ply", "material": "white"}], {"white": {"kd": [1.0, 1.0, 1.0]}})
     image, stats = warprt.render(scene)
     assert "vertex_color" in stats.effects
     eye, d = camera_rays(scene.camera)
@@ -249,14 +224,7 @@ def test_vertex_coloured_ply(tmp_path):
 
 def test_a_texture_without_uv_warns_and_samples_uv_zero(tmp_path, capsys):
     write_png(tmp_path / "blocks.png")
-    scene = scene_file(tmp_path, """
-        [[objects]]
-        shape = "sphere"
-        material = "tiles"
-        """, """
-        [materials.tiles]
-        kd_texture = "blocks.png"
-        """)
+    scene = scene_file(tmp_path, [{"shape": "sphere", "material": "tiles"}], {"tiles": {"kd_texture": "blocks.png"}})
     err = capsys.readouterr().err  # load_scene turns its warnings into warprt's one-line ones
     assert "objects[0]: material 'tiles' has a texture but 'sphere' has no texture coordinates" in err
     image, _ = warprt.render(scene)

@@ -6,7 +6,6 @@ image. An eye outside the region the BVH's padding covers (bvh.EYE_REACH) gets a
 and the stats say which and why."""
 
 from dataclasses import replace
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -14,18 +13,12 @@ import pytest
 import warprt
 from accuracy.harness import OFF_MAX, PSNR_MIN, SSIM_MIN
 from reference.compare import metrics
+from shortcuts import SCENE_CASES, at_width
 from warprt.geometry import Geometry
 from warprt.scene import Light, Material
 
-ROOT = Path(__file__).resolve().parents[2]
-SCENES = [None] + sorted((ROOT / "scenes").glob("*.toml"))
-IDS = ["default"] + [p.stem for p in SCENES[1:]]
-
-
 def small(path, width=96):
-    scene = warprt.load_scene(path)
-    height = max(8, round(width * scene.camera.height / scene.camera.width))
-    return scene.with_camera(width=width, height=height)
+    return at_width(warprt.load_scene(path), width)
 
 
 def orbit(scene, degrees):
@@ -80,7 +73,7 @@ def test_new_lights_and_materials_reuse_the_bvh_and_render_the_fresh_image():
     assert not np.array_equal(reused.image, warprt.render(scene).image)  # the edit shows
 
 
-@pytest.mark.parametrize("path", SCENES, ids=IDS)
+@pytest.mark.parametrize("path", SCENE_CASES)
 @pytest.mark.parametrize("degrees", [25.0, 140.0])
 def test_a_moved_eye_renders_as_a_fresh_build_from_it(path, degrees):
     scene = small(path)
@@ -117,7 +110,7 @@ def test_the_origin_is_the_objects_centre_or_a_far_eye():
     assert np.array_equal(geom.origin_for(far), far)
 
 
-@pytest.mark.parametrize("path", SCENES, ids=IDS)
+@pytest.mark.parametrize("path", SCENE_CASES)
 def test_on_a_reused_bvh_the_hybrid_is_the_traced_image(path):
     scene = small(path)
     home = Geometry(scene)

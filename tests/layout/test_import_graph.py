@@ -2,6 +2,7 @@
 image -> dataset -> cli), with no import circle, and tests, benchmarks and reference/ use the package's faces."""
 
 import ast
+import functools
 import re
 from pathlib import Path
 
@@ -47,6 +48,7 @@ def imports_of(name: str, path: Path, modules: dict) -> set[str]:
     return found
 
 
+@functools.cache  # one parse of the package for every test that reads its graph
 def import_graph(package: Path) -> dict[str, set[str]]:
     modules = module_files(package)
     return {m: imports_of(m, p, modules) for m, p in modules.items()}
@@ -87,13 +89,19 @@ def test_src_has_no_import_circle():
     assert circles(import_graph(PACKAGE)) == []
 
 
-def test_a_planted_circle_is_found(tmp_path):
-    """The negative control: the same check on a copy of the package with one import turned back up."""
+def package_copy(tmp_path) -> Path:
+    """A copy of the package's modules under tmp_path/warprt, for a negative control to plant a fault in."""
     pkg = tmp_path / "warprt"
     for p in PACKAGE.rglob("*.py"):
         dest = pkg / p.relative_to(PACKAGE)
         dest.parent.mkdir(parents=True, exist_ok=True)
         dest.write_text(p.read_text())
+    return pkg
+
+
+def test_a_planted_circle_is_found(tmp_path):
+    """The negative control: the same check on a copy of the package with one import turned back up."""
+    pkg = package_copy(tmp_path)
     model = pkg / "scene" / "model.py"
     model.write_text(model.read_text() + "\n\ndef _planted():\n    from ..image import renderer\n")
     found = circles(import_graph(pkg))
@@ -152,12 +160,30 @@ def test_only_the_command_line_mentions_its_flags():
 
 def test_a_planted_flag_is_found(tmp_path):
     """The negative control: a copy of the package with a flag in one error message and one docstring."""
-    pkg = tmp_path / "warprt"
-    for p in PACKAGE.rglob("*.py"):
-        dest = pkg / p.relative_to(PACKAGE)
-        dest.parent.mkdir(parents=True, exist_ok=True)
-        dest.write_text(p.read_text())
+    pkg = package_copy(tmp_path)
     launch = pkg / "image" / "launch.py"
     launch.write_text(launch.read_text() + '\n\ndef _planted(t):\n    """As --threads says."""\n'
                       '    raise ValueError(f"command line: --threads: got {t}")\n')
     assert [(f, flag) for f, _, flag in flags_mentioned(pkg)] == [("image/launch.py", "--threads")] * 2
+
+
+def warp_imported_by(statement: str) -> bool:
+    """Whether ``statement``, run in a fresh interpreter, leaves Warp in sys.modules."""
+    import subprocess
+    import sys
+
+    code = f"import sys\n{statement}\nprint('warp' in sys.modules)"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=ROOT)
+    return out.stdout.split()[-1] == "True"
+
+
+@pytest.mark.parametrize("statement", ["import warprt", "import warprt.scene", "import reference",
+                                       "import warprt; warprt.load_scene('scenes/cornell.toml')"])
+def test_reading_scenes_does_not_import_warp(statement):
+    """Cold start: warprt/__init__.py defers render and batch, the one place Warp's import waits."""
+    assert not warp_imported_by(statement)
+
+
+def test_rendering_imports_warp():
+    """The negative control: the same check sees Warp once render is asked for."""
+    assert warp_imported_by("import warprt; warprt.render")

@@ -3,14 +3,12 @@ camera where that decides it and by Warp's closest-hit query always, for the mis
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
+from shortcuts import probe_camera, probe_ray, probe_samples
 from warprt.geometry import SceneData
-from warprt.kernels import (CameraData, Mirrors, camera_data, camera_ray, init_warp, make_surface, mirror_chain,
-                            mirror_hit, offset_ray_origin, reflect, sample_offset, wp)
-from warprt.scene import camera_basis
+from warprt.kernels import (CameraData, Mirrors, init_warp, make_surface, mirror_chain, mirror_hit, offset_ray_origin,
+                            reflect, wp)
 
 init_warp()
 surface = make_surface(True)
@@ -26,11 +24,8 @@ def reflection_rays(s: SceneData, c: CameraData, m: Mirrors, max_depth: int, k: 
     x = i % c.width
     row = i / c.width
     for sample in range(samples):
-        offset = wp.vec2(0.5, 0.5)
-        if samples > 1:
-            offset = sample_offset(sample, k)
         o = c.eye
-        d = camera_ray(c, x, row, offset[0], offset[1])
+        d = probe_ray(c, x, row, sample, samples, k)
         chain = int(-1)
         src = int(-1)
         for depth in range(max_depth):
@@ -60,13 +55,11 @@ def reflection_rays(s: SceneData, c: CameraData, m: Mirrors, max_depth: int, k: 
             src = q.face
 
 
-def level_counts(scene, geom, data: SceneData, mirrors: Mirrors, supersampling: bool) -> np.ndarray:
+def level_counts(scene, geom, data: SceneData, mirrors: Mirrors) -> np.ndarray:
     """(levels, 3): per reflection level, the rays, those the mirrors decided, and the mismatches."""
     cam = scene.camera
-    k = math.isqrt(scene.render.spp)
-    samples = k * k if supersampling else 1
+    k, samples = probe_samples(scene)
     out = wp.zeros((cam.width * cam.height, LEVELS, 3), dtype=wp.int32)
-    c = camera_data(camera_basis(cam), geom.eye_offset(cam.eye))
     wp.launch(reflection_rays, dim=cam.width * cam.height,
-              inputs=[data, c, mirrors, min(scene.render.max_depth, LEVELS + 1), k, samples, out])
+              inputs=[data, probe_camera(scene, geom), mirrors, min(scene.render.max_depth, LEVELS + 1), k, samples, out])
     return out.numpy().astype(np.int64).sum(axis=0)

@@ -5,29 +5,26 @@ sees mismatches once the margins are taken away (the negative control). Most ray
 the images are the traced images to the bit on every scene, the Z-buffer's hard cases and random scenes."""
 
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 import warprt
 from accuracy.test_random_scenes import random_scene
+from marks import slow
+from shortcuts import IDS, SCENE_CASES, SCENES, SEEDS, at_width, same_as_traced
 from tests.scenekit import make_scene
-from tests.zbuffer.test_hybrid_exact import CASES, case_scene
+from tests.zbuffer.test_agreement import QUICK_CASES
+from tests.zbuffer.test_hybrid_exact import case_scene
 from warprt.geometry import Geometry
 from warprt.image import MirrorFrame
 from warprt.scene import resolve_effects
 
 from mirrors.probes import level_counts
 
-ROOT = Path(__file__).resolve().parents[2]
-SCENES = [None] + sorted((ROOT / "scenes").glob("*.toml"))
-IDS = ["default"] + [p.stem for p in SCENES[1:]]
-
 
 def at(path, width, **render):
-    scene = warprt.load_scene(path).with_render(**render)
-    return scene.with_camera(width=width, height=max(8, round(width * scene.camera.height / scene.camera.width)))
+    return at_width(warprt.load_scene(path).with_render(**render), width)
 
 
 def counts(scene, **options):
@@ -37,10 +34,10 @@ def counts(scene, **options):
     frame = MirrorFrame(scene, geom, data, fx, 2, 16, "cpu", **options)
     if frame.mirrors is None:
         return None, frame
-    return level_counts(scene, geom, data, frame.mirrors, fx.supersampling), frame
+    return level_counts(scene, geom, data, frame.mirrors), frame
 
 
-@pytest.mark.parametrize("path", SCENES, ids=IDS)
+@pytest.mark.parametrize("path", SCENE_CASES)
 def test_every_reflection_ray_the_mirrors_decide_gets_the_bvh_answer(path):
     """At 160 pixels across; at 1024x768 the share decided was 97.7-99.6 % of the first and second
     reflection levels of the scenes with planar mirrors (92 % on the knot's floor, under 524,288 small
@@ -88,34 +85,26 @@ def test_without_their_margins_the_mirrors_get_rays_wrong():
     assert c[0, 2] > 0
 
 
+@slow
 def test_the_edge_grid_image_is_the_traced_image():
-    scene = edge_grid_scene(1e-5)
-    mirrors = warprt.render(scene, reflections="mirrors")
+    _, mirrors = same_as_traced(edge_grid_scene(1e-5), "reflections", "mirrors")
     assert mirrors.stats.reflections == "mirrors" and mirrors.stats.mirrors["decided"] > 500
-    assert np.array_equal(mirrors.image, warprt.render(scene, reflections="bvh").image)
 
 
-@pytest.mark.parametrize("path", SCENES, ids=IDS)
+@pytest.mark.parametrize("path", SCENE_CASES)
 def test_mirror_reflections_give_the_traced_image_on_every_scene(path):
     scene = at(path, 200, spp=4)
-    traced = warprt.render(scene, primary="raytrace", reflections="bvh")
-    mirrors = warprt.render(scene, primary="raytrace", reflections="mirrors")
-    assert np.array_equal(mirrors.image, traced.image) and mirrors.stats.rays == traced.stats.rays
+    _, mirrors = same_as_traced(scene, "reflections", "mirrors", primary="raytrace")
     # Virtual cameras exist where some flat object reflects (k_r > 0): planar mirrors to unfold.
     flat_mirror = any(not o.smooth and max(scene.materials[o.material].reflectivity) > 0.0 for o in scene.objects)
     assert mirrors.stats.reflections == ("mirrors" if flat_mirror else "bvh")
 
 
-@pytest.mark.parametrize("name", CASES)
+@pytest.mark.parametrize("name", QUICK_CASES)
 def test_mirror_reflections_give_the_traced_image_on_the_zbuffer_hard_cases(name):
-    scene = case_scene(name).with_render(max_depth=3)
-    traced = warprt.render(scene, primary="raytrace", reflections="bvh")
-    mirrors = warprt.render(scene, primary="raytrace", reflections="mirrors")
-    assert np.array_equal(mirrors.image, traced.image) and mirrors.stats.rays == traced.stats.rays
+    same_as_traced(case_scene(name).with_render(max_depth=3), "reflections", "mirrors", primary="raytrace")
 
 
-@pytest.mark.parametrize("seed", range(12))
+@pytest.mark.parametrize("seed", SEEDS)
 def test_mirror_reflections_give_the_traced_image_on_random_scenes(seed):
-    scene = random_scene(seed)
-    traced = warprt.render(scene, primary="raytrace", reflections="bvh").image
-    assert np.array_equal(warprt.render(scene, primary="raytrace", reflections="mirrors").image, traced)
+    same_as_traced(random_scene(seed), "reflections", "mirrors", primary="raytrace")

@@ -2,16 +2,9 @@
 them (measured here: the rasters cost about what the queries they replace do, benchmarks/ATTEMPTS.md).
 The stats give the chains, the rays decided and their share, and the memory; the flag is checked."""
 
-import json
-import subprocess
-import sys
-from pathlib import Path
-
-import pytest
-
 import warprt
-
-ROOT = Path(__file__).resolve().parents[2]
+from marks import slow
+from shortcuts import ROOT, assert_unknown_choice_refused, command_stats
 
 
 def test_mirrors_decide_most_reflection_rays_of_the_default_scene():
@@ -35,14 +28,11 @@ def test_a_scene_without_planar_mirrors_traces_its_reflections():
 
 
 def test_unknown_reflection_query_is_a_scene_error():
-    with pytest.raises(warprt.SceneError, match=r"render\(\): reflections: unknown"):
-        warprt.render(warprt.load_scene().with_camera(width=8, height=6), reflections="portals")
+    assert_unknown_choice_refused("reflections", "portals")
 
 
+@slow
 def test_the_command_line_flag_and_stats(tmp_path):
-    r = subprocess.run([sys.executable, "-m", "warprt", "render", "-o", str(tmp_path / "o.png"), "--width", "64",
-                        "--height", "48", "--reflection-rays", "mirrors", "--stats"], capture_output=True, text=True)
-    assert r.returncode == 0, r.stderr
-    stats = json.loads(r.stdout)
+    stats = command_stats(tmp_path, "--reflection-rays", "mirrors")
     assert stats["reflections"] == "mirrors" and stats["mirrors"]["decided"] > 0
     assert {"groups", "tiles", "triangles"} <= set(stats["mirrors"]["chains"][0])

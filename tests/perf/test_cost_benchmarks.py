@@ -11,6 +11,7 @@ import pytest
 from PIL import Image
 
 from benchmarks import accuracy_cost, growth
+from marks import slow
 from warprt.scene import Camera
 
 
@@ -91,6 +92,7 @@ def _links_resolve(markdown: Path):
             assert im.width >= 400 and im.height >= 300, link
 
 
+@slow
 def test_growth_quick_run_writes_plots_and_report(tmp_path):
     growth.main(["--quick", "-o", str(tmp_path / "growth.md")])
     _links_resolve(tmp_path / "growth.md")
@@ -101,6 +103,7 @@ def test_growth_quick_run_writes_plots_and_report(tmp_path):
     assert "1" in data["pixels"]["fits"]
 
 
+@slow
 def test_accuracy_cost_quick_run_measures_what_each_knob_buys(tmp_path):
     accuracy_cost.main(["--quick", "--scenes", "seed", "-o", str(tmp_path / "accuracy_cost.md")])
     _links_resolve(tmp_path / "accuracy_cost.md")

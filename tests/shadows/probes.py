@@ -6,10 +6,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from shortcuts import probe_camera
 from warprt.geometry import LIGHT_DIRECTIONAL, SceneData
-from warprt.kernels import (CameraData, camera_data, camera_ray, grid_occluded, init_warp, make_surface,
-                            offset_ray_origin, reflect, refract, triangle, unit_normal, wp)
-from warprt.scene import camera_basis
+from warprt.kernels import (CameraData, camera_ray, grid_occluded, init_warp, make_surface, offset_ray_origin, reflect,
+                            refract, triangle, unit_normal, wp)
 
 init_warp()
 surface = make_surface(True)
@@ -83,8 +83,7 @@ def frame_counts(scene, geom, data: SceneData, max_depth: int) -> dict:
     """The frame's shadow rays (pixel centres, every ray level): how many, blocked, mismatches."""
     cam = scene.camera
     counts = wp.zeros(cam.width * cam.height, dtype=wp.vec3i)
-    c = camera_data(camera_basis(cam), geom.eye_offset(cam.eye))
-    wp.launch(frame_shadow_rays, dim=cam.width * cam.height, inputs=[data, c, max_depth, counts])
+    wp.launch(frame_shadow_rays, dim=cam.width * cam.height, inputs=[data, probe_camera(scene, geom), max_depth, counts])
     rays, blocked, differ = counts.numpy().astype(np.int64).sum(0)
     return {"rays": int(rays), "blocked": int(blocked), "mismatches": int(differ)}
 

@@ -6,24 +6,20 @@ leave the shadow rays to the BVH; and the images are the traced images to the bi
 every Z-buffer hard case and random scenes."""
 
 from dataclasses import replace
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 import warprt
 from accuracy.test_random_scenes import random_scene
+from shortcuts import IDS, ROOT, SCENE_CASES, SCENES, SEEDS, at_width, same_as_traced
 from tests.scenekit import make_scene
-from tests.zbuffer.test_hybrid_exact import CASES, case_scene
+from tests.zbuffer.test_agreement import QUICK_CASES
+from tests.zbuffer.test_hybrid_exact import case_scene
 from warprt.geometry import Geometry, ShadowGridBuild, cells_for
 from warprt.scene import Light
 
 from shadows.probes import frame_counts, stress_counts, through_every_vertex_and_edge
-
-ROOT = Path(__file__).resolve().parents[2]
-SCENES = [None] + sorted((ROOT / "scenes").glob("*.toml"))
-IDS = ["default"] + [p.stem for p in SCENES[1:]]
-
 
 def at(path, width):
     """The scene at ``width`` pixels; one with no lights (glass_slab) gets one above its objects, so that
@@ -34,7 +30,7 @@ def at(path, width):
         hi = np.max([o.vertices.max(0) for o in scene.objects], 0)
         above = (lo + hi) / 2 + [0.3 * (hi - lo).max(), 1.5 * (hi - lo).max(), 0.2 * (hi - lo).max()]
         scene = replace(scene, lights=[Light(tuple(float(v) for v in above), (1.0, 1.0, 1.0))])
-    return scene.with_camera(width=width, height=max(8, round(width * scene.camera.height / scene.camera.width)))
+    return at_width(scene, width)
 
 
 def grid_of(geom, scene, **kw):
@@ -42,7 +38,7 @@ def grid_of(geom, scene, **kw):
     return ShadowGridBuild(geom.points_np, geom.indices_np, lights, cells_for(geom.triangle_count), **kw), lights
 
 
-@pytest.mark.parametrize("path", SCENES, ids=IDS)
+@pytest.mark.parametrize("path", SCENE_CASES)
 def test_every_shadow_ray_of_every_scene_gets_the_bvh_answer(path):
     scene = at(path, 160)
     geom = Geometry(scene)
@@ -54,7 +50,7 @@ def test_every_shadow_ray_of_every_scene_gets_the_bvh_answer(path):
     assert counts["mismatches"] == 0
 
 
-@pytest.mark.parametrize("path", SCENES, ids=IDS)
+@pytest.mark.parametrize("path", SCENE_CASES)
 def test_rays_through_every_vertex_and_edge_midpoint_get_the_bvh_answer(path):
     scene = at(path, 16)
     geom = Geometry(scene)
@@ -137,9 +133,8 @@ def test_a_light_at_geometry_leaves_its_shadow_rays_to_the_bvh():
                        camera={"eye": [0.0, 3.0, 6.0], "center": [0.0, 0.5, 0.0]}, ambient=[0.1] * 3)
     build, _ = grid_of(Geometry(scene), scene)
     assert build.light_ok.tolist() == [0, 1]
-    grid = warprt.render(scene, shadows="grid")
+    _, grid = same_as_traced(scene, "shadows", "grid")
     assert grid.stats.shadows == "grid" and grid.stats.shadow_grid["lights_on_grid"] == 1
-    assert np.array_equal(grid.image, warprt.render(scene, shadows="bvh").image)
 
 
 def test_a_grid_over_its_memory_budget_is_not_built():
@@ -149,29 +144,23 @@ def test_a_grid_over_its_memory_budget_is_not_built():
     assert build.grid is None and "budget" in build.reason and build.nbytes > 1 << 20
 
 
-@pytest.mark.parametrize("name", CASES)
+@pytest.mark.parametrize("name", QUICK_CASES)
 def test_grid_shadows_give_the_traced_image_on_the_zbuffer_hard_cases(name):
     scene = case_scene(name)
-    traced = warprt.render(scene, primary="raytrace", shadows="bvh")
-    grid = warprt.render(scene, primary="raytrace", shadows="grid")
+    traced, grid = same_as_traced(scene, "shadows", "grid", primary="raytrace")
     assert grid.stats.shadows == ("grid" if traced.stats.rays["shadow"] and scene.triangle_count else "bvh")
-    assert np.array_equal(grid.image, traced.image) and grid.stats.rays == traced.stats.rays
 
 
-@pytest.mark.parametrize("path", SCENES, ids=IDS)
+@pytest.mark.parametrize("path", SCENE_CASES)
 def test_grid_shadows_give_the_traced_image_on_every_scene(path):
     scene = at(path, 200).with_render(spp=4)
-    traced = warprt.render(scene, primary="raytrace", shadows="bvh", reflections="bvh")
-    grid = warprt.render(scene, primary="raytrace", shadows="grid", reflections="bvh")
+    traced, grid = same_as_traced(scene, "shadows", "grid", primary="raytrace", reflections="bvh")
     # glass_slab's materials have no diffuse or specular term: no lit term, so no shadow rays at all.
     assert traced.stats.rays["shadow"] > 0 or IDS[SCENES.index(path)] == "glass_slab"
     assert grid.stats.shadows == ("grid" if traced.stats.rays["shadow"] else "bvh")
     assert grid.stats.variant.endswith("_gshadow") == (grid.stats.shadows == "grid")
-    assert np.array_equal(grid.image, traced.image) and grid.stats.rays == traced.stats.rays
 
 
-@pytest.mark.parametrize("seed", range(12))
+@pytest.mark.parametrize("seed", SEEDS)
 def test_grid_shadows_give_the_traced_image_on_random_scenes(seed):
-    scene = random_scene(seed)
-    traced = warprt.render(scene, primary="raytrace", shadows="bvh").image
-    assert np.array_equal(warprt.render(scene, primary="raytrace", shadows="grid").image, traced)
+    same_as_traced(random_scene(seed), "shadows", "grid", primary="raytrace")

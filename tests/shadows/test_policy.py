@@ -2,15 +2,11 @@
 than the frame saves, otherwise from the second frame with those lights on;
 the grid is kept with the geometry, its memory counted in the stats, and the flag is checked."""
 
-import json
-import subprocess
-import sys
-
 from dataclasses import replace
 
-import pytest
-
 import warprt
+from marks import slow
+from shortcuts import assert_unknown_choice_refused, command_stats
 from warprt.geometry import Geometry
 from warprt.image import light_history, shadows_from_grid
 from warprt.scene import resolve_effects
@@ -59,6 +55,7 @@ def test_the_grid_is_kept_for_the_next_frame_with_the_same_lights():
     assert again["grid"] == "reused" and again["entries"] == first["entries"]
 
 
+@slow
 def test_a_scene_without_shadow_rays_builds_no_grid():
     scene = warprt.load_scene().with_camera(width=64, height=48).with_render(shadows=False)
     stats = warprt.render(scene, shadows="grid").stats
@@ -66,14 +63,11 @@ def test_a_scene_without_shadow_rays_builds_no_grid():
 
 
 def test_unknown_shadow_query_is_a_scene_error():
-    with pytest.raises(warprt.SceneError, match=r"render\(\): shadows: unknown"):
-        warprt.render(warprt.load_scene().with_camera(width=8, height=6), shadows="photons")
+    assert_unknown_choice_refused("shadows", "photons")
 
 
+@slow
 def test_the_command_line_flag_and_stats(tmp_path):
-    r = subprocess.run([sys.executable, "-m", "warprt", "render", "-o", str(tmp_path / "o.png"), "--width", "64",
-                        "--height", "48", "--shadow-rays", "grid", "--stats"], capture_output=True, text=True)
-    assert r.returncode == 0, r.stderr
-    stats = json.loads(r.stdout)
+    stats = command_stats(tmp_path, "--shadow-rays", "grid")
     assert stats["shadows"] == "grid" and stats["shadow_grid"]["lights_on_grid"] == 2
     assert stats["shadow_grid"]["cells"] == 256 and stats["memory"]["shadow_grid"] > 0

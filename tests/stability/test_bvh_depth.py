@@ -7,6 +7,7 @@ nested triangles and a million triangles, half of them packed in an exponential 
 import numpy as np
 import pytest
 
+from marks import slow
 from oracle import ray_triangle
 from warprt.geometry import Geometry
 
@@ -68,6 +69,7 @@ def test_a_40_level_chain_of_nested_triangles(constructor):
     assert figures["lost_hits"] == 0 and figures["farther_hits"] == 0
 
 
+@slow
 @pytest.mark.parametrize("constructor", ["sah"])  # the renderer's; median is covered by the chain
 def test_a_million_triangles_half_in_an_exponential_cluster(constructor):
     rng = np.random.default_rng(4)

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 import warprt
+from marks import slow
 from oracle import optics
 from oracle import camera_rays
 from scenekit import make_scene
@@ -32,6 +33,7 @@ def inside_a_slab(max_depth, W=8, H=6):
     return make_scene([box], {"glass": GLASS}, camera=camera, background=B, max_depth=max_depth)
 
 
+@slow
 @pytest.mark.parametrize("max_depth", [32, MAX_TREE_DEPTH])
 def test_deep_inside_a_glass_slab_the_image_is_the_closed_form_and_the_work_linear(max_depth):
     scene = inside_a_slab(max_depth)

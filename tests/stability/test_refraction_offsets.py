@@ -8,6 +8,7 @@ the probe can fail."""
 
 import numpy as np
 
+from marks import slow
 from warprt.geometry import build_mesh
 from warprt.kernels import OFFSET_SCALE
 
@@ -40,6 +41,7 @@ def grazing_exits(n: int, seed: int):
     return (mesh, points, indices, surface_tables(mesh, points, indices, n)), origin, target.astype(np.float32), posed
 
 
+@slow
 def test_refracted_rays_never_hit_their_own_triangle():
     sets = {}
     for kind, n, seed in (("random", 135_000, 11), ("floor", 115_000, 12)):

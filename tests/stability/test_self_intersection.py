@@ -10,6 +10,7 @@ self-intersection starts and so the margin OFFSET_SCALE leaves."""
 import numpy as np
 import pytest
 
+from marks import slow
 from warprt.geometry import build_mesh
 from warprt.kernels import OFFSET_SCALE
 
@@ -97,6 +98,7 @@ def probe_set(kind: str, n: int, seed: int):
     return (mesh, points, indices, tables), origin, target.astype(np.float32), light, posed, clear
 
 
+@slow
 @pytest.mark.parametrize("kind,n,seed", [("random", 135_000, 1), ("floor", 115_000, 2)])
 def test_secondary_rays_never_hit_their_own_triangle(kind, n, seed):
     keep, origin, target, light, posed, clear = probe_set(kind, n, seed)

@@ -29,6 +29,7 @@ from pathlib import Path
 import pytest
 
 import warprt
+from marks import quick_cases
 from tests.scenekit import make_scene
 from tests.zbuffer.compare import compare
 
@@ -86,6 +87,7 @@ def scene_file_case(path: Path):
 
 
 CASES = list(built_in_cases()) + [f"scenes/{p.name}" for p in SCENES]
+QUICK_CASES = quick_cases(CASES, {"eye-plane", "scenes/cornell.toml"})  # every case in the full suite, two in the quick loop
 
 
 @pytest.fixture(scope="module")
@@ -102,26 +104,26 @@ def comparisons():
     return get
 
 
-@pytest.mark.parametrize("name", CASES)
+@pytest.mark.parametrize("name", QUICK_CASES)
 def test_same_image_as_tracer_without_shadows_and_reflections(comparisons, name):
     c = comparisons(name)
     assert c.ssim >= 0.999, f"{name}: SSIM {c.ssim:.5f} (as rendered, ties included: {c.ssim_raw:.5f})"
 
 
-@pytest.mark.parametrize("name", CASES)
+@pytest.mark.parametrize("name", QUICK_CASES)
 def test_same_visible_triangle_as_tracer(comparisons, name):
     c = comparisons(name)
     assert c.agreement >= 0.999, (f"{name}: visible triangle differs at {c.disagree - c.ties} of {c.samples} samples "
                                   f"that are not ties ({c.ties} ties)")
 
 
-@pytest.mark.parametrize("name", CASES)
+@pytest.mark.parametrize("name", QUICK_CASES)
 def test_ties_lie_on_lines_only(comparisons, name):
     c = comparisons(name)
     assert c.ties <= 0.01 * c.samples, f"{name}: {c.ties} of {c.samples} samples are ties"
 
 
-@pytest.mark.parametrize("name", CASES)
+@pytest.mark.parametrize("name", QUICK_CASES)
 def test_one_shading_function(comparisons, name):
     """Where both renderers see the same triangles, the colours agree to rounding: the same Phong
     function at the same point (only the barycentrics are computed differently)."""

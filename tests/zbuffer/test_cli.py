@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 import warprt
+from marks import slow
 from warprt.image import read_image
 
 SRC = str(Path(__file__).resolve().parents[2] / "src")
@@ -21,6 +22,7 @@ def run(*args):
     return subprocess.run([sys.executable, "-m", "warprt", *args], capture_output=True, text=True, env=env)
 
 
+@slow
 def test_render_zbuffer_npy_matches_api(tmp_path):
     out, stats_file = tmp_path / "zb.npy", tmp_path / "stats.json"
     r = run("render", "--algorithm", "zbuffer", "-o", str(out), "--width", "80", "--height", "60",

@@ -3,6 +3,7 @@ computed here in closed form (two planar triangles, float64), independently of b
 
 import numpy as np
 
+from marks import slow
 from oracle import pinhole, pixel_directions, ray_triangle
 from tests.scenekit import make_scene
 from tests.zbuffer.test_agreement import FLOOR, LIGHTS, MATERIALS, WALL
@@ -30,6 +31,7 @@ def closed_form_faces(scene, triangles):
     return best.reshape(b.height, b.width), (best_t * b.d_f).reshape(b.height, b.width)  # t * d_f: depth
 
 
+@slow
 def test_triangles_crossing_the_eye_plane_match_the_closed_form():
     """The wall has one vertex behind the eye (clipped to a quad), the floor two (clipped to a
     triangle); both reach the eye, so much of what the image shows is nearer than near = 2."""

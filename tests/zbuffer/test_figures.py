@@ -5,8 +5,10 @@ import json
 from PIL import Image
 
 from benchmarks import figures
+from marks import slow
 
 
+@slow
 def test_quick_run_writes_every_figure(tmp_path):
     figures.main(["--quick", "--repeat", "1", "-o", str(tmp_path)])
     for name in ("fig6_effects.png", "fig7_zbuffer_vs_raytracing.png", "fig8_gallery.png", "cost_growth.png"):

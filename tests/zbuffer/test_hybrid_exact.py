@@ -14,7 +14,9 @@ import pytest
 
 import warprt
 from accuracy.test_random_scenes import random_scene
-from tests.zbuffer.test_agreement import CASES, built_in_cases, scene_file_case
+from marks import slow
+from shortcuts import SEEDS
+from tests.zbuffer.test_agreement import QUICK_CASES, built_in_cases, scene_file_case
 from tests.zbuffer.traced import traced_faces
 from warprt.geometry import Geometry
 from warprt.image import ZBuffer, eye_on_surface
@@ -28,7 +30,7 @@ def case_scene(name):
     return BUILT_IN[name] if name in BUILT_IN else scene_file_case(ROOT / name)
 
 
-@pytest.mark.parametrize("name", CASES)
+@pytest.mark.parametrize("name", QUICK_CASES)
 def test_hybrid_image_is_the_traced_image(name):
     scene = case_scene(name)
     traced, t_stats = warprt.render(scene, primary="raytrace")
@@ -38,14 +40,14 @@ def test_hybrid_image_is_the_traced_image(name):
     assert h_stats.rays == t_stats.rays
 
 
-@pytest.mark.parametrize("seed", range(12))
+@pytest.mark.parametrize("seed", SEEDS)
 def test_hybrid_image_is_the_traced_image_on_random_scenes(seed):
     scene = random_scene(seed)
     traced = warprt.render(scene, primary="raytrace").image
     assert np.array_equal(warprt.render(scene, primary="zbuffer").image, traced)
 
 
-@pytest.mark.parametrize("name", [c for c in CASES if c != "empty"])
+@pytest.mark.parametrize("name", [c for c in QUICK_CASES if c.values[0] != "empty"])
 def test_every_disagreement_is_marked_uncertain_and_few_samples_are(name):
     """The margins must cover every sample where float32 tracing and float64 rasterization part ways
     (at these sizes there are none on most cases: the full-size test below has some), and mark few
@@ -64,6 +66,7 @@ def test_every_disagreement_is_marked_uncertain_and_few_samples_are(name):
     assert unsure.mean() < bound, f"{name}: {unsure.mean():.2%} of samples marked uncertain"
 
 
+@slow
 @pytest.mark.parametrize("path, size", [("tilted.toml", (1024, 576)), ("curved_shadows.toml", (1024, 768))])
 def test_at_full_size_the_tie_samples_are_marked_and_the_image_is_the_traced_one(path, size):
     """At 1024 pixels across, the plain Z-buffer's visible triangle differs from the tracer's on a few

@@ -2,15 +2,13 @@
 hits at every sample, from a kernel of the test's own (the same camera ray, origin and max_t, without
 shading), so the comparison leaves the tracer as it is."""
 
-import math
-
 import numpy as np
 import warp as wp
 
+from shortcuts import probe_camera, probe_ray, probe_samples
 from warprt.geometry import Geometry, SceneData
 from warprt.image import launch_bands
-from warprt.kernels import CameraData, camera_data, camera_ray, init_warp, sample_offset
-from warprt.scene import camera_basis, resolve_effects
+from warprt.kernels import CameraData, init_warp
 
 
 @wp.kernel(enable_backward=False)
@@ -20,10 +18,7 @@ def primary_faces_kernel(s: SceneData, c: CameraData, k: int, samples: int, firs
     x = pixel % c.width
     row = pixel / c.width
     for sample in range(samples):
-        offset = wp.vec2(0.5, 0.5)
-        if samples > 1:
-            offset = sample_offset(sample, k)
-        q = wp.mesh_query_ray(s.mesh, c.eye, camera_ray(c, x, row, offset[0], offset[1]), 1.0e30)
+        q = wp.mesh_query_ray(s.mesh, c.eye, probe_ray(c, x, row, sample, samples, k), 1.0e30)
         f = int(-1)
         if q.result:
             f = q.face
@@ -35,12 +30,11 @@ def traced_faces(scene, *, geometry: Geometry | None = None, threads: int = 2) -
     samples as the tracer takes them (k*k with supersampling, else the centre)."""
     init_warp()
     cam = scene.camera
-    k = math.isqrt(scene.render.spp)
-    samples = k * k if resolve_effects(scene).supersampling else 1
+    k, samples = probe_samples(scene)
     geom = geometry or Geometry(scene)
     assert geom.mesh is not None, "the tracer's first hits need a Geometry with its BVH"
     face = wp.empty(cam.width * cam.height * samples, dtype=wp.int32, device="cpu")
-    c = camera_data(camera_basis(cam), geom.eye_offset(cam.eye))
+    c = probe_camera(scene, geom)
     launch_bands(primary_faces_kernel, lambda first: [geom.data, c, k, samples, first, face],
                  cam.width * cam.height, threads, max(16, 8 * threads), "cpu")
     return face.numpy().reshape(cam.height, cam.width, samples)
