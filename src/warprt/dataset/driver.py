@@ -11,6 +11,7 @@ from pathlib import Path
 
 from ..errors import ArgumentError, SceneError
 from ..image import default_threads, partial_files
+from ..timing import timed
 from .job import Frame, Job, check_scene, load_job, parse_shard, select_shard
 from .manifest import Manifest, done, read_rows
 from .worker import FrameScenes
@@ -100,11 +101,10 @@ def batch(job, output_dir=None, *, workers: int | None = None, ray=None, shard=N
                      check_seconds=time.perf_counter() - t_check)
 
         def prepare():
-            t = time.perf_counter()
-            if check:
-                check_frames(j, todo)
-            _make_folders(j, out_dir, todo)
-            stats["frame_check_seconds"] = time.perf_counter() - t
+            with timed(stats, "frame_check_seconds"):
+                if check:
+                    check_frames(j, todo)
+                _make_folders(j, out_dir, todo)
 
         if todo:
             if not ray:

@@ -16,6 +16,7 @@ from typing import NamedTuple
 
 from ..errors import SceneError
 from ..scene import load_scene, resolve_effects, sets_in_place, with_overrides
+from ..timing import timed
 
 
 class FrameScenes:
@@ -118,25 +119,27 @@ class FrameRenderer:
 
     def render(self, task: dict):
         """The frame's scene and image (a _Rendered), or the result record of a failure."""
-        t0 = time.perf_counter()
+        seconds = {}
         try:
-            scene = self.scenes.scene(task["overrides"])
-            t1 = time.perf_counter()
-            result = self.image.render(scene, threads=self.threads, aovs=self.aovs)
+            with timed(seconds, "scene"):
+                scene = self.scenes.scene(task["overrides"])
+            with timed(seconds, "render"):
+                result = self.image.render(scene, threads=self.threads, aovs=self.aovs)
         except SceneError as e:
             return {"ok": False, "frame": task["frame"], "error": error_record(e)}
         except Exception as e:  # a bug: not bad input
             return _internal(task, e)
-        return _Rendered(task, result, {"scene": t1 - t0, "render": time.perf_counter() - t1})
+        return _Rendered(task, result, seconds)
 
     def write(self, rendered) -> dict:
         """The frame's files (image and AOVs, each renamed into place) and its result record."""
         if isinstance(rendered, dict):
             return rendered  # a failure, already a record
         task, result, seconds = rendered
-        t = time.perf_counter()
+        seconds = dict(seconds)
         try:
-            self.image.write_image(self.output_dir / task["outputs"]["color"], result.image, "output", result.aovs)
+            with timed(seconds, "write"):
+                self.image.write_image(self.output_dir / task["outputs"]["color"], result.image, "output", result.aovs)
         except SceneError as e:
             return {"ok": False, "frame": task["frame"], "error": error_record(e)}
         except Exception as e:  # a failed write (a full disk): not bad input
@@ -144,7 +147,7 @@ class FrameRenderer:
         return {"ok": True, "frame": task["frame"], "stats": result.stats.to_dict(),
                 "worker": {"host": socket.gethostname(), "pid": os.getpid(), "threads": self.threads,
                            "frames_done": next(self._done)},
-                "seconds": {**seconds, "write": time.perf_counter() - t}}
+                "seconds": seconds}
 
 
 class _Rendered(NamedTuple):

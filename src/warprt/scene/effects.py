@@ -39,7 +39,8 @@ class EffectSet:
 
     @property
     def variant(self) -> str:
-        """A short stable name for the compiled kernel variant, e.g. 'trace_adsS_r'."""
+        """A short stable name for the compiled kernel variant: a letter per effect, e.g. 'adsSr' (ambient,
+        diffuse, specular, shadows, reflection); the trace kernel's name adds its path, 'trace_adsSr_gshadow'."""
         letters = {"ambient": "a", "diffuse": "d", "specular": "s", "shadows": "S",
                    "reflection": "r", "supersampling": "x", "smooth": "n", "texture": "t", "vertex_color": "c",
                    "refraction": "T", "absorption": "b", "light_model": "L"}
