@@ -83,3 +83,12 @@ def test_rasters_of_another_eye_decide_no_ray_wrongly():
     assert own[2] == 0 and own[1] > 0.9 * own[0]
     assert stale[2] == 0 and stale[1] < 0.1 * own[1]
     assert unchecked[2] > 0
+
+
+def test_a_geometry_keeps_two_views():
+    """A stereo pair alternates without rebuilding; a third view sends the oldest away."""
+    s = base()
+    left, right, third = (s.with_camera(eye=(x, 1.4, 5.1)) for x in (0.3, 0.5, 0.7))
+    rasters = lambda scene: warprt.render(scene, reflections="mirrors").stats.mirrors["rasters"]
+    assert [rasters(v) for v in (left, right, left, right, third, right, left)] == \
+        ["built", "built", "reused", "reused", "built", "reused", "built"]

@@ -24,7 +24,7 @@ PROBES_PER_SIDE = 2  # traced camera rays per raster tile side, to find the chai
 BYTES_PER_SAMPLE = 4 + 8 + 8
 MAX_BYTES = 256 * 2**20
 _scratch: dict = {}  # one frame's worth of raster buffers, every sample clear, kept for the next frame
-KEEP_VIEWS = 2  # the views whose virtual cameras a Geometry keeps for its next frames (two: a stereo pair)
+KEEP_VIEWS = 2  # views whose virtual cameras a Geometry keeps (a stereo pair), within MAX_BYTES in all
 VIEWS_COUNTED = 64
 
 
@@ -76,9 +76,10 @@ def mirror_frame(scene, geom, data, fx, key: tuple, threads: int, bands: int, de
             frame.mirrors.decided.zero_()
         return frame, True
     frame = MirrorFrame(scene, geom, data, fx, threads, bands, device)
-    while len(kept) >= KEEP_VIEWS:  # the oldest view goes first
-        kept.pop(next(iter(kept)))
     kept[key] = frame
+    # The oldest views go first, down to KEEP_VIEWS and MAX_BYTES (this frame's always stays).
+    while len(kept) > 1 and (len(kept) > KEEP_VIEWS or sum(f.nbytes for f in kept.values()) > MAX_BYTES):
+        kept.pop(next(iter(kept)))
     return frame, False
 
 
