@@ -176,10 +176,11 @@ def mirrors_from_rasters(reflections: str, fx, triangles: int, samples: int, dev
                          frames: int) -> bool:
     """The reflection rays' policy: whether the planar mirrors' virtual cameras answer them. "mirrors" asks
     for them; "auto" takes them on the CPU where rasterizing the scene beats tracing it (raster_is_cheaper,
-    the first hits' rule) once they are kept: building them (probes, a raster per chain) costs about what
-    one frame's reflection queries save, and kept for a static view they cost nothing and save 10-30% of
-    each frame (benchmarks/ATTEMPTS.md). So a view's second frame (``frames``: record_view's count, this
-    one included) builds them, for the frames after it. Either way the image is the traced one, to the bit."""
+    the first hits' rule) once they are kept: building them (probes, a raster per chain) costs one to three
+    frames' saving, and kept for a static view they cost nothing and take 10-25% off each frame
+    (benchmarks/ATTEMPTS.md). So a view's second frame (``frames``: record_view's count, this one included)
+    builds them, as a second frame with the same lights builds the shadow grid, for the frames after it;
+    a moving camera's are traced. Either way the image is the traced one, to the bit."""
     if not fx.reflection or reflections == "bvh":
         return False
     if reflections == "mirrors":
