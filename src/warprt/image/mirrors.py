@@ -44,11 +44,10 @@ def view_key(scene, data, fx) -> tuple:
     """Everything a frame's virtual cameras depend on besides the Geometry's triangles: the camera, the
     samples, the bounces and which material slots reflect. Lights, colours and how much a mirror
     reflects are not in it: a frame that changes only those reuses the rasters."""
-    cam = scene.camera
     spp = scene.render.spp if fx.supersampling else 1
     reflective = tuple(bool(r) for r in data.kr.numpy().max(axis=1) > 0.0)
-    return (tuple(cam.eye), tuple(cam.center), tuple(cam.up), float(cam.fovy), float(cam.near), int(cam.width),
-            int(cam.height), int(spp), min(MAX_BOUNCES, scene.render.max_depth - 1), reflective)
+    # The whole (frozen) Camera, so that a field it gains is part of the key too.
+    return (scene.camera, int(spp), min(MAX_BOUNCES, scene.render.max_depth - 1), reflective)
 
 
 def kept_mirror_frame(geom, key: tuple) -> "MirrorFrame | None":
