@@ -3,8 +3,10 @@ with the same rays, auto takes the virtual cameras where they are the cheaper, a
 the measured ratios (a smoke run: no timing is asserted)."""
 
 from benchmarks import mirrors
+from marks import slow
 
 
+@slow  # five scenes, four frames each at 320x240
 def test_a_small_run_renders_the_traced_images_and_reports_each_scene():
     data = mirrors.run(320, 240, repeat=1)
     rows = {r["scene"]: r for r in data["rows"]}
