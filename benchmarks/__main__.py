@@ -38,7 +38,7 @@ def machine() -> str:
 
 
 def targets(h2h: dict, cast: dict, floor: dict | None = None, orbit: dict | None = None,
-            many: dict | None = None, cold: dict | None = None) -> str:
+            many: dict | None = None, cold: dict | None = None, mirrors: dict | None = None) -> str:
     """The performance targets, each measured against Mitsuba or against warprt itself in this run (many
     frames: against a loop, Ray against local): met or not, with the gap."""
     rows_h = h2h["rows"]
@@ -75,6 +75,10 @@ def targets(h2h: dict, cast: dict, floor: dict | None = None, orbit: dict | None
         from . import cold as cold_bench
 
         rows += cold_bench.target_rows(cold)
+    if mirrors is not None:
+        from . import mirrors as mirrors_bench
+
+        rows += mirrors_bench.target_rows(mirrors)
     rows += [
         (f"Warm {size} frame, every scene: <= 1.0x Mitsuba `llvm_ad_rgb`",
          f"{min(hybrid):.2f}x to {max(hybrid):.2f}x (every ray traced: {min(warm):.2f}x to {max(warm):.2f}x)", met(max(hybrid) <= 1.0)),
@@ -131,6 +135,13 @@ def main():
     (RESULTS / "orbit.json").write_text(json.dumps(orbit, indent=1))
     sections.append(orbit_bench.report(orbit))
 
+    from . import mirrors as mirrors_bench
+
+    print("mirrors ...", file=sys.stderr, flush=True)
+    mirrors = mirrors_bench.run(*((320, 240) if q else (1024, 768)), repeat=1 if q else 7)
+    (RESULTS / "mirrors.json").write_text(json.dumps(mirrors, indent=1))
+    sections.append(mirrors_bench.report(mirrors))
+
     from . import accuracy_cost, growth
 
     for name, module in (("growth", growth), ("accuracy_cost", accuracy_cost)):
@@ -155,7 +166,7 @@ def main():
     many = batch.run(quick=q, log=lambda line: print(line, file=sys.stderr, flush=True))
     (RESULTS / "batch.json").write_text(json.dumps(many, indent=1))
     sections.append(batch.report(many))
-    sections.insert(0, targets(h2h, cast, floor, orbit, many, cold))
+    sections.insert(0, targets(h2h, cast, floor, orbit, many, cold, mirrors))
 
     attempts = (ROOT / "ATTEMPTS.md").read_text() if (ROOT / "ATTEMPTS.md").exists() else ""
     commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True, cwd=ROOT).stdout.strip()

@@ -3,7 +3,7 @@ llvm_ad_rgb and scalar_rgb running the same Whitted integrator (reference/).
 
 Cold: process start to image file, every compiled-kernel cache warm (each command is run once
 before it is timed). Warm: a frame after two in the same process (the first builds the BVH, the second
-what auto keeps from the second frame on: the shadow grid, the mirrors' unfolded scenes). Ratios are
+what auto keeps from the second frame on: the shadow grid, the mirrors' virtual cameras). Ratios are
 to Mitsuba llvm_ad_rgb; "before" is warprt's default before the exact shadow and mirror structures
 (first hits as now, every shadow and reflection ray traced), the target's "today's".
 
@@ -151,8 +151,8 @@ def report(data: dict) -> str:
         "and its BVH built once, on both sides). The Z-buffer renders without shadows and reflections, so its image "
         "is not the same image: it is listed for its cost. warprt default = `primary=\"auto\"`, what `warprt render` "
         "does: first hits from the Z-buffer where it is the cheaper (one triangle per ten samples or fewer) and certain, "
-        "shadow rays from the light-space grid and reflections off planar mirrors from their virtual cameras where those "
-        "are the cheaper, the rest traced, the image the traced one to the bit; before = that default before the grid and "
+        "shadow rays from the light-space grid and reflections off planar mirrors from their virtual cameras (from a view's "
+        "second frame on) where those are the cheaper, the rest traced, the image the traced one to the bit; before = that default before the grid and "
         "the mirrors (`shadows=\"bvh\", reflections=\"bvh\"`); traced = every ray traced. warprt "
         "cold is `warprt render`, so the default. Rays per second use warprt's exact ray count and the traced time.",
         "",

@@ -331,8 +331,9 @@ def build_parser() -> argparse.ArgumentParser:
                         "is the cheaper), bvh (Warp's any-hit query, every ray traced), or grid (the exact "
                         "light-space grid: each ray tests the triangles of its cell with the query's own test)")
     p.add_argument("--reflection-rays", default="auto", choices=["auto", "bvh", "mirrors"],
-                   help="what answers the reflection rays, the image being the same: auto (default: traced, "
-                        "where the mirrors' rasters were measured to cost what they save), bvh (Warp's closest-hit "
+                   help="what answers the reflection rays, the image being the same: auto (default: the mirrors' "
+                        "virtual cameras from a view's second frame, which builds the rasters its next frames "
+                        "reuse; traced before, and for a moving camera), bvh (Warp's closest-hit "
                         "query, every ray traced), or mirrors (a ray off planar mirrors from their rasterized "
                         "virtual camera wherever that is certain, the rest traced)")
     p.add_argument("--stats", action="store_true", help="print render statistics (times, rays, memory) as JSON on stdout")

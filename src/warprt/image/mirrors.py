@@ -1,6 +1,7 @@
 """A frame's virtual cameras for planar mirrors (the host side of kernels/mirror.py): the chains of planar
 groups its reflection rays follow, each chain's unfolded scene rasterized from the camera over the tiles
-its rays cover, and the Mirrors record of those rasters that the trace kernel reads."""
+its rays cover, and the Mirrors record of those rasters that the trace kernel reads; kept with the
+Geometry for the next frames of the same view (view_key)."""
 
 from __future__ import annotations
 
@@ -23,6 +24,8 @@ PROBES_PER_SIDE = 2  # traced camera rays per raster tile side, to find the chai
 BYTES_PER_SAMPLE = 4 + 8 + 8
 MAX_BYTES = 256 * 2**20
 _scratch: dict = {}  # one frame's worth of raster buffers, every sample clear, kept for the next frame
+KEEP_VIEWS = 2  # views whose virtual cameras a Geometry keeps (a stereo pair), within MAX_BYTES in all
+VIEWS_COUNTED = 64
 
 
 def empty_mirrors(device) -> Mirrors:
@@ -35,6 +38,48 @@ def empty_mirrors(device) -> Mirrors:
     m.groups = m.tiles = m.tiles_x = m.tile = m.samples = m.k = 1
     m.pixel_angle = wp.float64(0.0)
     return m
+
+
+def view_key(scene, data, fx) -> tuple:
+    """Everything a frame's virtual cameras depend on besides the Geometry's triangles: the camera, the
+    samples, the bounces and which material slots reflect. Lights, colours and how much a mirror
+    reflects are not in it: a frame that changes only those reuses the rasters."""
+    spp = scene.render.spp if fx.supersampling else 1
+    reflective = tuple(bool(r) for r in data.kr.numpy().max(axis=1) > 0.0)
+    # The whole (frozen) Camera, so that a field it gains is part of the key too.
+    return (scene.camera, int(spp), min(MAX_BOUNCES, scene.render.max_depth - 1), reflective)
+
+
+def kept_mirror_frame(geom, key: tuple) -> "MirrorFrame | None":
+    """The virtual cameras ``geom`` keeps for the view ``key`` (view_key), or None."""
+    return geom.__dict__.get("_virtual_cameras", {}).get(key)
+
+
+def record_view(geom, key: tuple) -> int:
+    """Count one more frame of ``geom`` with the view ``key``; how many there have been, this one included."""
+    frames = geom.__dict__.setdefault("_view_frames", {})
+    if key not in frames and len(frames) >= VIEWS_COUNTED:  # a moving camera: no view stays long enough
+        frames.clear()
+    frames[key] = frames.get(key, 0) + 1
+    return frames[key]
+
+
+def mirror_frame(scene, geom, data, fx, key: tuple, threads: int, bands: int, device: str) -> tuple["MirrorFrame", bool]:
+    """The virtual cameras of the view ``key`` (view_key) and whether ``geom`` kept them from an earlier
+    frame: a static camera's rasters are the same arrays frame after frame, so the image is the one a
+    fresh build gives, to the bit; only the count of rays decided starts again from zero."""
+    kept = geom.__dict__.setdefault("_virtual_cameras", {})
+    frame = kept.get(key)
+    if frame is not None:
+        if frame.mirrors is not None:
+            frame.mirrors.decided.zero_()
+        return frame, True
+    frame = MirrorFrame(scene, geom, data, fx, threads, bands, device)
+    kept[key] = frame
+    # The oldest views go first, down to KEEP_VIEWS and MAX_BYTES (this frame's always stays).
+    while len(kept) > 1 and (len(kept) > KEEP_VIEWS or sum(f.nbytes for f in kept.values()) > MAX_BYTES):
+        kept.pop(next(iter(kept)))
+    return frame, False
 
 
 def tiles_seen(tri: np.ndarray, basis, eye: np.ndarray, tile: int) -> np.ndarray:

@@ -20,7 +20,7 @@ from ..timing import timed
 from .aovs import check_aovs, finish_aovs
 from .launch import bands_of, launch_bands, launch_plan
 from .memory import RASTER_BYTES_PER_SAMPLE, check_frame_memory, frame_estimate, frame_memory
-from .mirrors import MirrorFrame, empty_mirrors
+from .mirrors import empty_mirrors, kept_mirror_frame, mirror_frame as virtual_cameras, record_view, view_key
 from .samples import SampleGrid, sample_grid
 from .stats import RenderResult, RenderStats
 from .zbuffer import RASTER_TILE, ZBuffer, empty_fragments, eye_on_surface
@@ -172,6 +172,22 @@ def shadows_from_grid(shadows: str, fx, geom: Geometry, lights: np.ndarray, samp
     return build <= per_frame * (GRID_HORIZON if frames >= 2 else 1)
 
 
+def mirrors_from_rasters(reflections: str, fx, triangles: int, samples: int, device: str, kept: bool,
+                         frames: int) -> bool:
+    """The reflection rays' policy: whether the planar mirrors' virtual cameras answer them. "mirrors" asks
+    for them; "auto" takes them on the CPU where rasterizing the scene beats tracing it (raster_is_cheaper,
+    the first hits' rule) once they are kept: building them (probes, a raster per chain) costs one to three
+    frames' saving, and kept for a static view they cost nothing and take 10-25% off each frame
+    (benchmarks/ATTEMPTS.md). So a view's second frame (``frames``: record_view's count, this one included)
+    builds them, as a second frame with the same lights builds the shadow grid, for the frames after it;
+    a moving camera's are traced. Either way the image is the traced one, to the bit."""
+    if not fx.reflection or reflections == "bvh":
+        return False
+    if reflections == "mirrors":
+        return True
+    return device == "cpu" and raster_is_cheaper(triangles, samples, device) and (kept or frames >= 2)
+
+
 geometry_cache = ObjectCache(size=4)  # the Geometries kept for the next frames of the same objects
 
 
@@ -229,7 +245,7 @@ class FramePlan:
     max_depth: int  # ray levels the kernel follows: 1 without reflection and refraction
     stack: int  # the ray tree's stack: 0 without refraction
     raster: bool  # the hybrid policy wants the Z-buffer's first hits (a camera on a surface still traces)
-    mirrors: bool  # the reflection rays' virtual cameras are asked for
+    mirrors: bool  # the reflection rays' virtual cameras are asked for, or auto may take them
 
     @property
     def samples(self) -> int:
@@ -244,7 +260,7 @@ def plan_frame(scene, o: RenderOptions) -> FramePlan:
                      max_depth=scene.render.max_depth if fx.reflection or fx.refraction else 1,
                      stack=stack_size(scene.render.max_depth, scene.source) if fx.refraction else 0,
                      raster=raster_wanted(o.primary, scene.triangle_count, cam.width * cam.height * grid.per_pixel, o.device),
-                     mirrors=fx.reflection and o.reflections == "mirrors")
+                     mirrors=fx.reflection and o.reflections != "bvh")
 
 
 @dataclass(frozen=True)
@@ -284,8 +300,8 @@ def render(scene, options: RenderOptions | None = None, *, geometry: Geometry | 
     answers), or "auto", the default, the grid where it is the cheaper. ``reflections`` says what answers
     the reflection rays: "bvh" (Warp's closest-hit query), "mirrors" (off planar mirrors, their virtual
     cameras' rasters wherever certain to give the query's answer, the rest traced), or "auto", the
-    default, which traces them: the virtual cameras' rasters were measured to cost about what the
-    queries they replace do. With ``report_truncated``, stats.truncated is the weight per pixel (H, W, 3)
+    default, which takes the virtual cameras from a view's second frame on (mirrors_from_rasters): their
+    build costs about what one frame's queries save, kept they cost nothing. With ``report_truncated``, stats.truncated is the weight per pixel (H, W, 3)
     of the reflected and refracted rays max_depth cut off: the share of their radiance the image is
     missing. ``aovs`` (names from image.aovs.AOVS) come back as the result's ``.aovs``, from the camera
     rays' first hits; the image is the same with or without them. ``geometry``: a Geometry built for
@@ -345,12 +361,16 @@ def _shortcuts(scene, o: RenderOptions, plan: FramePlan, geom: Geometry, stats: 
     stats.shadows = "grid" if grid is not None else "bvh"
     mirror_frame = None
     if plan.mirrors:
-        with stats.phase("mirrors"):
-            mirror_frame = MirrorFrame(scene, geom, geom.scene_data(scene, grid), plan.fx, plan.threads, plan.bands,
-                                       o.device)
-        stats.mirrors = mirror_frame.stats
-        if mirror_frame.mirrors is None:
-            mirror_frame = None
+        data = geom.scene_data(scene, grid)
+        view = view_key(scene, data, plan.fx)
+        frames = record_view(geom, view)
+        if mirrors_from_rasters(o.reflections, plan.fx, geom.triangle_count, plan.samples, o.device,
+                                kept_mirror_frame(geom, view) is not None, frames):
+            with stats.phase("mirrors"):
+                mirror_frame, kept = virtual_cameras(scene, geom, data, plan.fx, view, plan.threads, plan.bands, o.device)
+            stats.mirrors = {"rasters": "reused" if kept else "built", **mirror_frame.stats}
+            if mirror_frame.mirrors is None:
+                mirror_frame = None
     stats.reflections = "mirrors" if mirror_frame is not None else "bvh"
     return raster, grid, mirror_frame
 

@@ -1,0 +1,21 @@
+"""The mirrors benchmark compares like with like: auto's frames and the traced frames are the same image
+with the same rays, auto takes the virtual cameras where they are the cheaper, and the target row reads
+the measured ratios (a smoke run: no timing is asserted)."""
+
+from benchmarks import mirrors
+from marks import slow
+
+
+@slow  # five scenes, four frames each at 320x240
+def test_a_small_run_renders_the_traced_images_and_reports_each_scene():
+    data = mirrors.run(320, 240, repeat=1)
+    rows = {r["scene"]: r for r in data["rows"]}
+    assert set(rows) == set(mirrors.SCENES)
+    assert all(r["identical"] for r in rows.values())
+    # 5,158 triangles under 76,800 samples: raster_is_cheaper, so auto's warm frames take the virtual cameras.
+    assert rows["default"]["reflections"] == "mirrors" and rows["default"]["share"] > 0.9
+    (target,) = mirrors.target_rows(data)
+    taken = all(r["reflections"] == "mirrors" for r in rows.values())
+    assert target[2] == ("met" if taken and max(r["ratio"] for r in rows.values()) <= mirrors.TARGET else "not met")
+    assert all(f"{name} {r['ratio']:.2f}x" in target[1] for name, r in rows.items())
+    assert mirrors.report(data).count("\n| ") == len(rows) + 1
