@@ -38,7 +38,8 @@ def machine() -> str:
 
 
 def targets(h2h: dict, cast: dict, floor: dict | None = None, orbit: dict | None = None,
-            many: dict | None = None, cold: dict | None = None, mirrors: dict | None = None) -> str:
+            many: dict | None = None, cold: dict | None = None, mirrors: dict | None = None,
+            kernel_floor: dict | None = None) -> str:
     """The performance targets, each measured against Mitsuba or against warprt itself in this run (many
     frames: against a loop, Ray against local): met or not, with the gap."""
     rows_h = h2h["rows"]
@@ -65,6 +66,10 @@ def targets(h2h: dict, cast: dict, floor: dict | None = None, orbit: dict | None
             rows.append(("The floor: the warm frame with every shadow and reflection answer free (what the queries left cost)",
                          f"{min(f)[0]:.2f}x to {max(f)[0]:.2f}x Mitsuba on the {len(f)} scenes the replay renders exactly; "
                          f"the frame is {min(hybrid):.2f}x to {max(hybrid):.2f}x", "measured"))
+    if kernel_floor:
+        from . import kernel_floor as kernel_floor_bench
+
+        rows.append(kernel_floor_bench.target_row(kernel_floor))
     if orbit:
         ratio = orbit["orbit_per_frame"] / orbit["static_warm"]
         rows.append((f"A {orbit['frames']}-frame camera orbit around a {orbit['triangles']:,}-triangle scene: per-frame time "
@@ -130,6 +135,13 @@ def main():
     floor = floor_bench.run(*((256, 192) if q else (1024, 768)), repeat=1 if q else 3)
     (RESULTS / "floor.json").write_text(json.dumps(floor, indent=1))
     sections.append(floor_bench.report(floor))
+    from . import kernel_floor as kernel_floor_bench
+
+    print("kernel floor ...", file=sys.stderr, flush=True)
+    kfloor = kernel_floor_bench.run(*((128, 96) if q else (1024, 768)), repeat=1 if q else 5,
+                                    log=lambda line: print(line, file=sys.stderr, flush=True))
+    (RESULTS / "kernel_floor.json").write_text(json.dumps(kfloor, indent=1))
+    sections.append(kernel_floor_bench.report(kfloor))
     print("orbit ...", file=sys.stderr, flush=True)
     orbit = orbit_bench.run(*((128, 96, 6, 4) if q else (1024, 768, 20, 7)))
     (RESULTS / "orbit.json").write_text(json.dumps(orbit, indent=1))
@@ -166,7 +178,7 @@ def main():
     many = batch.run(quick=q, log=lambda line: print(line, file=sys.stderr, flush=True))
     (RESULTS / "batch.json").write_text(json.dumps(many, indent=1))
     sections.append(batch.report(many))
-    sections.insert(0, targets(h2h, cast, floor, orbit, many, cold, mirrors))
+    sections.insert(0, targets(h2h, cast, floor, orbit, many, cold, mirrors, kernel_floor=kfloor))
 
     attempts = (ROOT / "ATTEMPTS.md").read_text() if (ROOT / "ATTEMPTS.md").exists() else ""
     commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True, cwd=ROOT).stdout.strip()

@@ -131,42 +131,28 @@ def make_first_hit(raster: bool, mirrors: bool):
 
 @functools.cache
 def make_ray_stack(size: int):
-    """RayStack (the rays of the tree waiting to be traced, ``size`` at most, in registers and local
-    memory), push and pop. Warp passes structs by value, so both return the stack."""
-    vec3s = wp.types.matrix(shape=(size, 3), dtype=float)
-    ints = wp.types.vector(length=size, dtype=int)
-
-    @wp.struct
-    class RayStack:
-        o: vec3s  # entry j: TreeRay j's fields
-        d: vec3s
-        weight: vec3s
-        start: vec3s
-        depth: ints
-        medium: ints
-        top: int  # entries in use
+    """The rays of the tree waiting to be traced, ``size`` at most, in registers and local memory:
+    RayRows, a matrix whose row j is waiting ray j, and the functions that make a ray a row and a row
+    a ray again. The kernel writes a row in place (``stack[top] = waiting(r)``): Warp passes structs
+    and matrices to a function by value, so a push function returning the stack copied all of it in
+    and out, and once more at every branch that might have pushed (measured in benchmarks/ATTEMPTS.md).
+    A row holds the ray's integers too, as floats: a level and a medium index are exact in float32."""
+    RayRows = wp.types.matrix(shape=(size, 14), dtype=float)
+    Row = wp.types.vector(length=14, dtype=float)
 
     @wp.func
-    def push(stack: RayStack, r: TreeRay) -> RayStack:
-        out = stack
-        out.o[stack.top] = r.ray.o
-        out.d[stack.top] = r.ray.d
-        out.weight[stack.top] = r.weight
-        out.start[stack.top] = r.start
-        out.depth[stack.top] = r.depth
-        out.medium[stack.top] = r.medium
-        out.top = stack.top + 1
-        return out
+    def waiting(r: TreeRay) -> Row:
+        o, d, w, p = r.ray.o, r.ray.d, r.weight, r.start
+        return Row(o[0], o[1], o[2], d[0], d[1], d[2], w[0], w[1], w[2], p[0], p[1], p[2], float(r.depth),
+                   float(r.medium))
 
     @wp.func
-    def pop(stack: RayStack):
-        out = stack
-        out.top = stack.top - 1
-        j = out.top
-        return out, TreeRay(Ray(out.o[j], out.d[j]), out.weight[j], out.start[j], out.depth[j], out.medium[j],
-                            NO_CHAIN, -1)
+    def resumed(row: Row) -> TreeRay:
+        return TreeRay(Ray(wp.vec3(row[0], row[1], row[2]), wp.vec3(row[3], row[4], row[5])),
+                       wp.vec3(row[6], row[7], row[8]), wp.vec3(row[9], row[10], row[11]), int(row[12]),
+                       int(row[13]), NO_CHAIN, -1)
 
-    return RayStack, push, pop
+    return RayRows, waiting, resumed
 
 
 @functools.cache
@@ -193,7 +179,7 @@ def make_trace_kernel(fx, raster_primary: bool = False, stack: int = 0, report_t
     REFRACTION, ABSORPTION, TRUNCATED = fx.refraction, fx.absorption, report_truncated
     if REFRACTION and stack < 1:
         raise ValueError("a kernel with refraction needs a stack: stack_size(max_depth)")
-    RayStack, push, pop = make_ray_stack(max(stack, 1))
+    RayRows, waiting, resumed = make_ray_stack(max(stack, 1))
     COUNTS = wp.vec4i if REFRACTION else wp.vec3i
 
     @wp.kernel(module="unique", enable_backward=False)
@@ -218,7 +204,9 @@ def make_trace_kernel(fx, raster_primary: bool = False, stack: int = 0, report_t
             r = TreeRay(Ray(c.eye, camera_ray(c, x, row, offset[0], offset[1])), wp.vec3(1.0), c.eye, 0,
                         s.eye_medium, FROM_CAMERA, -1)
             color = wp.vec3(0.0)
-            stack = RayStack()
+            top = int(0)  # rays waiting on the stack
+            if wp.static(REFRACTION):
+                stack = RayRows()
             while r.depth < max_depth:
                 # ---- nearest hit ----
                 h = first_hit(s, frags, mir, r, i, pixel * samples + sample, x, row, sample)
@@ -257,13 +245,17 @@ def make_trace_kernel(fx, raster_primary: bool = False, stack: int = 0, report_t
                     # ---- dielectric ----
                     if wp.static(REFRACTION):
                         eta = s.ior[hit.material]
-                        if eta > 0.0:
+                        wanted = level < max_depth  # the children are traced, or (report_truncated) counted
+                        if wp.static(TRUNCATED):
+                            wanted = True
+                        if eta > 0.0 and wanted:
                             ch = dielectric_children(s, h.face, hit, r.ray.d, r.weight, eta)
                             if level < max_depth and (ch.has_r or ch.has_t):
                                 r = TreeRay(spawn_ray(hit, ch.d_r), ch.w_r, hit.p, level, ch.medium_r, NO_CHAIN, -1)
                                 if ch.has_t:  # else total internal reflection, or nothing transmitted
                                     if ch.has_r:  # the reflected ray waits, the refracted one goes on
-                                        stack = push(stack, r)
+                                        stack[top] = waiting(r)
+                                        top += 1
                                     r = TreeRay(spawn_ray(hit, ch.d_t), ch.w_t, hit.p, level, ch.medium_t, NO_CHAIN, -1)
                                 rays[2] += wp.where(ch.has_r, 1, 0)
                                 rays[3] += wp.where(ch.has_t, 1, 0)
@@ -273,8 +265,9 @@ def make_trace_kernel(fx, raster_primary: bool = False, stack: int = 0, report_t
                                     truncated = truncated + ch.w_r + ch.w_t
                 # ---- next ray ----
                 if wp.static(REFRACTION):
-                    if stack.top > 0:  # this path has ended: the next waiting ray of the tree
-                        stack, r = pop(stack)
+                    if top > 0:  # this path has ended: the next waiting ray of the tree
+                        top -= 1
+                        r = resumed(stack[top])
                         continue
                 break
             total = total + color
