@@ -230,3 +230,33 @@ def test_a_glTF_dielectric_stays_double_sided(tmp_path):
     scene = warprt.load_scene(g.write(tmp_path / "g.gltf"))
     (material,) = {scene.materials[o.material] for o in scene.objects}
     assert material.dielectric and material.double_sided
+
+
+def test_a_scene_files_material_may_be_single_sided(tmp_path):
+    """double_sided = false in a scene file culls as glTF does: the wall in z = 0 (a plane turned to face
+    -z by its winding) seen from +z shows the backdrop; the default (true) draws it."""
+    from tests.scenekit import make_scene
+
+    wall = {"shape": "plane", "size": [2.0, 2.0], "rotate": [-90.0, 0.0, 0.0], "material": "w"}
+    back = {"shape": "plane", "size": [20.0, 20.0], "rotate": [90.0, 0.0, 0.0], "translate": [0.0, 0.0, -2.0],
+            "material": "b"}
+    for double_sided, colour in ((False, B), (True, Q)):
+        scene = make_scene([wall, back], {"w": {"ka": list(Q), "kd": [0.0] * 3, "double_sided": double_sided},
+                                          "b": {"ka": list(B), "kd": [0.0] * 3}},
+                           camera={"eye": [0.0, 0.0, 4.0], "width": 64, "height": 64}, ambient=[1.0] * 3)
+        v, f = scene.objects[0].vertices, scene.objects[0].faces[0]
+        assert np.cross(v[f[1]] - v[f[0]], v[f[2]] - v[f[0]])[2] < 0  # the winding faces away from the eye
+        on, _ = quad_pixels(scene)
+        assert_sees(warprt.render(scene).image, on, colour)
+
+
+@pytest.mark.parametrize("material, message", [
+    ({"double_sided": "no"}, "expected true or false, got 'no'"),
+    ({"ior": 1.5, "double_sided": False}, "a dielectric (ior) is seen from inside through its back faces"),
+])
+def test_a_bad_double_sided_is_one_error_naming_the_field(material, message):
+    from tests.scenekit import make_scene
+
+    with pytest.raises(warprt.SceneError) as e:
+        warprt.render(make_scene([{"shape": "box", "material": "m"}], {"m": material}))
+    assert e.value.field == "materials.m.double_sided" and message in e.value.message
