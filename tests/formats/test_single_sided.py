@@ -260,3 +260,15 @@ def test_a_bad_double_sided_is_one_error_naming_the_field(material, message):
     with pytest.raises(warprt.SceneError) as e:
         warprt.render(make_scene([{"shape": "box", "material": "m"}], {"m": material}))
     assert e.value.field == "materials.m.double_sided" and message in e.value.message
+
+
+def test_the_first_hit_aovs_name_what_lies_behind_a_culled_quad(tmp_path):
+    """The AOVs record the camera ray's first hit after culling: behind the quad, the backdrop (object 1)
+    at its distance from the eye, |p - eye| for p on the plane z = 2, closed form."""
+    scene = view(tmp_path, "behind")
+    result = warprt.render(scene, aovs=["object", "depth"])
+    on, _ = quad_pixels(scene)
+    eye, d = camera_rays(scene.camera)
+    t = ray_plane(eye, d, [0.0, 0.0, 2.0], [0.0, 0.0, 1.0])
+    assert (result.aovs["object"][on] == 1).all()
+    np.testing.assert_allclose(result.aovs["depth"][on], t[on], rtol=1e-5)
