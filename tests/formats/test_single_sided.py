@@ -117,14 +117,12 @@ def test_a_node_turned_around_turns_its_faces(tmp_path):
     assert_sees(warprt.render(scene).image, on, B)
 
 
-@pytest.mark.parametrize("double_sided, colour", [(False, B), (True, Q)])
-def test_a_mirror_sees_through_the_back_of_a_single_sided_quad(tmp_path, double_sided, colour):
+def mirror_scene(tmp_path, double_sided):
     """A mirror at 45 degrees (normal (1, 0, 1)/sqrt 2) sends the camera's rays along +x onto the quad
-    in the plane x = 3, whose winding faces +x: away from them. Single-sided, the reflection rays pass
-    it and meet the backdrop at x = 6; double-sided (the control), they stop on it."""
+    in the plane x = 3, whose winding faces +x: away from them; the backdrop lies beyond, at x = 6."""
     quad_gltf(tmp_path / "q.gltf", double_sided=double_sided, rotation=quaternion([0.0, 1.0, 0.0], 90.0),
               translation=[3.0, 0.0, 0.0])
-    scene = scene_toml(tmp_path, 4.0, -20.0, """
+    return scene_toml(tmp_path, 4.0, -20.0, """
         [materials.mirror]
         ka = [0.0, 0.0, 0.0]
         kd = [0.0, 0.0, 0.0]
@@ -141,6 +139,13 @@ def test_a_mirror_sees_through_the_back_of_a_single_sided_quad(tmp_path, double_
         translate = [6.0, 0.0, 0.0]
         material = "backdrop"
         """).with_render(max_depth=2)
+
+
+@pytest.mark.parametrize("double_sided, colour", [(False, B), (True, Q)])
+def test_a_mirror_sees_through_the_back_of_a_single_sided_quad(tmp_path, double_sided, colour):
+    """Single-sided, the reflection rays pass the quad's back and meet the backdrop; double-sided (the
+    control), they stop on the quad."""
+    scene = mirror_scene(tmp_path, double_sided)
     n = np.array([1.0, 0.0, 1.0]) / np.sqrt(2.0)
     eye, d = camera_rays(scene.camera)
     p = eye + ray_plane(eye, d, np.zeros(3), n)[..., None] * d
@@ -205,14 +210,16 @@ def test_the_plain_zbuffer_culls_as_the_tracer_does(tmp_path):
 
 def test_hybrid_and_virtual_cameras_leave_a_scene_with_culling_to_the_tracer_exactly(tmp_path):
     """Neither the Z-buffer nor the mirrors' virtual cameras know sidedness: asked for, they are not used
-    and the image is the traced one to the bit. The control: the same scene double-sided uses them."""
-    for double_sided, shortcut in ((False, False), (True, True)):
-        scene = view(tmp_path, "behind", double_sided=double_sided)
-        traced = warprt.render(scene, primary="raytrace")
-        hybrid = warprt.render(scene, primary="zbuffer")
-        assert (hybrid.stats.primary == "zbuffer") is shortcut
-        assert ("C" in traced.stats.variant) is not double_sided
-        assert np.array_equal(hybrid.image, traced.image)
+    and the image is the traced one to the bit, with the same rays. The control: the same scene
+    double-sided uses both."""
+    for double_sided in (False, True):
+        scene = mirror_scene(tmp_path, double_sided)
+        traced = warprt.render(scene, primary="raytrace", reflections="bvh")
+        fast = warprt.render(scene, primary="zbuffer", reflections="mirrors")
+        assert fast.stats.primary == ("zbuffer" if double_sided else "raytrace")
+        assert fast.stats.reflections == ("mirrors" if double_sided else "bvh")
+        assert ("C" in traced.stats.variant.split("_")[1]) is not double_sided
+        assert np.array_equal(fast.image, traced.image) and fast.stats.rays == traced.stats.rays
 
 
 def test_doubleSided_that_is_not_a_boolean_is_refused_naming_the_field(tmp_path):
