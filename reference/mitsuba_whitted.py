@@ -1,7 +1,8 @@
 """A warprt Scene rendered by Mitsuba 3: the same Whitted model on Mitsuba's own sensor, sampler,
 film, Embree intersection and ray spawning, sharing no tracing code with src/warprt.
 
-Model (the seed's Figure 3, as warprt defines it), per colour channel, two-sided surfaces:
+Model (the seed's Figure 3, as warprt defines it), per colour channel, two-sided surfaces (a
+single-sided material's back faces passed through, as glTF culls them; shadow rays still meet them):
     I = C_amb ka + sum_l vis_l C_l (kd max(0, n.L) + ks max(0, r.v)^n) + k_r I(reflected),
 vis_l = 0 when n.L <= 0 or the shadow ray is blocked; a miss returns the background; max_depth ray levels.
 The lights are Mitsuba's own emitters (point, spot, directional): L, C_l with its spot profile and
@@ -170,6 +171,31 @@ def _register_integrator(mi, dr):
                 color += dr.select(lit, light_color * term, 0.0)
             return color
 
+        def intersect(self, scene, ray, flags, coherent, active):
+            """scene.ray_intersect, continued past the back faces of single-sided materials (glTF's
+            back-face culling: si.n, the winding's normal, facing away from the ray's origin) by
+            Mitsuba's own spawn_ray, on along the same direction to the next surface or a miss."""
+            si = scene.ray_intersect(ray, ray_flags=flags, coherent=coherent, active=active)
+            if not self.tables.culling:
+                return si
+            return self.skip_culled(scene, si, ray.d, flags, active & self.culled(si, ray.d))
+
+        @dr.syntax
+        def skip_culled(self, scene, si, d, flags, skip):
+            while skip:
+                si = dr.select(skip, scene.ray_intersect(si.spawn_ray(d), ray_flags=flags, coherent=False, active=skip), si)
+                skip &= self.culled(si, d)
+            return si
+
+        def culled(self, si, d):
+            """Whether direction d passes through the hit si: a single-sided material seen from behind."""
+            t = self.tables
+            if t.jit:
+                single = dr.gather(mi.Bool, t.cull, dr.reinterpret_array(mi.UInt32, si.shape), si.is_valid())
+            else:
+                single = si.is_valid() and si.shape is not None and si.shape.id() in t.culled_ids
+            return single & (dr.dot(si.n, d) > 0.0)
+
         @dr.syntax
         def sample(self, scene, sampler, ray, medium=None, active=True):
             t = self.tables
@@ -184,7 +210,7 @@ def _register_integrator(mi, dr):
             if t.attributes or t.own_textures:
                 flags = flags | mi.RayFlags.UV
             while active:
-                si = scene.ray_intersect(ray, ray_flags=flags, coherent=depth == 0, active=active)
+                si = self.intersect(scene, ray, flags, depth == 0, active)
                 hit = si.is_valid()
                 color = dr.select(active & ~hit, color + weight * t.background, color)
                 active &= hit
@@ -284,6 +310,9 @@ class _Tables:
         self.lights = [(emitter, light.falloff == "none" and light.type != "directional")
                        for emitter, light in zip(emitters, scene.lights)]
         mats = {sid: scene.materials[scene.objects[i].material] for sid, i in object_of_shape.items()}
+        # Whether some material is single-sided: only then are hits tested for culling (as warprt's variants).
+        self.culling = any(not m.double_sided for m in mats.values())
+        self.culled_ids = {sid for sid, m in mats.items() if not m.double_sided}
         if self.jit:
             # Opaque: kernel inputs rather than literals, so the kernels are not specialised to these
             # values and another scene with as many lights reuses them.
@@ -311,6 +340,9 @@ class _Tables:
             self.shininess = mi.Float(shininess.astype(np.float32))
             self.eta = mi.Float(eta.astype(np.float32))
             self.dielectric_rows = {int(r) for r in np.nonzero(eta > 0)[0]}
+            cull = np.zeros(rows, bool)
+            cull[[ids[sid] for sid in self.culled_ids]] = True
+            self.cull = mi.Bool(cull)
             textured = np.zeros(rows, bool)
             textured[[ids[sid] for sid in textured_ids]] = True
             self.textured = mi.Bool(textured)

@@ -130,7 +130,7 @@ def render_tree(ms, switches, camera=None, record=None) -> TreeResult:
             break
         ray = mi.Ray3f(_dr3(mi.Point3f, o), _dr3(mi.Vector3f, d))
         ray.maxt = mi.Float(np.asarray(maxt, np.float32))
-        si = ms.mi_scene.ray_intersect(ray, ray_flags=flags, coherent=level == 0)
+        si = integ.intersect(ms.mi_scene, ray, flags, level == 0, mi.Bool(True))  # past culled back faces
         hit = si.is_valid()
         row = dr.reinterpret_array(mi.UInt32, si.shape)  # the hit shape's table row (0: a miss)
         wgt = _dr3(mi.Color3f, w)

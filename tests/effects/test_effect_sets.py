@@ -169,6 +169,18 @@ def test_the_general_light_model_is_absent_from_the_seeds_variants():
     assert marker in _generated_source(EffectSet(light_model=True))
 
 
+def test_back_face_culling_is_compiled_in_only_where_a_material_is_single_sided():
+    """A scene file's materials are double-sided: its variants keep the code they had (the same images,
+    to the bit); one single-sided material asks for culling, which is not an effect one names or disables."""
+    marker = "while q.result and culled(s, q.face, ray.d)"
+    assert marker not in _generated_source(EffectSet())
+    assert marker in _generated_source(EffectSet(culling=True))
+    single = make_scene([WALL], {"m": {**PLAIN, "double_sided": False}}, [LIGHT])
+    fx = resolve_effects(single, disable=["specular"])
+    assert fx.culling and not scene_effects(make_scene([WALL], {"m": PLAIN}, [LIGHT])).culling
+    assert fx.variant.endswith("C") and "culling" not in fx.names
+
+
 # A line of each AOV's recording code, as above.
 AOV_MARKERS = {
     "depth": "a.depth[pixel] = a.depth[pixel] + wp.length(hit.p - o)",

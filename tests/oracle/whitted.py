@@ -105,6 +105,8 @@ class Whitted:
                                area2 / np.linalg.norm(self.p2 - self.p0, axis=1),
                                area2 / np.linalg.norm(self.p1 - self.p0, axis=1)], 1)
         self.materials = [scene.materials[n] for n in names]
+        # Per face: a single-sided material, whose back faces camera, reflected and refracted rays pass through.
+        self.single = np.array([not getattr(m, "double_sided", True) for m in self.materials], bool)[self.mat]
         self.obj = np.concatenate([np.full(len(o.faces), i) for i, o in enumerate(scene.objects)])
         # Per object: the dielectric's eta (0: opaque), k_t and sigma as the switches let them act.
         glass = [scene.materials[o.material] for o in scene.objects]
@@ -116,8 +118,9 @@ class Whitted:
         self.eye_object = next((i for i, (o, m) in enumerate(zip(scene.objects, glass)) if m.dielectric
                                 and winding_number(o.vertices, o.faces, scene.camera.eye) > 0.5), -1)
 
-    def _query(self, o, d, tmax):
-        """Nearest hit (face, t, b1, b2) or None, and the query's decision margin, relative to the
+    def _query(self, o, d, tmax, cull: bool = False):
+        """Nearest hit (face, t, b1, b2) or None (with ``cull``, not counting single-sided faces seen from
+        behind, as glTF culls them), and the query's decision margin, relative to the
         coordinates' magnitude (1 + max|p|), as float32 rounding is: how far the ray passes from an
         edge of any triangle whose plane it crosses before the hit, and the gap to a second
         triangle hit at (nearly) the same distance."""
@@ -137,6 +140,8 @@ class Whitted:
             scale = 1.0 + np.abs(o + t[:, None] * d).max(axis=1)
         in_range = np.isfinite(t) & (t > 0.0) & (t < tmax)
         hit = in_range & (q.margin >= 0.0)
+        if cull:
+            hit &= ~(self.single[near] & (self.n_hat[near] @ d > 0.0))
         tt = np.where(hit, t, np.inf)
         f = int(np.argmin(tt))
         t_hit = tt[f]
@@ -237,7 +242,7 @@ class Whitted:
         for depth in range(sw.max_depth):
             next_rays = []
             for o, d, w, medium, path, start in level_rays:
-                hit, ray_margin = self._query(o, d, math.inf)
+                hit, ray_margin = self._query(o, d, math.inf, cull=True)
                 sigma = self.sigma[medium] if medium >= 0 else np.zeros(3)
                 if hit is None:
                     w = np.where(sigma > 0.0, 0.0, w)  # exp(-sigma * infinity)

@@ -91,6 +91,7 @@ class SceneData:
     ior: wp.array(dtype=float)  # eta of a dielectric, 0 for an opaque material
     transmittance: wp.array(dtype=wp.vec3)  # k_t
     absorption: wp.array(dtype=wp.vec3)  # sigma per scene unit
+    cull: wp.array(dtype=wp.int32)  # per material, 1: single-sided, its back faces skipped (EffectSet.culling)
     eye_medium: int  # the dielectric material holding the eye, -1: air
     light_pos: wp.array(dtype=wp.vec3)  # relative to the frame origin; NaN for a directional light
     light_color: wp.array(dtype=wp.vec3)
@@ -221,6 +222,7 @@ class Geometry:
         s.ior = wp.array(np.asarray([x.ior or 0.0 for x in m] or [0.0], np.float32), dtype=float, device=d)
         s.transmittance = vec([x.transmittance for x in m] or [[1, 1, 1]])
         s.absorption = vec([x.absorption for x in m] or [[0, 0, 0]])
+        s.cull = wp.array(np.asarray([not x.double_sided for x in m] or [0], np.int32), dtype=wp.int32, device=d)
         # Only the tracer follows rays into a medium (the Z-buffer's geometry has no BVH).
         medium = eye_medium(scene) if self.mesh is not None and dielectric else None
         s.eye_medium = self.material_names.index(medium) if medium is not None else -1

@@ -23,7 +23,7 @@ from .memory import RASTER_BYTES_PER_SAMPLE, check_frame_memory, frame_estimate,
 from .mirrors import empty_mirrors, kept_mirror_frame, mirror_frame as virtual_cameras, record_view, view_key
 from .samples import SampleGrid, sample_grid
 from .stats import RenderResult, RenderStats
-from .zbuffer import RASTER_TILE, ZBuffer, empty_fragments, eye_on_surface
+from .zbuffer import RASTER_TILE, ZBuffer, culled_faces, empty_fragments, eye_on_surface
 
 ALGORITHMS = ("raytrace", "zbuffer")
 PRIMARY = ("auto", "raytrace", "zbuffer")
@@ -259,8 +259,11 @@ def plan_frame(scene, o: RenderOptions) -> FramePlan:
     return FramePlan(fx, threads, bands, grid, cam.width * cam.height,
                      max_depth=scene.render.max_depth if fx.reflection or fx.refraction else 1,
                      stack=stack_size(scene.render.max_depth, scene.source) if fx.refraction else 0,
-                     raster=raster_wanted(o.primary, scene.triangle_count, cam.width * cam.height * grid.per_pixel, o.device),
-                     mirrors=fx.reflection and o.reflections != "bvh")
+                     # Neither the Z-buffer nor the mirrors' virtual cameras know a face's side: with
+                     # single-sided materials every first hit is traced, so the image stays the traced one.
+                     raster=not fx.culling and raster_wanted(o.primary, scene.triangle_count,
+                                                             cam.width * cam.height * grid.per_pixel, o.device),
+                     mirrors=fx.reflection and o.reflections != "bvh" and not fx.culling)
 
 
 @dataclass(frozen=True)
@@ -491,7 +494,7 @@ def render_zbuffer(scene, options: RenderOptions | None = None, *, geometry: Geo
                 wp.load_module(m, device=o.device)
         with stats.phase("render"):  # project + bin + raster + shade
             zb = ZBuffer(scene, geom, fx, device=o.device, tile=tile, track_uncertain=False)
-            zb.rasterize(threads, bands)
+            zb.rasterize(threads, bands, skip=culled_faces(scene, geom, zb.eye) if fx.culling else None)
             stats.times.update(zb.times)
             with stats.phase("shade"):
                 cam = scene.camera

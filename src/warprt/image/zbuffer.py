@@ -74,6 +74,18 @@ def empty_fragments(device) -> Fragments:
     return frags
 
 
+def culled_faces(scene, geometry: Geometry, eye) -> np.ndarray:
+    """Per triangle, whether the camera at ``eye`` (relative to the frame origin) sees it from behind
+    and its material is single-sided: what the tracer's rays pass through (trace.culled), so a plain
+    Z-buffer image does not draw it. The eye's side of the triangle's plane, in float64."""
+    single = np.array([not scene.materials[n].double_sided for n in geometry.material_names] or [False])
+    faces = geometry.indices_np.reshape(-1, 3)[: geometry.triangle_count]
+    p = geometry.points_np.astype(np.float64)[faces]
+    n = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
+    behind = np.einsum("ij,ij->i", p[:, 0] - np.asarray(eye, np.float64), n) > 0.0
+    return single[geometry.tri_material_np[: geometry.triangle_count]] & behind
+
+
 class ZBuffer:
     """Owns the per-sample buffers of one scene's rasterization (self.fragments)."""
 
@@ -109,9 +121,10 @@ class ZBuffer:
         f = self.fragments
         return int(f.face.capacity + f.inv_depth.capacity + f.uv.capacity + f.rival_inv_depth.capacity)
 
-    def rasterize(self, threads: int, bands: int, tiles: np.ndarray | None = None):
+    def rasterize(self, threads: int, bands: int, tiles: np.ndarray | None = None, skip: np.ndarray | None = None):
         """Project, bin and depth-test every triangle; times["project"|"bin"|"raster"] in seconds. With
-        ``tiles`` (one flag per raster tile, row-major from the bottom), only those tiles' samples."""
+        ``tiles`` (one flag per raster tile, row-major from the bottom), only those tiles' samples; with
+        ``skip`` (one flag per triangle: culled_faces), not those triangles."""
         g, c, dev = self.geometry, self.camera, self.device
         data = g.data
         k = self.k if self.samples > 1 else 1
@@ -121,6 +134,10 @@ class ZBuffer:
                 # A few thousand triangles per launch: below that, launching costs more than projecting.
                 launch_bands(project_kernel, lambda first: [data, c, k, first, bounds], g.triangle_count, threads,
                              max(1, min(bands, g.triangle_count // 4096)), dev)
+            if skip is not None and skip.any():
+                b = bounds.numpy()
+                b[: g.triangle_count][skip] = (1, 0, 1, 0)  # an empty rectangle: in no tile
+                bounds = wp.array(b, dtype=wp.vec4i, device=dev)
 
         # Binning: count per tile, scan, fill. One launch each: Warp's atomics are plain
         # read-modify-writes on the CPU, safe within a launch (one thread) but not across launches.

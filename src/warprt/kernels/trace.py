@@ -15,11 +15,11 @@ from .aov import AovBuffers, make_record_first_hit
 from .camera import CameraData, camera_ray, sample_offset
 from .dielectric import beer, beer_forever, dielectric_children
 from .hybrid import uncertain
-from .interaction import Ray, Surface, make_surface, reflect, spawn_ray
+from .interaction import Ray, Surface, hit_point_error, make_surface, offset_ray_origin, reflect, spawn_ray
 from .mirror import FROM_CAMERA, NO_CHAIN, Mirrors, mirror_chain, mirror_hit
 from .raster import Fragments
 from .shading import make_shade
-from .triangle import query_normal, triangle, woop_hit
+from .triangle import query_normal, triangle, unit_normal, woop_hit
 
 # The ray tree is walked depth first: at a dielectric hit one child waits on the stack while the
 # other is followed. A waiting ray is always one level deeper than those below it, so max_depth
@@ -87,11 +87,34 @@ class Hit:
     normal: wp.vec3
 
 
+@wp.func
+def culled(s: SceneData, f: int, d: wp.vec3) -> bool:
+    """Whether a ray along d passes through face f: its material is single-sided and d leaves the side
+    its winding's normal points to (glTF's back-face culling; Mitsuba's si.n is that normal too)."""
+    if s.cull[s.tri_material[f]] == 0:
+        return False
+    p0, p1, p2 = triangle(s, f)
+    return wp.dot(d, unit_normal(p0, p1, p2)) > 0.0
+
+
+@wp.func
+def past(s: SceneData, f: int, u: float, v: float, d: wp.vec3) -> wp.vec3:
+    """The origin that continues a ray along d beyond its hit on face f at (u, v): spawned off the hit
+    point past its error bound, as pbrt's SkipIntersection and Mitsuba's si.spawn_ray do."""
+    p0, p1, p2 = triangle(s, f)
+    w = 1.0 - u - v
+    return offset_ray_origin(p0 * u + p1 * v + p2 * w, hit_point_error(p0, p1, p2, u, v, w), unit_normal(p0, p1, p2), d)
+
+
 @functools.cache
-def make_first_hit(raster: bool, mirrors: bool):
+def make_first_hit(raster: bool, mirrors: bool, cull: bool = False):
     """The nearest hit of a ray: with ``raster``, a camera ray's from the Z-buffer where that is certain
     to be the query's (hybrid.uncertain); with ``mirrors``, a reflection ray's from its chain's virtual
-    camera where certain (kernels/mirror.py); every other ray's from the BVH. The same record to the bit."""
+    camera where certain (kernels/mirror.py); every other ray's from the BVH. The same record to the bit.
+    With ``cull``, the BVH's answer skips the back faces of single-sided materials; neither shortcut
+    knows sidedness, so the renderer never asks for them then."""
+    if cull and (raster or mirrors):
+        raise ValueError("back-face culling is traced: no Z-buffer or virtual-camera first hits with it")
 
     @wp.func
     def first_hit(s: SceneData, frags: Fragments, mir: Mirrors, r: TreeRay, i: int, n_s: int, x: int, row: int,
@@ -122,6 +145,9 @@ def make_first_hit(raster: bool, mirrors: bool):
                     mir.decided[i] = mir.decided[i] + 1
         if not found:
             q = wp.mesh_query_ray(s.mesh, ray.o, ray.d, 1.0e30)
+            if wp.static(cull):
+                while q.result and culled(s, q.face, ray.d):  # on through it, to the next surface
+                    q = wp.mesh_query_ray(s.mesh, past(s, q.face, q.u, q.v, ray.d), ray.d, 1.0e30)
             if q.result:
                 out = Hit(q.face, q.u, q.v, q.normal)
         return out
@@ -169,12 +195,13 @@ def make_trace_kernel(fx, raster_primary: bool = False, stack: int = 0, report_t
     counts hold refraction rays too (vec4i). With report_truncated, image holds twice width * height
     values: the radiance, then the weight of the paths cut off at max_depth (the energy the image is
     missing), both averaged over the samples. With ``aovs`` (names, aov.py), each camera ray's first
-    hit is also recorded into the AOV buffers; without, that code is absent."""
+    hit is also recorded into the AOV buffers; without, that code is absent. With fx.culling, camera,
+    reflection and refraction rays pass through single-sided materials' back faces (shadow rays do not)."""
     shade = make_shade(fx, shadow_grid)
     surface = make_surface(fx.smooth, fx.texture, fx.vertex_color)
     record_first_hit = make_record_first_hit(tuple(aovs), fx.texture, fx.vertex_color)
     MIRRORS = fx.reflection and mirrors
-    first_hit = make_first_hit(raster_primary, MIRRORS)
+    first_hit = make_first_hit(raster_primary, MIRRORS, fx.culling)
     REFLECTION, SUPERSAMPLING, AOVS = fx.reflection, fx.supersampling, bool(aovs)
     REFRACTION, ABSORPTION, TRUNCATED = fx.refraction, fx.absorption, report_truncated
     if REFRACTION and stack < 1:

@@ -31,6 +31,9 @@ class EffectSet:
     # Not an effect one switches off: whether some light is not the seed's point light without falloff
     # (a spot, a directional light, inverse_square), which needs the general light model in the kernels.
     light_model: bool = False
+    # Likewise: whether some material is single-sided, so that camera, reflection and refraction rays
+    # pass through its back faces (a scene file's materials are double-sided unless they say otherwise).
+    culling: bool = False
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -43,8 +46,9 @@ class EffectSet:
         diffuse, specular, shadows, reflection); the trace kernel's name adds its path, 'trace_adsSr_gshadow'."""
         letters = {"ambient": "a", "diffuse": "d", "specular": "s", "shadows": "S",
                    "reflection": "r", "supersampling": "x", "smooth": "n", "texture": "t", "vertex_color": "c",
-                   "refraction": "T", "absorption": "b", "light_model": "L"}
-        return "".join(letters[n] for n in self.names + ("light_model",) * self.light_model) or "none"
+                   "refraction": "T", "absorption": "b", "light_model": "L", "culling": "C"}
+        flags = ("light_model",) * self.light_model + ("culling",) * self.culling
+        return "".join(letters[n] for n in self.names + flags) or "none"
 
     def __str__(self) -> str:
         return ",".join(self.names) or "none"
@@ -73,6 +77,7 @@ def scene_effects(scene) -> EffectSet:
         refraction=scene.render.max_depth > 1 and any(m.dielectric for m in mats),
         absorption=any(m.dielectric and max(m.absorption) > 0 for m in mats),
         light_model=not all(light.seed_point for light in scene.lights),
+        culling=not all(m.double_sided for m in mats),
     )
 
 
@@ -102,7 +107,7 @@ def resolve_effects(scene, allow=None, disable=()) -> EffectSet:
     keep -= parse_effects(disable, None, "disable")
     on = {n: getattr(fx, n) and n in keep for n in EFFECTS}
     on["shadows"] = on["shadows"] and (on["diffuse"] or on["specular"])  # shadows only dim those terms
-    return EffectSet(**on, light_model=fx.light_model)
+    return EffectSet(**on, light_model=fx.light_model, culling=fx.culling)
 
 
 def zbuffer_effects(scene, effects=None, disable=()) -> EffectSet:

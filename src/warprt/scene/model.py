@@ -120,7 +120,9 @@ class Material:
     with a texture is the texture's value times the coefficient (glTF's factor times texture), and
     an object's vertex colours multiply ka and kd. With an index of refraction, a dielectric: the
     interface between its inside (index ior) and air, whose transmitted ray is weighted by k_t
-    (transmittance) and, inside, by exp(-absorption * distance)."""
+    (transmittance) and, inside, by exp(-absorption * distance). A material that is not double_sided
+    is invisible from behind (the side its triangles' winding turns away) to camera, reflection and
+    refraction rays, as glTF's doubleSided = false culls back faces; shadow rays still meet it."""
 
     kd: tuple = (0.7, 0.7, 0.7)
     ka: tuple | None = None  # None: the same as kd, with kd's texture
@@ -133,6 +135,7 @@ class Material:
     ior: float | None = None  # eta > 0: a dielectric; None: opaque
     transmittance: tuple = (1.0, 1.0, 1.0)  # k_t, only with ior
     absorption: tuple = (0.0, 0.0, 0.0)  # sigma per scene unit (Beer's law), only with ior
+    double_sided: bool = True  # False: back faces culled (an opaque material only)
 
     def __post_init__(self):
         # reflectivity, transmittance and absorption may be one number, as in the scene file.

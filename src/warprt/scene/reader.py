@@ -27,7 +27,7 @@ _RENDER_KEYS = {"ambient", "background", "max_depth", "shadows", "spp", "effects
 _LIGHT_KEYS = {"type", "position", "color", "direction", "target", "cutoff_angle", "beam_width", "falloff"}
 _SPOT_KEYS = ("target", "cutoff_angle", "beam_width")  # meaningful only for a spot
 _MATERIAL_KEYS = {"ka", "kd", "ks", "shininess", "reflectivity", "ka_texture", "kd_texture", "ks_texture", "ior",
-                  "transmittance", "absorption"}
+                  "transmittance", "absorption", "double_sided"}
 _DIELECTRIC_KEYS = ("transmittance", "absorption")  # meaningful only with an ior
 _TEXTURE_KEYS = {"image", "checker", "scale", "offset", "srgb"}
 _OBJECT_KEYS = {"name", "mesh", "shape", "material", "scale", "rotate", "translate", "smooth", "up"}
@@ -274,6 +274,7 @@ def read_material(source: str, name: str, t, base: Path = Path(".")) -> Material
         reflectivity=reflectivity,
         kd_texture=tex.get("kd"), ka_texture=ka_texture, ks_texture=tex.get("ks"),
         ior=ior,
+        double_sided=r.boolean("double_sided", True),
         **dielectric,
     )
 

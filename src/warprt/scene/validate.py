@@ -143,7 +143,12 @@ def _check_light(source, where, light, eye):
 
 def _check_dielectric(source, where, m):
     """ior > 0 makes a dielectric, whose reflection is its Fresnel term; k_t in [0, 1] and sigma >= 0
-    belong to a dielectric only."""
+    belong to a dielectric only, and a dielectric is double-sided (its rays meet its back faces from inside)."""
+    if not isinstance(m.double_sided, (bool, np.bool_)):
+        raise SceneError(source, f"{where}.double_sided", f"expected true or false, got {_num(m.double_sided)}")
+    if m.ior is not None and not m.double_sided:
+        raise SceneError(source, f"{where}.double_sided", "a dielectric (ior) is seen from inside through its back "
+                                                          "faces; double_sided must be true")
     if m.ior is None:
         if tuple(m.transmittance) != (1.0, 1.0, 1.0):
             raise SceneError(source, f"{where}.transmittance", "only a dielectric has it: give the material an ior")

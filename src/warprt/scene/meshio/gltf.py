@@ -4,8 +4,8 @@ normalized integer attributes raw and ignores KHR_texture_transform).
 What is read: the default scene's node tree (matrix or TRS; each node using a mesh is a placed copy,
 EXT_mesh_gpu_instancing too), triangle, strip and fan primitives, POSITION, NORMAL, TEXCOORD_n,
 COLOR_0 (linear, as the spec says), and per material baseColorFactor times baseColorTexture (embedded,
-data URI or file; sRGB) with KHR_texture_transform and the sampler's wrapS/wrapT; primitives without a
-material get the specification's default; perspective cameras and KHR_lights_punctual lights placed
+data URI or file; sRGB) with KHR_texture_transform and the sampler's wrapS/wrapT, and doubleSided
+(false, the default, culls back faces); primitives without a material get the specification's default; perspective cameras and KHR_lights_punctual lights placed
 by their nodes. glTF is y-up and in metres by its spec.
 """
 
@@ -22,7 +22,7 @@ from urllib.parse import unquote
 import numpy as np
 
 from ...diagnostics import warn
-from ...errors import SceneError, one_line
+from ...errors import SceneError, one_line, show
 from ..dielectric_formats import dielectric_from_gltf
 from ..camera import FileCamera, look_from_matrix
 from ..model import Light, Material
@@ -34,7 +34,8 @@ _WIDTH = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT2": 4, "MAT3": 9, "M
 _WRAP = {10497: "repeat", 33071: "clamp", 33648: "mirror"}  # the sampler's wrapS / wrapT as Texture.wrap
 # What the specification gives a primitive without a material: base colour 1, metallic 1, roughness 1.
 # A rough metal has no highlight to speak of, and Phong has no metallic term: kd 1 and no ks.
-GLTF_DEFAULT_MATERIAL = Material(kd=(1.0, 1.0, 1.0), ka=(1.0, 1.0, 1.0), ks=(0.0, 0.0, 0.0))
+# Like every glTF material unless it says doubleSided, it is single-sided (three.js: FrontSide).
+GLTF_DEFAULT_MATERIAL = Material(kd=(1.0, 1.0, 1.0), ka=(1.0, 1.0, 1.0), ks=(0.0, 0.0, 0.0), double_sided=False)
 _UNREAD_MATERIAL_EXTENSIONS = {"KHR_materials_volume": "volume",
                                "KHR_materials_clearcoat": "clearcoat", "KHR_materials_sheen": "sheen",
                                "KHR_materials_emissive_strength": "emission"}
@@ -202,8 +203,15 @@ class _Document:
             uv_map, tex_coord = _texture_transform(info)
             if texture is not None:
                 texture = texture.mapped(uv_map)
-        material = Material(kd=kd, ka=kd, ks=(0.0, 0.0, 0.0), kd_texture=texture, ka_texture=texture)
-        return replace(material, **dielectric_from_gltf(m, self.src, where)), tex_coord
+        double_sided = m.get("doubleSided", False)  # the specification's default: back faces culled
+        if not isinstance(double_sided, bool):
+            raise SceneError(self.src, f"{where}.doubleSided", f"expected true or false, got {show(double_sided)}")
+        material = Material(kd=kd, ka=kd, ks=(0.0, 0.0, 0.0), kd_texture=texture, ka_texture=texture,
+                            double_sided=double_sided)
+        dielectric = dielectric_from_gltf(m, self.src, where)
+        if dielectric:  # KHR_materials_volume: "the doubleSided property has no effect on volume boundaries"
+            dielectric["double_sided"] = True
+        return replace(material, **dielectric), tex_coord
 
     def mesh_file(self) -> MeshFile:
         doc = self.doc
