@@ -58,7 +58,7 @@ sensor = mi.load_dict({"type": "perspective", "fov_axis": "y", "fov": c["fovy"],
                                 "pixel_format": "rgb", "component_format": "float32"},
                        "sampler": {"type": "stratified", "sample_count": 1, "jitter": False}})
 material = lambda m: NS(ka=m.get("ka", m["kd"]), kd=m["kd"], ks=m["ks"], shininess=m["shininess"],
-                        reflectivity=[m.get("reflectivity", 0.0)] * 3, ior=None, textures={})
+                        reflectivity=[m.get("reflectivity", 0.0)] * 3, ior=None, textures={}, double_sided=True)
 tables = NS(lights=[NS(position=l["position"], color=l["color"], type="point", falloff="none") for l in doc["lights"]],
             render=NS(ambient=r["ambient"], background=r["background"]),
             materials={k: material(m) for k, m in doc["materials"].items()}, objects=objects)

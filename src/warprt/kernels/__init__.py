@@ -14,7 +14,7 @@ from .._warp import init_warp, wp
 from .aov import aov_buffers, aov_bytes, aov_sums, empty_aov_buffers
 from .camera import CameraData, camera_data, camera_ray, raster_camera, sample_offset
 from .clip import CLIP_SCALE
-from .dielectric import fresnel_dielectric, refract
+from .dielectric import beer, beer_forever, fresnel_dielectric, refract
 from .hybrid import MARGIN_PX, uncertain, uncertain_np
 from .interaction import OFFSET_SCALE, make_surface, offset_ray_origin, reflect
 from .mirror import MARGIN_PX as MIRROR_MARGIN_PX, MAX_BOUNCES, Mirrors, gather_kernel, mirror_chain, mirror_hit, probe_kernel
@@ -28,7 +28,7 @@ from .zbuffer_shade import make_shade_kernel
 # What image/ launches and reads, and what tests and benchmarks compose into kernels of their own.
 __all__ = ["CLIP_SCALE", "CameraData", "Fragments", "MARGIN_PX", "MAX_BOUNCES", "MAX_TREE_DEPTH", "MIRROR_MARGIN_PX",
            "Mirrors", "OFFSET_SCALE", "aov_buffers", "aov_bytes", "aov_sums", "camera_data", "camera_ray",
-           "count_kernel", "empty_aov_buffers", "fill_kernel", "fresnel_dielectric", "gather_kernel", "grid_occluded",
+           "beer", "beer_forever", "count_kernel", "empty_aov_buffers", "fill_kernel", "fresnel_dielectric", "gather_kernel", "grid_occluded",
            "init_warp", "make_shade_kernel", "make_surface", "make_trace_kernel", "mirror_chain", "mirror_hit",
            "offset_ray_origin", "phong_diffuse", "phong_specular", "probe_kernel", "project_kernel", "query_normal",
            "raster_camera", "raster_kernel", "reflect", "refract", "sample_offset", "stack_size", "tile_order_pixel",
