@@ -6,7 +6,8 @@ import pytest
 import warprt
 
 from accuracy.harness import check
-from formats.test_texture_wrap import quad_gltf, write_texture
+from formats.test_texture_wrap import quad_gltf, quad_scene_doc, write_texture
+from scenekit import write_scene
 
 pytestmark = pytest.mark.accuracy
 
@@ -15,8 +16,7 @@ pytestmark = pytest.mark.accuracy
 def test_wrapped_texture_matches_mitsuba(tmp_path, mode):
     write_texture(tmp_path / "t.png")
     quad_gltf(tmp_path / "q.gltf", (mode, mode))
-    (tmp_path / "s.toml").write_text('[camera]\neye = [0.0, 0.0, 4.0]\ncenter = [0.0, 0.0, 0.0]\nfovy = 60.0\n'
-                                     'width = 96\nheight = 96\n[render]\nambient = [0.2, 0.2, 0.2]\n'
-                                     '[[lights]]\nposition = [1.0, 2.0, 5.0]\ncolor = [0.8, 0.8, 0.8]\n'
-                                     '[[objects]]\nmesh = "q.gltf"\n')
+    doc = quad_scene_doc("q.gltf", lights=[{"position": [1.0, 2.0, 5.0], "color": [0.8, 0.8, 0.8]}],
+                         ambient=[0.2, 0.2, 0.2])
+    write_scene(tmp_path, doc, "s.toml")
     check(f"texture_wrap_{mode}", warprt.load_scene(tmp_path / "s.toml"))

@@ -3,7 +3,6 @@ computed here from the numbers written into the file (rotations by Rodrigues' fo
 USD's 2 atan(aperture / 2 focal length), intensity x 2^exposure x colour), never from the reader."""
 
 import math
-import textwrap
 
 import numpy as np
 import pytest
@@ -12,6 +11,7 @@ import warprt
 from warprt.scene import read_mesh_file
 
 from formats.gltf_files import Gltf, box, quaternion, quaternion_product, rotation_matrix
+from scenekit import write_scene
 
 YAW, PITCH = 35.0, -20.0  # the camera turns about y, then about its own x
 
@@ -138,11 +138,8 @@ def test_info_lists_cameras_and_lights(tmp_path, capsys):
 
 def test_scene_file_camera_from_a_model_file(tmp_path):
     camera_gltf(tmp_path / "c.gltf")
-    (tmp_path / "s.toml").write_text(textwrap.dedent("""
-        camera = { from = "c.gltf", name = "Side", width = 200, height = 100 }
-        [[objects]]
-        mesh = "c.gltf"
-        """))
+    write_scene(tmp_path, {"camera": {"from": "c.gltf", "name": "Side", "width": 200, "height": 100},
+                           "objects": [{"mesh": "c.gltf"}]}, "s.toml")
     scene = warprt.load_scene(tmp_path / "s.toml")
     assert_camera(scene.camera, [-6.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], 55.0, 0.5)
     assert (scene.camera.width, scene.camera.height) == (200, 100)
@@ -345,20 +342,12 @@ def test_gltf_primitive_without_material_gets_the_specifications_default(tmp_pat
     g = Gltf()
     g.node(mesh=g.mesh([[-2, -2, 0], [2, -2, 0], [2, 2, 0], [-2, 2, 0]], [[0, 1, 2], [0, 2, 3]]))
     g.write(tmp_path / "q.gltf")
-    (tmp_path / "s.toml").write_text(textwrap.dedent("""
-        [camera]
-        eye = [0.0, 0.0, 4.0]
-        center = [0.0, 0.0, 0.0]
-        width = 64
-        height = 48
-        [render]
-        ambient = [0.0, 0.0, 0.0]
-        max_depth = 1
-        [[lights]]
-        position = [0.0, 0.0, 4.0]
-        [[objects]]
-        mesh = "q.gltf"
-        """))
+    write_scene(tmp_path, {
+        "camera": {"eye": [0.0, 0.0, 4.0], "center": [0.0, 0.0, 0.0], "width": 64, "height": 48},
+        "render": {"ambient": [0.0, 0.0, 0.0], "max_depth": 1},
+        "lights": [{"position": [0.0, 0.0, 4.0]}],
+        "objects": [{"mesh": "q.gltf"}],
+    }, "s.toml")
     scene = warprt.load_scene(tmp_path / "s.toml")
     (obj,) = scene.objects
     material = scene.materials[obj.material]
@@ -431,8 +420,8 @@ def test_scene_file_camera_from_a_z_up_stage_is_turned_with_its_objects(tmp_path
     """An [[objects]] entry turns a z-up stage so that its z is the scene's y: (x, y, z) -> (x, z, -y).
     The camera taken from it is turned the same way, so it sees the object as the author framed it."""
     camera_usd(tmp_path / "c.usda", up_axis="Z")
-    (tmp_path / "s.toml").write_text('camera = { from = "c.usda", name = "Shot", width = 300, height = 200 }\n'
-                                     '[[objects]]\nmesh = "c.usda"\n')
+    write_scene(tmp_path, {"camera": {"from": "c.usda", "name": "Shot", "width": 300, "height": 200},
+                           "objects": [{"mesh": "c.usda"}]}, "s.toml")
     scene = warprt.load_scene(tmp_path / "s.toml")
     r = rotation_matrix([0, 1, 0], YAW) @ rotation_matrix([1, 0, 0], PITCH)
     z_to_y = lambda v: np.array([v[0], v[2], -v[1]])  # noqa: E731

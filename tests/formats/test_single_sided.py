@@ -3,8 +3,6 @@ default) is invisible from behind to camera, reflection and refraction rays, and
 A glTF quad of base colour Q before a backdrop of colour B, C_amb = 1 and no lights: a pixel is the
 ka of what its ray meets, so where the ray crosses the quad from behind it is B, from the front Q."""
 
-import textwrap
-
 import numpy as np
 import pytest
 
@@ -12,6 +10,7 @@ import warprt
 from oracle import camera_rays, ray_plane
 
 from formats.gltf_files import Gltf, quaternion
+from scenekit import write_scene
 
 Q = (0.9, 0.2, 0.1)  # the quad's base colour
 B = (0.1, 0.3, 0.8)  # the backdrop's ka
@@ -33,32 +32,38 @@ def quad_gltf(path, double_sided=None, material=True, **node):
     return g.write(path)
 
 
-def scene_toml(tmp_path, camera_z, backdrop_z, extra=""):
+def quad_doc(eye, backdrop_z, backdrop, size=64, lights=(), **render):
+    """The scene-file dict of the quad q.gltf at the origin before a backdrop (material ``backdrop``,
+    double-sided, as scene files' materials are) in the plane z = backdrop_z, seen from ``eye`` looking
+    at the origin with a ``size`` x ``size`` image."""
+    doc = {
+        "camera": {"eye": list(eye), "center": [0.0, 0.0, 0.0], "fovy": 60.0, "width": size, "height": size},
+        "render": dict(render),
+        "materials": {"backdrop": dict(backdrop)},
+        "objects": [{"mesh": "q.gltf"},
+                    {"shape": "plane", "size": [20.0, 20.0], "rotate": [90.0, 0.0, 0.0],
+                     "translate": [0.0, 0.0, backdrop_z], "material": "backdrop"}],
+    }
+    if lights:
+        doc["lights"] = [dict(l) for l in lights]
+    return doc
+
+
+# A mirror at 45 degrees about the origin (normal (1, 0, 1)/sqrt 2), and the backdrop's material in the
+# plane x = 6, facing it.
+MIRROR_PLANE = {"shape": "plane", "size": [3.0, 3.0], "rotate": [90.0, 45.0, 0.0], "material": "mirror"}
+SIDE_BACKDROP = {"shape": "plane", "size": [20.0, 20.0], "rotate": [0.0, 0.0, 90.0], "translate": [6.0, 0.0, 0.0],
+                 "material": "backdrop"}
+
+
+def scene_toml(tmp_path, camera_z, backdrop_z, materials=None, objects=()):
     """The camera on the z axis at camera_z looking at the quad, the backdrop (double-sided, as scene
-    files' materials are) in the plane z = backdrop_z."""
-    (tmp_path / "s.toml").write_text(textwrap.dedent(f"""
-        [camera]
-        eye = [0.0, 0.0, {camera_z}]
-        center = [0.0, 0.0, 0.0]
-        fovy = 60.0
-        width = 64
-        height = 64
-        [render]
-        ambient = [1.0, 1.0, 1.0]
-        max_depth = 1
-        [materials.backdrop]
-        ka = {list(B)}
-        kd = [0.0, 0.0, 0.0]
-        [[objects]]
-        mesh = "q.gltf"
-        [[objects]]
-        shape = "plane"
-        size = [20.0, 20.0]
-        rotate = [90.0, 0.0, 0.0]
-        translate = [0.0, 0.0, {backdrop_z}]
-        material = "backdrop"
-        """) + textwrap.dedent(extra))
-    return warprt.load_scene(tmp_path / "s.toml")
+    files' materials are) in the plane z = backdrop_z; ``materials`` and ``objects`` added after."""
+    doc = quad_doc([0.0, 0.0, camera_z], backdrop_z, {"ka": list(B), "kd": [0.0, 0.0, 0.0]},
+                   ambient=[1.0, 1.0, 1.0], max_depth=1)
+    doc["materials"].update(materials or {})
+    doc["objects"] += [dict(o) for o in objects]
+    return warprt.load_scene(write_scene(tmp_path, doc, "s.toml"))
 
 
 def quad_pixels(scene):
@@ -122,23 +127,9 @@ def mirror_scene(tmp_path, double_sided):
     in the plane x = 3, whose winding faces +x: away from them; the backdrop lies beyond, at x = 6."""
     quad_gltf(tmp_path / "q.gltf", double_sided=double_sided, rotation=quaternion([0.0, 1.0, 0.0], 90.0),
               translation=[3.0, 0.0, 0.0])
-    return scene_toml(tmp_path, 4.0, -20.0, """
-        [materials.mirror]
-        ka = [0.0, 0.0, 0.0]
-        kd = [0.0, 0.0, 0.0]
-        reflectivity = 1.0
-        [[objects]]
-        shape = "plane"
-        size = [3.0, 3.0]
-        rotate = [90.0, 45.0, 0.0]
-        material = "mirror"
-        [[objects]]
-        shape = "plane"
-        size = [20.0, 20.0]
-        rotate = [0.0, 0.0, 90.0]
-        translate = [6.0, 0.0, 0.0]
-        material = "backdrop"
-        """).with_render(max_depth=2)
+    return scene_toml(tmp_path, 4.0, -20.0,
+                      {"mirror": {"ka": [0.0, 0.0, 0.0], "kd": [0.0, 0.0, 0.0], "reflectivity": 1.0}},
+                      [MIRROR_PLANE, SIDE_BACKDROP]).with_render(max_depth=2)
 
 
 @pytest.mark.parametrize("double_sided, colour", [(False, B), (True, Q)])
@@ -162,28 +153,14 @@ def test_shadow_rays_are_stopped_by_the_back_of_a_single_sided_quad(tmp_path):
     normal +y) to the point light without falloff at (0, 5, 0) meet its back, and it still shadows the
     floor. A floor point is lit max(0, n.L) = L_y where the segment to the light misses the quad, else 0."""
     quad_gltf(tmp_path / "q.gltf", rotation=quaternion([1.0, 0.0, 0.0], -90.0), translation=[0.0, 1.0, 0.0])
-    (tmp_path / "s.toml").write_text(textwrap.dedent("""
-        [camera]
-        eye = [0.0, 3.0, 6.0]
-        center = [0.0, 0.0, 0.0]
-        fovy = 60.0
-        width = 64
-        height = 64
-        [render]
-        ambient = [0.0, 0.0, 0.0]
-        max_depth = 1
-        [[lights]]
-        position = [0.0, 5.0, 0.0]
-        [materials.floor]
-        kd = [1.0, 1.0, 1.0]
-        [[objects]]
-        mesh = "q.gltf"
-        [[objects]]
-        shape = "plane"
-        size = [20.0, 20.0]
-        material = "floor"
-        """))
-    scene = warprt.load_scene(tmp_path / "s.toml")
+    doc = {
+        "camera": {"eye": [0.0, 3.0, 6.0], "center": [0.0, 0.0, 0.0], "fovy": 60.0, "width": 64, "height": 64},
+        "render": {"ambient": [0.0, 0.0, 0.0], "max_depth": 1},
+        "lights": [{"position": [0.0, 5.0, 0.0]}],
+        "materials": {"floor": {"kd": [1.0, 1.0, 1.0]}},
+        "objects": [{"mesh": "q.gltf"}, {"shape": "plane", "size": [20.0, 20.0], "material": "floor"}],
+    }
+    scene = warprt.load_scene(write_scene(tmp_path, doc, "s.toml"))
     assert scene.materials[scene.objects[0].material].double_sided is False
     up = np.array([0.0, 1.0, 0.0])
     eye, d = camera_rays(scene.camera)

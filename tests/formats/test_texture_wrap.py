@@ -4,7 +4,6 @@ bilinear texel at its uv with the wrap written in the file (glTF's sampler wrapS
 UsdUVTexture wrapS/wrapT, MTL's -clamp on): clamp to edge, mirrored repeat or repeat, per axis."""
 
 import math
-import textwrap
 
 import numpy as np
 import pytest
@@ -14,6 +13,7 @@ import warprt
 from oracle import camera_rays, ray_plane
 
 from formats.gltf_files import Gltf
+from scenekit import write_scene
 
 S = 2.0  # the quad spans [-2, 2]^2 in z = 0
 LO, HI = -1.0, 2.0  # and uv [-1, 2]^2 across it
@@ -47,20 +47,20 @@ def bilinear(u, v, wrap):
     return (1 - a) * (1 - b) * at(0, 0) + a * (1 - b) * at(1, 0) + (1 - a) * b * at(0, 1) + a * b * at(1, 1)
 
 
+def quad_scene_doc(mesh_name, lights=(), **render):
+    """The scene-file dict of the mesh file ``mesh_name`` seen face on from z = 4, 96 x 96 pixels."""
+    doc = {
+        "camera": {"eye": [0.0, 0.0, 4.0], "center": [0.0, 0.0, 0.0], "fovy": 60.0, "width": 96, "height": 96},
+        "render": dict(render),
+        "objects": [{"mesh": mesh_name}],
+    }
+    if lights:
+        doc["lights"] = [dict(l) for l in lights]
+    return doc
+
+
 def render_quad(tmp_path, mesh_name):
-    (tmp_path / "s.toml").write_text(textwrap.dedent(f"""
-        [camera]
-        eye = [0.0, 0.0, 4.0]
-        center = [0.0, 0.0, 0.0]
-        fovy = 60.0
-        width = 96
-        height = 96
-        [render]
-        ambient = [1.0, 1.0, 1.0]
-        max_depth = 1
-        [[objects]]
-        mesh = "{mesh_name}"
-        """))
+    write_scene(tmp_path, quad_scene_doc(mesh_name, ambient=[1.0, 1.0, 1.0], max_depth=1), "s.toml")
     scene = warprt.load_scene(tmp_path / "s.toml")
     image, _ = warprt.render(scene)
     eye, d = camera_rays(scene.camera)
