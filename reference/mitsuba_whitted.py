@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import math
 import os
-import re
 import sys
 from dataclasses import dataclass
 
@@ -495,7 +494,7 @@ class MitsubaFileScene(MitsubaScene):
     it (not changed by overrides such as --width)."""
 
     def __init__(self, scene, path, smooth: bool = True):
-        from warprt.scene import load_mitsuba_file, mitsuba_camera, reads_mitsuba_shape
+        from warprt.scene import load_mitsuba_file, mitsuba_camera, reads_mitsuba_light, reads_mitsuba_shape
 
         mi, dr = self.mi, self.dr = mitsuba()
         self.scene, self.smooth = scene, smooth
@@ -514,8 +513,7 @@ class MitsubaFileScene(MitsubaScene):
         own = any(m.textures for m in scene.materials.values())
         # The file's own point, spot and directional emitters, in the order the reader reads them into
         # scene.lights (its area, constant and other emitters are not Whitted lights).
-        emitters = [e for e in self.mi_scene.emitters()
-                    if re.match(r"\s*(PointLight|SpotLight|DirectionalEmitter)\b", str(e))]
+        emitters = [e for e in self.mi_scene.emitters() if reads_mitsuba_light(e)]
         if len(emitters) != len(scene.lights):
             raise ValueError(f"{path}: Mitsuba loads {len(emitters)} Whitted lights, the scene has {len(scene.lights)}")
         self.integrator.tables = _Tables(mi, dr, self.mi_scene, scene, object_of_shape, False, emitters,

@@ -15,7 +15,7 @@ from .dielectric_formats import DEFAULT_IOR, dielectric_from_gltf, dielectric_fr
 from .effects import EFFECTS, EffectSet, resolve_effects, scene_effects, zbuffer_effects
 from .load import load_scene, sets_in_place, with_overrides
 from .meshio import read_mesh_file
-from .mitsuba_xml import load_mitsuba_file, mitsuba_camera, read_mitsuba_xml, reads_mitsuba_shape
+from .mitsuba_xml import load_mitsuba_file, mitsuba_camera, read_mitsuba_xml, reads_mitsuba_light, reads_mitsuba_shape
 from .model import DEFAULT_MATERIAL, Camera, Light, Material, RenderSettings, Scene, SceneObject
 from .normals import vertex_normals
 from .reader import rotation, scene_from_dict
@@ -25,7 +25,7 @@ from .validate import MAX_REACH, check_setting, validate_camera, validate_scene
 __all__ = ["Camera", "camera_basis", "CameraBasis", "check_setting", "DEFAULT_IOR", "DEFAULT_MATERIAL",
            "dielectric_from_gltf", "dielectric_from_mtl", "dielectric_from_usd", "EFFECTS", "EffectSet",
            "eye_medium", "Light", "load_mitsuba_file", "load_scene", "Material", "MAX_REACH", "ObjectCache", "open_edges",
-           "pixel_ray_directions", "mitsuba_camera", "read_mesh_file", "read_mitsuba_xml", "reads_mitsuba_shape", "RenderSettings", "resolve_effects", "rotation", "Scene",
+           "pixel_ray_directions", "mitsuba_camera", "read_mesh_file", "read_mitsuba_xml", "reads_mitsuba_light", "reads_mitsuba_shape", "RenderSettings", "resolve_effects", "rotation", "Scene",
            "scene_effects", "scene_from_dict", "SceneObject", "sets_in_place", "shapes", "signed_volume",
            "srgb_to_linear", "Texture", "validate_camera", "validate_scene", "vertex_normals", "winding_number",
            "with_overrides", "zbuffer_effects"]

@@ -134,6 +134,14 @@ def reads_mitsuba_shape(shape) -> bool:
     return bool(shape.is_mesh()) or _class(shape) in _TESSELLATED
 
 
+_LIGHTS = ("PointLight", "SpotLight", "DirectionalEmitter")  # Mitsuba's point, spot, directional
+
+
+def reads_mitsuba_light(emitter) -> bool:
+    """Whether the reader makes a light of this loaded Mitsuba emitter (in scene.emitters() order)."""
+    return _class(emitter) in _LIGHTS
+
+
 def _array(v) -> np.ndarray:
     return np.array(v, np.float64)
 
