@@ -176,9 +176,8 @@ def mirrors_from_rasters(reflections: str, fx, triangles: int, samples: int, dev
                          frames: int) -> bool:
     """The reflection rays' policy: whether the planar mirrors' virtual cameras answer them. "mirrors" asks
     for them; "auto" takes them on the CPU where rasterizing the scene beats tracing it (raster_is_cheaper,
-    the first hits' rule) once they are kept: building them (probes, a raster per chain) costs one to three
-    frames' saving, and kept for a static view they cost nothing and take 10-25% off each frame
-    (benchmarks/ATTEMPTS.md). So a view's second frame (``frames``: record_view's count, this one included)
+    the first hits' rule) once they are kept: building them (probes, a raster per chain) costs about what a
+    few frames' queries save, and kept for a static view they cost nothing. So a view's second frame (``frames``: record_view's count, this one included)
     builds them, as a second frame with the same lights builds the shadow grid, for the frames after it;
     a moving camera's are traced. Either way the image is the traced one, to the bit."""
     if not fx.reflection or reflections == "bvh":
@@ -304,10 +303,11 @@ def render(scene, options: RenderOptions | None = None, *, geometry: Geometry | 
     the reflection rays: "bvh" (Warp's closest-hit query), "mirrors" (off planar mirrors, their virtual
     cameras' rasters wherever certain to give the query's answer, the rest traced), or "auto", the
     default, which takes the virtual cameras from a view's second frame on (mirrors_from_rasters): their
-    build costs about what one frame's queries save, kept they cost nothing. With ``report_truncated``, stats.truncated is the weight per pixel (H, W, 3)
-    of the reflected and refracted rays max_depth cut off: the share of their radiance the image is
-    missing. ``aovs`` (names from image.aovs.AOVS) come back as the result's ``.aovs``, from the camera
-    rays' first hits; the image is the same with or without them. ``geometry``: a Geometry built for
+    build costs about what one frame's queries save, kept they cost nothing. With ``report_truncated``,
+    stats.truncated is the weight per pixel (H, W, 3) of the reflected and refracted rays max_depth cut
+    off: the share of their radiance the image is missing. ``aovs`` (names from image.aovs.AOVS) come back
+    as the result's ``.aovs``, from the camera rays' first hits; the image is the same with or without
+    them. ``geometry``: a Geometry built for
     this scene, used as it is; ``progress``: a progress.Progress told of each band done."""
     o = RenderOptions.of(options, kwargs)
     validate_scene(scene)  # a Scene built in Python gets the file's checks too, before any kernel
