@@ -14,6 +14,7 @@ untimed run of each; the ratio is the median of the pairs' ratios.
 from __future__ import annotations
 
 import argparse
+import json
 import statistics
 import subprocess
 import sys
@@ -265,6 +266,39 @@ def pair(a: list[str], b: list[str], repeat: int) -> dict:
             "ratio": statistics.median(t[0] / t[1] for t in times), "pairs": times}
 
 
+# Where a cold process's time goes: each step a fresh process that does everything the step before did
+# and one thing more, then leaves through os._exit as `warprt render` does (interpreter teardown apart).
+LADDER = {
+    "warprt": [("interpreter start", "import os; os._exit(0)"),
+               ("+ import numpy", "import os, numpy; os._exit(0)"),
+               ("+ import warp", "import os, warp; os._exit(0)"),
+               ("+ warp.init()", "import os, warp; warp.config.quiet = True; warp.init(); os._exit(0)"),
+               ("+ import warprt's renderer and CLI", "import os, warp; warp.config.quiet = True; warp.init(); "
+                                                       "import warprt.cli, warprt.image, warprt.kernels; os._exit(0)")],
+    "mitsuba": [("interpreter start", "import os; os._exit(0)"),
+                ("+ import mitsuba", "import os, mitsuba; os._exit(0)"),
+                ("+ set_variant('llvm_ad_rgb')", "import os, mitsuba; mitsuba.set_variant('llvm_ad_rgb'); os._exit(0)")],
+}
+
+
+def breakdown(repeat: int, out: Path) -> dict:
+    """The cold default render taken apart: the LADDER's steps (medians of ``repeat`` runs), the render's
+    own phases from `warprt render --stats`, and the modules that cost most to import (`python -X
+    importtime`, self time, one run)."""
+    ladder = {side: [(name, statistics.median(_run([sys.executable, "-c", code]) for _ in range(repeat)))
+                     for name, code in steps] for side, steps in LADDER.items()}
+    cmd = [sys.executable, "-X", "importtime", "-m", "warprt", "render", "--stats", "-o", str(out / "w.png")]
+    runs = [subprocess.run(cmd, capture_output=True, text=True, env=ENV, cwd=REPO) for _ in range(repeat)]
+    phases = {k: statistics.median(json.loads(r.stdout)["times"][k] for r in runs)
+              for k in json.loads(runs[0].stdout)["times"]}
+    imports = []
+    for line in runs[-1].stderr.splitlines():
+        if line.startswith("import time:") and "self" not in line:
+            self_us, _, name = (x.strip() for x in line[len("import time:"):].split("|"))
+            imports.append((int(self_us) / 1e6, name))
+    return {"ladder": ladder, "phases": phases, "imports": sorted(imports, reverse=True)[:8]}
+
+
 def run(repeat: int = 7) -> dict:
     out = Path(tempfile.mkdtemp())
     scene = write_mesh_scene(out / "meshes")
@@ -274,7 +308,8 @@ def run(repeat: int = 7) -> dict:
     files = pair(warprt[:4] + [str(scene)] + warprt[4:], [sys.executable, "-c", MITSUBA_FILES, str(scene), str(out / "m.png")],
                  repeat)
     print(f"cold mesh files warprt/mitsuba {files['ratio']:.2f}", file=sys.stderr, flush=True)
-    return {"default": default, "files": files, "repeat": repeat, "size": [WIDTH, HEIGHT]}
+    parts = breakdown(repeat, out)
+    return {"default": default, "files": files, "breakdown": parts, "repeat": repeat, "size": [WIDTH, HEIGHT]}
 
 
 def target_rows(data: dict) -> list[tuple[str, str, str]]:
@@ -303,6 +338,28 @@ def report(data: dict) -> str:
     for key, name in (("default", "default scene"), ("files", "five PLY/OBJ files")):
         r = data[key]
         lines.append(f"| {name} | {r['warprt']:.2f} | {r['mitsuba']:.2f} | {r['ratio']:.2f} |")
+    if "breakdown" in data:
+        lines += ["", breakdown_report(data["breakdown"], data["default"])]
+    return "\n".join(lines)
+
+
+def breakdown_report(parts: dict, default: dict) -> str:
+    lines = ["### Where the cold default render's time goes", "",
+             "Each step is a fresh process doing what the step above did and one thing more, then leaving through "
+             "`os._exit` as `warprt render` does; seconds are medians. The last row of each side is the whole command "
+             "of the table above.", "", "| step | warprt | | step | Mitsuba |", "|---|---:|---|---|---:|"]
+    w, m = parts["ladder"]["warprt"], parts["ladder"]["mitsuba"]
+    w = w + [("+ load, build, trace, write (`warprt render`)", default["warprt"])]
+    m = m + [("+ load the scene, render, write", default["mitsuba"])]
+    for i in range(max(len(w), len(m))):
+        a = w[i] if i < len(w) else ("", None)
+        b = m[i] if i < len(m) else ("", None)
+        lines.append(f"| {a[0]} | {'' if a[1] is None else f'{a[1]:.3f}'} | | {b[0]} | {'' if b[1] is None else f'{b[1]:.3f}'} |")
+    ph = parts["phases"]
+    lines += ["", "The render's own phases (`warprt render --stats`, medians, seconds): "
+              + ", ".join(f"{k} {v:.3f}" for k, v in ph.items()) + ".", "",
+              "The most costly imports of that process (`python -X importtime`, self time): "
+              + ", ".join(f"`{name}` {t * 1e3:.0f} ms" for t, name in parts["imports"]) + "."]
     return "\n".join(lines)
 
 

@@ -127,6 +127,7 @@ def run(width=1024, height=768, scalar_width=128, scalar_height=96, repeat=3, on
         row["scalar_size"] = [scalar_width, scalar_height]
         # The reference's ray tree (glass) runs on a JIT variant only: no scalar_rgb time for those scenes.
         glass = any(m.dielectric for m in load_scene(scene).materials.values())
+        row["glass"] = glass
         row["mitsuba_scalar_warm"] = None if glass else warm("mitsuba_scalar", scene, scalar_width, scalar_height, 1)[0]
         row["mitsuba_llvm_warm_small"], _ = warm("mitsuba_llvm", scene, scalar_width, scalar_height, repeat)
         row["warprt_warm_small"], _ = warm("warprt", scene, scalar_width, scalar_height, repeat)
