@@ -35,6 +35,6 @@ quick: install-extras llvm
 figures: install-extras
 	$(PYTHON) -m benchmarks.figures
 
-# The performance report, benchmarks/REPORT.md (about 40 minutes on 2 cores; run on a quiet machine).
+# The performance report, benchmarks/REPORT.md (26 minutes on 2 cores, quiet; run on a quiet machine).
 benchmark: install-extras llvm
 	$(PYTHON) -m benchmarks

@@ -1,6 +1,6 @@
 """The performance report: every benchmark in one run, written to benchmarks/REPORT.md with its plots.
 
-    python -m benchmarks            # the full report (about 40 minutes on 2 cores)
+    python -m benchmarks            # the full report (26 minutes on 2 cores, quiet)
     python -m benchmarks --quick    # small sizes, to check that everything runs
 """
 
