@@ -20,12 +20,12 @@ from .model import DEFAULT_MATERIAL, Camera, Light, Material, RenderSettings, Sc
 from .normals import vertex_normals
 from .reader import rotation, scene_from_dict
 from .texture import Texture, srgb_to_linear
-from .validate import MAX_REACH, check_setting, validate_camera, validate_scene
+from .validate import MAX_REACH, CheckedContent, check_setting, validate_camera, validate_scene, validate_view
 
-__all__ = ["Camera", "camera_basis", "CameraBasis", "check_setting", "DEFAULT_IOR", "DEFAULT_MATERIAL",
+__all__ = ["Camera", "camera_basis", "CameraBasis", "CheckedContent", "check_setting", "DEFAULT_IOR", "DEFAULT_MATERIAL",
            "dielectric_from_gltf", "dielectric_from_mtl", "dielectric_from_usd", "EFFECTS", "EffectSet",
            "eye_medium", "Light", "load_mitsuba_file", "load_scene", "Material", "MAX_REACH", "ObjectCache", "open_edges",
            "pixel_ray_directions", "mitsuba_camera", "read_mesh_file", "read_mitsuba_xml", "reads_mitsuba_light", "reads_mitsuba_shape", "RenderSettings", "resolve_effects", "rotation", "Scene",
            "scene_effects", "scene_from_dict", "SceneObject", "sets_in_place", "shapes", "signed_volume",
-           "srgb_to_linear", "Texture", "validate_camera", "validate_scene", "vertex_normals", "winding_number",
+           "srgb_to_linear", "Texture", "validate_camera", "validate_scene", "validate_view", "vertex_normals", "winding_number",
            "with_overrides", "zbuffer_effects"]

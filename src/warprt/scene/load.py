@@ -15,7 +15,7 @@ from .autoframe import scene_for_mesh
 from .meshio import FORMATS, is_mesh_path
 from .model import Camera, RenderSettings, Scene
 from .reader import read_camera, read_render, scene_from_dict
-from .validate import validate_scene
+from .validate import CheckedContent, validate_scene, validate_view
 
 # The fields with_overrides sets on a loaded scene without reading its file again.
 _IN_PLACE = {"camera": {f.name for f in fields(Camera)}, "render": {f.name for f in fields(RenderSettings)}}
@@ -68,12 +68,15 @@ def apply_overrides(data: dict, overrides: dict, source: str) -> dict:
     return data
 
 
-def with_overrides(base: Scene, path, overrides: dict, base_overrides: dict | None = None) -> Scene:
+def with_overrides(base: Scene, path, overrides: dict, base_overrides: dict | None = None,
+                   content: CheckedContent | None = None) -> Scene:
     """load_scene(path, overrides), made from ``base`` = load_scene(path, base_overrides) without reading
     the file again where the two differ only in camera.* and render.* fields (sets_in_place): those go through the
     reader's own read_camera and read_render on the merged tables (its coercion and checks, the same
-    SceneError), then the whole scene's checks; lights, materials and objects are base's own, so a
-    renderer's geometry cache keeps them. Any other difference loads the file."""
+    SceneError), then the whole scene's checks, or with ``content`` (validate_scene(base)'s return value)
+    only those that depend on the camera and render settings (validate_view: the same SceneError); lights,
+    materials and objects are base's own, so a renderer's geometry cache keeps them. Any other difference
+    loads the file."""
     times: dict = {}
     with timed(times, "load"):
         base_overrides = base_overrides or {}
@@ -82,7 +85,10 @@ def with_overrides(base: Scene, path, overrides: dict, base_overrides: dict | No
         if not in_place:
             return load_scene(path, overrides)
         scene = _set_camera_render(base, changed, base.source) if changed else replace(base)
-        validate_scene(scene)
+        if content is None:
+            validate_scene(scene)
+        else:
+            validate_view(scene, content)
     scene.load_seconds = times["load"]
     return scene
 

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 import weakref
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -118,10 +119,7 @@ def _check_light(source, where, light, eye):
         if light.position is not None:
             raise SceneError(source, f"{where}.position", "a directional light has no position (it is infinitely far)")
     else:
-        position = _check_vector(source, f"{where}.position", light.position)
-        if np.abs(position - eye).max() > MAX_REACH:
-            raise SceneError(source, f"{where}.position", f"is more than {MAX_REACH:g} from camera.eye; "
-                                                          "float32 ray tests cannot reach it")
+        _check_light_reach(source, where, _check_vector(source, f"{where}.position", light.position), eye)
     _check_vector(source, f"{where}.color", light.color, nonneg=True)
     if light.type == "point":
         if light.direction is not None:
@@ -139,6 +137,20 @@ def _check_light(source, where, light, eye):
         for key, v, default in (("cutoff_angle", cutoff, Light.cutoff_angle), ("beam_width", beam, None)):
             if v != default:
                 raise SceneError(source, f"{where}.{key}", f"only a spot light has it (this light's type is {light.type})")
+
+
+def _check_light_reach(source, where, position, eye):
+    if np.abs(position - eye).max() > MAX_REACH:
+        raise SceneError(source, f"{where}.position", f"is more than {MAX_REACH:g} from camera.eye; "
+                                                      "float32 ray tests cannot reach it")
+
+
+def _check_object_reach(source, i, name, lo, hi, eye):
+    """|v - eye| over an object's vertices through their bounding box: the largest difference along an axis
+    is at the box's low or high side, and float64 subtraction keeps that order, so the same value to the bit."""
+    if max(np.abs(lo - eye).max(), np.abs(hi - eye).max()) > MAX_REACH:
+        raise SceneError(source, f"objects[{i}]", f"'{name}' reaches more than {MAX_REACH:g} from "
+                                                  "camera.eye; float32 ray tests cannot reach it")
 
 
 def _check_dielectric(source, where, m):
@@ -166,27 +178,41 @@ def _check_dielectric(source, where, m):
     _check_vector(source, f"{where}.absorption", m.absorption, nonneg=True)
 
 
-def validate_scene(scene: Scene):
+@dataclass(frozen=True)
+class CheckedContent:
+    """What validate_scene learned of a scene's lights, materials and objects that the checks depending on
+    the camera and the render settings read: validate_view re-checks a scene with other camera.* and render.*
+    fields against it without looking at the content again."""
+
+    lights: tuple  # (index, float64 position) of each light that has a position
+    light_max: np.ndarray  # the lights' colours summed
+    peaks: tuple  # (ka, kd, ks) peaks of each material, in order
+    color_max: float  # the brightest vertex colour, at least 1
+    kr_max: float
+    coef_max: float
+    objects: tuple  # (index, name, lowest and highest vertex coordinates) of each object with vertices
+
+
+def validate_scene(scene: Scene) -> CheckedContent:
     """Everything render() relies on: finite values in range, geometry within float32 reach of the
-    eye, and an image that cannot overflow."""
+    eye, and an image that cannot overflow. Returns what validate_view needs to re-check the scene
+    with another camera or render settings."""
     src = scene.source
     cam = scene.camera
     validate_camera(cam, src)
     eye = np.asarray(cam.eye, np.float64)
-    r = scene.render
-    ambient = _check_vector(src, "render.ambient", r.ambient, nonneg=True)
-    background = _check_vector(src, "render.background", r.background, nonneg=True)
-    for key in ("render.max_depth", "render.spp"):
-        check_setting(src, key, key, getattr(r, key.split(".")[1]))
-    light_max = np.zeros(3)
+    ambient, background = _check_render(src, scene.render)
+    light_max, lights = np.zeros(3), []
     for i, light in enumerate(scene.lights):
         _check_light(src, f"lights[{i}]", light, eye)
         # inverse_square: C_l / r^2 has no bound short of the nearest surface; C_l is the bound at r >= 1.
         light_max = light_max + np.asarray(light.color, np.float64)
+        if light.position is not None:
+            lights.append((i, np.asarray(light.position, np.float64)))
     # Vertex colours multiply ka and kd: the brightest of them scales what a material can reflect.
     color_max = max([1.0] + [float(np.max(o.colors, initial=0.0)) for o in scene.objects
                              if getattr(o, "colors", None) is not None and np.all(np.isfinite(o.colors))])
-    lit_max, kr_max, coef_max = np.zeros(3), 0.0, 0.0
+    peaks, kr_max, coef_max = [], 0.0, 0.0
     for name, m in scene.materials.items():
         for key in ("kd", "ks", "reflectivity", "ka"):
             _check_vector(src, f"materials.{name}.{key}", getattr(m, key), nonneg=True)
@@ -195,11 +221,11 @@ def validate_scene(scene: Scene):
             _check_texture(src, f"materials.{name}.{key}_texture", getattr(m, f"{key}_texture", None))
         _check_dielectric(src, f"materials.{name}", m)
         ka, kd, ks = (m.peak(k) for k in ("ka", "kd", "ks"))
-        lit = (ambient * ka + light_max * kd) * color_max + light_max * ks
-        lit_max = np.maximum(lit_max, lit)
+        peaks.append((ka, kd, ks))
         # A dielectric splits a ray's weight w into F w and (1 - F) k_t w: at most w in all.
         kr_max = max(kr_max, float(np.max(m.reflectivity)), 1.0 if m.dielectric else 0.0)
         coef_max = max(coef_max, float(np.max(kd * color_max + ks)), float(np.max(ka)) * color_max)
+    objects = []
     for i, obj in enumerate(scene.objects):
         where = f"objects[{i}]"
         v = np.asarray(obj.vertices)
@@ -219,10 +245,44 @@ def validate_scene(scene: Scene):
                 what = "non-negative " if nonneg else ""
                 raise SceneError(src, f"{where}.{key}", f"expected ({len(v)}, {width}) finite {what}values, one per "
                                                         f"vertex ('{obj.name}')")
-        if len(v) and np.abs(v - eye).max() > MAX_REACH:
-            raise SceneError(src, where, f"'{obj.name}' reaches more than {MAX_REACH:g} from "
-                                                       "camera.eye; float32 ray tests cannot reach it")
-    # The brightest possible pixel: every level of the mirror series fully lit, then the background.
+        if len(v):
+            objects.append((i, obj.name, v.min(axis=0), v.max(axis=0)))
+            _check_object_reach(src, *objects[-1], eye)
+    content = CheckedContent(tuple(lights), light_max, tuple(peaks), color_max, kr_max, coef_max, tuple(objects))
+    _check_overflow(src, scene.render, ambient, background, content)
+    return content
+
+
+def validate_view(scene: Scene, content: CheckedContent):
+    """validate_scene(scene) for a scene whose lights, materials and objects are those ``content`` was
+    checked from (validate_scene's return value), with any camera and render settings: the checks that
+    depend on those alone, in validate_scene's order, so the first failure is the same SceneError."""
+    src = scene.source
+    validate_camera(scene.camera, src)
+    eye = np.asarray(scene.camera.eye, np.float64)
+    ambient, background = _check_render(src, scene.render)
+    for i, position in content.lights:
+        _check_light_reach(src, f"lights[{i}]", position, eye)
+    for obj in content.objects:
+        _check_object_reach(src, *obj, eye)
+    _check_overflow(src, scene.render, ambient, background, content)
+
+
+def _check_render(src, r):
+    ambient = _check_vector(src, "render.ambient", r.ambient, nonneg=True)
+    background = _check_vector(src, "render.background", r.background, nonneg=True)
+    for key in ("render.max_depth", "render.spp"):
+        check_setting(src, key, key, getattr(r, key.split(".")[1]))
+    return ambient, background
+
+
+def _check_overflow(src, r, ambient, background, content: CheckedContent):
+    """The brightest possible pixel: every level of the mirror series fully lit, then the background."""
+    light_max, color_max, kr_max, coef_max = content.light_max, content.color_max, content.kr_max, content.coef_max
+    lit_max = np.zeros(3)
+    for ka, kd, ks in content.peaks:
+        lit = (ambient * ka + light_max * kd) * color_max + light_max * ks
+        lit_max = np.maximum(lit_max, lit)
     depth = r.max_depth
     grows = kr_max > 1.0 and depth * math.log(kr_max) > 700.0  # kr^depth beyond float64
     if grows:
