@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import NamedTuple
 
 from ..errors import SceneError
-from ..scene import load_scene, resolve_effects, sets_in_place, with_overrides
+from ..scene import load_scene, resolve_effects, sets_in_place, validate_scene, with_overrides
 from ..timing import timed
 
 
@@ -28,17 +28,22 @@ class FrameScenes:
     def __init__(self, path, keep: int = 3):
         self.path = Path(path)
         self.keep = keep
-        self._loaded = {}  # the other fields' values (JSON) -> the scene loaded with them; last used last
+        self._loaded = {}  # the other fields' values (JSON) -> (the scene loaded with them, its checked content)
 
     def scene(self, overrides: dict):
-        """warprt.load_scene(path, overrides), equal field by field; a SceneError as load_scene's."""
+        """warprt.load_scene(path, overrides), equal field by field; a SceneError as load_scene's. A frame
+        re-checks only what its camera and render settings change (validate_view): the loaded scene's
+        lights, materials and objects were checked once, and nothing here changes them."""
         rest = {k: v for k, v in overrides.items() if not sets_in_place(k, self.path)}
         key = json.dumps(rest, sort_keys=True)
-        base = self._loaded.pop(key, None) or load_scene(self.path, rest)
-        self._loaded[key] = base
+        loaded = self._loaded.pop(key, None)
+        if loaded is None:
+            base = load_scene(self.path, rest)
+            loaded = base, validate_scene(base)
+        self._loaded[key] = loaded
         while len(self._loaded) > self.keep:
             self._loaded.pop(next(iter(self._loaded)))
-        return with_overrides(base, self.path, overrides, rest)
+        return with_overrides(loaded[0], self.path, overrides, rest, loaded[1])
 
 
 class _warmup_lock:
