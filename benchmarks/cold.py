@@ -14,6 +14,7 @@ untimed run of each; the ratio is the median of the pairs' ratios.
 from __future__ import annotations
 
 import argparse
+import itertools
 import json
 import statistics
 import subprocess
@@ -351,10 +352,9 @@ def breakdown_report(parts: dict, default: dict) -> str:
     w, m = parts["ladder"]["warprt"], parts["ladder"]["mitsuba"]
     w = w + [("+ load, build, trace, write (`warprt render`)", default["warprt"])]
     m = m + [("+ load the scene, render, write", default["mitsuba"])]
-    for i in range(max(len(w), len(m))):
-        a = w[i] if i < len(w) else ("", None)
-        b = m[i] if i < len(m) else ("", None)
-        lines.append(f"| {a[0]} | {'' if a[1] is None else f'{a[1]:.3f}'} | | {b[0]} | {'' if b[1] is None else f'{b[1]:.3f}'} |")
+    seconds = lambda t: "" if t is None else f"{t:.3f}"
+    for (a, ta), (b, tb) in itertools.zip_longest(w, m, fillvalue=("", None)):
+        lines.append(f"| {a} | {seconds(ta)} | | {b} | {seconds(tb)} |")
     ph = parts["phases"]
     lines += ["", "The render's own phases (`warprt render --stats`, medians, seconds): "
               + ", ".join(f"{k} {v:.3f}" for k, v in ph.items()) + ".", "",
