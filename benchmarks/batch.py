@@ -209,15 +209,12 @@ def ratios(data: dict) -> dict:
     """The targets' numbers. Per job length: the default local backend's frames/s over the loop's, and its
     CPU use; Ray's time (2 actors) over local's (2 workers: local_2, or the default local past the first
     length, where it is 2 x 1)."""
-    out = {"local_over_loop": {}, "cpu_use": {}}
+    out = {"local_over_loop": {}, "cpu_use": {}, "ray_over_local": {}}
     for n in data["lengths"]:
         b = best(data, n)
         if "loop" in b and "local" in b:
             out["local_over_loop"][n] = b["loop"]["seconds"] / b["local"]["seconds"]
             out["cpu_use"][n] = b["local"]["cpu_use"]
-    out["ray_over_local"] = {}
-    for n in data["lengths"]:
-        b = best(data, n)
         local = b.get("local_2") or (b["local"] if "local" in b and b["local"]["workers"] == 2 else None)
         if "ray_2" in b and local:
             out["ray_over_local"][n] = b["ray_2"]["seconds"] / local["seconds"]
