@@ -16,7 +16,7 @@ from reference import render_mitsuba_aovs
 from warprt.scene import Camera
 
 from accuracy.test_aovs_against_mitsuba import POSITION_REL, unexplained
-from formats.gltf_files import Gltf, box, quaternion, quaternion_product, rotation_matrix
+from formats.gltf_files import Gltf, box, quaternion, quaternion_product, rotation_matrix, usd_box
 
 pytestmark = pytest.mark.accuracy
 
@@ -50,11 +50,7 @@ def usd_file(tmp_path):
 
     stage = Usd.Stage.CreateNew(str(tmp_path / "shot.usda"))
     for k, (center, size) in enumerate(((np.zeros(3), [8.0, 0.02, 8.0]),) + BOXES):
-        mesh = UsdGeom.Mesh.Define(stage, f"/World/Box{k}")
-        v, f = box(center, size)
-        mesh.CreatePointsAttr([Gf.Vec3f(*map(float, p)) for p in v])
-        mesh.CreateFaceVertexCountsAttr([3] * len(f))
-        mesh.CreateFaceVertexIndicesAttr([int(i) for i in f.reshape(-1)])
+        usd_box(stage, f"/World/Box{k}", center, size)
     cam = UsdGeom.Camera.Define(stage, "/World/Shot")
     cam.CreateFocalLengthAttr(30.0)
     cam.CreateVerticalApertureAttr(20.0)

@@ -98,3 +98,15 @@ def box(center, size):
     f = [[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1],
          [2, 3, 7], [2, 7, 6], [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]]
     return v, np.array(f)
+
+
+def usd_box(stage, prim_path: str, center, size):
+    """The same box as a UsdGeom.Mesh of triangles at prim_path on a pxr stage, for the USD tests."""
+    from pxr import Gf, UsdGeom
+
+    v, f = box(center, size)
+    mesh = UsdGeom.Mesh.Define(stage, prim_path)
+    mesh.CreatePointsAttr([Gf.Vec3f(*map(float, p)) for p in v])
+    mesh.CreateFaceVertexCountsAttr([3] * len(f))
+    mesh.CreateFaceVertexIndicesAttr([int(i) for i in f.reshape(-1)])
+    return mesh

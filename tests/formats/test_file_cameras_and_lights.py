@@ -10,7 +10,7 @@ import pytest
 import warprt
 from warprt.scene import read_mesh_file
 
-from formats.gltf_files import Gltf, box, quaternion, quaternion_product, rotation_matrix
+from formats.gltf_files import Gltf, box, quaternion, quaternion_product, rotation_matrix, usd_box
 from scenekit import write_scene
 
 YAW, PITCH = 35.0, -20.0  # the camera turns about y, then about its own x
@@ -171,11 +171,7 @@ def camera_usd(path, meters=None, up_axis=None):
         UsdGeom.SetStageMetersPerUnit(stage, meters)
     if up_axis is not None:
         UsdGeom.SetStageUpAxis(stage, up_axis)
-    mesh = UsdGeom.Mesh.Define(stage, "/World/Box")
-    v, f = box([0, 0.5, 0], [1, 1, 1])
-    mesh.CreatePointsAttr([Gf.Vec3f(*map(float, p)) for p in v])
-    mesh.CreateFaceVertexCountsAttr([3] * len(f))
-    mesh.CreateFaceVertexIndicesAttr([int(i) for i in f.reshape(-1)])
+    usd_box(stage, "/World/Box", [0, 0.5, 0], [1, 1, 1])
     cam = UsdGeom.Camera.Define(stage, "/World/Shot")
     cam.CreateFocalLengthAttr(35.0)
     cam.CreateVerticalApertureAttr(24.0)
@@ -280,11 +276,7 @@ def test_usd_lux_lights(tmp_path):
     from pxr import Gf, Usd, UsdGeom, UsdLux
 
     stage = Usd.Stage.CreateNew(str(tmp_path / "l.usda"))
-    mesh = UsdGeom.Mesh.Define(stage, "/World/Box")
-    v, f = box([0, 0.5, 0], [1, 1, 1])
-    mesh.CreatePointsAttr([Gf.Vec3f(*map(float, p)) for p in v])
-    mesh.CreateFaceVertexCountsAttr([3] * len(f))
-    mesh.CreateFaceVertexIndicesAttr([int(i) for i in f.reshape(-1)])
+    usd_box(stage, "/World/Box", [0, 0.5, 0], [1, 1, 1])
     sphere = UsdLux.SphereLight.Define(stage, "/World/Bulb")
     sphere.CreateIntensityAttr(30.0)
     sphere.CreateExposureAttr(2.0)
