@@ -105,8 +105,8 @@ def figure7(out: Path, repeat: int, width: int, height: int) -> dict:
         scene = base if view is None else base.with_camera(eye=tuple(view[0]), center=tuple(view[1]))
         geometry = Geometry(scene)
         zb, t_zb = timed(scene, geometry, repeat, algorithm="zbuffer")
-        rt, t_rt = timed(scene, geometry, repeat, disable=NO_SHADOWS_OR_REFLECTIONS, primary=TRACED)
-        full, t_full = timed(scene.with_render(max_depth=2), geometry, repeat, primary=TRACED)
+        rt, t_rt = timed(scene, geometry, repeat, disable=NO_SHADOWS_OR_REFLECTIONS, primary_query=TRACED)
+        full, t_full = timed(scene.with_render(max_depth=2), geometry, repeat, primary_query=TRACED)
         cells += [(zb, [ms(t_zb)]), (rt, [ms(t_rt)]), (full, [ms(t_full)])]
         rows.append({"view": "scene camera" if view is None else {"eye": view[0], "center": view[1]},
                      "zbuffer": t_zb, "raytrace_local": t_rt, "raytrace_full_2_levels": t_full})

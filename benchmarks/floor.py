@@ -173,7 +173,7 @@ class Floor:
         warprt.render(scene)  # the first two frames build and keep what the next frames reuse
         reference = warprt.render(scene)
         self.reference = reference
-        self.raster = reference.stats.primary == "zbuffer"
+        self.raster = reference.stats.primary_query == "zbuffer"
         self.fx = resolve_effects(scene)
         self.geom, _ = frame_geometry(scene)
         self.data = self.geom.scene_data(scene)

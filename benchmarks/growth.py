@@ -88,7 +88,7 @@ def pixel_sweep(repeat: int, sizes, threads) -> dict:
         row = {"width": width, "height": height, "pixels": width * height, "seconds": {}}
         for n in threads:
             row["seconds"][str(n)] = timed(scene.with_camera(width=width, height=height), geometry, repeat, threads=n,
-                                           primary=TRACED)[1]
+                                           primary_query=TRACED)[1]
         runs.append(row)
         print(f"  {width}x{height}: " + ", ".join(f"{n} thread{'s' * (n > 1)} {ms(row['seconds'][str(n)])}"
                                                   for n in threads), flush=True)

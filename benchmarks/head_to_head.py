@@ -54,8 +54,8 @@ if engine.startswith("mitsuba"):
 else:
     algorithm = "zbuffer" if engine == "zbuffer" else "raytrace"
     # hybrid: the default; before: the default with every shadow and reflection ray traced; warprt: every ray
-    options = {"hybrid": {}, "before": {"shadows": "bvh", "reflections": "bvh"}}.get(
-        engine, {"primary": "raytrace", "shadows": "bvh", "reflections": "bvh"})
+    options = {"hybrid": {}, "before": {"shadow_query": "bvh", "reflection_query": "bvh"}}.get(
+        engine, {"primary_query": "raytrace", "shadow_query": "bvh", "reflection_query": "bvh"})
     frame = lambda: warprt.render(scene, algorithm=algorithm, **options)
 frame()
 frame()
@@ -150,7 +150,7 @@ def report(data: dict) -> str:
         "time / Mitsuba `llvm_ad_rgb` time measured in the same run (below 1 = warprt is faster). Cold = process start "
         "to image file with every kernel cache warm; warm = a second frame in the same process (the scene converted "
         "and its BVH built once, on both sides). The Z-buffer renders without shadows and reflections, so its image "
-        "is not the same image: it is listed for its cost. warprt default = `primary=\"auto\"`, what `warprt render` "
+        "is not the same image: it is listed for its cost. warprt default = `primary_query=\"auto\"`, what `warprt render` "
         "does: first hits from the Z-buffer where it is the cheaper (one triangle per ten samples or fewer) and certain, "
         "shadow rays from the light-space grid and reflections off planar mirrors from their virtual cameras (from a view's "
         "second frame on) where those are the cheaper, the rest traced, the image the traced one to the bit; before = that default before the grid and "

@@ -23,11 +23,11 @@ import warprt
 SCENES = Path(__file__).resolve().parent.parent / "scenes"
 
 PATHS = {
-    "traced": dict(primary="raytrace", shadows="bvh", reflections="bvh"),
-    "hybrid": dict(primary="zbuffer", shadows="bvh", reflections="bvh"),
-    "grid": dict(primary="raytrace", shadows="grid", reflections="bvh"),
-    "mirrors": dict(primary="raytrace", shadows="bvh", reflections="mirrors"),
-    "shortcuts": dict(primary="zbuffer", shadows="grid", reflections="mirrors"),
+    "traced": dict(primary_query="raytrace", shadow_query="bvh", reflection_query="bvh"),
+    "hybrid": dict(primary_query="zbuffer", shadow_query="bvh", reflection_query="bvh"),
+    "grid": dict(primary_query="raytrace", shadow_query="grid", reflection_query="bvh"),
+    "mirrors": dict(primary_query="raytrace", shadow_query="bvh", reflection_query="mirrors"),
+    "shortcuts": dict(primary_query="zbuffer", shadow_query="grid", reflection_query="mirrors"),
     "auto": dict(),
     "aovs": dict(aovs=("depth", "normal", "face")),
     "truncated": dict(report_truncated=True),

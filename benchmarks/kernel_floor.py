@@ -5,8 +5,8 @@ The floor is a bare kernel: one thread per pixel, row-major, one launch; the sam
 wp.mesh_query_ray and any-hit queries, the same hit record (warprt's, with its error bound: the shadow
 and reflection rays must start where warprt's do, or the images differ), the same Phong terms and
 normals; no tiles, no bands, no ray counters, no AOV buffers, and a stack of local arrays only where
-there is glass. warprt's kernel runs as render() launches it (bands of 8x8 tiles) with primary="raytrace",
-shadows="bvh", reflections="bvh"; two more launches of it split the gap: one launch instead of bands,
+there is glass. warprt's kernel runs as render() launches it (bands of 8x8 tiles) with primary_query="raytrace",
+shadow_query="bvh", reflection_query="bvh"; two more launches of it split the gap: one launch instead of bands,
 then row-major order instead of tiles. All are alternated in one process; medians.
 
     python -m benchmarks.kernel_floor [--width 1024 --height 768 --repeat 5] [--scene NAME ...]
@@ -35,7 +35,7 @@ from warprt.scene import camera_basis, resolve_effects
 ROOT = Path(__file__).resolve().parent
 REPO = ROOT.parent
 SCENES = (None, "cornell", "seed", "mirrors", "bunny", "glass_cube")
-TRACED = dict(primary="raytrace", shadows="bvh", reflections="bvh")
+TRACED = dict(primary_query="raytrace", shadow_query="bvh", reflection_query="bvh")
 TILE = (8, 8)  # render()'s pixel order (image/renderer.PIXEL_TILE)
 TARGET = 1.15
 # What the floor does not write: an effect outside this set makes it refuse the scene, not differ.
@@ -199,7 +199,7 @@ class Pair:
         self.scene = scene
         warprt.render(scene, threads=1, **TRACED)  # builds and keeps the geometry, compiles the variant
         self.reference = warprt.render(scene, threads=1, **TRACED)
-        assert self.reference.stats.primary == "raytrace" and self.reference.stats.shadows == "bvh"
+        assert self.reference.stats.primary_query == "raytrace" and self.reference.stats.shadow_query == "bvh"
         geom, _ = frame_geometry(scene)
         cam = scene.camera
         self.n = cam.width * cam.height
@@ -309,8 +309,8 @@ def report(data: dict) -> str:
              "medians of each repeat's ratio to the floor). *floor*: a bare "
              "Warp kernel, one thread per pixel, row-major, one launch, with warprt's camera rays, hit record, queries and "
              "Phong terms (and local arrays for the ray tree where there is glass); its image is checked against "
-             "`warprt.render`'s. *warprt*: warprt's trace kernel as `render(primary=\"raytrace\", shadows=\"bvh\", "
-             "reflections=\"bvh\", threads=1)` launches it (bands of 8x8 tiles); *one launch*: the same kernel in one "
+             "`warprt.render`'s. *warprt*: warprt's trace kernel as `render(primary_query=\"raytrace\", shadow_query=\"bvh\", "
+             "reflection_query=\"bvh\", threads=1)` launches it (bands of 8x8 tiles); *one launch*: the same kernel in one "
              "launch; *row-major*: one launch, pixels row-major (the floor's order); *render*: the whole `warprt.render`. "
              "Regenerate: `python -m benchmarks.kernel_floor`.", "",
              "| scene | floor (s) | warprt kernel (s) | ratio | one launch | row-major | render (s) | image |",

@@ -1,4 +1,4 @@
-"""The planar mirrors' virtual cameras: warm frames as `reflections="auto"` renders them (the rasters kept
+"""The planar mirrors' virtual cameras: warm frames as `reflection_query="auto"` renders them (the rasters kept
 from a view's second frame) against the same frames with every reflection ray traced, in turn in one process.
 
     python -m benchmarks.mirrors [--width 1024 --height 768] [--repeat 7]
@@ -38,7 +38,7 @@ def run(width: int = 1024, height: int = 768, repeat: int = 7) -> dict:
         pairs, identical, build = [], True, None
         for i in range(repeat + 2):
             t_auto, auto = timed_render(scene)
-            t_bvh, traced = timed_render(scene, reflections="bvh")
+            t_bvh, traced = timed_render(scene, reflection_query="bvh")
             identical &= np.array_equal(auto.image, traced.image) and auto.stats.rays == traced.stats.rays
             if i == 1:
                 build = t_auto / t_bvh
@@ -48,10 +48,10 @@ def run(width: int = 1024, height: int = 768, repeat: int = 7) -> dict:
         rows.append({"scene": name, "auto": statistics.median(p[0] for p in pairs),
                      "traced": statistics.median(p[1] for p in pairs),
                      "ratio": statistics.median(p[0] / p[1] for p in pairs), "build_ratio": build,
-                     "reflections": auto.stats.reflections, "share": mirrors.get("share", 0.0),
+                     "reflections": auto.stats.reflection_query, "share": mirrors.get("share", 0.0),
                      "chains": len(mirrors.get("chains", [])), "identical": bool(identical), "pairs": pairs})
         print(f"{name:<10} auto/traced reflections {rows[-1]['ratio']:.2f} (build frame {build:.2f}), "
-              f"{auto.stats.reflections}", flush=True)
+              f"{auto.stats.reflection_query}", flush=True)
     return {"rows": rows, "size": [width, height], "repeat": repeat}
 
 

@@ -83,11 +83,11 @@ def growth_runs(repeat: int, sizes, subdivisions, threads: int | None = None, fu
             flat, t_flat = once(lambda: Geometry(scene, build_bvh=False))
             with_bvh, t_bvh = once(lambda: Geometry(scene))
             _, t_zb = timed(scene, flat, repeat, algorithm="zbuffer", threads=threads)
-            _, t_rt = timed(scene, with_bvh, repeat, disable=NO_SHADOWS_OR_REFLECTIONS, threads=threads, primary=TRACED)
+            _, t_rt = timed(scene, with_bvh, repeat, disable=NO_SHADOWS_OR_REFLECTIONS, threads=threads, primary_query=TRACED)
             run = {"width": width, "height": height, "triangles": flat.triangle_count, "zbuffer": t_zb,
                    "raytrace": t_rt, "prepare_flat": t_flat, "prepare_bvh": t_bvh}
             if full:
-                run["raytrace_full"] = timed(scene, with_bvh, repeat, threads=threads, primary=TRACED)[1]
+                run["raytrace_full"] = timed(scene, with_bvh, repeat, threads=threads, primary_query=TRACED)[1]
             runs.append(run)
             log(f"  {width}x{height} {flat.triangle_count:>9,} triangles: Z-buffer {ms(t_zb)}, ray tracing {ms(t_rt)}"
                 + (f" (full {ms(run['raytrace_full'])})" if full else "")

@@ -91,7 +91,7 @@ def side_by_side(warprt_image: np.ndarray, mitsuba_image: np.ndarray, path) -> P
 def compare(scene, *, effects=None, disable=(), threads: int | None = None, output=None, **render_options) -> CompareResult:
     """Render ``scene`` with warprt and with the Mitsuba reference under the same effect set
     (warprt.render's ``effects``/``disable``) and compare; write the side-by-side PNG to ``output``.
-    ``render_options`` go to warprt.render as they are (e.g. primary="zbuffer")."""
+    ``render_options`` go to warprt.render as they are (e.g. primary_query="zbuffer")."""
     import warprt
     from warprt.scene import resolve_effects
 

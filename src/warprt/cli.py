@@ -16,6 +16,7 @@ from pathlib import Path
 
 from . import __version__, diagnostics
 from .errors import ArgumentError, SceneError, one_line
+from .options import RenderOptions
 from .scene import EFFECTS
 from .timing import timed
 
@@ -48,11 +49,18 @@ Bad input is one line on stderr naming the file and the field, exit status 2, an
 """
 
 
-# The library arguments the flags set, by the function that takes them: the library names its own
-# arguments in its errors (render(): shadows: ...), and main() rewords such an error as the flag.
+def _flag(option: dict) -> str:
+    """The flag of a RenderOptions field the command line offers (RenderOptions.schema()): its name."""
+    return "--" + (option["cli_name"] or option["name"]).replace("_", "-")
+
+
+RENDER_OPTIONS = [o for o in RenderOptions.schema() if o["cli"]]
+# The first release's flags for the queries, kept for one more with a warning (RenderOptions.RENAMED).
+OLD_FLAGS = {"--primary": "primary_query", "--shadow-rays": "shadow_query", "--reflection-rays": "reflection_query"}
+# Where the library names an argument the flags set (render(): shadow_query: ...), main() rewords the
+# error as the flag, by the function that takes the argument.
 FLAGS = {
-    "render": {"threads": "--threads", "device": "--device", "effects": "--effects", "algorithm": "--algorithm",
-               "primary": "--primary", "shadows": "--shadow-rays", "reflections": "--reflection-rays", "aovs": "--aov"},
+    "render": {o["name"]: _flag(o) for o in RENDER_OPTIONS},
     "load_scene": {"up": "--up", "camera": "--camera"},
     "batch": {"workers": "--workers", "ray": "--ray", "shard": "--shard"},
 }
@@ -120,18 +128,57 @@ def _check_device(device: str):
         raise SceneError("command line", "--device", f"'{device}' is not available on this machine (Warp found no CUDA device); use --device cpu")
 
 
+def _add_render_options(p: argparse.ArgumentParser):
+    """A flag for each RenderOptions field the command line offers, with its help, choices and default
+    from the schema; the old query flags hidden, setting the same fields."""
+    for o in RENDER_OPTIONS:
+        kw = {"dest": o["name"], "help": o["help"]}
+        if o["choices"]:
+            kw.update(choices=list(o["choices"]), default=o["default"])
+        else:
+            kw["metavar"] = o["metavar"]
+            if o["type"] is not None:
+                kw["type"] = o["type"]
+        if o["name"] == "aovs":
+            kw["help"] += "; in the .exr or .npz, beside a .png as <stem>.<aov>.exr"
+        p.add_argument(_flag(o), **kw)
+    for old, name in OLD_FLAGS.items():
+        choices = next(o["choices"] for o in RENDER_OPTIONS if o["name"] == name)
+        p.add_argument(old, dest=name, choices=list(choices), help=argparse.SUPPRESS, action=_OldFlag)
+
+
+class _OldFlag(argparse.Action):
+    """A flag of the first release: sets its field and notes itself for a warning."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        setattr(namespace, self.dest, values)
+        namespace.old_flags = getattr(namespace, "old_flags", []) + [option_string]
+
+
+def _render_options(args) -> RenderOptions:
+    """The RenderOptions the flags say; a flag of the first release warns, naming its new spelling."""
+    for old in getattr(args, "old_flags", []):
+        diagnostics.warn("command line", old, f"is now {_flag({'name': OLD_FLAGS[old], 'cli_name': None})} "
+                                              f"({old} goes in the next release)")
+    values = {}
+    for o in RENDER_OPTIONS:
+        v = getattr(args, o["name"])
+        if o["listed"] and v is not None:
+            v = [x.strip() for x in v.split(",")]
+        if v is not None:
+            values[o["name"]] = v
+    return RenderOptions(**values)
+
+
 def cmd_render(args) -> int:
-    from .image import RenderOptions, render
+    from .image import render
     from .image.film import aov_paths, check_distinct, check_output_path, check_text_path, write_image, write_text
     from .image.memory import peak_rss
     from .image.progress import Progress
 
     # Everything that can be checked before the render is: a render whose result cannot be
     # saved, or that cannot start, should fail at once and leave nothing behind.
-    options = RenderOptions(threads=args.threads, device=args.device, algorithm=args.algorithm, primary=args.primary,
-                            effects=args.effects.split(",") if args.effects else None,
-                            aovs=[n.strip() for n in args.aov.split(",")] if args.aov else None,
-                            shadows=args.shadow_rays, reflections=args.reflection_rays)
+    options = _render_options(args)
     aovs = options.aovs
     outputs = {"--output": check_output_path(args.output, "--output", aovs)}
     outputs.update({f"--aov {name}": p for name, p in aov_paths(outputs["--output"], aovs).items()})
@@ -183,8 +230,7 @@ def _describe_light(light) -> str:
         words.append(f"along {_rounded(light.direction)}")
     words.append(f"color {_rounded(light.color)}")
     if kind == "spot":
-        beam = light.beam_width if light.beam_width is not None else 0.75 * light.cutoff_angle
-        words.append(f"cone {light.cutoff_angle:.4g} deg, beam {beam:.4g} deg")
+        words.append(f"cone {light.cutoff_angle:.4g} deg, beam {light.beam:.4g} deg")
     if light.falloff != "none":
         words.append(f"falloff {light.falloff}")
     return " ".join(words)
@@ -314,28 +360,7 @@ def build_parser() -> argparse.ArgumentParser:
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     _add_scene_options(p)
     p.add_argument("-o", "--output", default="warprt.png", help="output image: .png (sRGB 8-bit), .exr, .npy or .npz (linear float)")
-    p.add_argument("--aov", metavar="LIST", help="also write AOVs of the camera rays' first hits, comma-separated: "
-                                                 "depth,normal,albedo,position,uv,object,material,face,coverage "
-                                                 "(in the .exr or .npz; beside a .png as <stem>.<aov>.exr)")
-    p.add_argument("--threads", type=int, metavar="N", help="worker threads (default: all cores)")
-    p.add_argument("--device", default="cpu", choices=["cpu", "cuda"], help="Warp device (default: cpu)")
-    p.add_argument("--effects", help=f"comma-separated effects to keep: {','.join(EFFECTS)}")
-    p.add_argument("--algorithm", default="raytrace", choices=["raytrace", "zbuffer"],
-                   help="raytrace (default), or zbuffer: rasterized, same local shading, no shadows or reflections")
-    p.add_argument("--primary", default="auto", choices=["auto", "raytrace", "zbuffer"],
-                   help="where the tracer's first hits come from, the image being the same: auto (default: the "
-                        "Z-buffer where it is the cheaper), raytrace (every ray traced), or zbuffer (hybrid: the "
-                        "Z-buffer's visible triangle where it is certain, the rest traced)")
-    p.add_argument("--shadow-rays", default="auto", choices=["auto", "bvh", "grid"],
-                   help="what answers the shadow rays, the image being the same: auto (default: the grid where it "
-                        "is the cheaper), bvh (Warp's any-hit query, every ray traced), or grid (the exact "
-                        "light-space grid: each ray tests the triangles of its cell with the query's own test)")
-    p.add_argument("--reflection-rays", default="auto", choices=["auto", "bvh", "mirrors"],
-                   help="what answers the reflection rays, the image being the same: auto (default: the mirrors' "
-                        "virtual cameras from a view's second frame, which builds the rasters its next frames "
-                        "reuse; traced before, and for a moving camera), bvh (Warp's closest-hit "
-                        "query, every ray traced), or mirrors (a ray off planar mirrors from their rasterized "
-                        "virtual camera wherever that is certain, the rest traced)")
+    _add_render_options(p)
     p.add_argument("--stats", action="store_true", help="print render statistics (times, rays, memory) as JSON on stdout")
     p.add_argument("--stats-file", metavar="FILE", help="write render statistics as JSON to this file")
     p.add_argument("-q", "--quiet", action="store_true",

@@ -39,8 +39,8 @@ def test_hybrid_rendering_matches_mitsuba(path):
     """Primary hits from the Z-buffer, shadows and reflections traced: held to the same thresholds,
     every differing pixel explained by the same float64 oracle."""
     scene = small(path)
-    result = check(f"hybrid_{path.stem}", scene, primary="zbuffer")
-    assert warprt.render(scene, primary="zbuffer").stats.primary == "zbuffer"
+    result = check(f"hybrid_{path.stem}", scene, primary_query="zbuffer")
+    assert warprt.render(scene, primary_query="zbuffer").stats.primary_query == "zbuffer"
     print(f"\n{path.stem} hybrid: {record(result)}")
 
 

@@ -436,7 +436,7 @@ def _frame_memory(work, size, primary):
              "--stats", "-q", "--threads", "2"], work)
     assert r.returncode == 0, r.stderr
     stats = json.loads(r.stdout)
-    assert stats["primary"] == primary
+    assert stats["primary_query"] == primary
     return stats["memory"]
 
 
@@ -518,12 +518,12 @@ class _Interrupting:
 def _interrupted(progress):
     scene = warprt.load_scene(Path(__file__).parents[2] / "scenes" / "cornell.toml")
     scene = scene.with_camera(width=96, height=72).with_render(spp=16)
-    warprt.render(scene.with_camera(width=8, height=6), threads=2, primary="raytrace")  # kernels loaded
+    warprt.render(scene.with_camera(width=8, height=6), threads=2, primary_query="raytrace")  # kernels loaded
     with pytest.raises(KeyboardInterrupt):
-        warprt.render(scene, threads=2, bands=16, progress=progress, primary="raytrace")
+        warprt.render(scene, threads=2, bands=16, progress=progress, primary_query="raytrace")
     finished_at_raise = progress.done
     # The next render runs on the same pool of two workers: it gets them only once the old bands are done.
-    image, _ = warprt.render(scene.with_camera(width=8, height=6), threads=2, primary="raytrace")
+    image, _ = warprt.render(scene.with_camera(width=8, height=6), threads=2, primary_query="raytrace")
     assert image.shape == (6, 8, 3)
     return finished_at_raise, progress.done
 

@@ -227,24 +227,24 @@ def test_the_image_and_ray_counts_are_the_same_with_aovs():
 
 def test_traced_and_hybrid_first_hits_give_the_same_aovs():
     scene = scene_of(spp=4)
-    traced = warprt.render(scene, aovs=list(ALL), primary="raytrace")
-    hybrid = warprt.render(scene, aovs=list(ALL), primary="zbuffer")
-    assert hybrid.stats.primary == "zbuffer"
+    traced = warprt.render(scene, aovs=list(ALL), primary_query="raytrace")
+    hybrid = warprt.render(scene, aovs=list(ALL), primary_query="zbuffer")
+    assert hybrid.stats.primary_query == "zbuffer"
     for name in ALL:
         assert np.array_equal(traced.aovs[name], hybrid.aovs[name]), name
 
 
 def test_object_tables_are_built_only_for_the_id_aovs():
-    from warprt.image import cached_geometry
+    from warprt.geometry import Geometry
 
     scene = scene_of(camera={"width": 8, "height": 6})
-    warprt.render(scene, aovs=["depth", "coverage"])
-    geometry = cached_geometry(scene)
+    geometry = Geometry(scene)
+    warprt.render(scene, aovs=["depth", "coverage"], geometry=geometry)
     assert geometry.object_ids is None
-    before = warprt.render(scene).stats.memory["geometry"]["per_triangle"]
-    warprt.render(scene, aovs=["face"])
+    before = warprt.render(scene, geometry=geometry).stats.memory["geometry"]["per_triangle"]
+    warprt.render(scene, aovs=["face"], geometry=geometry)
     assert geometry.object_ids is not None
-    assert warprt.render(scene).stats.memory["geometry"]["per_triangle"] == before + 4 * 3 + 4 * 2
+    assert warprt.render(scene, geometry=geometry).stats.memory["geometry"]["per_triangle"] == before + 4 * 3 + 4 * 2
 
 
 @pytest.mark.parametrize("aovs, message", [

@@ -12,8 +12,8 @@ from core.test_shading import wall_scene, wall_terms
 
 def test_hybrid_gives_the_closed_form_phong_terms():
     scene = wall_scene(shadows=False)
-    image, stats = warprt.render(scene, primary="zbuffer")
-    assert stats.primary == "zbuffer" and stats.variant.endswith("_zprimary")
+    image, stats = warprt.render(scene, primary_query="zbuffer")
+    assert stats.primary_query == "zbuffer" and stats.variant.endswith("_zprimary")
     expect = sum(wall_terms(scene).values())
     np.testing.assert_allclose(image, expect, rtol=2e-4, atol=2e-6)
 
@@ -21,18 +21,18 @@ def test_hybrid_gives_the_closed_form_phong_terms():
 @slow
 def test_hybrid_is_bit_identical_across_threads_and_bands():
     scene = warprt.load_scene().with_camera(width=96, height=72).with_render(spp=4)
-    first, stats = warprt.render(scene, primary="zbuffer", threads=2)
+    first, stats = warprt.render(scene, primary_query="zbuffer", threads=2)
     assert stats.rays["primary"] == 96 * 72 * 4 and stats.rays["reflection"] > 0
     for threads, bands in [(1, 1), (3, 5), (2, 97)]:
-        image, s = warprt.render(scene, primary="zbuffer", threads=threads, bands=bands)
+        image, s = warprt.render(scene, primary_query="zbuffer", threads=threads, bands=bands)
         assert np.array_equal(image, first) and s.rays == stats.rays
 
 
 def test_auto_rasterizes_only_where_it_is_cheaper():
     sparse = warprt.load_scene().with_camera(width=320, height=240)   # 5,158 triangles, 76,800 samples
-    assert warprt.render(sparse, primary="auto").stats.primary == "zbuffer"
+    assert warprt.render(sparse, primary_query="auto").stats.primary_query == "zbuffer"
     dense = warprt.load_scene().with_camera(width=32, height=24)      # more triangles than samples
-    assert warprt.render(dense, primary="auto").stats.primary == "raytrace"
+    assert warprt.render(dense, primary_query="auto").stats.primary_query == "raytrace"
     assert raster_is_cheaper(1000, 10_000) and not raster_is_cheaper(1001, 10_000) and not raster_is_cheaper(0, 10)
     assert not raster_is_cheaper(10, 10_000, device="cuda")
 
@@ -43,9 +43,9 @@ def test_auto_traces_a_frame_whose_raster_buffers_would_be_large():
     929 MB) is traced; the memory stats count the buffers when they exist."""
     assert raster_is_cheaper(5000, 1920 * 1080 * 9) and not raster_is_cheaper(5000, 1920 * 1080 * 16)
     scene = warprt.load_scene().with_camera(width=320, height=240)
-    stats = warprt.render(scene, primary="auto").stats
-    assert stats.primary == "zbuffer" and stats.memory["raster"] == 320 * 240 * 28
-    assert warprt.render(scene, primary="raytrace").stats.memory["raster"] == 0
+    stats = warprt.render(scene, primary_query="auto").stats
+    assert stats.primary_query == "zbuffer" and stats.memory["raster"] == 320 * 240 * 28
+    assert warprt.render(scene, primary_query="raytrace").stats.memory["raster"] == 0
 
 
 def test_unknown_primary_is_a_scene_error():

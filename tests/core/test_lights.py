@@ -133,7 +133,7 @@ def test_directional_shadow_rays_reach_a_blocker_at_any_distance(shadows):
     centre = np.array([0.5, 0.3])
     blocker = {"shape": "plane", "size": [2.0, 2.0], "rotate": [90.0, 0.0, 0.0], "material": "m",
                "translate": [*(centre + shift).tolist(), 30.0]}
-    scene, image = render([WALL, blocker], {"type": "directional", "direction": SUN.tolist()}, shadows=shadows)
+    scene, image = render([WALL, blocker], {"type": "directional", "direction": SUN.tolist()}, shadow_query=shadows)
     p, _ = wall_points(scene)
     off = np.abs(p[..., :2] - centre).max(-1)
     inside, outside = off < 1.0 - 1e-3, off > 1.0 + 1e-3

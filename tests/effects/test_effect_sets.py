@@ -111,7 +111,7 @@ def test_scene_file_effects_setting_and_cli_flags(tmp_path):
 
     stats = json.loads(r.stdout)
     assert stats["effects"] == "ambient,diffuse" and stats["variant"] == "trace_ad_zprimary"
-    assert stats["primary"] == "zbuffer"  # the default: two triangles over 192 samples are rasterized
+    assert stats["primary_query"] == "zbuffer"  # the default: two triangles over 192 samples are rasterized
     assert stats["rays"] == {"primary": 16 * 12, "shadow": 0, "reflection": 0, "refraction": 0, "total": 16 * 12}
 
 

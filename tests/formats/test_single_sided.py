@@ -145,7 +145,7 @@ def test_a_mirror_sees_through_the_back_of_a_single_sided_quad(tmp_path, double_
     on_mirror = (np.abs(p[..., 1]) < 1.4) & (np.abs(p @ np.array([1.0, 0.0, -1.0]) / np.sqrt(2.0)) < 1.4)
     seen = on_mirror & (np.abs(q[..., 1:]).max(-1) < 1.0 - EDGE)
     for primary, reflections in (("raytrace", "bvh"), ("zbuffer", "mirrors")):
-        assert_sees(warprt.render(scene, primary=primary, reflections=reflections).image, seen, colour, least=200)
+        assert_sees(warprt.render(scene, primary_query=primary, reflection_query=reflections).image, seen, colour, least=200)
 
 
 def test_shadow_rays_are_stopped_by_the_back_of_a_single_sided_quad(tmp_path):
@@ -191,10 +191,10 @@ def test_hybrid_and_virtual_cameras_leave_a_scene_with_culling_to_the_tracer_exa
     double-sided uses both."""
     for double_sided in (False, True):
         scene = mirror_scene(tmp_path, double_sided)
-        traced = warprt.render(scene, primary="raytrace", reflections="bvh")
-        fast = warprt.render(scene, primary="zbuffer", reflections="mirrors")
-        assert fast.stats.primary == ("zbuffer" if double_sided else "raytrace")
-        assert fast.stats.reflections == ("mirrors" if double_sided else "bvh")
+        traced = warprt.render(scene, primary_query="raytrace", reflection_query="bvh")
+        fast = warprt.render(scene, primary_query="zbuffer", reflection_query="mirrors")
+        assert fast.stats.primary_query == ("zbuffer" if double_sided else "raytrace")
+        assert fast.stats.reflection_query == ("mirrors" if double_sided else "bvh")
         assert ("C" in traced.stats.variant.split("_")[1]) is not double_sided
         assert np.array_equal(fast.image, traced.image) and fast.stats.rays == traced.stats.rays
 

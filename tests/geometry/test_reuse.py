@@ -80,8 +80,8 @@ def test_a_moved_eye_renders_as_a_fresh_build_from_it(path, degrees):
     home = Geometry(scene)
     moved = orbit(scene, degrees)
     assert home.covers(moved.camera.eye) and np.array_equal(home.origin_for(moved.camera.eye), home.origin)
-    reused = warprt.render(moved, geometry=home, primary="raytrace")
-    fresh = warprt.render(moved, geometry=Geometry(moved), primary="raytrace")
+    reused = warprt.render(moved, geometry=home, primary_query="raytrace")
+    fresh = warprt.render(moved, geometry=Geometry(moved), primary_query="raytrace")
     assert np.array_equal(reused.image, fresh.image) and reused.stats.rays == fresh.stats.rays
 
 
@@ -92,8 +92,8 @@ def test_negative_control_a_bvh_built_at_another_eye_is_close_but_not_the_same_b
     scene = small(None)
     moved = orbit(scene, 25.0)
     at_first_eye = Geometry(scene, origin=scene.camera.eye)
-    reused = warprt.render(moved, geometry=at_first_eye, primary="raytrace").image
-    fresh = warprt.render(moved, primary="raytrace").image
+    reused = warprt.render(moved, geometry=at_first_eye, primary_query="raytrace").image
+    fresh = warprt.render(moved, primary_query="raytrace").image
     assert not np.array_equal(reused, fresh)
     ssim, psnr, off, _ = metrics(reused, fresh)
     assert ssim >= SSIM_MIN and psnr >= PSNR_MIN and off <= OFF_MAX, (ssim, psnr, off)
@@ -115,7 +115,7 @@ def test_on_a_reused_bvh_the_hybrid_is_the_traced_image(path):
     scene = small(path)
     home = Geometry(scene)
     moved = orbit(scene, 60.0)
-    traced = warprt.render(moved, geometry=home, primary="raytrace")
-    hybrid = warprt.render(moved, geometry=home, primary="zbuffer")
-    assert hybrid.stats.primary == "zbuffer" and hybrid.stats.geometry["bvh"] == "given"
+    traced = warprt.render(moved, geometry=home, primary_query="raytrace")
+    hybrid = warprt.render(moved, geometry=home, primary_query="zbuffer")
+    assert hybrid.stats.primary_query == "zbuffer" and hybrid.stats.geometry["bvh"] == "given"
     assert np.array_equal(hybrid.image, traced.image) and hybrid.stats.rays == traced.stats.rays

@@ -23,9 +23,9 @@ def base():
 
 def frame_after(first, second):
     """``second`` rendered with the mirrors after ``first`` on the same objects (so the same Geometry)."""
-    assert warprt.render(first, reflections="mirrors").stats.mirrors["rasters"] == "built"
-    result = warprt.render(second, reflections="mirrors")
-    traced = warprt.render(second, reflections="bvh")
+    assert warprt.render(first, reflection_query="mirrors").stats.mirrors["rasters"] == "built"
+    result = warprt.render(second, reflection_query="mirrors")
+    traced = warprt.render(second, reflection_query="bvh")
     assert np.array_equal(result.image, traced.image) and result.stats.rays == traced.stats.rays
     return result.stats
 
@@ -43,7 +43,7 @@ def recoloured(s):
 def test_a_frame_changing_only_lights_or_colours_reuses_the_rasters(change):
     s = base()
     stats = frame_after(s, change(s))
-    assert stats.reflections == "mirrors" and stats.mirrors["rasters"] == "reused" and stats.mirrors["decided"] > 0
+    assert stats.reflection_query == "mirrors" and stats.mirrors["rasters"] == "reused" and stats.mirrors["decided"] > 0
 
 
 CHANGES = {
@@ -64,7 +64,7 @@ CHANGES = {
 def test_a_frame_changing_the_view_builds_its_own_rasters(name):
     s = base()
     stats = frame_after(s, CHANGES[name](s))
-    assert stats.reflections == "mirrors" and stats.mirrors["rasters"] == "built"
+    assert stats.reflection_query == "mirrors" and stats.mirrors["rasters"] == "built"
 
 
 def test_rasters_of_another_eye_decide_no_ray_wrongly():
@@ -90,6 +90,6 @@ def test_a_geometry_keeps_two_views():
     """A stereo pair alternates without rebuilding; a third view sends the oldest away."""
     s = base()
     left, right, third = (s.with_camera(eye=(x, 1.4, 5.1)) for x in (0.3, 0.5, 0.7))
-    rasters = lambda scene: warprt.render(scene, reflections="mirrors").stats.mirrors["rasters"]
+    rasters = lambda scene: warprt.render(scene, reflection_query="mirrors").stats.mirrors["rasters"]
     assert [rasters(v) for v in (left, right, left, right, third, right, left)] == \
         ["built", "built", "reused", "reused", "built", "reused", "built"]

@@ -87,24 +87,24 @@ def test_without_their_margins_the_mirrors_get_rays_wrong():
 
 @slow
 def test_the_edge_grid_image_is_the_traced_image():
-    _, mirrors = same_as_traced(edge_grid_scene(1e-5), "reflections", "mirrors")
-    assert mirrors.stats.reflections == "mirrors" and mirrors.stats.mirrors["decided"] > 500
+    _, mirrors = same_as_traced(edge_grid_scene(1e-5), "reflection_query", "mirrors")
+    assert mirrors.stats.reflection_query == "mirrors" and mirrors.stats.mirrors["decided"] > 500
 
 
 @pytest.mark.parametrize("path", SCENE_CASES)
 def test_mirror_reflections_give_the_traced_image_on_every_scene(path):
     scene = at(path, 200, spp=4)
-    _, mirrors = same_as_traced(scene, "reflections", "mirrors", primary="raytrace")
+    _, mirrors = same_as_traced(scene, "reflection_query", "mirrors", primary_query="raytrace")
     # Virtual cameras exist where some flat object reflects (k_r > 0): planar mirrors to unfold.
     flat_mirror = any(not o.smooth and max(scene.materials[o.material].reflectivity) > 0.0 for o in scene.objects)
-    assert mirrors.stats.reflections == ("mirrors" if flat_mirror else "bvh")
+    assert mirrors.stats.reflection_query == ("mirrors" if flat_mirror else "bvh")
 
 
 @pytest.mark.parametrize("name", QUICK_CASES)
 def test_mirror_reflections_give_the_traced_image_on_the_zbuffer_hard_cases(name):
-    same_as_traced(case_scene(name).with_render(max_depth=3), "reflections", "mirrors", primary="raytrace")
+    same_as_traced(case_scene(name).with_render(max_depth=3), "reflection_query", "mirrors", primary_query="raytrace")
 
 
 @pytest.mark.parametrize("seed", SEEDS)
 def test_mirror_reflections_give_the_traced_image_on_random_scenes(seed):
-    same_as_traced(random_scene(seed), "reflections", "mirrors", primary="raytrace")
+    same_as_traced(random_scene(seed), "reflection_query", "mirrors", primary_query="raytrace")

@@ -106,9 +106,9 @@ def test_a_scene_lit_only_by_the_sun_traces_its_shadow_rays():
                        camera={"eye": [0.0, 3.0, 6.0], "center": [0.0, 0.5, 0.0]}, ambient=[0.1] * 3)
     build, _ = grid_of(Geometry(scene), scene)
     assert build.grid is None and "directional" in build.reason
-    grid = warprt.render(scene, shadows="grid")
-    traced = warprt.render(scene, shadows="bvh")
-    assert grid.stats.shadows == "bvh" and traced.stats.rays["shadow"] > 0
+    grid = warprt.render(scene, shadow_query="grid")
+    traced = warprt.render(scene, shadow_query="bvh")
+    assert grid.stats.shadow_query == "bvh" and traced.stats.rays["shadow"] > 0
     assert np.array_equal(grid.image, traced.image) and grid.stats.rays == traced.stats.rays
 
 
@@ -133,8 +133,8 @@ def test_a_light_at_geometry_leaves_its_shadow_rays_to_the_bvh():
                        camera={"eye": [0.0, 3.0, 6.0], "center": [0.0, 0.5, 0.0]}, ambient=[0.1] * 3)
     build, _ = grid_of(Geometry(scene), scene)
     assert build.light_ok.tolist() == [0, 1]
-    _, grid = same_as_traced(scene, "shadows", "grid")
-    assert grid.stats.shadows == "grid" and grid.stats.shadow_grid["lights_on_grid"] == 1
+    _, grid = same_as_traced(scene, "shadow_query", "grid")
+    assert grid.stats.shadow_query == "grid" and grid.stats.shadow_grid["lights_on_grid"] == 1
 
 
 def test_a_grid_over_its_memory_budget_is_not_built():
@@ -147,20 +147,20 @@ def test_a_grid_over_its_memory_budget_is_not_built():
 @pytest.mark.parametrize("name", QUICK_CASES)
 def test_grid_shadows_give_the_traced_image_on_the_zbuffer_hard_cases(name):
     scene = case_scene(name)
-    traced, grid = same_as_traced(scene, "shadows", "grid", primary="raytrace")
-    assert grid.stats.shadows == ("grid" if traced.stats.rays["shadow"] and scene.triangle_count else "bvh")
+    traced, grid = same_as_traced(scene, "shadow_query", "grid", primary_query="raytrace")
+    assert grid.stats.shadow_query == ("grid" if traced.stats.rays["shadow"] and scene.triangle_count else "bvh")
 
 
 @pytest.mark.parametrize("path", SCENE_CASES)
 def test_grid_shadows_give_the_traced_image_on_every_scene(path):
     scene = at(path, 200).with_render(spp=4)
-    traced, grid = same_as_traced(scene, "shadows", "grid", primary="raytrace", reflections="bvh")
+    traced, grid = same_as_traced(scene, "shadow_query", "grid", primary_query="raytrace", reflection_query="bvh")
     # glass_slab's materials have no diffuse or specular term: no lit term, so no shadow rays at all.
     assert traced.stats.rays["shadow"] > 0 or IDS[SCENES.index(path)] == "glass_slab"
-    assert grid.stats.shadows == ("grid" if traced.stats.rays["shadow"] else "bvh")
-    assert grid.stats.variant.endswith("_gshadow") == (grid.stats.shadows == "grid")
+    assert grid.stats.shadow_query == ("grid" if traced.stats.rays["shadow"] else "bvh")
+    assert grid.stats.variant.endswith("_gshadow") == (grid.stats.shadow_query == "grid")
 
 
 @pytest.mark.parametrize("seed", SEEDS)
 def test_grid_shadows_give_the_traced_image_on_random_scenes(seed):
-    same_as_traced(random_scene(seed), "shadows", "grid", primary="raytrace")
+    same_as_traced(random_scene(seed), "shadow_query", "grid", primary_query="raytrace")

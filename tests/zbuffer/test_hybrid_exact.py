@@ -3,7 +3,7 @@ must be the tracer's (warprt.kernels.uncertain), and traces the rest: its image 
 to the bit, on every scene, built-in hard case and random scene, and at every sample where the two
 visibility algorithms disagree the Z-buffer must have said it was unsure.
 
-The oracle is the ray tracer itself (primary="raytrace"), an independent visibility algorithm from
+The oracle is the ray tracer itself (primary_query="raytrace"), an independent visibility algorithm from
 the rasterizer's float64 edge functions; tests/zbuffer/test_agreement.py checks the two agree.
 """
 
@@ -33,9 +33,9 @@ def case_scene(name):
 @pytest.mark.parametrize("name", QUICK_CASES)
 def test_hybrid_image_is_the_traced_image(name):
     scene = case_scene(name)
-    traced, t_stats = warprt.render(scene, primary="raytrace")
-    hybrid, h_stats = warprt.render(scene, primary="zbuffer")
-    assert h_stats.primary == "zbuffer"
+    traced, t_stats = warprt.render(scene, primary_query="raytrace")
+    hybrid, h_stats = warprt.render(scene, primary_query="zbuffer")
+    assert h_stats.primary_query == "zbuffer"
     assert np.array_equal(hybrid, traced), f"{name}: {int((hybrid != traced).any(-1).sum())} pixels differ"
     assert h_stats.rays == t_stats.rays
 
@@ -43,8 +43,8 @@ def test_hybrid_image_is_the_traced_image(name):
 @pytest.mark.parametrize("seed", SEEDS)
 def test_hybrid_image_is_the_traced_image_on_random_scenes(seed):
     scene = random_scene(seed)
-    traced = warprt.render(scene, primary="raytrace").image
-    assert np.array_equal(warprt.render(scene, primary="zbuffer").image, traced)
+    traced = warprt.render(scene, primary_query="raytrace").image
+    assert np.array_equal(warprt.render(scene, primary_query="zbuffer").image, traced)
 
 
 @pytest.mark.parametrize("name", [c for c in QUICK_CASES if c.values[0] != "empty"])
@@ -61,7 +61,7 @@ def test_every_disagreement_is_marked_uncertain_and_few_samples_are(name):
     assert not (disagree & ~unsure).any(), f"{name}: {int((disagree & ~unsure).sum())} disagreements not marked"
     # Measured at these sizes (about 160 pixels across): 0.5 % to 1.9 % of samples where the scene has
     # fewer triangles than samples; 5.7 % on the dense spheres and 7.9 % on the 524,288-triangle knot,
-    # whose triangles are smaller than a pixel (primary="auto" traces those: see raster_is_cheaper).
+    # whose triangles are smaller than a pixel (primary_query="auto" traces those: see raster_is_cheaper).
     bound = 0.02 if geometry.triangle_count <= unsure.size else 0.10
     assert unsure.mean() < bound, f"{name}: {unsure.mean():.2%} of samples marked uncertain"
 
@@ -80,8 +80,8 @@ def test_at_full_size_the_tie_samples_are_marked_and_the_image_is_the_traced_one
     assert disagree.sum() > 0  # the case this test is for
     assert not (disagree & ~zb.uncertain()).any()
     assert zb.uncertain().mean() < 0.005  # measured 0.155 % and 0.318 % (0.1 % to 0.3 % on the other files)
-    assert np.array_equal(warprt.render(scene, primary="zbuffer", geometry=geometry).image,
-                          warprt.render(scene, primary="raytrace", geometry=geometry).image)
+    assert np.array_equal(warprt.render(scene, primary_query="zbuffer", geometry=geometry).image,
+                          warprt.render(scene, primary_query="raytrace", geometry=geometry).image)
 
 
 EYE_ON_VERTEX = {"eye": [0.0, 1.0, 0.0], "center": [0.0, 0.0, 0.0], "up": [1.0, 0.0, 0.0]}
@@ -114,9 +114,9 @@ def test_a_camera_on_a_surface_is_traced_and_keeps_the_traced_image():
 
     scene = make_scene([{"shape": "sphere", "material": "w"}], {"w": {"kd": [0.7] * 3}}, [{"position": [0, 3, 3]}],
                        camera=EYE_ON_VERTEX, ambient=[0.1] * 3, background=[0.2] * 3)
-    hybrid = warprt.render(scene, primary="zbuffer")
-    assert hybrid.stats.primary == "raytrace"
-    assert np.array_equal(hybrid.image, warprt.render(scene, primary="raytrace").image)
+    hybrid = warprt.render(scene, primary_query="zbuffer")
+    assert hybrid.stats.primary_query == "raytrace"
+    assert np.array_equal(hybrid.image, warprt.render(scene, primary_query="raytrace").image)
 
 
 def test_a_triangle_seen_edge_on_leaves_its_samples_to_the_tracer():
@@ -138,5 +138,5 @@ def test_a_triangle_seen_edge_on_leaves_its_samples_to_the_tracer():
     # The wall's rows: its corners (0, +-1, -1) lie 6 from the eye, so it spans +-f_y / 6 = +-3.6 rows
     # around the centre (f_y = 25 / (2 tan 30 deg) = 21.65 pixels per unit of y/z).
     assert column[10:15].all()
-    assert np.array_equal(warprt.render(scene, primary="zbuffer", geometry=geometry).image,
-                          warprt.render(scene, primary="raytrace", geometry=geometry).image)
+    assert np.array_equal(warprt.render(scene, primary_query="zbuffer", geometry=geometry).image,
+                          warprt.render(scene, primary_query="raytrace", geometry=geometry).image)

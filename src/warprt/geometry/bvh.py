@@ -9,7 +9,7 @@ pbrt-v4 widens the slab interval by 2 gamma(3) for the same reason (Pharr et al.
 Warp's traversal is native code, so here the boxes are widened instead, by more than that error.
 
 How: wp.Mesh bounds each triangle by the box of its three points[indices] at construction and
-never recomputes it (we never refit). So the mesh is built with indices that name two proxy
+at a refit only. So the mesh is built with indices that name two proxy
 points per triangle, the corners of its padded box, and the real indices are written into the
 same array afterwards: the BVH keeps the padded boxes, the triangle tests read the real vertices.
 """
@@ -110,3 +110,21 @@ def build_mesh(points: np.ndarray, indices: np.ndarray, device="cpu", bvh_constr
     # The mesh reads indices through the same buffer: from here on its triangles are the real ones.
     indices_wp.assign(np.ascontiguousarray(faces.reshape(-1)))
     return mesh, points_wp, indices_wp
+
+
+def refit_mesh(mesh, points_wp, indices_wp, points: np.ndarray, indices: np.ndarray, eye: float,
+               pad: float = BOUNDS_PAD):
+    """Refit a build_mesh() BVH to new ``points`` (V, 3) float32 over the same triangles ``indices``:
+    the proxy corners of the new padded boxes written after the real points, the mesh refit while its
+    indices name the corners (so the tree bounds the padded boxes, as built), the real indices written
+    back. The tree's shape stays the one built for the old points."""
+    points = np.asarray(points, np.float32).reshape(-1, 3)
+    faces = np.asarray(indices, np.int32).reshape(-1, 3)
+    v, t = len(points), len(faces)
+    lower, upper = padded_bounds(points, faces, pad, eye)
+    corner = np.arange(t, dtype=np.int32)
+    proxy = np.stack([v + corner, v + t + corner, v + corner], axis=1)
+    points_wp.assign(np.ascontiguousarray(np.concatenate([points, lower, upper]), np.float32))
+    indices_wp.assign(np.ascontiguousarray(proxy.reshape(-1)))
+    mesh.refit()
+    indices_wp.assign(np.ascontiguousarray(faces.reshape(-1)))

@@ -19,11 +19,12 @@ MAX_GROUPS = 64  # the largest by area, where a flat-shaded curved mirror would 
 KEEP_BYTES = 256 * 2**20  # the unfolded scenes kept with a Geometry for the next frames
 
 
-def planar_groups(geom, reflective_slots) -> tuple[np.ndarray, np.ndarray]:
+def planar_groups(geom, reflective_slots, memo: dict | None = None) -> tuple[np.ndarray, np.ndarray]:
     """(group per triangle, -1 for none; planes (G, 4) float64 as (n, offset), n . x = offset on the
-    plane) of ``geom``'s flat triangles whose material slot is reflective, by object."""
+    plane) of ``geom``'s flat triangles whose material slot is reflective, by object; kept in ``memo``
+    (a Renderer's FrameCaches.planar_groups) for the next frames of these triangles."""
     key = tuple(bool(r) for r in reflective_slots)
-    memo = geom.__dict__.setdefault("_planar_groups", {})
+    memo = {} if memo is None else memo
     if key in memo:
         return memo[key]
     tri = geom.points_np.astype(np.float64)[geom.indices_np.reshape(-1, 3)][: geom.triangle_count]
@@ -128,10 +129,11 @@ class MirroredGeometry:
         return self.parent.eye_offset(eye)
 
 
-def mirrored_geometry(geom, planes: np.ndarray, side: float) -> MirroredGeometry:
-    """MirroredGeometry kept with ``geom`` (it depends on the triangles and mirrors, not the camera)."""
+def mirrored_geometry(geom, planes: np.ndarray, side: float, memo: dict | None = None) -> MirroredGeometry:
+    """MirroredGeometry of ``geom``, kept in ``memo`` (a Renderer's FrameCaches.mirrored): it depends on
+    the triangles and mirrors, not the camera."""
     key = (np.asarray(planes, np.float64).tobytes(), float(side))
-    memo = geom.__dict__.setdefault("_mirrored", {})
+    memo = {} if memo is None else memo
     if key not in memo:
         memo[key] = MirroredGeometry(geom, np.asarray(planes, np.float64).reshape(-1, 4), side)
         while len(memo) > 1 and sum(m.nbytes for m in memo.values()) > KEEP_BYTES:  # the oldest go first

@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 from .._warp import wp
 from ..scene import eye_medium, vertex_normals
-from .bvh import build_mesh, eye_reach, frame_origin, objects_center
+from .bvh import build_mesh, eye_reach, frame_origin, objects_center, refit_mesh
 from .shadow_grid import ShadowGrid, empty_grid
 
 _REPEAT = ("repeat", "repeat")
@@ -115,36 +115,35 @@ class Geometry:
         # The origin the rule gives this eye (planned) and the one used (tests may move it: origin=).
         self.planned_origin = self.origin_for(scene.camera.eye)
         self.origin = np.asarray(self.planned_origin if origin is None else origin, np.float64)  # world position
+        # Stand-ins and uploads kept for the next frames (scene_data, _textures), made on first use.
+        self._no_grid = None  # the ShadowGrid of no grid
+        self._no_uvs = None  # the uv array of a frame without textures
+        self._texture_cache: dict = {}  # (id(image), wrap) -> (image, wp.Texture2D): an image uploaded once
         # A triangle's material is a slot: the objects' material names in order of first use, so the
         # triangle arrays depend on the objects alone and a frame with other materials only swaps tables.
         self.material_names = list(dict.fromkeys(obj.material for obj in scene.objects))
-        verts, faces, mats, smooth, normals, owner = [], [], [], [], [], []
+        faces, mats, smooth, owner = [], [], [], []
         base = 0
         for index, obj in enumerate(scene.objects):
             owner.append(np.full(len(obj.faces), index, np.int32))
-            verts.append(obj.vertices - self.origin)
             faces.append(obj.faces + base)
             mats.append(np.full(len(obj.faces), self.material_names.index(obj.material), np.int32))
             smooth.append(np.full(len(obj.faces), int(obj.smooth), np.int32))
-            if obj.smooth:
-                given = getattr(obj, "normals", None)
-                normals.append(given if given is not None else vertex_normals(obj.vertices, obj.faces))
-            else:
-                normals.append(np.zeros_like(obj.vertices))
             base += len(obj.vertices)
-        if not verts:  # an empty scene still gets a (degenerate, never hit) mesh so kernels can run
-            verts, faces = [np.zeros((3, 3))], [np.zeros((1, 3), np.int64)]
-            mats, smooth, normals = [np.zeros(1, np.int32)], [np.zeros(1, np.int32)], [np.zeros((3, 3))]
+        if not faces:  # an empty scene still gets a (degenerate, never hit) mesh so kernels can run
+            faces, mats, smooth = [np.zeros((1, 3), np.int64)], [np.zeros(1, np.int32)], [np.zeros(1, np.int32)]
             owner = [np.zeros(1, np.int32)]
             self.triangle_count = 0
         else:
             self.triangle_count = int(sum(len(f) for f in faces))
-        self.points_np = np.ascontiguousarray(np.concatenate(verts), np.float32)
+        self.points_np, normals = self._placed(scene.objects)
         self.indices_np = np.ascontiguousarray(np.concatenate(faces).reshape(-1), np.int32)
         self.tri_material_np = np.concatenate(mats)
         self.tri_smooth_np = np.concatenate(smooth)
         self.tri_object_np = np.concatenate(owner)  # the index of each triangle's object
+        self.reach = float(np.abs(self.points_np).max(initial=0.0))  # the largest |coordinate|
         self.eye_reach = eye_reach(self.points_np)  # E: how far an eye may move and keep this BVH
+        self._boxes = None  # triangle_boxes(), once asked for
         self.object_face_counts = [len(obj.faces) for obj in scene.objects]
         self.object_ids = None  # object_tables(), once built
         self._object_uv = [(len(obj.vertices), getattr(obj, "uv", None)) for obj in scene.objects]
@@ -164,12 +163,57 @@ class Geometry:
             self.points = wp.array(self.points_np, dtype=wp.vec3, device=d)
             self.indices = wp.array(self.indices_np, dtype=wp.int32, device=d)
             self.mesh = None
-        self.normals = wp.array(np.concatenate(normals).astype(np.float32), dtype=wp.vec3, device=d)
+        self.normals = wp.array(normals, dtype=wp.vec3, device=d)
         self.tri_material = wp.array(self.tri_material_np, dtype=wp.int32, device=d)
         self.tri_smooth = wp.array(self.tri_smooth_np, dtype=wp.int32, device=d)
         self.colors = wp.array(colors, dtype=wp.vec3, device=d)  # white where the scene has no vertex colours
         self._tables = None
         self.data = self.scene_data(scene)  # the tables of the scene it was built for
+
+    def _placed(self, objects) -> tuple[np.ndarray, np.ndarray]:
+        """The points relative to the origin (float64, then float32) and the vertex normals (float32; zero
+        where an object is flat) of ``objects``; for no objects, the three points of the stand-in triangle."""
+        verts, normals = [], []
+        for obj in objects:
+            verts.append(obj.vertices - self.origin)
+            if obj.smooth:
+                given = getattr(obj, "normals", None)
+                normals.append(given if given is not None else vertex_normals(obj.vertices, obj.faces))
+            else:
+                normals.append(np.zeros_like(obj.vertices))
+        if not verts:
+            verts, normals = [np.zeros((3, 3))], [np.zeros((3, 3))]
+        return np.ascontiguousarray(np.concatenate(verts), np.float32), np.concatenate(normals).astype(np.float32)
+
+    def move_vertices(self, scene) -> bool:
+        """Take ``scene``'s objects' vertices, the objects being this Geometry's but for where their
+        vertices are: the frame origin planned again for them and the eye, the points and vertex
+        normals written over in place, and the BVH refit over their padded boxes rather than rebuilt.
+        The points are then a fresh build's to the bit; only the BVH's tree differs, which can break a
+        tie between two equal hits the other way. False (nothing changed) where the objects differ in
+        more than that, or there is no BVH: the caller builds a new Geometry."""
+        if self.mesh is None or self.triangle_count == 0 or len(scene.objects) != len(self.object_face_counts):
+            return False
+        if any(len(o.faces) != n or len(o.vertices) != m for o, n, (m, _) in
+               zip(scene.objects, self.object_face_counts, self._object_uv)):
+            return False
+        self.center, self.center_reach = objects_center(scene.objects)
+        self.planned_origin = self.origin = self.origin_for(scene.camera.eye)
+        self.points_np, normals = self._placed(scene.objects)
+        self.reach = float(np.abs(self.points_np).max(initial=0.0))
+        self.eye_reach = eye_reach(self.points_np)
+        self._boxes, self._tables = None, None  # the light positions and the eye's medium follow the origin
+        refit_mesh(self.mesh, self.points, self.indices, self.points_np, self.indices_np, self.eye_reach)
+        self.normals.assign(normals)
+        self.data = self.scene_data(scene)
+        return True
+
+    def triangle_boxes(self) -> tuple[np.ndarray, np.ndarray]:
+        """Each triangle's (lowest, highest) corner in float64, computed once for these points."""
+        if self._boxes is None:
+            tri = self.points_np.astype(np.float64)[self.indices_np.reshape(-1, 3)]
+            self._boxes = (tri.min(axis=1), tri.max(axis=1))
+        return self._boxes
 
     def origin_for(self, eye) -> np.ndarray:
         """The frame origin bvh.frame_origin gives these objects seen from ``eye``: a frame reuses this
@@ -232,8 +276,8 @@ class Geometry:
         s.num_lights = len(lights)
         s.ambient = wp.vec3(*scene.render.ambient)
         s.background = wp.vec3(*scene.render.background)
-        if shadow_grid is None:
-            self.__dict__.setdefault("_no_grid", empty_grid(d))
+        if shadow_grid is None and self._no_grid is None:
+            self._no_grid = empty_grid(d)
         s.shadow_grid = shadow_grid if shadow_grid is not None else self._no_grid
         self._tables = (key, s, shadow_grid, textures)  # the grid and textures kept alive with their ids
         return s
@@ -255,7 +299,8 @@ class Geometry:
         if textured:
             s.uvs = self.uv_array()
         else:
-            self.__dict__.setdefault("_no_uvs", wp.zeros(1, dtype=wp.vec2, device=device))
+            if self._no_uvs is None:
+                self._no_uvs = wp.zeros(1, dtype=wp.vec2, device=device)
             s.uvs = self._no_uvs
         images, index = [(np.ones((1, 1, 3), np.float32), _REPEAT)], {}  # slot 0: white
         slots = {"ka": [], "kd": [], "ks": []}
@@ -280,7 +325,7 @@ class Geometry:
         s.ka_map, s.kd_map, s.ks_map = (wp.array(slots[k], dtype=TextureSlot, device=device) for k in ("ka", "kd", "ks"))
         # Warp's textures hold 1, 2 or 4 channels: RGB is padded to RGBA. The cache holds the image
         # itself with its texture, so its id cannot be reused by another image while it is a key.
-        cache = self.__dict__.setdefault("_texture_cache", {})
+        cache = self._texture_cache
         objects = []
         for a, wrap in images:
             if (id(a), wrap) not in cache:

@@ -324,18 +324,20 @@ def cells_for(triangles: int) -> int:
     return 256 if triangles <= 50_000 else 512
 
 
-def kept_shadow_grid(geom, lights: np.ndarray, max_bytes: int = MAX_BYTES) -> ShadowGridBuild | None:
-    """The structure shadow_grid() built for these lights and kept with ``geom``, or None."""
-    return geom.__dict__.get("_shadow_grids", {}).get((np.asarray(lights, np.float32).tobytes(), max_bytes))
+def kept_shadow_grid(memo: dict, lights: np.ndarray, max_bytes: int = MAX_BYTES) -> ShadowGridBuild | None:
+    """The structure shadow_grid() built for these lights and kept in ``memo``, or None."""
+    return memo.get((np.asarray(lights, np.float32).tobytes(), max_bytes))
 
 
-def shadow_grid(geom, lights: np.ndarray, max_bytes: int = MAX_BYTES) -> ShadowGridBuild:
-    """The structure for ``geom``'s triangles and these float32 light positions, built once and kept
-    with the Geometry (and so with its BVH) for the next frames with the same lights."""
+def shadow_grid(geom, lights: np.ndarray, max_bytes: int = MAX_BYTES, memo: dict | None = None,
+                keep: int = 2) -> ShadowGridBuild:
+    """The structure for ``geom``'s triangles and these float32 light positions, built once and kept in
+    ``memo`` (a Renderer's FrameCaches.shadow_grids, for the next frames of these triangles with the
+    same lights); at most ``keep`` structures, the oldest dropped first (moving lights)."""
     key = (np.asarray(lights, np.float32).tobytes(), max_bytes)
-    memo = geom.__dict__.setdefault("_shadow_grids", {})
+    memo = {} if memo is None else memo
     if key not in memo:
-        if len(memo) >= 2:  # moving lights: keep the memory of two structures at most
+        if len(memo) >= keep:
             memo.pop(next(iter(memo)))
         memo[key] = ShadowGridBuild(geom.points_np, geom.indices_np, lights, cells_for(geom.triangle_count),
                                     geom.device, max_bytes)

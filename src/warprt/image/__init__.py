@@ -1,18 +1,24 @@
-"""The host side of a frame: launching bands (launch.py), the stats (stats.py), the renderers and their
-policies (renderer.py), the Z-buffer (zbuffer.py), the planar mirrors' virtual cameras (mirrors.py), the
-AOVs (aovs.py), memory (memory.py), image files (film.py) and the progress line (progress.py).
+"""The host side of a frame: the Renderer that owns a scene's frames and render(), the one-shot over it
+(renderer.py), its plan and policies (plan.py), the caches it keeps (caches.py) and the parameters it
+changes between frames (params.py); launching bands (launch.py), the stats (stats.py), the Z-buffer
+(zbuffer.py), the planar mirrors' virtual cameras (mirrors.py), the AOVs (aovs.py), memory (memory.py),
+image files (film.py) and the progress line (progress.py).
 """
 
+from ..options import RenderOptions
 from .aovs import AOVS, check_aovs
+from .caches import FrameCaches, LightHistory
 from .film import aov_paths, partial_files, read_aovs, read_image, to_srgb8, write_image
 from .launch import bands_of, default_threads, launch_bands
 from .mirrors import MirrorFrame
-from .renderer import (DEFAULTS, RenderOptions, cached_geometry, check_finite, frame_geometry, light_history,
-                       raster_is_cheaper, render, render_zbuffer, shadows_from_grid)
+from .params import SceneParameters
+from .plan import mirrors_from_rasters, raster_is_cheaper, shadows_from_grid
+from .renderer import Renderer, check_finite, render, render_zbuffer
 from .stats import RenderResult, RenderStats
 from .zbuffer import ZBuffer, eye_on_surface
 
-__all__ = ["AOVS", "DEFAULTS", "MirrorFrame", "RenderOptions", "RenderResult", "RenderStats", "ZBuffer", "aov_paths",
-           "bands_of", "cached_geometry", "check_aovs", "check_finite", "default_threads", "eye_on_surface",
-           "frame_geometry", "launch_bands", "light_history", "partial_files", "raster_is_cheaper", "read_aovs",
-           "read_image", "render", "render_zbuffer", "shadows_from_grid", "to_srgb8", "write_image"]
+__all__ = ["AOVS", "FrameCaches", "LightHistory", "MirrorFrame", "RenderOptions", "RenderResult", "RenderStats",
+           "Renderer", "SceneParameters", "ZBuffer", "aov_paths", "bands_of", "check_aovs", "check_finite",
+           "default_threads", "eye_on_surface", "launch_bands", "mirrors_from_rasters", "partial_files",
+           "raster_is_cheaper", "read_aovs", "read_image", "render", "render_zbuffer", "shadows_from_grid",
+           "to_srgb8", "write_image"]

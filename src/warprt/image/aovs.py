@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import ArgumentError, SceneError, show
+from ..options import AOVS, check_aovs  # noqa: F401 (the names and their check live with the options)
 
 # Definitions (first hits of camera rays; misses: depth +inf, ids -1, the rest 0):
 #   depth      distance from the eye to the hit along the ray                    float32 (H, W)
@@ -22,7 +22,6 @@ from ..errors import ArgumentError, SceneError, show
 #   coverage   share of the pixel's samples that hit                              float32 (H, W)
 # Geometric AOVs (depth .. uv) are averaged over the pixel's samples that hit; the ID AOVs (object,
 # material, face) are the sample's nearest the pixel centre (kernels.id_sample), never averaged.
-AOVS = ("depth", "normal", "albedo", "position", "uv", "object", "material", "face", "coverage")
 IDS = ("object", "material", "face")
 
 # OpenEXR channels of each AOV, "layer.channel" as compositors group them. EXR has no signed
@@ -31,25 +30,6 @@ CHANNELS = {"depth": ("depth.Z",), "normal": ("normal.X", "normal.Y", "normal.Z"
             "albedo": ("albedo.R", "albedo.G", "albedo.B"), "position": ("position.X", "position.Y", "position.Z"),
             "uv": ("uv.U", "uv.V"), "object": ("object.id",), "material": ("material.id",), "face": ("face.id",),
             "coverage": ("coverage.A",)}
-
-
-def check_aovs(names, field: str = "aovs", source: str | None = None) -> tuple:
-    """The AOV names asked for, checked and in AOVS order; an unknown or repeated one is a SceneError
-    naming ``field`` of ``source`` (a job file), or with source=None render()'s argument ``aovs``."""
-
-    def bad(message):
-        return ArgumentError("render", field, message) if source is None else SceneError(source, field, message)
-
-    if names is None:
-        return ()
-    if isinstance(names, str) or not isinstance(names, (list, tuple)) or not all(isinstance(n, str) for n in names):
-        raise bad(f"expected a list of AOV names, got {show(names)}")
-    for n in names:
-        if n not in AOVS:
-            raise bad(f"unknown AOV '{n}'; expected some of: {', '.join(AOVS)}")
-    if len(set(names)) != len(names):
-        raise bad(f"an AOV is named twice: {', '.join(names)}")
-    return tuple(n for n in AOVS if n in names)
 
 
 def finish_aovs(names, sums: dict, samples: int, origin, height: int, width: int) -> dict:

@@ -1,7 +1,7 @@
 """A frame's virtual cameras for planar mirrors (the host side of kernels/mirror.py): the chains of planar
 groups its reflection rays follow, each chain's unfolded scene rasterized from the camera over the tiles
-its rays cover, and the Mirrors record of those rasters that the trace kernel reads; kept with the
-Geometry for the next frames of the same view (view_key)."""
+its rays cover, and the Mirrors record of those rasters that the trace kernel reads; kept in a
+Renderer's FrameCaches for the next frames of the same view (view_key)."""
 
 from __future__ import annotations
 
@@ -15,6 +15,7 @@ from ..geometry import MAX_GROUPS, mirrored_geometry, planar_groups
 from ..geometry.planar import reflect_points
 from ..kernels import MAX_BOUNCES, MIRROR_MARGIN_PX, Mirrors, camera_data, gather_kernel, probe_kernel, raster_camera
 from ..scene import camera_basis
+from .caches import FrameCaches
 from .launch import launch_bands
 from .zbuffer import RASTER_TILE, ZBuffer
 
@@ -23,9 +24,7 @@ PROBES_PER_SIDE = 2  # traced camera rays per raster tile side, to find the chai
 # The stored rasters: face (int32), 1/z and its rival (float64 each) per sample of a stored tile.
 BYTES_PER_SAMPLE = 4 + 8 + 8
 MAX_BYTES = 256 * 2**20
-_scratch: dict = {}  # one frame's worth of raster buffers, every sample clear, kept for the next frame
-KEEP_VIEWS = 2  # views whose virtual cameras a Geometry keeps (a stereo pair), within MAX_BYTES in all
-VIEWS_COUNTED = 64
+KEEP_VIEWS = 2  # views whose virtual cameras a Renderer keeps (a stereo pair), within MAX_BYTES in all
 
 
 def empty_mirrors(device) -> Mirrors:
@@ -40,41 +39,36 @@ def empty_mirrors(device) -> Mirrors:
     return m
 
 
-def view_key(scene, data, fx) -> tuple:
+def view_key(scene, geom, fx) -> tuple:
     """Everything a frame's virtual cameras depend on besides the Geometry's triangles: the camera, the
-    samples, the bounces and which material slots reflect. Lights, colours and how much a mirror
-    reflects are not in it: a frame that changes only those reuses the rasters."""
+    samples, the bounces and which material slots reflect (k_r > 0 in float32, as the kernels read it).
+    Lights, colours and how much a mirror reflects are not in it: a frame that changes only those reuses
+    the rasters."""
     spp = scene.render.spp if fx.supersampling else 1
-    reflective = tuple(bool(r) for r in data.kr.numpy().max(axis=1) > 0.0)
+    kr = np.asarray([scene.materials[n].reflectivity for n in geom.material_names] or [[0, 0, 0]], np.float32)
+    reflective = tuple(bool(r) for r in kr.reshape(-1, 3).max(axis=1) > 0.0)
     # The whole (frozen) Camera, so that a field it gains is part of the key too.
     return (scene.camera, int(spp), min(MAX_BOUNCES, scene.render.max_depth - 1), reflective)
 
 
-def kept_mirror_frame(geom, key: tuple) -> "MirrorFrame | None":
-    """The virtual cameras ``geom`` keeps for the view ``key`` (view_key), or None."""
-    return geom.__dict__.get("_virtual_cameras", {}).get(key)
+def kept_mirror_frame(caches: FrameCaches, key: tuple) -> "MirrorFrame | None":
+    """The virtual cameras ``caches`` keep for the view ``key`` (view_key), or None."""
+    return caches.virtual_cameras.get(key)
 
 
-def record_view(geom, key: tuple) -> int:
-    """Count one more frame of ``geom`` with the view ``key``; how many there have been, this one included."""
-    frames = geom.__dict__.setdefault("_view_frames", {})
-    if key not in frames and len(frames) >= VIEWS_COUNTED:  # a moving camera: no view stays long enough
-        frames.clear()
-    frames[key] = frames.get(key, 0) + 1
-    return frames[key]
-
-
-def mirror_frame(scene, geom, data, fx, key: tuple, threads: int, bands: int, device: str) -> tuple["MirrorFrame", bool]:
-    """The virtual cameras of the view ``key`` (view_key) and whether ``geom`` kept them from an earlier
-    frame: a static camera's rasters are the same arrays frame after frame, so the image is the one a
-    fresh build gives, to the bit; only the count of rays decided starts again from zero."""
-    kept = geom.__dict__.setdefault("_virtual_cameras", {})
+def mirror_frame(scene, geom, data, fx, key: tuple, threads: int, bands: int, device: str,
+                 caches: FrameCaches) -> tuple["MirrorFrame", bool]:
+    """The virtual cameras of the view ``key`` (view_key) and whether ``caches`` (the Renderer's, for
+    ``geom``) kept them from an earlier frame: a static camera's rasters are the same arrays frame after
+    frame, so the image is the one a fresh build gives, to the bit; only the count of rays decided
+    starts again from zero."""
+    kept = caches.virtual_cameras
     frame = kept.get(key)
     if frame is not None:
         if frame.mirrors is not None:
             frame.mirrors.decided.zero_()
         return frame, True
-    frame = MirrorFrame(scene, geom, data, fx, threads, bands, device)
+    frame = MirrorFrame(scene, geom, data, fx, threads, bands, device, caches=caches)
     kept[key] = frame
     # The oldest views go first, down to KEEP_VIEWS and MAX_BYTES (this frame's always stays).
     while len(kept) > 1 and (len(kept) > KEEP_VIEWS or sum(f.nbytes for f in kept.values()) > MAX_BYTES):
@@ -112,14 +106,17 @@ class MirrorFrame:
     scene), ``mirrors`` (the kernel's record; None when no chain was worth a raster), ``nbytes``."""
 
     def __init__(self, scene, geom, data, fx, threads: int, bands: int, device: str,
-                 margin: float = MIRROR_MARGIN_PX, stray_check: bool = True):
-        """``margin`` and ``stray_check`` (tests only): the rasters' edge margin, and whether a ray
-        that strays from its ideal line is traced; without both the decisions are not exact."""
+                 margin: float = MIRROR_MARGIN_PX, stray_check: bool = True, caches: FrameCaches | None = None):
+        """``caches``: the Renderer's for ``geom`` (planar groups, unfolded scenes, raster buffers kept
+        across frames), or None for a frame of its own. ``margin`` and ``stray_check`` (tests only): the
+        rasters' edge margin, and whether a ray that strays from its ideal line is traced; without both
+        the decisions are not exact."""
         self.margin, self.stray_check = margin, stray_check
+        caches = FrameCaches() if caches is None else caches
         cam = scene.camera
         basis = camera_basis(cam)
         kr = data.kr.numpy()
-        group, planes = planar_groups(geom, kr.max(axis=1) > 0.0)
+        group, planes = planar_groups(geom, kr.max(axis=1) > 0.0, caches.planar_groups)
         self.chains, self.mirrors, self.nbytes = [], None, 0
         if not len(planes):
             return
@@ -154,13 +151,13 @@ class MirrorFrame:
             stored = int(seen.sum()) * per_tile_samples * BYTES_PER_SAMPLE
             if stored > budget:
                 continue
-            unfolded = mirrored_geometry(geom, chain_planes, side)
+            unfolded = mirrored_geometry(geom, chain_planes, side, caches.mirrored)
             budget -= stored
             self.chains.append({"groups": groups, "planes": chain_planes, "side": side, "tiles": seen,
                                 "unfolded": unfolded})
         if not self.chains:
             return
-        self._rasterize(scene, geom, group, planes, fx, basis, eye, threads, bands, device)
+        self._rasterize(scene, geom, group, planes, fx, basis, eye, threads, bands, device, caches.raster_scratch)
 
     @staticmethod
     def _probe(data, planes, basis, eye, group, tile, tiles_x, tiles_y, bounces, threads, bands, device) -> dict:
@@ -196,7 +193,7 @@ class MirrorFrame:
                 found[chain] = (where[1:-1, 1:-1].reshape(-1), float(side), hitting)
         return found
 
-    def _rasterize(self, scene, geom, group, planes, fx, basis, eye, threads, bands, device):
+    def _rasterize(self, scene, geom, group, planes, fx, basis, eye, threads, bands, device, kept_scratch: dict):
         cam, tile = scene.camera, RASTER_TILE
         tiles_x, tiles_y = -(-cam.width // tile), -(-cam.height // tile)
         n_tiles = tiles_x * tiles_y
@@ -225,7 +222,7 @@ class MirrorFrame:
         rival = wp.empty(slot * per_tile, dtype=wp.float64, device=device)
         tile_slot_wp = wp.array(tile_slot, dtype=wp.int32, device=device)
         flat = replace(fx, shadows=False, reflection=False)
-        scratch, z_clip = _scratch.pop((n_samples, device), None), 0.0
+        scratch, z_clip = kept_scratch.pop((n_samples, device), None), 0.0
         for c, chain in enumerate(self.chains):
             zb = ZBuffer(scene, chain["unfolded"], flat, device=device, margin=self.margin, fragments=scratch)
             zb.rasterize(threads, bands, tiles=chain["tiles"])
@@ -236,8 +233,8 @@ class MirrorFrame:
                               chain["unfolded"].source, wp.array(stored, dtype=wp.int32, device=device), face,
                               inv_depth, rival], device=device)
             chain["triangles"] = chain["unfolded"].triangle_count
-        _scratch.clear()
-        _scratch[(n_samples, device)] = scratch  # clean again (gathered), for the next frame of this size
+        kept_scratch.clear()
+        kept_scratch[(n_samples, device)] = scratch  # clean again (gathered), for the next frame of this size
         m = Mirrors()
         m.group = wp.array(group, dtype=wp.int32, device=device)
         m.first_chain = wp.array(first_chain, dtype=wp.int32, device=device)

@@ -1,268 +1,34 @@
-"""Render a Scene: the Whitted tracer (render) or the Z-buffer (render_zbuffer). render() checks its
-options once (RenderOptions), plans the frame (FramePlan: samples, depth, stack, the shortcuts' policies),
-then runs named phases: geometry (BVH), the shortcuts (rasterized first hits, the shadow rays' grid, the
-mirrors' virtual cameras), the kernel variant, the bands of pixels, and what it cost (stats)."""
+"""Render a Scene: a Renderer owns one scene's frames (the device, the Geometry with its BVH, the frame
+caches, the parameters changed between frames); render() is one frame of a new Renderer. A traced frame
+plans once (plan.py: FramePlan, then Shortcuts), runs named phases (geometry, shadow grid, virtual
+cameras, kernel, raster, trace) that each return a typed result, and fills the stats from them at the end."""
 
 from __future__ import annotations
 
-import weakref
-from dataclasses import dataclass, field, fields, replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from .._warp import init_warp, wp
-from ..errors import ArgumentError
-from ..geometry import Geometry, kept_shadow_grid, shadow_grid
+from ..geometry import Geometry, ShadowGridBuild, shadow_grid
 from ..kernels import (aov_buffers, aov_bytes, aov_sums, camera_data, empty_aov_buffers, make_shade_kernel,
-                       make_trace_kernel, raster_kernel, stack_size)
-from ..scene import EffectSet, ObjectCache, camera_basis, resolve_effects, validate_camera, validate_scene, zbuffer_effects
+                       make_trace_kernel, raster_kernel)
+from ..options import RenderOptions
+from ..scene import EffectSet, camera_basis, validate_camera, validate_scene, validate_view, zbuffer_effects
 from ..timing import timed
-from .aovs import check_aovs, finish_aovs
+from .aovs import finish_aovs
+from .caches import SHADOW_GRIDS_KEPT, FrameCaches
 from .launch import bands_of, launch_bands, launch_plan
-from .memory import RASTER_BYTES_PER_SAMPLE, check_frame_memory, frame_estimate, frame_memory
-from .mirrors import empty_mirrors, kept_mirror_frame, mirror_frame as virtual_cameras, record_view, view_key
-from .samples import SampleGrid, sample_grid
+from .memory import check_frame_memory, frame_estimate, frame_memory
+from .mirrors import MirrorFrame, empty_mirrors, mirror_frame
+from .plan import FramePlan, Shortcuts, choose_shortcuts, plan_frame
+from .samples import sample_grid
 from .stats import RenderResult, RenderStats
-from .zbuffer import RASTER_TILE, ZBuffer, culled_faces, empty_fragments, eye_on_surface
+from .zbuffer import ZBuffer, culled_faces, empty_fragments
 
-ALGORITHMS = ("raytrace", "zbuffer")
-PRIMARY = ("auto", "raytrace", "zbuffer")
-SHADOWS = ("auto", "bvh", "grid")
-REFLECTIONS = ("auto", "bvh", "mirrors")
-
-
-@dataclass
-class Defaults:
-    """render()'s defaults for what it is not told; the test suite sets them to run whole suites on
-    every path (tests/conftest.py)."""
-
-    primary: str = "auto"
-    shadows: str = "auto"
-    reflections: str = "auto"
-
-
-DEFAULTS = Defaults()
-
-# Pixel order: bands walk the image in 8x8 tiles, so the rays of a band stay close together and
-# reuse the BVH nodes in cache (measured against row-major order in benchmarks/ATTEMPTS.md).
+# Pixel order: bands walk the image in 8x8 tiles, so the rays of a band stay close together and reuse
+# the BVH nodes in cache (benchmarks/ATTEMPTS.md compares it with row-major order).
 PIXEL_TILE = (8, 8)
-
-# primary="auto" rasterizes only while those buffers stay under this: 19 million samples, 1920x1080
-# at 9 spp. Tracing needs no per-sample memory, so a bigger frame (4K at 16 spp would need 3.7 GB)
-# is traced rather than made to pay for its speed-up in memory.
-AUTO_RASTER_MAX_BYTES = 512 * 2**20
-
-
-@dataclass(frozen=True)
-class RenderOptions:
-    """How render() renders a scene, checked once, when made; each field is render()'s argument of the
-    same name (render's docstring). None for primary, shadows and reflections: DEFAULTS'."""
-
-    threads: int | None = None
-    device: str = "cpu"
-    effects: object = None
-    disable: object = ()
-    bands: int | None = None
-    algorithm: str = "raytrace"
-    tile: tuple[int, int] | None = None
-    primary: str | None = None
-    shadows: str | None = None
-    reflections: str | None = None
-    report_truncated: bool = False
-    aovs: tuple = field(default=())
-
-    def __post_init__(self):
-        put = lambda name, value: object.__setattr__(self, name, value)  # noqa: E731 (frozen)
-        for name in ("primary", "shadows", "reflections"):
-            put(name, getattr(DEFAULTS, name) if getattr(self, name) is None else getattr(self, name))
-        for name, choices, what in (("primary", PRIMARY, "primary visibility"), ("shadows", SHADOWS, "shadow-ray query"),
-                                    ("reflections", REFLECTIONS, "reflection-ray query"),
-                                    ("algorithm", ALGORITHMS, "algorithm")):
-            if getattr(self, name) not in choices:
-                raise ArgumentError("render", name, f"unknown {what} '{getattr(self, name)}'; "
-                                                    f"expected one of: {', '.join(choices)}")
-        put("aovs", check_aovs(self.aovs))
-        if self.aovs and self.algorithm == "zbuffer":
-            raise ArgumentError("render", "aovs", "AOVs come from the tracer's camera rays: not with {algorithm}",
-                                {"algorithm": "zbuffer"})
-        if self.threads is not None:
-            put("threads", int(self.threads))
-            if self.threads < 1:
-                raise ArgumentError("render", "threads", f"expected an integer >= 1, got {self.threads}")
-
-    @classmethod
-    def of(cls, options: "RenderOptions | None", kwargs: dict) -> "RenderOptions":
-        """``options`` with ``kwargs`` (render()'s keyword arguments) over it."""
-        unknown = set(kwargs) - {f.name for f in fields(cls)}
-        if unknown:
-            raise TypeError(f"render() got an unexpected keyword argument '{sorted(unknown)[0]}'")
-        if options is None:
-            return cls(**kwargs)
-        return replace(options, **kwargs) if kwargs else options
-
-
-def raster_is_cheaper(triangles: int, samples: int, device: str = "cpu") -> bool:
-    """Whether rasterizing the primary hits beats tracing them. Rasterization costs about a fixed
-    amount per triangle plus per covered sample, tracing about log(triangles) per sample, so the
-    raster wins with few triangles per sample: below one triangle per ten samples it did on every scene
-    measured (benchmarks/ATTEMPTS.md), on the CPU only (on a GPU the primaries are traced), and within
-    AUTO_RASTER_MAX_BYTES of buffers."""
-    return (device == "cpu" and 0 < triangles <= samples // 10
-            and samples * RASTER_BYTES_PER_SAMPLE <= AUTO_RASTER_MAX_BYTES)
-
-
-def raster_wanted(primary: str, triangles: int, samples: int, device: str) -> bool:
-    """The hybrid policy before the eye is known to be off every surface: "zbuffer" asks for the
-    Z-buffer's first hits, "auto" takes them where they are the cheaper."""
-    return primary == "zbuffer" or (primary == "auto" and raster_is_cheaper(triangles, samples, device))
-
-
-# What the light-space grid costs and saves, measured on the scenes on a quiet 2-core machine: a shadow
-# ray's any-hit query about 200 ns of thread time, the grid's answer about 70 ns; a build about 10 ms per
-# light plus 0.8 us per triangle and light (0.024 s for the default scene, 0.83 s for the 524k-triangle knot).
-GRID_SAVES_PER_RAY = 130e-9
-GRID_BUILD_PER_LIGHT = 10e-3
-GRID_BUILD_PER_TRIANGLE_LIGHT = 780e-9
-GRID_HORIZON = 20  # frames a second frame with the same lights is taken to promise
-LIGHT_SETS_KEPT = 64  # lights moving every frame: no set of them stays long enough to amortize a grid
-
-
-class LightHistory:
-    """How many frames a Geometry has served with each set of light positions: a grid built for
-    them is kept with the Geometry, so its build is paid once by all of those frames."""
-
-    def __init__(self):
-        self.frames: dict[bytes, int] = {}
-
-    def record(self, lights: np.ndarray) -> int:
-        """Count one more frame with ``lights``; how many there have been, this one included."""
-        if len(self.frames) >= LIGHT_SETS_KEPT:
-            self.frames.clear()
-        key = lights.tobytes()
-        self.frames[key] = self.frames.get(key, 0) + 1
-        return self.frames[key]
-
-
-_light_histories: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()  # Geometry -> LightHistory
-
-
-def light_history(geom: Geometry) -> LightHistory:
-    """The frames ``geom`` has served with shadow rays, by light set (kept as long as the Geometry)."""
-    return _light_histories.setdefault(geom, LightHistory())
-
-
-def shadows_from_grid(shadows: str, fx, geom: Geometry, lights: np.ndarray, samples: int, threads: int,
-                      device: str, frames: int) -> bool:
-    """The shadow rays' policy: whether the light-space grid answers them. "grid" asks for it; "auto"
-    takes it on the CPU where it is the cheaper: on a first frame when its build costs less than the
-    frame's shadow rays save (about one per sample and light), and from the second frame with the same
-    lights on (``frames``: light_history's count, this frame included) when it costs less than
-    GRID_HORIZON such frames save; a grid kept for these lights costs nothing. Either way the image is
-    the traced one, to the bit."""
-    if not fx.shadows or geom.triangle_count == 0 or shadows == "bvh":
-        return False
-    if shadows == "grid":
-        return True
-    if device != "cpu":
-        return False
-    if kept_shadow_grid(geom, lights) is not None:
-        return True
-    build = (GRID_BUILD_PER_LIGHT + GRID_BUILD_PER_TRIANGLE_LIGHT * geom.triangle_count) * len(lights)
-    per_frame = GRID_SAVES_PER_RAY * samples * len(lights) / threads
-    return build <= per_frame * (GRID_HORIZON if frames >= 2 else 1)
-
-
-def mirrors_from_rasters(reflections: str, fx, triangles: int, samples: int, device: str, kept: bool,
-                         frames: int) -> bool:
-    """The reflection rays' policy: whether the planar mirrors' virtual cameras answer them. "mirrors" asks
-    for them; "auto" takes them on the CPU where rasterizing the scene beats tracing it (raster_is_cheaper,
-    the first hits' rule) once they are kept: building them (probes, a raster per chain) costs about what a
-    few frames' queries save, and kept for a static view they cost nothing. So a view's second frame (``frames``: record_view's count, this one included)
-    builds them, as a second frame with the same lights builds the shadow grid, for the frames after it;
-    a moving camera's are traced. Either way the image is the traced one, to the bit."""
-    if not fx.reflection or reflections == "bvh":
-        return False
-    if reflections == "mirrors":
-        return True
-    return device == "cpu" and raster_is_cheaper(triangles, samples, device) and (kept or frames >= 2)
-
-
-geometry_cache = ObjectCache(size=4)  # the Geometries kept for the next frames of the same objects
-
-
-def frame_geometry(scene, device: str = "cpu") -> tuple[Geometry, dict]:
-    """The Geometry (triangles, normals, BVH) for a frame of ``scene``, and how it came: built, or
-    reused from an earlier frame of the same objects, as Mitsuba reuses a loaded scene. Keyed by the
-    objects alone (Scene.with_camera/with_render share them): another eye, lights or materials reuse
-    it while the eye keeps the frame origin it was built with (bvh.frame_origin: the objects' centre,
-    for any eye in the region its BVH's padding covers), so a frame's image is a fresh build's to the
-    bit; the tables of lights and materials are the frame's own (Geometry.scene_data)."""
-    key = (id(scene.objects), tuple(id(o.vertices) for o in scene.objects),
-           tuple((o.material, o.smooth, id(o.normals), id(o.uv), id(o.colors)) for o in scene.objects), str(device))
-    eye = scene.camera.eye
-    found = geometry_cache.peek(key, scene.objects)
-    if found is not None:
-        if np.array_equal(found.origin_for(eye), found.planned_origin) and found.covers(eye):
-            return found, {"bvh": "reused", "reason": geometry_reason(found, eye)}
-        reason = f"the eye left the region the cached BVH covers ({geometry_reason(found, eye)})"
-    else:
-        reason = "no geometry was built for these objects"
-    return geometry_cache.put(key, scene.objects, Geometry(scene, device=device)), {"bvh": "built", "reason": reason}
-
-
-def geometry_reason(geom: Geometry, eye) -> str:
-    """Where ``eye`` lies in the region ``geom``'s BVH covers, in words for the stats."""
-    moved = float(np.abs(np.asarray(eye, np.float64) - geom.origin).max())
-    if moved == 0.0:
-        return "eye at the BVH's origin (an eye beyond the region one built at the objects' centre covers)"
-    share = moved / geom.eye_reach if geom.eye_reach > 0 else float("inf")
-    return f"eye {moved:.4g} from the BVH's origin on its farthest axis, {share:.2f} of the {geom.eye_reach:.4g} its padding covers"
-
-
-def cached_geometry(scene, device: str = "cpu") -> Geometry:
-    """frame_geometry's Geometry."""
-    return frame_geometry(scene, device)[0]
-
-
-def check_finite(image: np.ndarray, what: str = "render"):
-    """The renderer checks its own output: a NaN or Inf pixel is a bug, never an image."""
-    bad = ~np.isfinite(image)
-    if bad.any():
-        rows, cols = np.nonzero(bad.any(-1))
-        raise RuntimeError(f"{what} produced {len(rows)} non-finite pixels (first at row {rows[0]}, column {cols[0]})")
-
-
-@dataclass(frozen=True)
-class FramePlan:
-    """What a traced frame will do, decided once from the scene and the options before any buffer."""
-
-    fx: EffectSet
-    threads: int
-    bands: int
-    grid: SampleGrid  # the samples a pixel takes
-    n_pixels: int
-    max_depth: int  # ray levels the kernel follows: 1 without reflection and refraction
-    stack: int  # the ray tree's stack: 0 without refraction
-    raster: bool  # the hybrid policy wants the Z-buffer's first hits (a camera on a surface still traces)
-    mirrors: bool  # the reflection rays' virtual cameras are asked for, or auto may take them
-
-    @property
-    def samples(self) -> int:
-        return self.n_pixels * self.grid.per_pixel
-
-
-def plan_frame(scene, o: RenderOptions) -> FramePlan:
-    threads, bands = launch_plan(o.threads, o.bands, o.device)
-    fx = resolve_effects(scene, o.effects, o.disable)
-    cam, grid = scene.camera, sample_grid(scene, fx)
-    return FramePlan(fx, threads, bands, grid, cam.width * cam.height,
-                     max_depth=scene.render.max_depth if fx.reflection or fx.refraction else 1,
-                     stack=stack_size(scene.render.max_depth, scene.source) if fx.refraction else 0,
-                     # Neither the Z-buffer nor the mirrors' virtual cameras know a face's side: with
-                     # single-sided materials every first hit is traced, so the image stays the traced one.
-                     raster=not fx.culling and raster_wanted(o.primary, scene.triangle_count,
-                                                             cam.width * cam.height * grid.per_pixel, o.device),
-                     mirrors=fx.reflection and o.reflections != "bvh" and not fx.culling)
 
 
 @dataclass(frozen=True)
@@ -289,96 +55,244 @@ class TraceVariant:
                                  shadow_grid=self.shadow_grid, mirrors=self.mirrors)
 
 
+@dataclass
+class TracedFrame:
+    """What the trace phase returns: the image, the truncated weights (report_truncated), the rays per
+    kind summed over the pixels, the AOV buffers, how many reflection rays the virtual cameras decided,
+    and the bytes of the frame's buffers."""
+
+    image: np.ndarray
+    truncated: np.ndarray | None
+    per_kind: np.ndarray
+    buffers: object
+    mirrors_decided: int
+    nbytes: int
+
+
+def check_finite(image: np.ndarray, what: str = "render"):
+    """The renderer checks its own output: a NaN or Inf pixel is a bug, never an image."""
+    bad = ~np.isfinite(image)
+    if bad.any():
+        rows, cols = np.nonzero(bad.any(-1))
+        raise RuntimeError(f"{what} produced {len(rows)} non-finite pixels (first at row {rows[0]}, column {cols[0]})")
+
+
+def _object_keys(objects) -> list:
+    """What a Geometry is built from, per object: the object, its arrays (by identity), material and
+    smoothness. Compared with objects_match, never hashed, so an id cannot be reused while it is kept."""
+    return [(o, o.vertices, o.faces, o.material, o.smooth, o.normals, o.uv, o.colors) for o in objects]
+
+
+def objects_match(a: list, b: list, but_vertices: bool = False) -> bool:
+    """Whether two _object_keys lists name the same objects and arrays (all but the vertices, with
+    ``but_vertices``, whose shape must still agree)."""
+    if len(a) != len(b):
+        return False
+    for x, y in zip(a, b):
+        same = [x[i] is y[i] for i in (2, 5, 6, 7)] + [x[3] == y[3], x[4] == y[4]]
+        if but_vertices:
+            same.append(x[1].shape == y[1].shape)
+        else:
+            same += [x[0] is y[0], x[1] is y[1]]
+        if not all(same):
+            return False
+    return True
+
+
+def geometry_reason(geom: Geometry, eye) -> str:
+    """Where ``eye`` lies in the region ``geom``'s BVH covers, in words for the stats."""
+    moved = float(np.abs(np.asarray(eye, np.float64) - geom.origin).max())
+    if moved == 0.0:
+        return "eye at the BVH's origin (an eye beyond the region one built at the objects' centre covers)"
+    share = moved / geom.eye_reach if geom.eye_reach > 0 else float("inf")
+    return f"eye {moved:.4g} from the BVH's origin on its farthest axis, {share:.2f} of the {geom.eye_reach:.4g} its padding covers"
+
+
+class Renderer:
+    """Renders frames of one scene and owns what they share: the device, the Geometry (the triangles in
+    float32 and their BVH), the frame caches (FrameCaches: shadow grids, virtual cameras, the histories
+    their policies read) and the scene's parameters (``params``). A frame is the image a fresh render()
+    of the same scene gives, to the bit, whatever frames came before it.
+
+        r = warprt.Renderer(scene, spp=...)          # options: RenderOptions' fields
+        image, stats = r.render()
+        r.params["materials.red.kd"] = [0.9, 0.1, 0.1]
+        image, stats = r.render()                    # the triangles and the BVH kept
+
+    ``geometry``: a Geometry built for this scene, used as it is for every frame (tests and benchmarks)."""
+
+    def __init__(self, scene, options: RenderOptions | None = None, *, geometry: Geometry | None = None, **kwargs):
+        self.options = RenderOptions.of(options, kwargs, "Renderer")
+        self.caches = FrameCaches()
+        self._given = geometry
+        self._geometry: Geometry | None = None
+        self._built_from: list = []  # _object_keys of the objects self._geometry holds
+        self._scene, self._checked, self._checked_for = None, None, None
+        self.set_scene(scene)
+
+    @property
+    def scene(self):
+        """The scene the next frame renders (set_scene, or changed through params)."""
+        return self._scene
+
+    @property
+    def geometry(self) -> Geometry | None:
+        """The Geometry of the last frame (None before the first)."""
+        return self._given if self._given is not None else self._geometry
+
+    @property
+    def params(self):
+        """The scene's parameters by name, as NumPy values: set one and the next frame renders the changed
+        scene (image/params.py lists the names)."""
+        from .params import SceneParameters
+
+        return SceneParameters(self)
+
+    def set_scene(self, scene, checked: bool = False):
+        """Render ``scene`` from the next frame on, checked (validate_scene; only what its camera and
+        render settings change where its lights, materials and objects are the last scene's, validate_view)
+        unless ``checked`` says its reader has done so (load_scene, with_overrides). The Geometry and the
+        caches stay while the objects are the same objects and the eye keeps the Geometry's frame origin."""
+        if not checked:
+            content = (list(scene.lights), list(scene.materials.items()), _object_keys(scene.objects))
+            if self._checked is not None and self._same_content(content):
+                validate_view(scene, self._checked)
+            else:
+                self._checked, self._checked_for = validate_scene(scene), content
+        self._scene = scene
+
+    def _same_content(self, content) -> bool:
+        lights, materials, objects = self._checked_for
+        return (len(lights) == len(content[0]) and all(a is b for a, b in zip(lights, content[0]))
+                and len(materials) == len(content[1])
+                and all(a[0] == b[0] and a[1] is b[1] for a, b in zip(materials, content[1]))
+                and objects_match(objects, content[2]))
+
+    def render(self, *, progress=None) -> RenderResult:
+        """One frame of the scene, with the Whitted tracer (or, algorithm="zbuffer", by rasterization with
+        the same local shading); ``progress``: a progress.Progress told of each band done."""
+        if self.options.algorithm == "zbuffer":
+            return self._render_zbuffer(progress)
+        init_warp()
+        scene, o, times = self._scene, self.options, {}
+        with timed(times, "total"):
+            plan = plan_frame(scene, o)
+            estimate = frame_estimate(scene, plan.grid.per_pixel, plan.raster)
+            check_frame_memory(scene, _without_geometry(estimate, self._given))  # before any buffer
+            with timed(times, "bvh"):
+                geom, geometry_info = self._frame_geometry(scene)
+            shortcuts = choose_shortcuts(scene, o, plan, geom, self.caches)
+            grid = self._shadow_grid(geom, shortcuts, times)
+            data = geom.scene_data(scene, grid.grid if grid is not None else None)
+            mirrors = self._virtual_cameras(scene, plan, geom, shortcuts, times)
+            used = mirrors if mirrors is not None and mirrors.mirrors is not None else None  # None: no chain rasterized
+            variant = TraceVariant(plan.fx, shortcuts.raster, plan.stack, o.report_truncated, o.aovs,
+                                   grid is not None and grid.grid is not None, used is not None)
+            with timed(times, "compile"):
+                kernel = variant.kernel()
+                wp.load_module(kernel.module, device=o.device)
+                if shortcuts.raster or used is not None:
+                    wp.load_module(raster_kernel.module, device=o.device)
+            zb = None
+            if shortcuts.raster:
+                with timed(times, "raster"):
+                    zb = ZBuffer(scene, geom, replace(plan.fx, shadows=False, reflection=False), device=o.device)
+                    zb.rasterize(plan.threads, plan.bands)
+            with timed(times, "trace"):
+                frame = _trace(scene, o, plan, geom, data, kernel, zb, used, progress)
+            result = _finish(scene, o, plan, geom, frame)
+        stats = _frame_stats(scene, o, plan, shortcuts, variant, geom, geometry_info, grid, mirrors, zb, frame, times)
+        stats.memory["estimate"] = estimate
+        return RenderResult(result[0], stats, result[1])
+
+    # ---- Phases -------------------------------------------------------------------------------------
+
+    def _frame_geometry(self, scene, build_bvh: bool = True) -> tuple[Geometry, dict]:
+        """The Geometry for a frame of ``scene`` and how it came: given, reused (the same objects, and an
+        eye that keeps its frame origin, so the image is a fresh build's to the bit), refit (only vertices
+        moved: Geometry.move_vertices) or built; the caches go with a Geometry that is replaced or refit."""
+        eye = scene.camera.eye
+        if self._given is not None:
+            return self._given, given_geometry(self._given, eye)
+        keys, geom = _object_keys(scene.objects), self._geometry
+        if geom is not None and (geom.mesh is not None or not build_bvh):
+            if objects_match(self._built_from, keys):
+                if np.array_equal(geom.origin_for(eye), geom.planned_origin) and geom.covers(eye):
+                    return geom, {"bvh": "reused", "reason": geometry_reason(geom, eye)}
+                reason = f"the eye left the region the kept BVH covers ({geometry_reason(geom, eye)})"
+            elif objects_match(self._built_from, keys, but_vertices=True) and geom.move_vertices(scene):
+                self._built_from = keys
+                self.caches.clear()
+                return geom, {"bvh": "refit", "reason": "the objects' vertices moved"}
+            else:
+                reason = "the objects changed"
+        else:
+            reason = "no geometry was built for these objects"
+        self._geometry = Geometry(scene, device=self.options.device, build_bvh=build_bvh)
+        self._built_from = keys
+        self.caches.clear()
+        return self._geometry, {"bvh": "built", "reason": reason}
+
+    def _shadow_grid(self, geom: Geometry, shortcuts: Shortcuts, times: dict) -> ShadowGridBuild | None:
+        """The light-space grid the shortcuts chose, built or kept (None: traced shadow rays). Its .grid is
+        None where the build fell back (over the memory budget, every light with geometry at it)."""
+        if not shortcuts.shadow_grid:
+            return None
+        with timed(times, "shadow_grid"):
+            return shadow_grid(geom, shortcuts.lights, memo=self.caches.shadow_grids, keep=SHADOW_GRIDS_KEPT)
+
+    def _virtual_cameras(self, scene, plan: FramePlan, geom: Geometry, shortcuts: Shortcuts, times: dict):
+        """The planar mirrors' virtual cameras the shortcuts chose, built or kept (None: reflection rays
+        traced); a MirrorFrame with no chain worth a raster is reported in the stats and not used."""
+        if not shortcuts.mirrors:
+            return None
+        o = self.options
+        data = geom.scene_data(scene)  # the probes need the triangles and materials alone
+        with timed(times, "mirrors"):
+            frame, _ = mirror_frame(scene, geom, data, plan.fx, shortcuts.view, plan.threads, plan.bands, o.device,
+                                    self.caches)
+        return frame
+
+    def _render_zbuffer(self, progress) -> RenderResult:
+        """A frame by rasterization with the tracer's local shading (no shadows, no reflections)."""
+        result, _ = _zbuffer_frame(self._scene, self.options, lambda scene: self._frame_geometry(scene, False)[0],
+                                   progress)
+        return result
+
+
 def render(scene, options: RenderOptions | None = None, *, geometry: Geometry | None = None, progress=None,
            **kwargs) -> RenderResult:
-    """Render ``scene`` with the Whitted tracer (or, algorithm="zbuffer", by rasterization with the same
-    local shading), as ``options`` (a RenderOptions) and keyword arguments (its fields) say:
-    ``effects`` (names) limits the effect set, ``disable`` removes effects; neither can add one the
-    scene has nothing for. ``primary`` says where the tracer's first hits come from: "raytrace";
-    "zbuffer" (hybrid rendering: the Z-buffer's visible triangle wherever it is certain to be the traced
-    one, the other samples traced; the image is the traced image to the bit); or "auto", the default,
-    which rasterizes where that is the cheaper of the two (raster_is_cheaper). ``shadows`` says what
-    answers the shadow rays: "bvh" (Warp's any-hit query), "grid" (the exact light-space grid: the same
-    answers), or "auto", the default, the grid where it is the cheaper. ``reflections`` says what answers
-    the reflection rays: "bvh" (Warp's closest-hit query), "mirrors" (off planar mirrors, their virtual
-    cameras' rasters wherever certain to give the query's answer, the rest traced), or "auto", the
-    default, which takes the virtual cameras from a view's second frame on (mirrors_from_rasters): their
-    build costs about what one frame's queries save, kept they cost nothing. With ``report_truncated``,
-    stats.truncated is the weight per pixel (H, W, 3) of the reflected and refracted rays max_depth cut
-    off: the share of their radiance the image is missing. ``aovs`` (names from image.aovs.AOVS) come back
-    as the result's ``.aovs``, from the camera rays' first hits; the image is the same with or without
-    them. ``geometry``: a Geometry built for
-    this scene, used as it is; ``progress``: a progress.Progress told of each band done."""
-    o = RenderOptions.of(options, kwargs)
-    validate_scene(scene)  # a Scene built in Python gets the file's checks too, before any kernel
-    if o.algorithm == "zbuffer":
-        return render_zbuffer(scene, o, geometry=geometry)
-    init_warp()
-    times: dict = {}
-    with timed(times, "total"):
-        plan = plan_frame(scene, o)
-        stats = RenderStats.begin(scene, plan.fx, threads=plan.threads, bands=plan.bands, device=o.device,
-                                  algorithm="raytrace", variant="", max_depth=plan.max_depth)
-        # Before any buffer: the most this frame can need, against what the machine has.
-        check_frame_memory(scene, _without_geometry(frame_estimate(scene, plan.grid.per_pixel, plan.raster), geometry))
-        with stats.phase("bvh"):
-            geom, stats.geometry = frame_geometry(scene, o.device) if geometry is None else given_geometry(geometry, scene.camera.eye)
-        stats.triangles = geom.triangle_count
-        raster, grid, mirror_frame = _shortcuts(scene, o, plan, geom, stats)
-        variant = TraceVariant(plan.fx, raster, plan.stack, o.report_truncated, o.aovs, grid is not None,
-                               mirror_frame is not None)
-        stats.variant = variant.name
-        with stats.phase("compile"):
-            kernel = variant.kernel()
-            wp.load_module(kernel.module, device=o.device)
-            if raster or mirror_frame is not None:
-                wp.load_module(raster_kernel.module, device=o.device)
-        zb = None
-        if raster:
-            with stats.phase("raster"):
-                zb = ZBuffer(scene, geom, replace(plan.fx, shadows=False, reflection=False), device=o.device)
-                zb.rasterize(plan.threads, plan.bands)
-        data = geom.scene_data(scene, grid)
-        with stats.phase("trace"):
-            frame = _trace(scene, o, plan, geom, data, kernel, zb, mirror_frame, progress)
-        result = _finish(scene, o, plan, geom, stats, frame, zb, grid, mirror_frame)
-    stats.times["total"] = times["total"]
-    stats.memory["estimate"] = frame_estimate(scene, plan.grid.per_pixel, raster)
-    return result
+    """One frame of ``scene``: Renderer(scene, options, geometry=geometry, **kwargs).render(progress=...),
+    as ``options`` (a RenderOptions) and keyword arguments (its fields) say. ``effects`` (names) limits
+    the effect set, ``disable`` removes effects; neither can add one the scene has nothing for.
+    ``primary_query``, ``shadow_query`` and ``reflection_query`` say what answers the camera, shadow and
+    reflection rays' queries (RenderOptions' help; "auto" by default, each the cheaper exact choice);
+    the image never depends on them. With ``report_truncated``, stats.truncated is the weight per pixel
+    (H, W, 3) of the reflected and refracted rays max_depth cut off. ``aovs`` (names from options.AOVS)
+    come back as the result's ``.aovs``, from the camera rays' first hits; the image is the same with
+    or without them. ``geometry``: a Geometry built for this scene, used as it is; ``progress``: a
+    progress.Progress told of each band done. Nothing is kept for a later call: frames of one scene
+    that should share a BVH and caches go through one Renderer."""
+    return Renderer(scene, options, geometry=geometry, **kwargs).render(progress=progress)
 
 
-def _shortcuts(scene, o: RenderOptions, plan: FramePlan, geom: Geometry, stats: RenderStats):
-    """The shortcuts this frame takes, each giving the traced answer to the bit: first hits from the
-    Z-buffer (True or False), the shadow rays' grid (or None) and the mirrors' virtual cameras (or None)."""
-    raster = plan.raster and not eye_on_surface(geom, camera_basis(scene.camera))
-    stats.primary = "zbuffer" if raster else "raytrace"
-    grid = None
-    lights = geom.light_positions(scene)
-    frames = light_history(geom).record(lights) if plan.fx.shadows and geom.triangle_count else 0
-    if shadows_from_grid(o.shadows, plan.fx, geom, lights, plan.samples, plan.threads, o.device, frames):
-        kept = kept_shadow_grid(geom, lights) is not None
-        with stats.phase("shadow_grid"):
-            build = shadow_grid(geom, lights)
-        grid = build.grid  # None: over the memory budget, or every light has geometry at it
-        stats.shadow_grid = {"grid": "reused" if kept else "built", **build.stats}
-    stats.shadows = "grid" if grid is not None else "bvh"
-    mirror_frame = None
-    if plan.mirrors:
-        data = geom.scene_data(scene, grid)
-        view = view_key(scene, data, plan.fx)
-        frames = record_view(geom, view)
-        if mirrors_from_rasters(o.reflections, plan.fx, geom.triangle_count, plan.samples, o.device,
-                                kept_mirror_frame(geom, view) is not None, frames):
-            with stats.phase("mirrors"):
-                mirror_frame, kept = virtual_cameras(scene, geom, data, plan.fx, view, plan.threads, plan.bands, o.device)
-            stats.mirrors = {"rasters": "reused" if kept else "built", **mirror_frame.stats}
-            if mirror_frame.mirrors is None:
-                mirror_frame = None
-    stats.reflections = "mirrors" if mirror_frame is not None else "bvh"
-    return raster, grid, mirror_frame
+def _without_geometry(estimate: dict, geometry) -> dict:
+    """The estimate less the geometry when the caller hands over a Geometry already built."""
+    if geometry is None:
+        return estimate
+    return {**estimate, "geometry": 0, "total": estimate["total"] - estimate["geometry"]}
 
 
-def _trace(scene, o: RenderOptions, plan: FramePlan, geom: Geometry, data, kernel, zb, mirror_frame, progress) -> dict:
+def given_geometry(geom: Geometry, eye) -> dict:
+    """How a Geometry handed to a Renderer came, if its BVH covers the eye (else a ValueError)."""
+    if not geom.covers(eye):
+        raise ValueError(f"the Geometry passed to render() does not cover the eye {list(eye)}: "
+                         f"{geometry_reason(geom, eye)}; build one for this eye")
+    return {"bvh": "given", "reason": geometry_reason(geom, eye)}
+
+
+def _trace(scene, o: RenderOptions, plan: FramePlan, geom: Geometry, data, kernel, zb, mirror_frame,
+           progress) -> TracedFrame:
     """Launch the kernel over the image: the image, the truncated weights after it (report_truncated),
     each pixel's ray counts and the AOV buffers."""
     cam, device = scene.camera, o.device
@@ -389,65 +303,71 @@ def _trace(scene, o: RenderOptions, plan: FramePlan, geom: Geometry, data, kerne
     c = camera_data(camera_basis(cam), geom.eye_offset(cam.eye))
     frags = zb.fragments if zb is not None else empty_fragments(device)
     mirrors = mirror_frame.mirrors if mirror_frame is not None else empty_mirrors(device)
-    tile_w, tile_h = o.tile or PIXEL_TILE
+    tile_w, tile_h = o.pixel_tile or PIXEL_TILE
     inputs = lambda first: [data, c, plan.max_depth, plan.grid.k, first, tile_w, tile_h, frags, mirrors,  # noqa: E731
                             buffers, image, counts]
     _launch_with_progress(kernel, inputs, plan.n_pixels, plan.threads, plan.bands, device, counts, progress)
     pixels = image.numpy().reshape(-1, cam.height, cam.width, 3)
-    return {"pixels": pixels, "image": pixels[0].copy(), "buffers": buffers, "mirrors": mirrors,
-            "per_kind": counts.numpy().sum(0, dtype=np.int64),  # no int64 copy of every pixel's counts
-            "bytes": image.capacity + counts.capacity}
+    return TracedFrame(image=pixels[0].copy(), truncated=pixels[1].copy() if o.report_truncated else None,
+                       per_kind=counts.numpy().sum(0, dtype=np.int64),  # no int64 copy of every pixel's counts
+                       buffers=buffers,
+                       mirrors_decided=int(mirrors.decided.numpy().sum()) if mirror_frame is not None else 0,
+                       nbytes=image.capacity + counts.capacity)
 
 
-def _finish(scene, o: RenderOptions, plan: FramePlan, geom: Geometry, stats: RenderStats, frame: dict, zb, grid,
-            mirror_frame) -> RenderResult:
-    """The result: the image checked, the AOVs, the truncated weights, and the ray counts and memory in the stats."""
-    cam, out, per_kind = scene.camera, frame["image"], frame["per_kind"]
-    check_finite(out)
-    if o.report_truncated:
-        stats.truncated = frame["pixels"][1].copy()
+def _finish(scene, o: RenderOptions, plan: FramePlan, geom: Geometry, frame: TracedFrame) -> tuple:
+    """The image, checked, and the AOV arrays (material slots as indices in scene.materials)."""
+    cam = scene.camera
+    check_finite(frame.image)
     aov_arrays = {}
     if o.aovs:
-        aov_arrays = finish_aovs(o.aovs, aov_sums(frame["buffers"], o.aovs), plan.grid.per_pixel, geom.origin,
+        aov_arrays = finish_aovs(o.aovs, aov_sums(frame.buffers, o.aovs), plan.grid.per_pixel, geom.origin,
                                  cam.height, cam.width)
         if "material" in aov_arrays:  # the kernel's material slots, as indices in scene.materials
             slots = aov_arrays["material"]
             aov_arrays["material"] = np.where(slots >= 0, geom.material_indices(scene)[np.maximum(slots, 0)], -1).astype(np.int32)
-    stats.rays = {"primary": int(per_kind[0]), "shadow": int(per_kind[1]), "reflection": int(per_kind[2]),
-                  "refraction": int(per_kind[3]) if plan.fx.refraction else 0}
+    return frame.image, aov_arrays
+
+
+def _frame_stats(scene, o: RenderOptions, plan: FramePlan, shortcuts: Shortcuts, variant: TraceVariant,
+                 geom: Geometry, geometry_info: dict, grid: ShadowGridBuild | None, mirrors: MirrorFrame | None,
+                 zb, frame: TracedFrame, times: dict) -> RenderStats:
+    """The stats of a traced frame, from its plan and what each phase returned."""
+    stats = RenderStats.begin(scene, plan.fx, threads=plan.threads, bands=plan.bands, device=o.device,
+                              algorithm="raytrace", variant=variant.name, max_depth=plan.max_depth)
+    stats.times.update(times)
+    stats.triangles, stats.geometry = geom.triangle_count, geometry_info
+    stats.primary_query = "zbuffer" if shortcuts.raster else "raytrace"
+    stats.shortcuts = dict(shortcuts.reasons)
+    if grid is not None:
+        stats.shadow_grid = {"grid": "reused" if shortcuts.grid_kept else "built", **grid.stats}
+    stats.shadow_query = "grid" if grid is not None and grid.grid is not None else "bvh"
+    if mirrors is not None:
+        stats.mirrors = {"rasters": "reused" if shortcuts.mirrors_kept else "built", **mirrors.stats}
+    used_mirrors = mirrors is not None and mirrors.mirrors is not None
+    stats.reflection_query = "mirrors" if used_mirrors else "bvh"
+    k = frame.per_kind
+    stats.rays = {"primary": int(k[0]), "shadow": int(k[1]), "reflection": int(k[2]),
+                  "refraction": int(k[3]) if plan.fx.refraction else 0}
     stats.rays["total"] = sum(stats.rays.values())
-    if mirror_frame is not None:
-        decided = int(frame["mirrors"].decided.numpy().sum())
-        stats.mirrors.update(decided=decided, share=decided / max(stats.rays["reflection"], 1))
+    if used_mirrors:
+        stats.mirrors.update(decided=frame.mirrors_decided, share=frame.mirrors_decided / max(stats.rays["reflection"], 1))
     stats.rays_per_second = stats.rays["total"] / max(stats.times["trace"], 1e-9)
-    stats.memory = frame_memory(geom, frame["bytes"], zb.nbytes if zb is not None else 0,
-                                aov_bytes=aov_bytes(frame["buffers"]),
-                                shadow_grid_bytes=stats.shadow_grid.get("bytes", 0) if grid is not None else 0,
-                                mirrors_bytes=mirror_frame.nbytes if mirror_frame is not None else 0)
-    return RenderResult(out, stats, aov_arrays)
-
-
-def _without_geometry(estimate: dict, geometry) -> dict:
-    """The estimate less the geometry when the caller hands over a Geometry already built."""
-    if geometry is None:
-        return estimate
-    return {**estimate, "geometry": 0, "total": estimate["total"] - estimate["geometry"]}
-
-
-def given_geometry(geom: Geometry, eye) -> tuple[Geometry, dict]:
-    """A Geometry passed to render(): used as it is, if its BVH covers the eye."""
-    if not geom.covers(eye):
-        raise ValueError(f"the Geometry passed to render() does not cover the eye {list(eye)}: "
-                         f"{geometry_reason(geom, eye)}; build one for this eye")
-    return geom, {"bvh": "given", "reason": geometry_reason(geom, eye)}
+    stats.truncated = frame.truncated
+    stats.memory = frame_memory(geom, frame.nbytes, zb.nbytes if zb is not None else 0,
+                                aov_bytes=aov_bytes(frame.buffers),
+                                shadow_grid_bytes=stats.shadow_grid.get("bytes", 0) if stats.shadow_query == "grid" else 0,
+                                mirrors_bytes=mirrors.nbytes if used_mirrors else 0)
+    return stats
 
 
 def _launch_with_progress(kernel, inputs, n_pixels, threads, bands, device, counts, progress):
-    """launch_bands, telling ``progress`` (a progress.Progress) of each band done and its exact ray count."""
+    """launch_bands, telling ``progress`` (a progress.Progress) of each band done and its exact ray count
+    (``counts``: each pixel's, or None where there are no rays to count)."""
     on_band = None
     if progress is not None:
         # On the CPU the counts live in host memory and a finished band's counts are final.
-        counts_host = counts.numpy() if device == "cpu" else None
+        counts_host = counts.numpy() if counts is not None and device == "cpu" else None
 
         def report(first, count):
             rays = int(counts_host[first:first + count].sum(dtype=np.int64)) if counts_host is not None else 0
@@ -467,25 +387,39 @@ def _launch_with_progress(kernel, inputs, n_pixels, threads, bands, device, coun
 
 
 def render_zbuffer(scene, options: RenderOptions | None = None, *, geometry: Geometry | None = None,
-                   tile: int = RASTER_TILE, return_faces: bool = False, **kwargs):
-    """Render ``scene`` by rasterization with the tracer's local shading (no shadows, no reflections),
-    as ``options`` and keyword arguments say (render()'s threads, device, effects, disable, bands);
-    ``tile``: the raster tiles' side in pixels. Returns a RenderResult, and with return_faces also the
+                   return_faces: bool = False, progress=None, **kwargs):
+    """Render ``scene`` by rasterization with the tracer's local shading (no shadows, no reflections), as
+    ``options`` and keyword arguments say (RenderOptions' threads, device, effects, disable, bands and
+    raster_tile, the raster tiles' side in pixels). Returns a RenderResult, and with return_faces also the
     visible face per sample (H, W, samples)."""
-    o = RenderOptions.of(options, kwargs)
-    init_warp()
+    if "tile" in kwargs:  # render_zbuffer's own first spelling: the raster tile (render()'s was the pixel tile)
+        import warnings
+
+        warnings.warn("render_zbuffer(): 'tile' is now 'raster_tile' ('tile' goes in the next release)",
+                      DeprecationWarning, stacklevel=2)
+        kwargs["raster_tile"] = kwargs.pop("tile")
+    o = RenderOptions.of(options, kwargs, "render_zbuffer")
+    o = o if o.algorithm == "zbuffer" else replace(o, algorithm="zbuffer")
     validate_camera(scene.camera, scene.source)
+    result, zb = _zbuffer_frame(scene, o, lambda s: geometry or Geometry(s, device=o.device, build_bvh=False),
+                                progress)
+    return (result, zb.faces()) if return_faces else result
+
+
+def _zbuffer_frame(scene, o: RenderOptions, geometry_for, progress) -> tuple[RenderResult, ZBuffer]:
+    """The Z-buffer algorithm's frame on the Geometry ``geometry_for(scene)`` gives, and its ZBuffer."""
+    init_warp()
     times: dict = {}
     with timed(times, "total"):
         threads, bands = launch_plan(o.threads, o.bands, o.device)
         fx = zbuffer_effects(scene, o.effects, o.disable)
         estimate = frame_estimate(scene, sample_grid(scene, fx).per_pixel, True, algorithm="zbuffer")
-        check_frame_memory(scene, _without_geometry(estimate, geometry))
+        check_frame_memory(scene, estimate)
         stats = RenderStats.begin(scene, fx, threads=threads, bands=bands, device=o.device, algorithm="zbuffer",
                                   variant=f"zbuffer_{fx.variant}", max_depth=1)
         stats.rays = {"primary": 0, "shadow": 0, "reflection": 0, "refraction": 0, "total": 0}  # visibility is rasterized
         with stats.phase("geometry"):
-            geom = geometry or Geometry(scene, device=o.device, build_bvh=False)
+            geom = geometry_for(scene)
             data = geom.scene_data(scene)
         stats.triangles = geom.triangle_count
         with stats.phase("compile"):
@@ -493,18 +427,17 @@ def render_zbuffer(scene, options: RenderOptions | None = None, *, geometry: Geo
             for m in (kernel.module, raster_kernel.module):
                 wp.load_module(m, device=o.device)
         with stats.phase("render"):  # project + bin + raster + shade
-            zb = ZBuffer(scene, geom, fx, device=o.device, tile=tile, track_uncertain=False)
+            zb = ZBuffer(scene, geom, fx, device=o.device, tile=o.raster_tile, track_uncertain=False)
             zb.rasterize(threads, bands, skip=culled_faces(scene, geom, zb.eye) if fx.culling else None)
             stats.times.update(zb.times)
             with stats.phase("shade"):
                 cam = scene.camera
                 image = wp.empty(cam.width * cam.height, dtype=wp.vec3, device=o.device)
                 c, k, frags = camera_data(zb.basis, zb.eye), zb.k, zb.fragments
-                launch_bands(kernel, lambda first: [data, c, k, first, frags, image], cam.width * cam.height,
-                             threads, bands, o.device)
+                _launch_with_progress(kernel, lambda first: [data, c, k, first, frags, image], cam.width * cam.height,
+                                      threads, bands, o.device, None, progress)
                 out = image.numpy().reshape(cam.height, cam.width, 3).copy()
         check_finite(out, "zbuffer")
     stats.times["total"] = times["total"]
     stats.memory["estimate"] = estimate
-    result = RenderResult(out, stats)
-    return (result, zb.faces()) if return_faces else result
+    return RenderResult(out, stats), zb

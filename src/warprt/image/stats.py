@@ -22,11 +22,12 @@ class RenderStats:
     threads: int = 1
     bands: int = 1
     algorithm: str = "raytrace"
-    primary: str = "raytrace"  # where the first hits came from: "raytrace", or "zbuffer" (hybrid; same image)
-    shadows: str = "bvh"  # what answered the shadow rays: "bvh", or "grid" (the light-space grid; same image)
+    primary_query: str = "raytrace"  # where the first hits came from: "raytrace", or "zbuffer" (hybrid; same image)
+    shadow_query: str = "bvh"  # what answered the shadow rays: "bvh", or "grid" (the light-space grid; same image)
     shadow_grid: dict = field(default_factory=dict)  # the grid's cells, lights, entries, bytes, build time
-    reflections: str = "bvh"  # what answered the reflection rays: "bvh", or "mirrors" (virtual cameras; same image)
+    reflection_query: str = "bvh"  # what answered the reflection rays: "bvh", or "mirrors" (virtual cameras; same image)
     mirrors: dict = field(default_factory=dict)  # the virtual cameras' chains, bytes, rays decided and their share
+    shortcuts: dict = field(default_factory=dict)  # primary, shadows, reflections: why each query was answered so
     effects: str = ""
     variant: str = ""
     rays: dict = field(default_factory=dict)  # primary, shadow, reflection, refraction, total

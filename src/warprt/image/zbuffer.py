@@ -9,26 +9,24 @@ import numpy as np
 
 from .._warp import wp
 from ..geometry import Geometry
+from ..options import RASTER_TILE
 from ..kernels import (CLIP_SCALE, MARGIN_PX, Fragments, count_kernel, fill_kernel, project_kernel,
                        raster_camera, raster_kernel, uncertain_np)
 from ..scene import EffectSet, camera_basis
+from .caches import EYE_TESTS_KEPT
 from .launch import launch_bands
 from .samples import sample_grid
 from .stats import timed
-
-RASTER_TILE = 16  # pixels per raster tile side: each raster thread owns one tile
 
 
 def clip_distance(geometry: Geometry, eye=(0.0, 0.0, 0.0)) -> float:
     """z_clip = CLIP_SCALE R, R = sqrt(3) (max |coordinate| + max |eye|) bounding every vertex's
     distance from the eye (``eye`` relative to the frame origin, as Geometry.eye_offset gives it)."""
-    if "_reach" not in geometry.__dict__:  # a Geometry is reused across frames
-        geometry._reach = float(np.abs(geometry.points_np).max(initial=0.0))
-    reach = (geometry._reach + float(np.abs(np.asarray(eye, np.float64)).max())) * math.sqrt(3.0)
+    reach = (geometry.reach + float(np.abs(np.asarray(eye, np.float64)).max())) * math.sqrt(3.0)
     return CLIP_SCALE * max(reach, 1e-30)
 
 
-def eye_on_surface(geometry: Geometry, basis) -> bool:
+def eye_on_surface(geometry: Geometry, basis, memo: dict | None = None) -> bool:
     """Whether some triangle comes within reach of the eye that the rasterizer clips: its plane that
     close, and the eye inside its box grown by as much. The clip plane z = z_clip cuts away points
     that camera rays (at most the corner ray's angle theta off the axis) reach within
@@ -38,10 +36,10 @@ def eye_on_surface(geometry: Geometry, basis) -> bool:
     eye = geometry.eye_offset(basis.eye)
     cos_corner = basis.d_f / math.sqrt(basis.d_f ** 2 + (basis.h / 2.0) ** 2 + (basis.w / 2.0) ** 2)
     tol = 2.0 * clip_distance(geometry, eye) / cos_corner
-    cache = geometry.__dict__.setdefault("_eye_on_surface", {})  # a Geometry is reused across frames
+    cache = {} if memo is None else memo  # a Renderer's FrameCaches.eye_on_surface, across its frames
     key = (tol, tuple(eye.tolist()))
     if key not in cache:
-        if len(cache) >= 16:  # a camera path: keep the memo small
+        if len(cache) >= EYE_TESTS_KEPT:
             cache.clear()
         cache[key] = _eye_on_surface(geometry, tol, eye.astype(np.float64))
     return cache[key]
@@ -50,10 +48,7 @@ def eye_on_surface(geometry: Geometry, basis) -> bool:
 def _eye_on_surface(geometry: Geometry, tol: float, eye: np.ndarray) -> bool:
     if geometry.triangle_count == 0:
         return False
-    if "_boxes" not in geometry.__dict__:  # the triangles' boxes, once per Geometry
-        tri = geometry.points_np.astype(np.float64)[geometry.indices_np.reshape(-1, 3)]
-        geometry._boxes = (tri.min(axis=1), tri.max(axis=1))
-    lower, upper = geometry._boxes
+    lower, upper = geometry.triangle_boxes()
     in_box = np.all((lower - eye <= tol) & (upper - eye >= -tol), axis=1)
     if not in_box.any():
         return False

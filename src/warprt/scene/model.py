@@ -3,7 +3,7 @@ geometry becomes float32 only when it is handed to the BVH (warprt.geometry)."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields, replace
+from dataclasses import dataclass, field, fields, replace
 
 import numpy as np
 
@@ -136,6 +136,10 @@ class Material:
     transmittance: tuple = (1.0, 1.0, 1.0)  # k_t, only with ior
     absorption: tuple = (0.0, 0.0, 0.0)  # sigma per scene unit (Beer's law), only with ior
     double_sided: bool = True  # False: back faces culled (an opaque material only)
+    # Whether ka (its value; its texture) was left to follow kd: a material made again with another kd
+    # (Renderer.params) keeps following it, as a file that leaves ka out would.
+    ka_follows_kd: bool = field(default=False, init=False, compare=False, repr=False)
+    ka_texture_follows_kd: bool = field(default=False, init=False, compare=False, repr=False)
 
     def __post_init__(self):
         # reflectivity, transmittance and absorption may be one number, as in the scene file.
@@ -143,8 +147,10 @@ class Material:
                  scalar_ok=("reflectivity", "transmittance", "absorption"))
         if self.ka is None:
             object.__setattr__(self, "ka", self.kd)
+            object.__setattr__(self, "ka_follows_kd", True)
             if self.ka_texture is None:
                 object.__setattr__(self, "ka_texture", self.kd_texture)
+                object.__setattr__(self, "ka_texture_follows_kd", True)
 
     @property
     def textures(self) -> dict:
