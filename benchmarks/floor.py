@@ -22,8 +22,8 @@ import numpy as np
 
 import warprt
 from benchmarks.output import save
-from warprt.geometry import SceneData
-from warprt.image import ZBuffer, frame_geometry, launch_bands
+from warprt.geometry import Geometry, SceneData
+from warprt.image import ZBuffer, launch_bands
 from warprt.kernels import (CameraData, Fragments, camera_data, camera_ray, init_warp, make_surface, offset_ray_origin,
                             phong_diffuse, phong_specular, query_normal, reflect, sample_offset, tile_order_pixel,
                             triangle, uncertain, woop_hit, wp)
@@ -175,7 +175,7 @@ class Floor:
         self.reference = reference
         self.raster = reference.stats.primary_query == "zbuffer"
         self.fx = resolve_effects(scene)
-        self.geom, _ = frame_geometry(scene)
+        self.geom = Geometry(scene)
         self.data = self.geom.scene_data(scene)
         cam = scene.camera
         self.k = math.isqrt(scene.render.spp)

@@ -24,8 +24,8 @@ import numpy as np
 
 import warprt
 from benchmarks.output import save
-from warprt.geometry import SceneData
-from warprt.image import frame_geometry, launch_bands
+from warprt.geometry import Geometry, SceneData
+from warprt.image import launch_bands
 from warprt.kernels import (MAX_BOUNCES, CameraData, Fragments, Mirrors, beer, beer_forever, camera_data, camera_ray,
                             empty_aov_buffers, fresnel_dielectric, init_warp, make_surface, make_trace_kernel,
                             offset_ray_origin, phong_diffuse, phong_specular, reflect, refract, stack_size, triangle,
@@ -200,7 +200,7 @@ class Pair:
         warprt.render(scene, threads=1, **TRACED)  # builds and keeps the geometry, compiles the variant
         self.reference = warprt.render(scene, threads=1, **TRACED)
         assert self.reference.stats.primary_query == "raytrace" and self.reference.stats.shadow_query == "bvh"
-        geom, _ = frame_geometry(scene)
+        geom = Geometry(scene)
         cam = scene.camera
         self.n = cam.width * cam.height
         self.data = geom.scene_data(scene)

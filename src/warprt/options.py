@@ -29,7 +29,7 @@ def option(default, help: str, *, choices: tuple | None = None, metavar: str | N
            listed: bool = False, cli_name: str | None = None, check_choices: bool = True, type=None):
     """A RenderOptions field: its default and help, the ``choices`` it takes, and how the command line
     offers it (``cli``: as a flag named after the field, or ``cli_name``; ``listed``: a comma-separated
-    list; ``metavar``: the value's name in --help)."""
+    list; ``metavar``: the value's name in the usage text)."""
     meta = {"help": help, "choices": choices, "metavar": metavar, "cli": cli, "listed": listed,
             "cli_name": cli_name, "check_choices": check_choices, "type": type}
     return field(default=default, metadata=meta)

@@ -1,4 +1,4 @@
-"""A camera, light or material change reuses the geometry and its BVH (no rebuild): lights and
+"""A Renderer's next frame with another camera, lights or materials reuses its geometry and BVH (no rebuild): lights and
 materials are small per-frame tables, and the frame origin is the objects' centre whatever the eye
 (bvh.frame_origin), so a reused frame is the fresh build's image to the bit, a moved eye's too (its
 camera rays start at eye - origin in float32, as a fresh build's do), and the hybrid stays the traced
@@ -32,10 +32,12 @@ def orbit(scene, degrees):
 
 def test_the_first_frame_builds_and_a_moved_eye_reuses_the_bvh():
     scene = small(None)
-    first = warprt.render(scene).stats.geometry
-    assert first["bvh"] in ("built", "reused")  # reused if an earlier test cached these objects
-    moved = warprt.render(orbit(scene, 30.0)).stats.geometry
+    r = warprt.Renderer(scene)
+    assert r.render().stats.geometry["bvh"] == "built"
+    r.set_scene(orbit(scene, 30.0))
+    moved = r.render().stats.geometry
     assert moved["bvh"] == "reused" and "padding covers" in moved["reason"]
+    assert warprt.render(orbit(scene, 30.0)).stats.geometry["bvh"] == "built"  # render() keeps nothing
 
 
 def test_an_eye_beyond_the_region_the_padding_covers_rebuilds():
@@ -43,8 +45,10 @@ def test_an_eye_beyond_the_region_the_padding_covers_rebuilds():
     geom = Geometry(scene)
     far = np.asarray(scene.camera.eye) + [1.01 * geom.eye_reach, 0.0, 0.0]
     assert geom.covers(np.asarray(scene.camera.eye) + [0.99 * geom.eye_reach, 0.0, 0.0]) and not geom.covers(far)
-    warprt.render(scene)
-    stats = warprt.render(scene.with_camera(eye=tuple(far), center=tuple(far - [0.0, 0.0, 1.0]))).stats.geometry
+    r = warprt.Renderer(scene)
+    r.render()
+    r.set_scene(scene.with_camera(eye=tuple(far), center=tuple(far - [0.0, 0.0, 1.0])))
+    stats = r.render().stats.geometry
     assert stats["bvh"] == "built" and "left the region" in stats["reason"]
 
 
@@ -60,13 +64,15 @@ def test_new_lights_and_materials_reuse_the_bvh_and_render_the_fresh_image():
     """The eye stays at the BVH's origin, so the coordinates are the fresh build's and the image must
     be the fresh build's to the bit: only the tables changed."""
     scene = small(None)
-    warprt.render(scene)
+    r = warprt.Renderer(scene)
+    r.render()
     lights = [Light((-3.0, 5.0, 2.0), (0.9, 0.8, 0.7)), Light((2.0, 2.0, 6.0), (0.2, 0.3, 0.4))]
     materials = {**scene.materials, "red": Material(kd=(0.1, 0.6, 0.2), ks=(0.9, 0.9, 0.9), shininess=8.0,
                                                     reflectivity=(0.3, 0.3, 0.3))}
     edited = replace(scene, lights=lights, materials=materials).with_render(ambient=(0.3, 0.2, 0.1),
                                                                              background=(0.1, 0.1, 0.2))
-    reused = warprt.render(edited)
+    r.set_scene(edited)
+    reused = r.render()
     assert reused.stats.geometry["bvh"] == "reused"
     fresh = warprt.render(edited, geometry=Geometry(edited))
     assert np.array_equal(reused.image, fresh.image) and reused.stats.rays == fresh.stats.rays

@@ -1,4 +1,4 @@
-"""A view's virtual cameras are kept with its Geometry and reused by its next frames: a frame that changes
+"""A view's virtual cameras are kept by its Renderer and reused by its next frames: a frame that changes
 only lights or colours reuses them; one that changes what they were rasterized for (the camera, the image
 size, the samples, the bounces, which materials reflect) builds its own. Every frame is the traced image,
 and rasters kept for another eye give wrong answers (the negative control that makes the camera a key)."""
@@ -22,9 +22,11 @@ def base():
 
 
 def frame_after(first, second):
-    """``second`` rendered with the mirrors after ``first`` on the same objects (so the same Geometry)."""
-    assert warprt.render(first, reflection_query="mirrors").stats.mirrors["rasters"] == "built"
-    result = warprt.render(second, reflection_query="mirrors")
+    """``second`` rendered with the mirrors after ``first`` by one Renderer (the same objects: the same Geometry)."""
+    r = warprt.Renderer(first, reflection_query="mirrors")
+    assert r.render().stats.mirrors["rasters"] == "built"
+    r.set_scene(second)
+    result = r.render()
     traced = warprt.render(second, reflection_query="bvh")
     assert np.array_equal(result.image, traced.image) and result.stats.rays == traced.stats.rays
     return result.stats
@@ -86,10 +88,16 @@ def test_rasters_of_another_eye_decide_no_ray_wrongly():
     assert unchecked[2] > 0
 
 
-def test_a_geometry_keeps_two_views():
+def test_a_renderer_keeps_two_views():
     """A stereo pair alternates without rebuilding; a third view sends the oldest away."""
     s = base()
     left, right, third = (s.with_camera(eye=(x, 1.4, 5.1)) for x in (0.3, 0.5, 0.7))
-    rasters = lambda scene: warprt.render(scene, reflection_query="mirrors").stats.mirrors["rasters"]
+    r = warprt.Renderer(s, reflection_query="mirrors")
+
+    def rasters(scene):
+        r.set_scene(scene)
+        return r.render().stats.mirrors["rasters"]
+
     assert [rasters(v) for v in (left, right, left, right, third, right, left)] == \
         ["built", "built", "reused", "reused", "built", "reused", "built"]
+    assert warprt.render(left, reflection_query="mirrors").stats.mirrors["rasters"] == "built"  # nothing kept

@@ -23,9 +23,9 @@ def test_auto_takes_the_virtual_cameras_from_a_views_second_frame():
     frame is the traced image. (At 320x240 the default scene's 5,158 triangles are few enough to rasterize.)"""
     scene = warprt.load_scene().with_camera(width=320, height=240, eye=(0.3, 1.6, 5.2))
     traced = warprt.render(scene, reflection_query="bvh")
-    seen = []
+    seen, r = [], warprt.Renderer(scene)
     for _ in range(3):
-        result = warprt.render(scene)
+        result = r.render()
         assert np.array_equal(result.image, traced.image) and result.stats.rays == traced.stats.rays
         seen.append((result.stats.reflection_query, result.stats.mirrors.get("rasters")))
     assert seen == [("bvh", None), ("mirrors", "built"), ("mirrors", "reused")]
@@ -35,8 +35,10 @@ def test_auto_takes_the_virtual_cameras_from_a_views_second_frame():
 def test_auto_traces_a_moving_cameras_reflections():
     """Each view seen once: no frame pays for rasters it would not reuse."""
     scene = warprt.load_scene().with_camera(width=320, height=240)
+    r = warprt.Renderer(scene)
     for x in (0.0, 0.1, 0.2, 0.3):
-        stats = warprt.render(scene.with_camera(eye=(x, 1.5, 5.0))).stats
+        r.set_scene(scene.with_camera(eye=(x, 1.5, 5.0)))
+        stats = r.render().stats
         assert stats.reflection_query == "bvh" and stats.mirrors == {} and stats.memory["mirrors"] == 0
 
 
@@ -44,8 +46,9 @@ def test_auto_traces_where_rasterizing_is_not_the_cheaper():
     """Below ten samples a triangle (raster_is_cheaper), the rasters would cost more than the queries."""
     scene = warprt.load_scene().with_camera(width=16, height=12)
     assert not warprt.image.raster_is_cheaper(scene.triangle_count, 16 * 12)
+    r = warprt.Renderer(scene)
     for _ in range(3):
-        assert warprt.render(scene).stats.reflection_query == "bvh"
+        assert r.render().stats.reflection_query == "bvh"
 
 
 def test_a_scene_without_planar_mirrors_traces_its_reflections():

@@ -87,6 +87,7 @@ class FrameRenderer:
         self.aovs = tuple(spec["aovs"])
         self.output_dir = Path(spec["output_dir"])
         self.scenes = FrameScenes(spec["scene"])
+        self._renderers: dict = {}  # id of a loaded scene's objects -> (the objects, their Renderer)
         t = time.perf_counter()
         # Warp's start (about 0.6 s) and the warm-up frames' scenes first, outside the lock: the
         # workers do that at once. Then, one worker at a time, every kernel variant the job's frames
@@ -110,7 +111,7 @@ class FrameRenderer:
             self.lock_seconds = time.perf_counter() - t_lock
             for tiny, primary in tiny_frames:
                 try:
-                    image.render(tiny, threads=threads, aovs=self.aovs, primary=primary)
+                    image.render(tiny, threads=threads, aovs=self.aovs, primary_query=primary)
                 except SceneError:
                     pass  # a bad frame reports itself when it is rendered
         self.warmup_seconds = time.perf_counter() - t
@@ -129,12 +130,26 @@ class FrameRenderer:
             with timed(seconds, "scene"):
                 scene = self.scenes.scene(task["overrides"])
             with timed(seconds, "render"):
-                result = self.image.render(scene, threads=self.threads, aovs=self.aovs)
+                result = self._renderer(scene).render()
         except SceneError as e:
             return {"ok": False, "frame": task["frame"], "error": error_record(e)}
         except Exception as e:  # a bug: not bad input
             return _internal(task, e)
         return _Rendered(task, result, seconds)
+
+    def _renderer(self, scene):
+        """The Renderer for frames of ``scene``'s objects (FrameScenes shares them between the frames of one
+        loaded scene), set to this frame; one per loaded scene FrameScenes keeps. The scene comes checked."""
+        key = id(scene.objects)
+        kept = self._renderers.pop(key, None)
+        if kept is None or kept[0] is not scene.objects:
+            kept = (scene.objects, self.image.Renderer(scene, threads=self.threads, aovs=self.aovs))
+        else:
+            kept[1].set_scene(scene, checked=True)
+        self._renderers[key] = kept
+        while len(self._renderers) > self.scenes.keep:
+            self._renderers.pop(next(iter(self._renderers)))
+        return kept[1]
 
     def write(self, rendered) -> dict:
         """The frame's files (image and AOVs, each renamed into place) and its result record."""

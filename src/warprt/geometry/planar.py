@@ -118,6 +118,7 @@ class MirroredGeometry:
         if not len(pieces):  # kernels need an array: one degenerate triangle that covers no sample
             self.points_np = np.zeros((3, 3), np.float32)
         self.indices_np = np.arange(len(self.points_np), dtype=np.int32)
+        self.reach = float(np.abs(self.points_np).max(initial=0.0))  # the largest |coordinate|, as Geometry's
         d = SceneData()
         d.points = wp.array(self.points_np, dtype=wp.vec3, device=geom.device)
         d.indices = wp.array(self.indices_np, dtype=wp.int32, device=geom.device)
