@@ -18,7 +18,8 @@ from .meshio import read_mesh_file
 from .mitsuba_xml import load_mitsuba_file, mitsuba_camera, read_mitsuba_xml, reads_mitsuba_light, reads_mitsuba_shape
 from .model import DEFAULT_MATERIAL, Camera, Light, Material, RenderSettings, Scene, SceneObject
 from .normals import vertex_normals
-from .reader import rotation, scene_from_dict
+from .placement import rotation
+from .reader import scene_from_dict
 from .texture import Texture, srgb_to_linear
 from .validate import MAX_REACH, CheckedContent, check_setting, validate_camera, validate_scene, validate_view
 
