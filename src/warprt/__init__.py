@@ -1,6 +1,6 @@
 """warprt: a small, correct, fast Whitted ray tracer whose kernels are NVIDIA Warp code.
 
-    scene = warprt.load_scene("scene.toml")
+    scene = warprt.load_scene("scene.toml")        # or warprt.load_dict({...}): the file's schema as a dict
     image, stats = warprt.render(scene)
     rows = warprt.batch("orbit.toml", "out")      # many frames from a job file (warprt.dataset)
 
@@ -12,7 +12,7 @@ frames) -> cli.py.
 from typing import TYPE_CHECKING
 
 from .errors import SceneError, SceneWarning
-from .scene import Camera, Light, Material, RenderSettings, Scene, SceneObject, load_scene
+from .scene import Camera, Light, Material, RenderSettings, Scene, SceneObject, load_dict, load_scene
 
 if TYPE_CHECKING:
     from .dataset import batch
@@ -21,7 +21,7 @@ if TYPE_CHECKING:
 __version__ = "0.1.0"
 
 __all__ = ["Camera", "Light", "Material", "RenderSettings", "Scene", "SceneError", "SceneObject", "SceneWarning",
-           "batch", "load_scene", "render", "__version__"]
+           "batch", "load_dict", "load_scene", "render", "__version__"]
 
 
 def __getattr__(name):

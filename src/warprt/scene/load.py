@@ -1,6 +1,7 @@
 """load_scene: a TOML scene file, a bare mesh file (framed automatically) or the built-in default
-scene, with dotted overrides ("camera.width", "lights[0].color") applied before validation; and
-with_overrides, the same scene for other overrides, from one already loaded."""
+scene, with dotted overrides ("camera.width", "lights[0].color") applied before validation;
+load_dict, the scene file's schema as a Python dict; and with_overrides, the same scene for other
+overrides, from one already loaded."""
 
 from __future__ import annotations
 
@@ -8,13 +9,13 @@ from dataclasses import asdict, fields, replace
 from pathlib import Path
 
 from ..diagnostics import collecting
-from ..errors import ArgumentError, SceneError
+from ..errors import ArgumentError, SceneError, show
 from ..timing import timed
 from .autoframe import scene_for_mesh
 from .meshio import FORMATS, is_mesh_path
 from .model import Camera, RenderSettings, Scene
 from .reader import read_camera, read_render, scene_from_dict
-from .toml_fields import read_toml
+from .toml_fields import plain, read_toml
 from .validate import CheckedContent, validate_scene, validate_view
 
 # The fields with_overrides sets on a loaded scene without reading its file again.
@@ -30,6 +31,21 @@ def load_scene(path=None, overrides: dict | None = None, up: str | None = None, 
     with timed(times, "load"), collecting(str(path) if path is not None else "default scene"):
         scene = _load_scene(path, overrides, up, camera)
     scene.files = (Path(path if path is not None else default_scene_path()), *scene.files)
+    scene.load_seconds = times["load"]
+    return scene
+
+
+def load_dict(d: dict, base=None, source: str = "<dict>") -> Scene:
+    """A validated Scene from the scene file's schema as a dict, what tomllib gives for a scene file (as
+    Mitsuba's mi.load_dict takes its own): the file's checks and errors, naming ``source`` and the dotted
+    field; file names in it (meshes, textures, camera.from) relative to ``base``, else the working folder.
+    Tuples, NumPy arrays and numbers, and Paths are read as the lists, numbers and strings a file holds.
+    Its warnings are Python warnings (SceneWarning), to filter or catch, as a Scene built in Python has them."""
+    if not isinstance(d, dict):
+        raise SceneError(source, None, f"expected a dict of the scene file's tables, got {show(d)}")
+    times: dict = {}
+    with timed(times, "load"):
+        scene = scene_from_dict(plain(d), source, base)
     scene.load_seconds = times["load"]
     return scene
 

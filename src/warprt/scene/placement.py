@@ -134,6 +134,8 @@ def shape_fields(r: TableReader, textured: bool, normals: np.ndarray | None = No
         r.fail("shape", "the mesh has no triangles")
     if faces.min() < 0 or faces.max() >= len(vertices):
         r.fail("faces", f"vertex index out of range [0, {len(vertices) - 1}]")
+    if normals is not None and len(normals) != len(vertices):
+        r.fail("normals", f"expected one per vertex ({len(vertices)}), got {len(normals)}")
     try:
         world, shading = place_triangles(vertices, faces, smooth, placement,
                                          None if normals is None else normals[faces])
