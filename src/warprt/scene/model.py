@@ -171,7 +171,7 @@ DEFAULT_MATERIAL = Material(kd=(0.7, 0.7, 0.7), ks=(0.3, 0.3, 0.3), shininess=32
 @dataclass
 class SceneObject:
     """One object: its triangles in world space (float64), the name of its material, and what it
-    has per vertex besides its position."""
+    has per vertex besides its position. from_shape and from_arrays make one as a scene file's table would."""
 
     name: str
     vertices: np.ndarray  # (N, 3) float64, world space
@@ -257,8 +257,9 @@ class Scene:
     cameras: tuple = ()  # the cameras the mesh files define (camera.FileCamera), for `warprt info`
 
     def __post_init__(self):
-        self.lights, self.objects = (v if isinstance(v, list) else list(v) for v in (self.lights, self.objects))
-        if "default" not in self.materials and any(getattr(o, "material", None) == "default" for o in self.objects):
+        self.lights, self.objects = (list(v) if isinstance(v, tuple) else v for v in (self.lights, self.objects))
+        if isinstance(self.materials, dict) and "default" not in self.materials and \
+                any(getattr(o, "material", None) == "default" for o in self.objects or ()):
             self.materials = {"default": DEFAULT_MATERIAL, **self.materials}  # first, as a file has it
 
     @property

@@ -1,5 +1,5 @@
-"""The TOML scene file to a Scene: typed access to each table, with every error naming the file and
-the dotted field in the file's own vocabulary (``camera.fovy``, ``objects[2].mesh``)."""
+"""The TOML scene file to a Scene, table by table (typed access: toml_fields.TableReader), with every error
+naming the file and the dotted field in the file's own vocabulary (``camera.fovy``, ``objects[2].mesh``)."""
 
 from __future__ import annotations
 
