@@ -12,7 +12,6 @@ from pathlib import Path
 
 import warprt
 from warprt.geometry import Geometry
-from warprt.scene import scene_from_dict
 
 SCENES = Path(__file__).resolve().parent.parent / "scenes"
 NO_SHADOWS_OR_REFLECTIONS = ["shadows", "reflection"]
@@ -67,7 +66,7 @@ def growth_scene(subdivisions: int, width: int, height: int):
         if obj.get("name") == "sphere":
             obj.pop("segments", None)
             obj.update(shape="sphere", subdivisions=subdivisions, smooth=False)
-    return scene_from_dict(doc, "scenes/seed.toml (sphere subdivided)", SCENES).with_camera(width=width, height=height)
+    return warprt.load_dict(doc, SCENES, "scenes/seed.toml (sphere subdivided)").with_camera(width=width, height=height)
 
 
 def growth_runs(repeat: int, sizes, subdivisions, threads: int | None = None, full: bool = False,

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from warprt.scene import scene_from_dict
+import warprt
 
 # A camera on the +z axis looking at the origin: the image plane is parallel to z = 0.
 FRONT_CAMERA = {"eye": [0.0, 0.0, 5.0], "center": [0.0, 0.0, 0.0], "up": [0.0, 1.0, 0.0],
@@ -31,7 +31,7 @@ def scene_doc(objects, materials=None, lights=(), camera=None, **render) -> dict
 
 
 def make_scene(objects, materials=None, lights=(), camera=None, **render):
-    return scene_from_dict(scene_doc(objects, materials, lights, camera, **render), "<test>")
+    return warprt.load_dict(scene_doc(objects, materials, lights, camera, **render), source="<test>")
 
 
 # A material that shows only its ambient term: with C_amb = 1 a hit pixel is exactly ka.

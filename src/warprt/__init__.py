@@ -1,6 +1,6 @@
 """warprt: a small, correct, fast Whitted ray tracer whose kernels are NVIDIA Warp code.
 
-    scene = warprt.load_scene("scene.toml")
+    scene = warprt.load_scene("scene.toml")        # or warprt.load_dict({...}): the file's schema as a dict
     image, stats = warprt.render(scene)
     r = warprt.Renderer(scene)                    # frames of one scene: the BVH and caches kept
     r.params["materials.red.kd"] = [0.9, 0.1, 0.1]
@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING
 
 from .errors import SceneError, SceneWarning
 from .options import RenderOptions
-from .scene import Camera, Light, Material, RenderSettings, Scene, SceneObject, load_scene
+from .scene import Camera, Light, Material, RenderSettings, Scene, SceneObject, load_dict, load_scene
 
 if TYPE_CHECKING:
     from .dataset import batch
@@ -25,7 +25,7 @@ if TYPE_CHECKING:
 __version__ = "0.1.0"
 
 __all__ = ["Camera", "Light", "Material", "RenderOptions", "RenderSettings", "Renderer", "Scene", "SceneError",
-           "SceneObject", "SceneWarning", "batch", "load_scene", "render", "__version__"]
+           "SceneObject", "SceneWarning", "batch", "load_dict", "load_scene", "render", "__version__"]
 
 
 def __getattr__(name):

@@ -185,3 +185,15 @@ def test_bad_sweep_and_set_fields_name_the_job_and_the_scene(job_dir, body, fiel
         check_scene(load_job(path))
     assert (e.value.source, e.value.field) == (str(path), field)
     assert message in e.value.message and str(SCENE) in e.value.message
+
+
+def test_a_job_file_reads_as_a_scene_file_does(job_dir):
+    """One TOML reader: a byte-order mark (as Windows editors write) is skipped in a job file too, and a
+    byte that is not UTF-8 is named with its line, in the scene file's words."""
+    path = write_job(job_dir, 'scene = "{scene}"\n[orbit]\nframes = 2\n')
+    path.write_bytes(b"\xef\xbb\xbf" + path.read_bytes())
+    assert load_job(path).n_cameras == 2
+    path.write_bytes(b'scene = "{scene}"\n# caf\xe9\n')
+    with pytest.raises(SceneError) as e:
+        load_job(path)
+    assert (e.value.field, e.value.message) == (None, "not UTF-8 text (byte 0xe9 on line 2); a TOML file must be UTF-8")

@@ -25,20 +25,18 @@ warprt.load_scene(scene, overrides).
 
 from __future__ import annotations
 
-import difflib
 import hashlib
 import itertools
 import json
 import math
 import os
 import string
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..errors import ArgumentError, SceneError, show
 from ..image import aov_paths, check_aovs
-from ..scene import load_scene
+from ..scene import TableReader, load_scene, read_toml
 
 JOB_KEYS = ("scene", "output", "aovs", "set", "orbit", "cameras", "path", "sweep")
 CAMERA_SEQUENCES = ("orbit", "cameras", "path")
@@ -103,15 +101,6 @@ class Job:
         return n if shard is None else len(range(shard[0], n, shard[1]))
 
 
-def _hint(key, allowed) -> str:
-    close = difflib.get_close_matches(key, sorted(allowed), n=1)
-    return f" (did you mean '{close[0]}'?)" if close else f" (expected one of: {', '.join(sorted(allowed))})"
-
-
-def _is_num(v) -> bool:
-    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
-
-
 def _flatten(source, table: dict, prefix: str, what: str) -> dict:
     """[sweep] render.spp = [..] parses as nested tables, "render.spp" = [..] as a dotted key: both are
     the field render.spp."""
@@ -127,32 +116,12 @@ def _flatten(source, table: dict, prefix: str, what: str) -> dict:
     return out
 
 
-def _vector(source, where, v):
-    if not isinstance(v, list) or len(v) != 3 or not all(_is_num(x) for x in v):
-        raise SceneError(source, where, f"expected a list of 3 finite numbers, got {show(v)}")
-    return [float(x) for x in v]
-
-
 def _camera_table(source, where, t: dict) -> dict:
     if not isinstance(t, dict):
         raise SceneError(source, where, f"expected a table, got {show(t)}")
-    out = {}
-    for k, v in t.items():
-        if k not in CAMERA_FIELDS:
-            raise SceneError(source, f"{where}.{k}", f"unknown camera field{_hint(k, CAMERA_FIELDS)}")
-        if k in VECTOR_FIELDS:
-            out[k] = _vector(source, f"{where}.{k}", v)
-        elif not _is_num(v):
-            raise SceneError(source, f"{where}.{k}", f"expected a number, got {show(v)}")
-        else:
-            out[k] = float(v)
-    return out
-
-
-def _positive_int(source, where, v, lo=1):
-    if isinstance(v, bool) or not isinstance(v, int) or v < lo:
-        raise SceneError(source, where, f"expected an integer >= {lo}, got {show(v)}")
-    return v
+    r = TableReader(source, t, where)
+    r.check_keys(CAMERA_FIELDS, what="camera field")
+    return {k: list(r.vector(k, whole=True)) if k in VECTOR_FIELDS else r.number(k, whole=True) for k in t}
 
 
 def orbit_eye(eye, center, up, degrees: float) -> list:
@@ -178,9 +147,8 @@ def _lerp(a, b, t):
 
 
 def _path_cameras(source, t: dict) -> list[dict]:
-    for k in t:
-        if k not in ("frames", "keyframes"):
-            raise SceneError(source, f"path.{k}", f"unknown key{_hint(k, ('frames', 'keyframes'))}")
+    r = TableReader(source, t, "path")
+    r.check_keys(("frames", "keyframes"))
     keys = t.get("keyframes")
     if not isinstance(keys, list) or len(keys) < 2:
         raise SceneError(source, "path.keyframes", f"expected a list of at least 2 keyframe tables, got {show(keys)}")
@@ -189,10 +157,8 @@ def _path_cameras(source, t: dict) -> list[dict]:
         where = f"path.keyframes[{i}]"
         if not isinstance(kf, dict):
             raise SceneError(source, where, f"expected a table {{frame = N, eye = [..], ...}}, got {show(kf)}")
-        kf = dict(kf)
-        if "frame" not in kf:
-            raise SceneError(source, f"{where}.frame", "is required")
-        f = _positive_int(source, f"{where}.frame", kf.pop("frame"), lo=0)
+        f = TableReader(source, kf, where).integer("frame", lo=0)
+        kf = {k: v for k, v in kf.items() if k != "frame"}
         if frames and f <= frames[-1]:
             raise SceneError(source, f"{where}.frame", f"keyframes must be in increasing frame order; {f} follows {frames[-1]}")
         cam = _camera_table(source, where, kf)
@@ -205,7 +171,7 @@ def _path_cameras(source, t: dict) -> list[dict]:
         cams.append(cam)
     if frames[0] != 0:
         raise SceneError(source, "path.keyframes[0].frame", f"the first keyframe must be frame 0, got {frames[0]}")
-    n = _positive_int(source, "path.frames", t.get("frames", frames[-1] + 1))
+    n = r.integer("frames", frames[-1] + 1, lo=1)
     if frames[-1] != n - 1:
         raise SceneError(source, "path.frames", f"the last keyframe (frame {frames[-1]}) must be the last frame, {n - 1}")
     out = []
@@ -242,31 +208,13 @@ def _fingerprint(scene_bytes: bytes, frame_overrides: dict, outputs: dict, aovs)
     return h.hexdigest()[:20]
 
 
-def _read(path: Path) -> dict:
-    source = str(path)
-    try:
-        return tomllib.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise SceneError(source, None, "job file not found") from None
-    except IsADirectoryError:
-        raise SceneError(source, None, "is a folder, not a job file") from None
-    except UnicodeDecodeError:
-        raise SceneError(source, None, "not UTF-8 text; a TOML file must be UTF-8") from None
-    except OSError as e:
-        raise SceneError(source, None, f"cannot read job file: {e.strerror or e}") from None
-    except tomllib.TOMLDecodeError as e:
-        raise SceneError(source, None, f"malformed TOML: {e}") from None
-
-
 def load_job(path, output_dir=None) -> Job:
     """Read and check a job file and expand it into frames; a SceneError names the job file and the
     field. Nothing here needs the scene: check_scene() checks it (and completes an orbit's cameras)."""
     path = Path(path)
     source = str(path)
-    data = _read(path)
-    for k in data:
-        if k not in JOB_KEYS:
-            raise SceneError(source, k, f"unknown key{_hint(k, JOB_KEYS)}")
+    data = read_toml(path, "job file")
+    TableReader(source, data, "").check_keys(JOB_KEYS)
 
     scene = data.get("scene")
     if not isinstance(scene, str) or not scene:
@@ -298,12 +246,9 @@ def load_job(path, output_dir=None) -> Job:
         t = data["orbit"]
         if not isinstance(t, dict):
             raise SceneError(source, "orbit", f"expected a table [orbit] frames = N, got {show(t)}")
-        for k in t:
-            if k != "frames":
-                raise SceneError(source, f"orbit.{k}", f"unknown key{_hint(k, ('frames',))}")
-        if "frames" not in t:
-            raise SceneError(source, "orbit.frames", "is required")
-        n = _positive_int(source, "orbit.frames", t["frames"])
+        r = TableReader(source, t, "orbit")
+        r.check_keys(("frames",))
+        n = r.integer("frames", lo=1)
         cams = [None] * n  # the eyes follow from the scene's camera: check_scene
         labels = [f"orbit {k}/{n}" for k in range(n)]
     elif sequence == "cameras":

@@ -1,10 +1,11 @@
 """file -> Scene: the scene model (float64, validated, no Warp), its readers and what derives from it
 alone (the camera basis, vertex normals, the effect set).
 
-    texture.py (images, checker) <- model.py (dataclasses) <- validate.py <- normals.py, shapes.py,
-    dielectric.py (closed meshes, the eye's medium) <- meshio/ (one reader a format, with
-    dielectric_formats.py) <- reader.py (TOML) <- autoframe.py (a bare mesh) <- load.py (load_scene,
-    overrides, with_overrides); effects.py, camera.py beside them.
+    toml_fields.py (TOML files, typed tables), texture.py (images, checker) <- shapes.py, normals.py <-
+    placement.py (an object's triangles placed and shaded) <- model.py (dataclasses, SceneObject's
+    constructors) <- validate.py <- dielectric.py (closed meshes, the eye's medium) <- meshio/ (one reader
+    a format, with dielectric_formats.py) <- reader.py (TOML) <- autoframe.py (a bare mesh) <- load.py
+    (load_scene, load_dict, overrides, with_overrides); effects.py, camera.py beside them.
 """
 
 from ..memo import ObjectCache
@@ -13,19 +14,21 @@ from .camera import CameraBasis, camera_basis, pixel_ray_directions
 from .dielectric import eye_medium, open_edges, signed_volume, winding_number
 from .dielectric_formats import DEFAULT_IOR, dielectric_from_gltf, dielectric_from_mtl, dielectric_from_usd
 from .effects import EFFECTS, EffectSet, resolve_effects, scene_effects, zbuffer_effects
-from .load import load_scene, sets_in_place, with_overrides
+from .load import input_kind, load_dict, load_scene, sets_in_place, with_overrides
 from .meshio import read_mesh_file
 from .mitsuba_xml import load_mitsuba_file, mitsuba_camera, read_mitsuba_xml, reads_mitsuba_light, reads_mitsuba_shape
 from .model import DEFAULT_MATERIAL, Camera, Light, Material, RenderSettings, Scene, SceneObject
 from .normals import vertex_normals
-from .reader import rotation, scene_from_dict
+from .placement import rotation
+from .reader import scene_from_dict
 from .texture import Texture, srgb_to_linear
+from .toml_fields import TableReader, did_you_mean, read_toml
 from .validate import MAX_REACH, CheckedContent, check_setting, validate_camera, validate_scene, validate_view
 
 __all__ = ["Camera", "camera_basis", "CameraBasis", "CheckedContent", "check_setting", "DEFAULT_IOR", "DEFAULT_MATERIAL",
-           "dielectric_from_gltf", "dielectric_from_mtl", "dielectric_from_usd", "EFFECTS", "EffectSet",
-           "eye_medium", "Light", "load_mitsuba_file", "load_scene", "Material", "MAX_REACH", "ObjectCache", "open_edges",
-           "pixel_ray_directions", "mitsuba_camera", "read_mesh_file", "read_mitsuba_xml", "reads_mitsuba_light", "reads_mitsuba_shape", "RenderSettings", "resolve_effects", "rotation", "Scene",
+           "did_you_mean", "dielectric_from_gltf", "dielectric_from_mtl", "dielectric_from_usd", "EFFECTS", "EffectSet",
+           "eye_medium", "input_kind", "Light", "load_dict", "load_mitsuba_file", "load_scene", "Material", "MAX_REACH", "ObjectCache", "open_edges",
+           "pixel_ray_directions", "mitsuba_camera", "read_mesh_file", "read_toml", "read_mitsuba_xml", "reads_mitsuba_light", "reads_mitsuba_shape", "RenderSettings", "resolve_effects", "rotation", "Scene",
            "scene_effects", "scene_from_dict", "SceneObject", "sets_in_place", "shapes", "signed_volume",
-           "srgb_to_linear", "Texture", "validate_camera", "validate_scene", "validate_view", "vertex_normals", "winding_number",
+           "srgb_to_linear", "TableReader", "Texture", "validate_camera", "validate_scene", "validate_view", "vertex_normals", "winding_number",
            "with_overrides", "zbuffer_effects"]

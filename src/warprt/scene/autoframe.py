@@ -15,7 +15,8 @@ from .camera import aspect_note, find_camera
 from .dielectric import warn_unclosed
 from .meshio import file_objects, read_mesh_file, warn_if_tiny, warn_if_unmapped
 from .model import Light, Material, RenderSettings, Scene
-from .reader import UP_AXES, read_camera, up_rotation
+from .placement import UP_AXES, up_rotation
+from .reader import read_camera
 
 DEFAULT_SIZE = (640, 480)
 DEFAULT_FOVY = 40.0

@@ -1,20 +1,21 @@
 """load_scene: a TOML scene file, a bare mesh file (framed automatically) or the built-in default
-scene, with dotted overrides ("camera.width", "lights[0].color") applied before validation; and
-with_overrides, the same scene for other overrides, from one already loaded."""
+scene, with dotted overrides ("camera.width", "lights[0].color") applied before validation;
+load_dict, the scene file's schema as a Python dict; and with_overrides, the same scene for other
+overrides, from one already loaded."""
 
 from __future__ import annotations
 
-import tomllib
 from dataclasses import asdict, fields, replace
 from pathlib import Path
 
 from ..diagnostics import collecting
-from ..errors import ArgumentError, SceneError
+from ..errors import ArgumentError, SceneError, show
 from ..timing import timed
 from .autoframe import scene_for_mesh
 from .meshio import FORMATS, is_mesh_path
 from .model import Camera, RenderSettings, Scene
 from .reader import read_camera, read_render, scene_from_dict
+from .toml_fields import plain, read_toml
 from .validate import CheckedContent, validate_scene, validate_view
 
 # The fields with_overrides sets on a loaded scene without reading its file again.
@@ -32,6 +33,27 @@ def load_scene(path=None, overrides: dict | None = None, up: str | None = None, 
     scene.files = (Path(path if path is not None else default_scene_path()), *scene.files)
     scene.load_seconds = times["load"]
     return scene
+
+
+def load_dict(d: dict, base=None, source: str = "<dict>") -> Scene:
+    """A validated Scene from the scene file's schema as a dict, what tomllib gives for a scene file (as
+    Mitsuba's mi.load_dict takes its own): the file's checks and errors, naming ``source`` and the dotted
+    field; file names in it (meshes, textures, camera.from) relative to ``base``, else the working folder.
+    Tuples, NumPy arrays and numbers, and Paths are read as the lists, numbers and strings a file holds.
+    Its warnings are Python warnings (SceneWarning), to filter or catch, as a Scene built in Python has them."""
+    if not isinstance(d, dict):
+        raise SceneError(source, None, f"expected a dict of the scene file's tables, got {show(d)}")
+    times: dict = {}
+    with timed(times, "load"):
+        scene = scene_from_dict(plain(d), source, base)
+    scene.load_seconds = times["load"]
+    return scene
+
+
+def input_kind(path) -> str:
+    """What load_scene reads ``path`` as, by its extension: "toml" (a scene file), "mitsuba" (a Mitsuba
+    scene file) or "mesh" (a mesh file, framed)."""
+    return {".toml": "toml", ".xml": "mitsuba"}.get(Path(path).suffix.lower(), "mesh")
 
 
 def default_scene_path() -> Path:
@@ -97,7 +119,7 @@ def sets_in_place(key: str, path=None) -> bool:
     """Whether with_overrides sets the dotted field ``key`` on a scene loaded from ``path``: camera.* and
     render.* of a scene file; of a bare mesh only render.*, as its framing follows its camera."""
     section, _, name = key.partition(".")
-    if path is not None and Path(path).suffix.lower() not in (".toml", ".xml") and section == "camera":
+    if path is not None and input_kind(path) == "mesh" and section == "camera":
         return False
     return section in _IN_PLACE and name.isidentifier()  # unknown names too: the reader reports them
 
@@ -115,9 +137,10 @@ def _load_scene(path, overrides, up, camera=None) -> Scene:
         path = default_scene_path()
     path = Path(path)
     source = str(path)
-    if path.suffix.lower() == ".xml":
+    kind = input_kind(path)
+    if kind == "mitsuba":
         return _load_mitsuba_scene(path, overrides, up)
-    if path.suffix.lower() != ".toml":
+    if kind == "mesh":
         return _load_mesh_scene(path, overrides, up, camera)
     if camera is not None:
         raise ArgumentError("load_scene", "camera", "applies to a mesh file; in a scene file, write "
@@ -125,23 +148,7 @@ def _load_scene(path, overrides, up, camera=None) -> Scene:
     if up is not None:
         raise ArgumentError("load_scene", "up", "applies to a mesh file; in a scene file, give the object "
                                                 "up = \"z\" (or x, y, -x, -y, -z)")
-    try:
-        # utf-8-sig: a byte-order mark, which Windows editors write, is not part of the TOML.
-        text = path.read_text(encoding="utf-8-sig")
-    except FileNotFoundError:
-        raise SceneError(source, None, "scene file not found") from None
-    except IsADirectoryError:
-        raise SceneError(source, None, "is a folder, not a scene file") from None
-    except UnicodeDecodeError as e:
-        line = e.object[:e.start].count(b"\n") + 1
-        raise SceneError(source, None, f"not UTF-8 text (byte 0x{e.object[e.start]:02x} on line {line}); "
-                                       "a TOML file must be UTF-8") from None
-    except OSError as e:
-        raise SceneError(source, None, f"cannot read scene file: {e.strerror or e}") from None
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as e:
-        raise SceneError(source, None, f"malformed TOML: {e}") from None
+    data = read_toml(path, "scene file")
     if overrides:
         data = apply_overrides(data, overrides, source)
     return scene_from_dict(data, source, path.parent)

@@ -8,6 +8,9 @@ from dataclasses import dataclass, field, fields, replace
 import numpy as np
 
 from ..errors import SceneError, show
+from . import shapes
+from .placement import shape_fields
+from .toml_fields import TableReader, plain
 
 
 def _as_floats(owner, name: str, v, scalar_ok: bool = False) -> tuple:
@@ -167,15 +170,19 @@ class Material:
         return self.ior is not None
 
 
+# The material "default" of every scene file, which its objects that name no material get.
+DEFAULT_MATERIAL = Material(kd=(0.7, 0.7, 0.7), ks=(0.3, 0.3, 0.3), shininess=32.0)
+
+
 @dataclass
 class SceneObject:
     """One object: its triangles in world space (float64), the name of its material, and what it
-    has per vertex besides its position."""
+    has per vertex besides its position. from_shape and from_arrays make one as a scene file's table would."""
 
     name: str
     vertices: np.ndarray  # (N, 3) float64, world space
     faces: np.ndarray  # (M, 3) int64
-    material: str
+    material: str = "default"  # as a scene file's object that names none
     smooth: bool = False
     # Vertex normals (N, 3) for smooth shading, when they are not the ones computed from the
     # triangles alone: the file's own, split at creases, or computed over a whole mesh that was
@@ -199,18 +206,67 @@ class SceneObject:
                 raise SceneError("SceneObject", name, f"expected a list of [x, y, z] rows, got {show(v)}") from None
             setattr(self, name, a.astype(np.int64) if name == "faces" and a.dtype.kind in "iu" else a)
 
+    @classmethod
+    def from_arrays(cls, name: str, vertices, faces, material: str = "default", *, normals=None, uv=None, colors=None,
+                    smooth=None, scale=1.0, rotate=(0.0, 0.0, 0.0), translate=(0.0, 0.0, 0.0), up: str = "y") -> "SceneObject":
+        """Triangles from arrays (``vertices`` (N, 3), ``faces`` (M, 3) indices; per vertex optionally
+        ``normals``, ``uv``, ``colors``), placed and shaded as a scene file's ``shape = "triangles"`` object
+        with the same keys is, or with ``normals`` as a mesh file with its own normals: the same arrays.
+        ``smooth``: as the file's, default false, or "auto" (the normals given) where there are normals.
+        A bad argument is a SceneError naming it."""
+        source = "SceneObject.from_arrays()"
+        if normals is not None:
+            normals = TableReader(source, {"normals": normals}, "").rows("normals", 3, "[x, y, z] per vertex")
+        table = {"shape": "triangles", "name": name, "material": material, "vertices": vertices, "faces": faces,
+                 "smooth": ("auto" if normals is not None else False) if smooth is None else smooth,
+                 "scale": scale, "rotate": rotate, "translate": translate, "up": up}
+        table.update({k: v for k, v in (("uv", uv), ("colors", colors)) if v is not None})
+        return cls._from_table(TableReader(source, plain(table), ""), textured=False, normals=normals)
+
+    @classmethod
+    def from_shape(cls, shape: str, name: str | None = None, material: str = "default", *, textured: bool = False,
+                   smooth=False, scale=1.0, rotate=(0.0, 0.0, 0.0), translate=(0.0, 0.0, 0.0), up: str = "y",
+                   **params) -> "SceneObject":
+        """A built-in shape (``shape``: sphere, uv_sphere, box, plane, cylinder, torus_knot, triangles) with its
+        parameters (``radius=0.5``, ``size=[1, 2, 1]``, ...), as a scene file's [[objects]] table with the same
+        keys gives it: the same arrays. ``textured``: with the texture coordinates a file gives the shape when
+        its material has a texture (plane, box, uv_sphere). A bad argument is a SceneError naming it."""
+        source = "SceneObject.from_shape()"
+        if textured and shape not in shapes.WITH_UV and shape != "triangles":
+            raise SceneError(source, "textured", f"the {shape!r} shape has no texture coordinates; shapes with "
+                                                 f"them: {', '.join(shapes.WITH_UV)}, triangles with uv")
+        table = {"shape": shape, **params, "material": material, "smooth": smooth, "scale": scale, "rotate": rotate,
+                 "translate": translate, "up": up, **({} if name is None else {"name": name})}
+        return cls._from_table(TableReader(source, plain(table), ""), textured=textured)
+
+    @classmethod
+    def _from_table(cls, r: TableReader, textured: bool, normals=None) -> "SceneObject":
+        """The object of a shape table, through the scene file reader's own reading of one (placement.shape_fields)."""
+        return cls(material=r.string("material"), **shape_fields(r, textured, normals))
+
 
 @dataclass
 class Scene:
-    camera: Camera
-    render: RenderSettings
-    lights: list[Light]
-    materials: dict[str, Material]
-    objects: list[SceneObject]
+    """A scene, each field defaulting to what a scene file that leaves it out gets: Camera(), RenderSettings(),
+    no lights, the material "default" alone, no objects. As in a file, an object whose material is "default"
+    gets DEFAULT_MATERIAL unless ``materials`` defines its own; any other name it lacks is a SceneError
+    when the scene is validated (validate_scene, which render() runs)."""
+
+    camera: Camera = field(default_factory=Camera)
+    render: RenderSettings = field(default_factory=RenderSettings)
+    lights: list[Light] = field(default_factory=list)
+    materials: dict[str, Material] = field(default_factory=lambda: {"default": DEFAULT_MATERIAL})
+    objects: list[SceneObject] = field(default_factory=list)
     source: str = "<scene>"
     load_seconds: float | None = None  # time load_scene spent reading and validating
     files: tuple = ()  # the files it was read from: the scene file, then the mesh files it names
     cameras: tuple = ()  # the cameras the mesh files define (camera.FileCamera), for `warprt info`
+
+    def __post_init__(self):
+        self.lights, self.objects = (list(v) if isinstance(v, tuple) else v for v in (self.lights, self.objects))
+        if isinstance(self.materials, dict) and "default" not in self.materials and \
+                any(getattr(o, "material", None) == "default" for o in self.objects or ()):
+            self.materials = {"default": DEFAULT_MATERIAL, **self.materials}  # first, as a file has it
 
     @property
     def triangle_count(self) -> int:
@@ -226,5 +282,3 @@ class Scene:
     def with_render(self, **kw) -> "Scene":
         return replace(self, render=replace(self.render, **kw))
 
-
-DEFAULT_MATERIAL = Material(kd=(0.7, 0.7, 0.7), ks=(0.3, 0.3, 0.3), shininess=32.0)

@@ -140,6 +140,10 @@ class Shading:
     normals: np.ndarray | None
     smooth: bool
 
+    def take(self, a: np.ndarray | None) -> np.ndarray | None:
+        """A per-vertex array (positions, uv, colours) for the new vertices."""
+        return a if a is None or self.keep is None else np.ascontiguousarray(a[self.keep])
+
 
 def resolve_normals(vertices, faces, smooth, file_normals=None, smoothing_group=None,
                     auto_crease: float = AUTO_CREASE_DEGREES) -> Shading:

@@ -9,6 +9,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..errors import show
+from .toml_fields import TableReader, did_you_mean
+
 # Built here in NumPy rather than with trimesh.creation: importing trimesh costs about 0.6 s,
 # which a scene made of built-in shapes should not pay at every start.
 
@@ -195,3 +198,58 @@ SHAPES = {
 
 # The shapes whose texture coordinates are defined, and their builders with uv.
 WITH_UV = {"plane": plane_uv, "box": box_uv, "uv_sphere": uv_sphere_uv}
+
+# The keys of an [[objects]] table besides its shape's parameters.
+OBJECT_KEYS = {"name", "mesh", "shape", "material", "scale", "rotate", "translate", "smooth", "up"}
+
+
+def read_shape(r: TableReader, textured: bool):
+    """The table's shape (``shape = "..."``) built from its parameters: (kind, vertices, faces, uv, colors),
+    uv where ``textured`` and the shape has them (WITH_UV) or given (triangles), colours where given."""
+    kind = r.string("shape")
+    if kind not in SHAPES:
+        r.fail("shape", f"unknown shape '{kind}'{did_you_mean(kind, SHAPES)}; expected one of: {', '.join(SHAPES)}")
+    builder, params = SHAPES[kind]
+    r.check_keys(OBJECT_KEYS | set(params))
+    args = {p: _read_parameter(r, p, ptype, default) for p, (ptype, default) in params.items()
+            if p in r.table or ptype not in ("uv", "colors")}
+    if kind == "triangles":
+        n = len(args["vertices"])
+        for key in ("uv", "colors"):
+            if key in args and len(args[key]) != n:
+                r.fail(key, f"expected one per vertex ({n}), got {len(args[key])}")
+        uv, colors = args.pop("uv", None), args.pop("colors", None)
+        return (kind, *builder(**args), uv, colors)
+    if textured and kind in WITH_UV:
+        return (kind, *WITH_UV[kind](**args), None)
+    return (kind, *builder(**args), None, None)
+
+
+def _read_parameter(r: TableReader, p: str, ptype: str, default):
+    """One shape parameter of SHAPES, checked as its kind says."""
+    if ptype == "positive":
+        return r.number(p, default, lo=0.0, lo_open=True)
+    if ptype.startswith("int"):
+        if isinstance(default, list):
+            v = r.vector(p, default, n=2)
+            if any(x != int(x) or x < 3 for x in v):
+                r.fail(p, f"expected 2 integers >= 3, got {list(v)}")
+            return tuple(int(x) for x in v)
+        return r.integer(p, default, lo=int(ptype[3:]), hi=8 if p == "subdivisions" else 100000)
+    if ptype in ("size3", "size2"):
+        v = r.vector(p, default, n=int(ptype[-1]), allow_scalar=True)
+        if min(v) <= 0:
+            r.fail(p, f"expected positive sizes, got {list(v)}")
+        return v
+    if ptype in ("points", "uv", "colors"):
+        width, what, min_rows = {"points": (3, "[x, y, z] points (at least 3)", 3), "uv": (2, "[u, v] per vertex", 1),
+                                 "colors": (3, "[r, g, b] per vertex", 1)}[ptype]
+        return r.rows(p, width, what, min_rows, nonneg=ptype == "colors")
+    v = r.table.get(p)  # "faces"
+    try:
+        a = np.asarray(v)
+    except (TypeError, ValueError):
+        a = None
+    if a is None or a.ndim != 2 or a.shape[1] != 3 or len(a) < 1 or a.dtype.kind not in "iu":
+        r.fail(p, f"expected a list of [i, j, k] integer vertex indices, got {show(v)}")
+    return a.astype(np.int64)

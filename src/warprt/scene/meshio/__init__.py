@@ -17,7 +17,8 @@ import numpy as np
 from ...diagnostics import warn
 from ...errors import SceneError
 from ..model import Material, SceneObject
-from ..normals import face_normals_and_angles, resolve_normals, vertex_normals, weld_corner_normals
+from ..normals import face_normals_and_angles, vertex_normals, weld_corner_normals
+from ..placement import Placement, place_triangles
 
 OWN_READERS = (".obj", ".ply", ".glb", ".gltf")
 TRIMESH_FORMATS = (".stl", ".off")
@@ -219,32 +220,18 @@ def unique_name(name: str, taken) -> str:
 # --- a file's parts as scene objects ------------------------------------------------------------------
 
 
-def file_objects(name: str, mesh: MeshFile, materials: dict, fallback: str, smooth, place=None, linear=None,
+def file_objects(name: str, mesh: MeshFile, materials: dict, fallback: str, smooth, placement: Placement | None = None,
                  use_file_materials: bool = True, auto_crease: float | None = None) -> list[SceneObject]:
-    """The file placed in the scene by ``place`` (vertices (N, 3) -> world; ``linear`` its linear
-    part, for normals) as SceneObjects: one per material the file gives its faces (its materials join
-    ``materials`` as "<name>/<material>"; faces without one, or all of them when use_file_materials is
-    False, get ``fallback``), shaded as ``smooth`` says (normals.resolve_normals), with the file's uvs
-    and vertex colours."""
-    linear = np.eye(3) if linear is None else np.asarray(linear, np.float64)
-    with np.errstate(all="ignore"):  # an absurd scale is reported once, by place()
-        mirrored = np.linalg.det(linear) < 0  # a mirroring placement turns the winding over
-        normal_map = np.linalg.inv(linear)  # normals as row vectors: n' = n L^-1 (the inverse transpose)
+    """The file placed in the scene by ``placement`` (None: as the file places it) as SceneObjects: one per
+    material the file gives its faces (its materials join ``materials`` as "<name>/<material>"; faces
+    without one, or all of them when use_file_materials is False, get ``fallback``), shaded as ``smooth``
+    says (normals.resolve_normals), with the file's uvs and vertex colours."""
     kw = {} if auto_crease is None else {"auto_crease": auto_crease}
     placed = []
     for p in mesh.parts:
-        vertices = p.vertices if place is None else place(p.vertices)
-        faces, normals = p.faces, p.normals
-        if mirrored:
-            faces = faces[:, ::-1]
-            normals = None if normals is None else normals[:, ::-1]
-        if normals is not None:
-            normals = normals @ normal_map
-        shading = resolve_normals(vertices, faces, smooth, normals, p.smoothing_group, **kw)
-        keep = shading.keep
-        take = (lambda a: a if a is None or keep is None else a[keep])
-        placed.append([take(vertices), shading.faces, p.face_material, take(p.uv), take(p.colors), shading.normals,
-                       shading.smooth])
+        vertices, shading = place_triangles(p.vertices, p.faces, smooth, placement, p.normals, p.smoothing_group, **kw)
+        placed.append([shading.take(vertices), shading.faces, p.face_material, shading.take(p.uv), shading.take(p.colors),
+                       shading.normals, shading.smooth])
     any_smooth = any(q[6] for q in placed)
     given = any(q[5] is not None for q in placed)
     for q in placed:
