@@ -20,11 +20,11 @@ from .worker import FrameScenes
 def default_start_method() -> str:
     """How worker processes start. "fork" where it is safe: Linux, and this process has one thread and has
     not started Warp's runtime (`warprt batch` itself: the driver only reads scenes); a worker then starts
-    with warprt and Warp imported, in milliseconds. Otherwise "forkserver" where there is one: workers fork
-    from a server that imports warprt and Warp first (about 1 s, 4 s on a busy 2-core machine, in every
-    batch's start) but starts neither Warp's runtime nor a thread; else "spawn". Never "fork" from a process
-    that has rendered: it holds warprt's thread pool, whose threads do not exist in the child, and the
-    child's first threaded frame hangs (measured)."""
+    with warprt and Warp already imported. Otherwise "forkserver" where there is one: workers fork from a
+    server that imports warprt and Warp first (a fresh interpreter's imports, which every batch's start
+    waits for) but starts neither Warp's runtime nor a thread; else "spawn". Never "fork" from a process
+    that has rendered: it holds warprt's thread pool, whose threads do not exist in the child, so the
+    child's first threaded frame waits for them for ever. What each start costs: benchmarks/ATTEMPTS.md."""
     import multiprocessing as mp
     import threading
 
