@@ -96,14 +96,15 @@ def run_one(config: str, job: Path, out: Path) -> dict:
             cluster.wait_for_nodes()
             address = cluster.address
         res["ray_start_seconds"] = time.perf_counter() - t
-    summary, first = {}, []
+    first = []
     t0 = time.perf_counter()
     res["start"] = time.monotonic()
-    rows = batch(job, out, workers=int(workers) if workers else None, ray=address, summary=summary,
-                 on_frame=lambda row: first or first.append(time.perf_counter() - t0))
-    res.update(seconds=time.perf_counter() - t0, end=time.monotonic(), frames=len(rows), workers=summary["workers"],
-               threads=summary["threads"], render_seconds=summary["render_seconds"],
-               boot_seconds=summary.get("boot_seconds"), first_frame_seconds=first[0],
+    result = batch(job, out, workers=int(workers) if workers else None, ray=address,
+                   on_frame=lambda row: first or first.append(time.perf_counter() - t0))
+    rows = result.rows
+    res.update(seconds=time.perf_counter() - t0, end=time.monotonic(), frames=len(rows), workers=result.workers,
+               threads=result.threads, render_seconds=result.render_seconds,
+               boot_seconds=list(result.boot_seconds) or None, first_frame_seconds=first[0],
                nodes=len({r["worker"].get("node", r["worker"]["host"]) for r in rows}),
                frame_ms=frame_ms([r["stats"]["times"] for r in rows]))
     if kind in ("ray", "cluster"):

@@ -336,16 +336,13 @@ stderr naming the job file and the field or frame, exit status 2, before anythin
 def cmd_batch(args) -> int:
     from .dataset import batch
 
-    summary: dict = {}
-    rows = batch(args.job, args.output_dir, workers=args.workers, ray=args.ray, shard=args.shard,
-                 resume=args.resume, quiet=args.quiet, summary=summary)
+    r = batch(args.job, args.output_dir, workers=args.workers, ray=args.ray, shard=args.shard, resume=args.resume,
+              quiet=args.quiet)
     if not args.quiet:
-        s = summary
-        secs = s.get("render_seconds") or 0.0
-        fps = f", {s['rendered'] / secs:.2f} frames/s" if secs > 0 and s["rendered"] else ""
-        workers = f" on {s['workers']} {s['backend']} workers x {s['threads']} threads" if s.get("workers") else ""
-        print(f"warprt batch: {s['rendered']} frames rendered, {s['skipped']} already done, of {len(rows)}"
-              f"{workers} in {s['seconds']:.1f} s{fps}", file=sys.stderr)
+        fps = f", {r.frames_per_second:.2f} frames/s" if r.frames_per_second else ""
+        workers = f" on {r.workers} {r.backend} workers x {r.threads} threads" if r.workers else ""
+        print(f"warprt batch: {r.rendered} frames rendered, {r.skipped} already done, of {r.frames}{workers} in "
+              f"{r.seconds:.1f} s{fps}", file=sys.stderr)
     return 0
 
 

@@ -40,15 +40,13 @@ def same_rows(a, b):
 def orbit_run(tmp_path_factory):
     d = tmp_path_factory.mktemp("orbit")
     job = write_job(d, ORBIT)
-    summary = {}
-    rows = batch(job, d / "out", workers=2, summary=summary)
-    return job, d / "out", rows, summary
+    return job, d / "out", batch(job, d / "out", workers=2)
 
 
 def test_frames_and_aovs_are_bit_identical_to_direct_renders(orbit_run):
-    job, out, rows, summary = orbit_run
-    assert [r["frame"] for r in rows] == list(range(6)) and summary["rendered"] == 6 and summary["workers"] == 2
-    for r in rows:
+    job, out, result = orbit_run
+    assert [r["frame"] for r in result.rows] == list(range(6)) and result.rendered == 6 and result.workers == 2
+    for r in result.rows:
         direct = warprt.render(warprt.load_scene(SCENE, overrides=r["overrides"]), aovs=r["aovs"])
         path = out / r["outputs"]["color"]
         assert np.array_equal(read_image(path), direct.image), r["frame"]
@@ -64,7 +62,7 @@ def test_png_and_exr_frames_are_the_files_warprt_render_writes(tmp_path):
         job = write_job(tmp_path, f'scene = "{{scene}}"\noutput = "f/{{frame}}.{ext}"\naovs = ["depth", "normal", "object"]\n'
                                   '[[cameras]]\neye = [1.0, 1.2, 4.5]\nfovy = 38.5\n[[cameras]]\ncenter = [0.2, 0.5, 0.0]\n',
                         name=f"job_{ext}.toml")
-        rows = batch(job, tmp_path / ext, workers=1)
+        rows = batch(job, tmp_path / ext, workers=1).rows
         assert [r["frame"] for r in rows] == [0, 1]
         r = rows[1]
         ref = tmp_path / f"ref.{ext}"
@@ -90,7 +88,7 @@ def test_killed_worker_leaves_every_frame_once(tmp_path):
             os.kill(others[0].pid, signal.SIGKILL)
             killed.append(others[0].pid)
 
-    rows = batch(job, tmp_path / "out", workers=2, on_frame=on_frame)
+    rows = batch(job, tmp_path / "out", workers=2, on_frame=on_frame).rows
     lines = [json.loads(x) for x in (tmp_path / "out" / "manifest.jsonl").read_text().splitlines()]
     assert killed and sorted(x["frame"] for x in lines) == list(range(12))  # one line per frame, none twice
     assert [r["frame"] for r in rows] == list(range(12))
@@ -127,9 +125,9 @@ def test_resume_after_an_interrupt_renders_only_what_is_missing(tmp_path):
     assert 2 <= len(first) < n, "the interrupt came too late to test anything"
     mtimes = {r["frame"]: (out / r["outputs"]["color"]).stat().st_mtime_ns for r in first}
 
-    summary = {}
-    rows = batch(job, out, workers=1, resume=True, summary=summary)
-    assert summary["skipped"] == len(first) and summary["rendered"] == n - len(first)
+    result = batch(job, out, workers=1, resume=True)
+    assert result.skipped == len(first) and result.rendered == n - len(first)
+    rows = result.rows
     resumed = {r["run"] for r in rows if r["frame"] not in mtimes}
     assert len(resumed) == 1 and {r["frame"] for r in rows if r["run"] in resumed} == set(range(n)) - set(mtimes)
     assert all((out / r["outputs"]["color"]).stat().st_mtime_ns == mtimes[r["frame"]] for r in first)
@@ -137,19 +135,18 @@ def test_resume_after_an_interrupt_renders_only_what_is_missing(tmp_path):
     assert every_line_is_json(manifest)  # the torn line dropped, its frame rendered again
     assert sorted(x.name for x in (out / "f").iterdir()) == [f"{k:02d}.png" for k in range(n)]
 
-    again = {}
-    batch(job, out, resume=True, summary=again)  # nothing left: no worker starts
-    assert again["rendered"] == 0 and again["skipped"] == n and "workers" not in again
+    again = batch(job, out, resume=True)  # nothing left: no worker starts
+    assert again.rendered == 0 and again.skipped == n and again.workers is None
 
 
 def test_union_of_shards_is_the_unsharded_run(orbit_run, tmp_path):
-    job, out, rows, _ = orbit_run
-    shards = [batch(job, tmp_path, workers=1, shard=f"{i}/2") for i in range(2)]
+    job, out, result = orbit_run
+    shards = [batch(job, tmp_path, workers=1, shard=f"{i}/2").rows for i in range(2)]
     assert [r["frame"] for r in shards[0]] == [0, 2, 4] and [r["frame"] for r in shards[1]] == [1, 3, 5]
     assert sorted(p.name for p in tmp_path.glob("manifest*.jsonl")) == ["manifest.shard-0-of-2.jsonl",
                                                                        "manifest.shard-1-of-2.jsonl"]
     union = sorted(read_rows(tmp_path), key=lambda r: r["frame"])
-    assert same_rows(union, rows)
+    assert same_rows(union, result.rows)
     for r in union:
         assert (tmp_path / r["outputs"]["color"]).read_bytes() == (out / r["outputs"]["color"]).read_bytes()
 
@@ -167,7 +164,7 @@ def test_workers_fork_from_a_driver_that_has_not_rendered_and_not_from_one_that_
             batch({str(job)!r}, {str(tmp_path / "a")!r}, workers=1)
             warprt.render(warprt.load_scene({str(SCENE)!r}), threads=2)
             after = default_start_method()
-            rows = batch({str(job)!r}, {str(tmp_path / "b")!r}, workers=1)
+            rows = batch({str(job)!r}, {str(tmp_path / "b")!r}, workers=1).rows
             print(before, after, len(rows))
     """)
     (tmp_path / "driver.py").write_text(script)

@@ -35,10 +35,10 @@ def ray():
 def test_ray_frames_match_direct_renders(ray, tmp_path):
     job = write_job(tmp_path, f'scene = "{{scene}}"\noutput = "f/{{frame}}_{{render.spp}}.npz"\naovs = {AOVS}\n'
                               '[orbit]\nframes = 3\n[sweep]\n"render.spp" = [1, 4]\n')
-    summary = {}
-    rows = batch(job, tmp_path / "out", ray="local", summary=summary)
+    result = batch(job, tmp_path / "out", ray="local")
+    rows = result.rows
     assert [r["frame"] for r in rows] == list(range(6)) and {r["backend"] for r in rows} == {"ray"}
-    assert summary["workers"] == len(os.sched_getaffinity(0))  # default: one actor per core
+    assert result.workers == len(os.sched_getaffinity(0))  # default: one actor per core
     assert ray.is_initialized()  # it was running before: batch leaves it running
     for r in rows:
         direct = warprt.render(warprt.load_scene(SCENE, overrides=r["overrides"]), aovs=r["aovs"])
@@ -59,7 +59,7 @@ def test_killed_actor_leaves_every_frame_once(ray, tmp_path, capfd):
             killed.append(row["worker"]["pid"])
             os.kill(killed[0], signal.SIGKILL)
 
-    rows = batch(job, tmp_path / "out", ray="local", workers=2, on_frame=on_frame)
+    rows = batch(job, tmp_path / "out", ray="local", workers=2, on_frame=on_frame).rows
     lines = [json.loads(x) for x in (tmp_path / "out" / "manifest.jsonl").read_text().splitlines()]
     assert sorted(x["frame"] for x in lines) == list(range(n))  # one line per frame, none twice
     pids = {r["worker"]["pid"] for r in rows}

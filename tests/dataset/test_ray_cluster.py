@@ -26,7 +26,7 @@ def test_two_node_cluster_runs_a_job(tmp_path):
         cluster.add_node(**args)
         cluster.wait_for_nodes()
         job = write_job(tmp_path, 'scene = "{scene}"\noutput = "f/{frame}.npz"\n[orbit]\nframes = 6\n')
-        rows = batch(job, tmp_path / "out", ray=cluster.address)
+        rows = batch(job, tmp_path / "out", ray=cluster.address).rows
         assert [r["frame"] for r in rows] == list(range(6))
         assert len({r["worker"]["node"] for r in rows}) == 2  # one actor on each node
         assert not ray.is_initialized()  # batch joined the cluster, so it left it

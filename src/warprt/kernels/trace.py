@@ -159,9 +159,9 @@ def make_first_hit(raster: bool, mirrors: bool, cull: bool = False):
 def make_ray_stack(size: int):
     """The rays of the tree waiting to be traced, ``size`` at most, in registers and local memory:
     RayRows, a matrix whose row j is waiting ray j, and the functions that make a ray a row and a row
-    a ray again. The kernel writes a row in place (``stack[top] = waiting(r)``): Warp passes structs
-    and matrices to a function by value, so a push function returning the stack copied all of it in
-    and out, and once more at every branch that might have pushed (measured in benchmarks/ATTEMPTS.md).
+    a ray again. The kernel writes a row in place (``stack[top] = waiting(r)``) because Warp passes
+    structs and matrices to a function by value: a push returning the stack would copy all of it in and
+    out, and again at every branch that might have pushed (benchmarks/ATTEMPTS.md, "The kernel at its floor").
     A row holds the ray's integers too, as floats: a level and a medium index are exact in float32."""
     RayRows = wp.types.matrix(shape=(size, 14), dtype=float)
     Row = wp.types.vector(length=14, dtype=float)
