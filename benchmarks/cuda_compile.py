@@ -35,9 +35,9 @@ EVERYTHING = dict(SHORTCUTS, aovs=AOVS, report_truncated=True)
 # per path would cost five, and a wp.static switch's code does not depend on the others'.
 RUNS = (
     ("traced", "mirrors", {}, TRACED),
-    ("shortcuts, AOVs, truncated", "mirrors", {}, EVERYTHING),
+    ("glass, spp 4, shortcuts, AOVs, truncated", "mirrors", {"materials.red.ior": 1.5, "render.spp": 4}, EVERYTHING),
     ("Z-buffer, textures, spp 4", "textured", {"render.spp": 4}, dict(algorithm="zbuffer")),
-    ("glass, textures, spp 4, shortcuts, AOVs", "whitted", {"render.spp": 4}, EVERYTHING),
+    ("textured glass", "whitted", {}, TRACED),
     ("absorbing glass", "glass_cube", {}, TRACED),
     ("light model, single-sided", "sun", {"materials.wall.double_sided": False}, TRACED),
     ("vertex colours, AOVs", "vertex_colors", {}, dict(TRACED, aovs=AOVS)),

@@ -7,7 +7,7 @@ from benchmarks.cuda_compile import ARCHS, RUNS, Failure, compile_all, compile_m
 from marks import slow
 
 
-@slow  # seven tiny renders, then ten modules x two architectures through NVRTC (about a minute on 2 cores)
+@slow  # seven tiny renders, then ten modules x two architectures through NVRTC (35 s on 2 shared cores)
 def test_every_module_of_every_path_compiles_for_cuda(tmp_path):
     runs = render_every_path()
     assert [r.label for r in runs] == [label for label, *_ in RUNS]
