@@ -94,10 +94,11 @@ def check(device: str, quick: bool = False, only=None) -> list[Comparison]:
         for label, options in PATHS.items():
             case = f"{name} {w}x{h} spp{spp} {label}"
             cpu, other = attempt(scene, "cpu", options), attempt(scene, device, options)
-            if isinstance(cpu, str) or isinstance(other, str):
-                agree = isinstance(cpu, str) and isinstance(other, str) and cpu.startswith("refused")
-                out.append(Comparison(case, error=None if agree else f"cpu: {cpu if isinstance(cpu, str) else 'ok'}; "
-                                                                     f"{device}: {other if isinstance(other, str) else 'ok'}"))
+            if isinstance(cpu, str) and isinstance(other, str) and cpu.startswith("refused") and other.startswith("refused"):
+                out.append(Comparison(f"{case} (refused on both)"))
+            elif isinstance(cpu, str) or isinstance(other, str):
+                said = lambda r: r if isinstance(r, str) else "rendered"  # noqa: E731
+                out.append(Comparison(case, error=f"cpu: {said(cpu)}; {device}: {said(other)}"))
             else:
                 out.append(compare(case, cpu, other))
             print(out[-1], flush=True)

@@ -71,3 +71,9 @@ def test_on_the_cpu_the_check_runs_every_path_and_agrees(capsys):
     lines = capsys.readouterr().out.splitlines()
     assert len([ln for ln in lines if ln.endswith("  ok")]) == len(device_check.PATHS)
     assert lines[-1].startswith(f"{len(device_check.PATHS)} images on cpu against the CPU")
+
+
+def test_a_device_that_cannot_render_fails_each_case_with_its_error(capsys):
+    results = device_check.check("cuda:7", quick=True, only={"seed"})
+    assert len(results) == len(device_check.PATHS) and not any(r.ok for r in results)
+    assert all("cuda:7: ValueError" in r.error for r in results)
