@@ -4,7 +4,7 @@ LLVM ?= /usr/lib/x86_64-linux-gnu/libLLVM.so.19.1
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 export DRJIT_LIBLLVM_PATH ?= $(LLVM)
 
-.PHONY: install install-extras llvm demo test quick figures benchmark
+.PHONY: install install-extras llvm demo test quick figures benchmark device-check
 
 # The package alone: rendering an image needs neither pytest, Mitsuba nor Ray.
 install:
@@ -38,3 +38,10 @@ figures: install-extras
 # The performance report, benchmarks/REPORT.md (26 minutes on 2 cores, quiet; run on a quiet machine).
 benchmark: install-extras llvm
 	$(PYTHON) -m benchmarks
+
+# The day a GPU is lent: every hash-list image rendered on cuda and held to the CPU's (docs/gpu.md), results in
+# benchmarks/results/device.md; without CUDA it says so and succeeds. No install step: a lent machine may be offline.
+# DEVICE=cpu: the same script on the CPU, two small scenes (CI's smoke run, so that it does not rot).
+DEVICE ?= cuda
+device-check:
+	$(PYTHON) -m benchmarks.device_check --device $(DEVICE) $(if $(filter cpu,$(DEVICE)),--quick,--out benchmarks/results/device.md)

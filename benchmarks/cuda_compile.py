@@ -1,0 +1,155 @@
+"""warprt's kernels compiled for CUDA on a machine without a GPU: tiny CPU renders through every path load
+each Warp module warprt has, then NVRTC (inside Warp, no driver needed) compiles each for every ARCHS.
+
+    python -m benchmarks.cuda_compile          # exit 1, naming each module and NVRTC's first error line
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import os
+import sys
+import tempfile
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import warprt
+from warprt.image import AOVS
+
+SCENES = Path(__file__).resolve().parent.parent / "scenes"
+
+# Turing, the oldest architecture CUDA 13 still targets, and Hopper, the H200 a session may be lent.
+ARCHS = (75, 90)
+
+# render()'s query options under the names they are getting; the old names are still accepted.
+RENAMED = {"primary": "primary_query", "shadows": "shadow_query", "reflections": "reflection_query"}
+
+TRACED = dict(primary="raytrace", shadows="bvh", reflections="bvh")
+SHORTCUTS = dict(primary="zbuffer", shadows="grid", reflections="mirrors")
+EVERYTHING = dict(SHORTCUTS, aovs=AOVS, report_truncated=True)
+
+# (label, scene, overrides, render options). Each kernel switch (the shortcuts, AOVs, the truncated
+# weights, each effect) is compiled off and on: every shortcut at once costs one kernel variant where one
+# per path would cost five, and a wp.static switch's code does not depend on the others'.
+RUNS = (
+    ("traced", "mirrors", {}, TRACED),
+    ("glass, spp 4, shortcuts, AOVs, truncated", "mirrors", {"materials.red.ior": 1.5, "render.spp": 4}, EVERYTHING),
+    ("Z-buffer, textures, spp 4", "textured", {"render.spp": 4}, dict(algorithm="zbuffer")),
+    ("textured glass", "whitted", {}, TRACED),
+    ("absorbing glass", "glass_cube", {}, TRACED),
+    ("light model, single-sided", "sun", {"materials.wall.double_sided": False}, TRACED),
+    ("vertex colours, AOVs", "vertex_colors", {}, dict(TRACED, aovs=AOVS)),
+)
+
+
+def render(scene, **options):
+    """warprt.render with the query options under their new names where render() knows them."""
+    renamed = {RENAMED.get(k, k): v for k, v in options.items()}
+    try:
+        return warprt.render(scene, **renamed)
+    except TypeError as e:
+        if renamed == options or "unexpected keyword argument" not in str(e):
+            raise
+        return warprt.render(scene, **options)
+
+
+@dataclass
+class Run:
+    label: str
+    variant: str  # the kernel variant render() reported (stats.variant)
+    modules: list  # the Warp modules holding warprt kernels this run was the first to load
+
+
+def render_every_path(width: int = 16, height: int = 12) -> list[Run]:
+    """Render RUNS on the CPU at width x height."""
+    runs = []
+    for label, name, overrides, options in RUNS:
+        before = {id(m) for m in warprt_modules()}
+        scene = warprt.load_scene(SCENES / f"{name}.toml", {"camera.width": width, "camera.height": height, **overrides})
+        variant = render(scene, **options).stats.variant
+        runs.append(Run(label, variant, [m for m in warprt_modules() if id(m) not in before]))
+    return runs
+
+
+def warprt_modules() -> list:
+    """The Warp modules holding a warprt kernel that this process has loaded for a device (launched):
+    those named after warprt's Python modules and the 'unique' ones its kernel factories make."""
+    from warp._src.context import user_modules
+
+    return [m for m in list(user_modules.values())
+            if m.execs and any(k.func.__module__.startswith("warprt.") for k in m.kernels.values())]
+
+
+@dataclass
+class Failure:
+    module: str
+    arch: int
+    error: str  # NVRTC's first error line
+
+    def __str__(self) -> str:
+        return f"{self.module} (sm_{self.arch}): {self.error}"
+
+
+@contextlib.contextmanager
+def native_stderr(into: Path):
+    """File descriptor 2 into ``into``: Warp's native code prints NVRTC's log there, not to sys.stderr."""
+    sys.stderr.flush()
+    saved = os.dup(2)
+    with open(into, "wb") as f:
+        os.dup2(f.fileno(), 2)
+    try:
+        yield
+    finally:
+        sys.stderr.flush()
+        os.dup2(saved, 2)
+        os.close(saved)
+
+
+def first_error(log: str, fallback: str) -> str:
+    """NVRTC's first error line in ``log`` ('file.cu(62): error: ...'), else ``fallback``."""
+    lines = [ln.strip() for ln in log.splitlines()]
+    return next((ln for ln in lines if ": error" in ln or ln.startswith("error")), fallback)
+
+
+def compile_module(module, arch: int, out: Path, ptx: bool = False) -> Path | Failure:
+    """``module`` compiled by NVRTC for sm_``arch`` into ``out``: the CUBIN (or PTX), or the Failure."""
+    import warp as wp
+
+    log = out / f"nvrtc_{module.name}_{arch}.log"
+    try:
+        with native_stderr(log):
+            (path,) = wp.compile_aot_module(module, arch=arch, use_ptx=ptx, module_dir=out)
+        return path
+    except Exception as e:  # Warp says only 'CUDA kernel build failed'; NVRTC's reason is in the log
+        return Failure(module.name, arch, first_error(log.read_text(errors="replace"), str(e)))
+
+
+def compile_all(modules, out: Path, archs=ARCHS, ptx: bool = False) -> tuple[list[Path], list[Failure]]:
+    done, failed = [], []
+    for module in modules:
+        for arch in archs:
+            result = compile_module(module, arch, out, ptx)
+            (failed if isinstance(result, Failure) else done).append(result)
+    return done, failed
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--ptx", action="store_true", help="PTX instead of CUBIN (NVRTC without its ptxas step)")
+    args = ap.parse_args(argv)
+    start = time.perf_counter()
+    render_every_path()
+    modules = warprt_modules()
+    with tempfile.TemporaryDirectory() as out:
+        done, failed = compile_all(modules, Path(out), ptx=args.ptx)
+    print(f"{len(modules)} modules x sm_{', sm_'.join(map(str, ARCHS))}: {len(done)} compiled, {len(failed)} failed "
+          f"in {time.perf_counter() - start:.0f} s")
+    for f in failed:
+        print(f"  {f}")
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
