@@ -17,7 +17,7 @@ from pathlib import Path
 from . import __version__, diagnostics
 from .errors import ArgumentError, SceneError, one_line
 from .options import RenderOptions
-from .scene import EFFECTS
+from .scene import EFFECTS, input_kind
 from .timing import timed
 
 EXAMPLES = """examples:
@@ -212,7 +212,7 @@ def cmd_render(args) -> int:
 def _inputs(scene) -> list:
     """The files a scene was read from, as check_distinct names them."""
     files = list(scene.files)
-    return [("scene file" if i == 0 and Path(f).suffix.lower() in (".toml", ".xml") else "mesh file", f)
+    return [("scene file" if i == 0 and input_kind(f) != "mesh" else "mesh file", f)
             for i, f in enumerate(files)]
 
 
