@@ -4,6 +4,8 @@ here: the command line reads it before it knows whether anything will render."""
 
 from __future__ import annotations
 
+import os
+import sys
 import warnings
 from dataclasses import MISSING, dataclass, field, fields, replace
 
@@ -127,6 +129,15 @@ def check_aovs(names, field: str = "aovs", source: str | None = None) -> tuple:
     return tuple(n for n in AOVS if n in names)
 
 
+def _callers_level() -> int:
+    """The warnings stacklevel of the first frame outside warprt: the line that used the old spelling."""
+    package = os.path.dirname(os.path.abspath(__file__))
+    frame, level = sys._getframe(1), 1
+    while frame is not None and os.path.abspath(frame.f_code.co_filename).startswith(package + os.sep):
+        frame, level = frame.f_back, level + 1
+    return level
+
+
 def renamed(kwargs: dict, caller: str = "render") -> dict:
     """``kwargs`` with the first release's spellings (RENAMED) read as their new names, each with a
     one-line DeprecationWarning; both spellings at once is an error."""
@@ -139,6 +150,6 @@ def renamed(kwargs: dict, caller: str = "render") -> dict:
         if new in out:
             raise TypeError(f"{caller}() got both '{k}' and its new name '{new}'")
         warnings.warn(f"{caller}(): '{k}' is now '{new}' ('{k}' goes in the next release)", DeprecationWarning,
-                      stacklevel=4)
+                      stacklevel=_callers_level())
         out[new] = out.pop(k)
     return out

@@ -132,12 +132,14 @@ def _split(name, scene) -> tuple[str, object, str]:
         hint = f" (did you mean '{close[0]}'?)" if close else f" (names: {', '.join(known[:8])}{', ...' if len(known) > 8 else ''})"
         raise SceneError(SOURCE, str(name), f"unknown parameter{hint}")
     section, rest = name.split(".", 1)
+    if section == "camera":
+        return section, None, rest
     owner, key = rest.rsplit(".", 1)
     if section == "lights":
         return section, int(owner), key
     if section == "objects":
         return section, _object_names(scene)[owner], key
-    return section, (owner if section == "materials" else None), key
+    return section, owner, key
 
 
 def _vector(name: str, value, shape: tuple) -> np.ndarray:

@@ -164,8 +164,8 @@ def read_material(source: str, name: str, t, base: Path = Path(".")) -> Material
     kd = r.vector("kd", white if "kd" in tex else d.kd, nonneg=True)
     if "ka" in t or "ka" in tex:
         ka, ka_texture = r.vector("ka", white, nonneg=True), tex.get("ka")
-    else:
-        ka, ka_texture = kd, tex.get("kd")
+    else:  # left to Material: kd and its texture, followed when kd changes (Renderer.params)
+        ka, ka_texture = None, None
     reflectivity = r.vector("reflectivity", d.reflectivity, nonneg=True, allow_scalar=True)
     ior, dielectric = None, {}
     if "ior" in t:
