@@ -200,7 +200,7 @@ class Pair:
         warprt.render(scene, threads=1, **TRACED)  # builds and keeps the geometry, compiles the variant
         self.reference = warprt.render(scene, threads=1, **TRACED)
         assert self.reference.stats.primary_query == "raytrace" and self.reference.stats.shadow_query == "bvh"
-        geom = Geometry(scene)
+        self.geom = geom = Geometry(scene)  # kept: scene_data holds its mesh by id, freed with it
         cam = scene.camera
         self.n = cam.width * cam.height
         self.data = geom.scene_data(scene)

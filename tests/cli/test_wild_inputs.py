@@ -247,7 +247,7 @@ def _interrupted_render(work, width: int) -> tuple[int, bool, bytes]:
     scene = Path(__file__).parents[2] / "scenes" / "cornell.toml"
     master, slave = pty.openpty()
     p = subprocess.Popen([sys.executable, "-m", "warprt", "render", str(scene), "-o", "out.png", "--width", str(width),
-                          "--height", str(width * 3 // 4), "--spp", "16", "--primary", "raytrace"], cwd=work,
+                          "--height", str(width * 3 // 4), "--spp", "16", "--primary-query", "raytrace"], cwd=work,
                          env={**ENV, "WARPRT_PROGRESS_AFTER": "0"}, stdin=subprocess.DEVNULL,
                          stdout=subprocess.DEVNULL, stderr=slave)
     os.close(slave)
@@ -282,7 +282,7 @@ def test_ctrl_c_exits_130_and_writes_nothing(work):
         if code != 0:
             break
         (work / "out.png").unlink()
-    assert code == 130 and sent
+    assert code == 130 and sent, (code, sent, seen[-400:])  # what it printed, if it ever fails under load
     assert seen.decode().replace("\r\x1b[K", "\n").splitlines()[-1] == "warprt: interrupted"
     assert sorted(os.listdir(work)) == ["ok.toml", "tri.obj"]
 
@@ -432,7 +432,7 @@ def test_a_frame_bigger_than_the_memory_limit_is_refused_before_allocating(work)
 
 def _frame_memory(work, size, primary):
     """The stats' memory record of a size x size frame rendered by the command in a process of its own."""
-    r = run(["render", "ok.toml", "--width", str(size), "--height", str(size), "--primary", primary, "-o", "m.npy",
+    r = run(["render", "ok.toml", "--width", str(size), "--height", str(size), "--primary-query", primary, "-o", "m.npy",
              "--stats", "-q", "--threads", "2"], work)
     assert r.returncode == 0, r.stderr
     stats = json.loads(r.stdout)

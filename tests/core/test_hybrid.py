@@ -49,5 +49,5 @@ def test_auto_traces_a_frame_whose_raster_buffers_would_be_large():
 
 
 def test_unknown_primary_is_a_scene_error():
-    with pytest.raises(warprt.SceneError, match=r"render\(\): primary: unknown"):
-        warprt.render(warprt.load_scene().with_camera(width=8, height=6), primary="photon")
+    with pytest.raises(warprt.SceneError, match=r"render\(\): primary_query: unknown primary query 'photon'"):
+        warprt.render(warprt.load_scene().with_camera(width=8, height=6), primary_query="photon")

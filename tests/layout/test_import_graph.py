@@ -11,7 +11,8 @@ import pytest
 ROOT = Path(__file__).resolve().parents[2]
 PACKAGE = ROOT / "src" / "warprt"
 LAYERS = ("scene", "geometry", "kernels", "image", "dataset")  # the data flow, upstream first
-FACES = {"warprt", "warprt.cli", *(f"warprt.{layer}" for layer in LAYERS)}
+# warprt.options is a face too: the options schema the CLI and the Python API are both built from.
+FACES = {"warprt", "warprt.cli", "warprt.options", *(f"warprt.{layer}" for layer in LAYERS)}
 
 
 def module_files(package: Path) -> dict[str, Path]:

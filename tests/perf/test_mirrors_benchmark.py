@@ -13,9 +13,9 @@ def test_a_small_run_renders_the_traced_images_and_reports_each_scene():
     assert set(rows) == set(mirrors.SCENES)
     assert all(r["identical"] for r in rows.values())
     # 5,158 triangles under 76,800 samples: raster_is_cheaper, so auto's warm frames take the virtual cameras.
-    assert rows["default"]["reflections"] == "mirrors" and rows["default"]["share"] > 0.9
+    assert rows["default"]["reflection_query"] == "mirrors" and rows["default"]["share"] > 0.9
     (target,) = mirrors.target_rows(data)
-    taken = all(r["reflections"] == "mirrors" for r in rows.values())
+    taken = all(r["reflection_query"] == "mirrors" for r in rows.values())
     assert target[2] == ("met" if taken and max(r["ratio"] for r in rows.values()) <= mirrors.TARGET else "not met")
     assert all(f"{name} {r['ratio']:.3f}x" in target[1] for name, r in rows.items())
     assert mirrors.report(data).count("\n| ") == len(rows) + 1
