@@ -66,13 +66,14 @@ def run_one(config: str, job: Path, out: Path) -> dict:
         (out / "frames").mkdir(parents=True, exist_ok=True)
         t0 = time.perf_counter()
         res["start"] = time.monotonic()
-        times, first = [], None
-        for f in j.frames:
+        times, first, renderer = [], None, warprt.Renderer(base, threads=default_threads())
+        for f in j.frames:  # one Renderer, as a user's loop would keep: its BVH reused while the mesh stays
             if config == "loop_reload":
                 scene = warprt.load_scene(j.scene_path, f.overrides)
             else:
                 scene = base.with_camera(eye=tuple(f.overrides["camera.eye"]))
-            image, stats = warprt.render(scene, threads=default_threads())
+            renderer.set_scene(scene)
+            image, stats = renderer.render()
             write_image(out / f.outputs["color"], image)
             times.append(stats.times)
             first = first or time.perf_counter() - t0

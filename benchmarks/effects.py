@@ -43,11 +43,12 @@ def glass_sphere(scene):
 
 def warm_time(scene, geometry, repeat, **kw) -> tuple[float, dict]:
     """Median wall time of a warm render (kernel variant compiled, BVH built once)."""
-    result = warprt.render(scene, geometry=geometry, **kw)  # compiles or loads the variant
+    renderer = warprt.Renderer(scene, geometry=geometry, **kw)
+    result = renderer.render()  # compiles or loads the variant
     times = []
     for _ in range(repeat):
         t = time.perf_counter()
-        result = warprt.render(scene, geometry=geometry, **kw)
+        result = renderer.render()
         times.append(time.perf_counter() - t)
     return statistics.median(times), result.stats.rays
 

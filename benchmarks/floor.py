@@ -170,8 +170,9 @@ class Floor:
     def __init__(self, scene):
         init_warp()
         self.scene = scene
-        warprt.render(scene)  # the first two frames build and keep what the next frames reuse
-        reference = warprt.render(scene)
+        self.renderer = warprt.Renderer(scene)
+        self.renderer.render()  # the first two frames build and keep what the next frames reuse
+        reference = self.renderer.render()
         self.reference = reference
         self.raster = reference.stats.primary_query == "zbuffer"
         self.fx = resolve_effects(scene)
@@ -224,7 +225,7 @@ def measure(scene, repeat: int = 3) -> dict:
     warm, free = [], []
     for _ in range(repeat):  # alternated, so both see the same machine
         t = time.perf_counter()
-        warprt.render(scene)
+        floor.renderer.render()
         warm.append(time.perf_counter() - t)
         free.append(floor.frame(replay=True)[1])
     return {"warm": statistics.median(warm), "floor": statistics.median(free), "identical": same,

@@ -197,8 +197,9 @@ class Pair:
             raise ValueError(f"the floor kernel writes effects {sorted(SUPPORTED)} with {sorted(REQUIRED)} on; "
                              f"this scene has {sorted(names)}")
         self.scene = scene
-        warprt.render(scene, threads=1, **TRACED)  # builds and keeps the geometry, compiles the variant
-        self.reference = warprt.render(scene, threads=1, **TRACED)
+        self.renderer = warprt.Renderer(scene, threads=1, **TRACED)
+        self.renderer.render()  # builds and keeps the geometry, compiles the variant
+        self.reference = self.renderer.render()
         assert self.reference.stats.primary_query == "raytrace" and self.reference.stats.shadow_query == "bvh"
         self.geom = geom = Geometry(scene)  # kept: scene_data holds its mesh by id, freed with it
         cam = scene.camera
@@ -245,14 +246,14 @@ class Pair:
 
 def measure(scene, repeat: int = 5) -> dict:
     """Medians of ``repeat`` alternated runs: the floor, warprt's kernel as render() launches it, in one
-    launch, in one launch row-major; and the whole warprt.render on one thread. The ratios to the floor
+    launch, in one launch row-major; and a warm frame of a Renderer on one thread. The ratios to the floor
     are medians of each repeat's own ratio, so a load that drifts between repeats cancels; the order
     is reversed every other repeat, so none always runs first."""
     pair = Pair(scene)
     row = pair.difference()
     runs = {"floor": pair.run_floor, "warprt": pair.run_warprt, "one_launch": lambda: pair.run_warprt(1),
             "row_major": lambda: pair.run_warprt(1, (scene.camera.width, 1)),
-            "render": lambda: _render_seconds(scene)}
+            "render": lambda: _render_seconds(pair.renderer)}
     times = {k: [] for k in runs}
     for j in range(repeat):
         for k in list(runs)[::1 if j % 2 == 0 else -1]:
@@ -268,9 +269,9 @@ def ratio(row: dict, key: str = "warprt") -> float:
     return row.get(f"{key}_ratio", row[key] / row["floor"])
 
 
-def _render_seconds(scene) -> float:
+def _render_seconds(renderer) -> float:
     t = time.perf_counter()
-    warprt.render(scene, threads=1, **TRACED)
+    renderer.render()
     return time.perf_counter() - t
 
 

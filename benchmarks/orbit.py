@@ -40,17 +40,23 @@ def run(width: int = 1024, height: int = 768, frames: int = 20, subdivisions: in
     orbit = []
     geometry = []
     t_all = time.perf_counter()
+    renderer = None
     for eye in orbit_eyes(scene, frames):
         t = time.perf_counter()
-        result = warprt.render(scene.with_camera(eye=eye))
+        if renderer is None:
+            renderer = warprt.Renderer(scene.with_camera(eye=eye))
+        else:
+            renderer.set_scene(scene.with_camera(eye=eye))
+        result = renderer.render()
         orbit.append(time.perf_counter() - t)
         geometry.append(result.stats.geometry["bvh"])
     total = time.perf_counter() - t_all
-    warprt.render(scene)
+    renderer.set_scene(scene)
+    renderer.render()
     static = []
     for _ in range(repeat):
         t = time.perf_counter()
-        result = warprt.render(scene)
+        result = renderer.render()
         static.append(time.perf_counter() - t)
     return {"width": width, "height": height, "frames": frames, "triangles": result.stats.triangles,
             "orbit_frames": orbit, "orbit_per_frame": total / frames, "bvh": geometry,

@@ -28,11 +28,13 @@ def timed_result(scene, geometry, repeat: int, warmup_size: tuple[int, int] | No
     """(the last RenderResult, median seconds) of ``repeat`` >= 1 warm renders. For an expensive frame,
     ``warmup_size`` (width, height) makes the first, untimed call a small image instead of the frame."""
     warmup = scene if warmup_size is None else scene.with_camera(width=warmup_size[0], height=warmup_size[1])
-    warprt.render(warmup, geometry=geometry, **kw)
+    renderer = warprt.Renderer(warmup, geometry=geometry, **kw)  # warm frames of one Renderer, as a user's
+    renderer.render()
+    renderer.set_scene(scene, checked=True)
     times = []
     for _ in range(max(1, repeat)):
         t = time.perf_counter()
-        result = warprt.render(scene, geometry=geometry, **kw)
+        result = renderer.render()
         times.append(time.perf_counter() - t)
     return result, statistics.median(times)
 
