@@ -3,7 +3,6 @@ thread and releases the GIL, so a pool of one worker per core runs that many ban
 
 from __future__ import annotations
 
-import functools
 import os
 import threading
 from concurrent.futures import FIRST_EXCEPTION, ThreadPoolExecutor, wait
@@ -35,22 +34,18 @@ def bands_of(n_items: int, n_bands: int) -> list[tuple[int, int]]:
 POLL_SECONDS = 0.02  # how late a Ctrl-C may be noticed while bands run
 
 
-@functools.cache
-def _pool(threads: int) -> ThreadPoolExecutor:
-    """One long-lived pool per thread count: starting threads for every frame costs more than a
-    small frame's trace."""
-    return ThreadPoolExecutor(max_workers=threads, thread_name_prefix="warprt")
-
-
-def launch_bands(kernel, inputs_for, n_items: int, threads: int, bands: int, device: str, on_band=None):
+def launch_bands(kernel, inputs_for, n_items: int, threads: int, bands: int, device: str, on_band=None,
+                 pool: ThreadPoolExecutor | None = None):
     """Launch ``kernel`` over ranges of [0, n_items), with ``inputs_for(first)`` as its inputs; on the
     CPU ``threads`` bands run at once. ``on_band(first, count)`` is called when a band has finished,
-    on the worker thread that ran it.
+    on the worker thread that ran it. ``pool``: the threads to run the bands on (a Renderer's, kept for
+    its frames: handing a frame's bands to idle threads costs about 1 ms, starting the threads too about
+    0.2-0.3 ms more); without one, a pool of ``threads`` lives for this call.
 
     An exception, a KeyboardInterrupt (Ctrl-C in the main thread, or raised by ``on_band``) included,
     cancels the bands not yet started and waits for the running ones before it propagates: a Warp
-    launch cannot be stopped, and the pool is shared, so the next render would otherwise queue
-    behind the interrupted one's bands (and they would write into buffers it has let go)."""
+    launch cannot be stopped, and the bands still running would write into buffers the caller has let
+    go (a next frame would reuse them)."""
     ranges = bands_of(n_items, bands)
     stop = threading.Event()
 
@@ -72,22 +67,31 @@ def launch_bands(kernel, inputs_for, n_items: int, threads: int, bands: int, dev
         for r in ranges:
             run(r)
     else:
-        futures = [_pool(threads).submit(run, r) for r in ranges]
-        try:
-            # Waited for in short steps: a SIGINT that lands just before the main thread blocks does not
-            # wake it (CPython runs the handler at its next bytecode), and Ctrl-C would then wait for
-            # the whole frame (measured: 1 time in 12 when it came at the end of the first band).
-            while True:
-                done, running = wait(futures, timeout=POLL_SECONDS, return_when=FIRST_EXCEPTION)
-                failed = next((f for f in done if f.exception() is not None), None)
-                if failed is not None:
-                    failed.result()
-                if not running:
-                    break
-        except BaseException:
-            stop.set()
-            for f in futures:
-                f.cancel()
-            wait(futures)
-            raise
+        if pool is not None:
+            _run_bands(pool, run, ranges, stop)
+        else:
+            with ThreadPoolExecutor(max_workers=threads, thread_name_prefix="warprt") as own:
+                _run_bands(own, run, ranges, stop)
     wp.synchronize_device(device)
+
+
+def _run_bands(pool: ThreadPoolExecutor, run, ranges, stop: threading.Event):
+    """Submit a band per range and wait for them; see launch_bands for what an exception does."""
+    futures = [pool.submit(run, r) for r in ranges]
+    try:
+        # Waited for in short steps: a SIGINT that lands just before the main thread blocks does not
+        # wake it (CPython runs the handler at its next bytecode), and Ctrl-C would then wait for
+        # the whole frame (measured: 1 time in 12 when it came at the end of the first band).
+        while True:
+            done, running = wait(futures, timeout=POLL_SECONDS, return_when=FIRST_EXCEPTION)
+            failed = next((f for f in done if f.exception() is not None), None)
+            if failed is not None:
+                failed.result()
+            if not running:
+                break
+    except BaseException:
+        stop.set()
+        for f in futures:
+            f.cancel()
+        wait(futures)
+        raise

@@ -57,18 +57,18 @@ def kept_mirror_frame(caches: FrameCaches, key: tuple) -> "MirrorFrame | None":
 
 
 def mirror_frame(scene, geom, data, fx, key: tuple, threads: int, bands: int, device: str,
-                 caches: FrameCaches) -> tuple["MirrorFrame", bool]:
+                 caches: FrameCaches, pool=None) -> tuple["MirrorFrame", bool]:
     """The virtual cameras of the view ``key`` (view_key) and whether ``caches`` (the Renderer's, for
     ``geom``) kept them from an earlier frame: a static camera's rasters are the same arrays frame after
     frame, so the image is the one a fresh build gives, to the bit; only the count of rays decided
-    starts again from zero."""
+    starts again from zero. ``pool``: the threads the bands run on (launch_bands)."""
     kept = caches.virtual_cameras
     frame = kept.get(key)
     if frame is not None:
         if frame.mirrors is not None:
             frame.mirrors.decided.zero_()
         return frame, True
-    frame = MirrorFrame(scene, geom, data, fx, threads, bands, device, caches=caches)
+    frame = MirrorFrame(scene, geom, data, fx, threads, bands, device, caches=caches, pool=pool)
     kept[key] = frame
     # The oldest views go first, down to KEEP_VIEWS and MAX_BYTES (this frame's always stays).
     while len(kept) > 1 and (len(kept) > KEEP_VIEWS or sum(f.nbytes for f in kept.values()) > MAX_BYTES):
@@ -106,7 +106,8 @@ class MirrorFrame:
     scene), ``mirrors`` (the kernel's record; None when no chain was worth a raster), ``nbytes``."""
 
     def __init__(self, scene, geom, data, fx, threads: int, bands: int, device: str,
-                 margin: float = MIRROR_MARGIN_PX, stray_check: bool = True, caches: FrameCaches | None = None):
+                 margin: float = MIRROR_MARGIN_PX, stray_check: bool = True, caches: FrameCaches | None = None,
+                 pool=None):
         """``caches``: the Renderer's for ``geom`` (planar groups, unfolded scenes, raster buffers kept
         across frames), or None for a frame of its own. ``margin`` and ``stray_check`` (tests only): the
         rasters' edge margin, and whether a ray that strays from its ideal line is traced; without both
@@ -128,7 +129,7 @@ class MirrorFrame:
         spp = scene.render.spp if fx.supersampling else 1
         per_tile_samples = tile * tile * spp
         bounces = min(MAX_BOUNCES, scene.render.max_depth - 1)
-        probed = self._probe(data, planes, basis, eye, group, tile, tiles_x, tiles_y, bounces, threads, bands, device)
+        probed = self._probe(data, planes, basis, eye, group, tile, tiles_x, tiles_y, bounces, threads, bands, device, pool)
         candidates = []
         for chain, (where, side, probes) in probed.items():
             p = planes[list(chain)]
@@ -157,10 +158,10 @@ class MirrorFrame:
                                 "unfolded": unfolded})
         if not self.chains:
             return
-        self._rasterize(scene, geom, group, planes, fx, basis, eye, threads, bands, device, caches.raster_scratch)
+        self._rasterize(scene, geom, group, planes, fx, basis, eye, threads, bands, device, caches.raster_scratch, pool)
 
     @staticmethod
-    def _probe(data, planes, basis, eye, group, tile, tiles_x, tiles_y, bounces, threads, bands, device) -> dict:
+    def _probe(data, planes, basis, eye, group, tile, tiles_x, tiles_y, bounces, threads, bands, device, pool) -> dict:
         """{chain of groups: (the tiles where PROBES_PER_SIDE^2 traced camera rays per tile follow it, and
         their neighbours; the side of its last plane they start on; how many then hit something)}: which
         virtual cameras the frame needs, and where. A first bounce's side is the eye's; a later one's the
@@ -170,7 +171,7 @@ class MirrorFrame:
         c, groups = camera_data(basis, eye), wp.array(group, dtype=wp.int32, device=device)
         planes32 = wp.array(planes.astype(np.float32), dtype=wp.vec4, device=device)
         launch_bands(probe_kernel, lambda first: [data, c, groups, planes32, tile, tiles_x, PROBES_PER_SIDE, bounces,
-                                                  first, out], n, threads, bands, device)
+                                                  first, out], n, threads, bands, device, pool=pool)
         hits = out.numpy()
         found = {}
         for level in range(1, bounces + 1):
@@ -193,7 +194,7 @@ class MirrorFrame:
                 found[chain] = (where[1:-1, 1:-1].reshape(-1), float(side), hitting)
         return found
 
-    def _rasterize(self, scene, geom, group, planes, fx, basis, eye, threads, bands, device, kept_scratch: dict):
+    def _rasterize(self, scene, geom, group, planes, fx, basis, eye, threads, bands, device, kept_scratch: dict, pool):
         cam, tile = scene.camera, RASTER_TILE
         tiles_x, tiles_y = -(-cam.width // tile), -(-cam.height // tile)
         n_tiles = tiles_x * tiles_y
@@ -225,7 +226,7 @@ class MirrorFrame:
         scratch, z_clip = kept_scratch.pop((n_samples, device), None), 0.0
         for c, chain in enumerate(self.chains):
             zb = ZBuffer(scene, chain["unfolded"], flat, device=device, margin=self.margin, fragments=scratch)
-            zb.rasterize(threads, bands, tiles=chain["tiles"])
+            zb.rasterize(threads, bands, tiles=chain["tiles"], pool=pool)
             scratch, z_clip = zb.fragments, max(z_clip, float(zb.camera.z_clip))
             stored = np.nonzero(chain["tiles"])[0].astype(np.int32)
             wp.launch(gather_kernel, dim=len(stored) * per_tile,

@@ -5,6 +5,8 @@ cameras, kernel, raster, trace) that each return a typed result, and fills the s
 
 from __future__ import annotations
 
+import weakref
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -128,7 +130,37 @@ class Renderer:
         self._geometry: Geometry | None = None
         self._built_from: list = []  # _object_keys of the objects self._geometry holds
         self._scene, self._checked, self._checked_for = None, None, None
+        self._pool: ThreadPoolExecutor | None = None  # the frames' band threads, from the first that needs them
+        self._pool_threads = 0
         self.set_scene(scene)
+
+    def close(self):
+        """Stop the threads the frames' bands ran on (a next frame starts them again). ``with
+        warprt.Renderer(scene) as r:`` closes at the end; a Renderer let go closes when collected."""
+        if self._pool is not None:
+            self._pool.shutdown(wait=True)  # idle threads: they end at once
+            self._pool = None
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    def _bands_pool(self, threads, device: str | None = None) -> ThreadPoolExecutor | None:
+        """The pool a frame's bands run on where they run on several CPU threads (``threads``: a count, or
+        a FramePlan): kept from frame to frame, since handing bands to threads already started is what a
+        small frame can afford (benchmarks/ATTEMPTS.md, "A Renderer's threads")."""
+        if not isinstance(threads, int):
+            threads = threads.threads
+        device = device or self.options.device
+        if threads <= 1 or device != "cpu":
+            return None
+        if self._pool is None or self._pool_threads != threads:
+            self.close()
+            self._pool, self._pool_threads = ThreadPoolExecutor(max_workers=threads, thread_name_prefix="warprt"), threads
+            weakref.finalize(self, self._pool.shutdown, wait=False)
+        return self._pool
 
     @property
     def scene(self):
@@ -197,9 +229,9 @@ class Renderer:
             if shortcuts.raster:
                 with timed(times, "raster"):
                     zb = ZBuffer(scene, geom, replace(plan.fx, shadows=False, reflection=False), device=o.device)
-                    zb.rasterize(plan.threads, plan.bands)
+                    zb.rasterize(plan.threads, plan.bands, pool=self._bands_pool(plan))
             with timed(times, "trace"):
-                frame = _trace(scene, o, plan, geom, data, kernel, zb, used, progress)
+                frame = _trace(scene, o, plan, geom, data, kernel, zb, used, progress, self._bands_pool(plan))
             result = _finish(scene, o, plan, geom, frame)
         stats = _frame_stats(scene, o, plan, shortcuts, variant, geom, geometry_info, grid, mirrors, zb, frame, times)
         stats.memory["estimate"] = estimate
@@ -250,13 +282,14 @@ class Renderer:
         data = geom.scene_data(scene)  # the probes need the triangles and materials alone
         with timed(times, "mirrors"):
             frame, _ = mirror_frame(scene, geom, data, plan.fx, shortcuts.view, plan.threads, plan.bands, o.device,
-                                    self.caches)
+                                    self.caches, self._bands_pool(plan))
         return frame
 
     def _render_zbuffer(self, progress) -> RenderResult:
         """A frame by rasterization with the tracer's local shading (no shadows, no reflections)."""
-        result, _ = _zbuffer_frame(self._scene, self.options, lambda scene: self._frame_geometry(scene, False)[0],
-                                   progress)
+        o = self.options
+        result, _ = _zbuffer_frame(self._scene, o, lambda scene: self._frame_geometry(scene, False)[0], progress,
+                                   self._bands_pool(launch_plan(o.threads, o.bands, o.device)[0], o.device))
         return result
 
 
@@ -273,7 +306,8 @@ def render(scene, options: RenderOptions | None = None, *, geometry: Geometry | 
     or without them. ``geometry``: a Geometry built for this scene, used as it is; ``progress``: a
     progress.Progress told of each band done. Nothing is kept for a later call: frames of one scene
     that should share a BVH and caches go through one Renderer."""
-    return Renderer(scene, options, geometry=geometry, **kwargs).render(progress=progress)
+    with Renderer(scene, options, geometry=geometry, **kwargs) as r:
+        return r.render(progress=progress)
 
 
 def _without_geometry(estimate: dict, geometry) -> dict:
@@ -292,7 +326,7 @@ def given_geometry(geom: Geometry, eye) -> dict:
 
 
 def _trace(scene, o: RenderOptions, plan: FramePlan, geom: Geometry, data, kernel, zb, mirror_frame,
-           progress) -> TracedFrame:
+           progress, pool) -> TracedFrame:
     """Launch the kernel over the image: the image, the truncated weights after it (report_truncated),
     each pixel's ray counts and the AOV buffers."""
     cam, device = scene.camera, o.device
@@ -306,7 +340,7 @@ def _trace(scene, o: RenderOptions, plan: FramePlan, geom: Geometry, data, kerne
     tile_w, tile_h = o.pixel_tile or PIXEL_TILE
     inputs = lambda first: [data, c, plan.max_depth, plan.grid.k, first, tile_w, tile_h, frags, mirrors,  # noqa: E731
                             buffers, image, counts]
-    _launch_with_progress(kernel, inputs, plan.n_pixels, plan.threads, plan.bands, device, counts, progress)
+    _launch_with_progress(kernel, inputs, plan.n_pixels, plan.threads, plan.bands, device, counts, progress, pool)
     pixels = image.numpy().reshape(-1, cam.height, cam.width, 3)
     return TracedFrame(image=pixels[0].copy(), truncated=pixels[1].copy() if o.report_truncated else None,
                        per_kind=counts.numpy().sum(0, dtype=np.int64),  # no int64 copy of every pixel's counts
@@ -361,7 +395,7 @@ def _frame_stats(scene, o: RenderOptions, plan: FramePlan, shortcuts: Shortcuts,
     return stats
 
 
-def _launch_with_progress(kernel, inputs, n_pixels, threads, bands, device, counts, progress):
+def _launch_with_progress(kernel, inputs, n_pixels, threads, bands, device, counts, progress, pool=None):
     """launch_bands, telling ``progress`` (a progress.Progress) of each band done and its exact ray count
     (``counts``: each pixel's, or None where there are no rays to count)."""
     on_band = None
@@ -380,7 +414,7 @@ def _launch_with_progress(kernel, inputs, n_pixels, threads, bands, device, coun
             # Inside the try: a Ctrl-C landing while begin() waits for its thread to start must still
             # clear the line the thread may already have drawn.
             progress.begin(len(bands_of(n_pixels, bands)), n_pixels)
-        launch_bands(kernel, inputs, n_pixels, threads, bands, device, on_band)
+        launch_bands(kernel, inputs, n_pixels, threads, bands, device, on_band, pool)
     finally:
         if progress is not None:
             progress.end()
@@ -406,8 +440,9 @@ def render_zbuffer(scene, options: RenderOptions | None = None, *, geometry: Geo
     return (result, zb.faces()) if return_faces else result
 
 
-def _zbuffer_frame(scene, o: RenderOptions, geometry_for, progress) -> tuple[RenderResult, ZBuffer]:
-    """The Z-buffer algorithm's frame on the Geometry ``geometry_for(scene)`` gives, and its ZBuffer."""
+def _zbuffer_frame(scene, o: RenderOptions, geometry_for, progress, pool=None) -> tuple[RenderResult, ZBuffer]:
+    """The Z-buffer algorithm's frame on the Geometry ``geometry_for(scene)`` gives, and its ZBuffer;
+    ``pool``: the threads its bands run on (launch_bands)."""
     init_warp()
     times: dict = {}
     with timed(times, "total"):
@@ -428,14 +463,14 @@ def _zbuffer_frame(scene, o: RenderOptions, geometry_for, progress) -> tuple[Ren
                 wp.load_module(m, device=o.device)
         with stats.phase("render"):  # project + bin + raster + shade
             zb = ZBuffer(scene, geom, fx, device=o.device, tile=o.raster_tile, track_uncertain=False)
-            zb.rasterize(threads, bands, skip=culled_faces(scene, geom, zb.eye) if fx.culling else None)
+            zb.rasterize(threads, bands, skip=culled_faces(scene, geom, zb.eye) if fx.culling else None, pool=pool)
             stats.times.update(zb.times)
             with stats.phase("shade"):
                 cam = scene.camera
                 image = wp.empty(cam.width * cam.height, dtype=wp.vec3, device=o.device)
                 c, k, frags = camera_data(zb.basis, zb.eye), zb.k, zb.fragments
                 _launch_with_progress(kernel, lambda first: [data, c, k, first, frags, image], cam.width * cam.height,
-                                      threads, bands, o.device, None, progress)
+                                      threads, bands, o.device, None, progress, pool)
                 out = image.numpy().reshape(cam.height, cam.width, 3).copy()
         check_finite(out, "zbuffer")
     stats.times["total"] = times["total"]

@@ -116,7 +116,8 @@ class ZBuffer:
         f = self.fragments
         return int(f.face.capacity + f.inv_depth.capacity + f.uv.capacity + f.rival_inv_depth.capacity)
 
-    def rasterize(self, threads: int, bands: int, tiles: np.ndarray | None = None, skip: np.ndarray | None = None):
+    def rasterize(self, threads: int, bands: int, tiles: np.ndarray | None = None, skip: np.ndarray | None = None,
+                  pool=None):
         """Project, bin and depth-test every triangle; times["project"|"bin"|"raster"] in seconds. With
         ``tiles`` (one flag per raster tile, row-major from the bottom), only those tiles' samples; with
         ``skip`` (one flag per triangle: culled_faces), not those triangles."""
@@ -128,7 +129,7 @@ class ZBuffer:
             if g.triangle_count:
                 # A few thousand triangles per launch: below that, launching costs more than projecting.
                 launch_bands(project_kernel, lambda first: [data, c, k, first, bounds], g.triangle_count, threads,
-                             max(1, min(bands, g.triangle_count // 4096)), dev)
+                             max(1, min(bands, g.triangle_count // 4096)), dev, pool=pool)
             if skip is not None and skip.any():
                 b = bounds.numpy()
                 b[: g.triangle_count][skip] = (1, 0, 1, 0)  # an empty rectangle: in no tile
@@ -154,7 +155,7 @@ class ZBuffer:
         with timed(self.times, "raster"):
             samples, frags = self.samples, self.fragments
             launch_bands(raster_kernel, lambda first: [data, c, starts, faces, tiles_x, tile, k, samples, first, frags],
-                         tiles_x * tiles_y, threads, max(bands, 4 * threads), dev)
+                         tiles_x * tiles_y, threads, max(bands, 4 * threads), dev, pool=pool)
 
     def uncertain(self) -> np.ndarray:
         """Where the rasterizer's visible triangle may not be the tracer's, (height, width, samples):
