@@ -150,6 +150,48 @@ def polygon_overlaps_box(px: wp.vec4d, py: wp.vec4d, m: int, u0: wp.float64, u1:
     return True
 
 
+@wp.func
+def face_projection(verts: wp.mat33d, a: int, sign: wp.float64, z_clip: wp.float64):
+    """The triangle ``verts`` (relative to the light) on the cube face of axis ``a`` and ``sign``:
+    Sutherland-Hodgman against depth >= z_clip, then the projection (u, v) = (x_b, x_c) / depth. Returns
+    the polygon's u and v (up to 4 corners) and its corner count m (0: wholly behind the face)."""
+    b = (a + 1) % 3
+    c = (a + 2) % 3
+    px = wp.vec4d()
+    py = wp.vec4d()
+    m = int(0)
+    for k in range(3):
+        P = verts[k]
+        Q = verts[(k + 1) % 3]
+        zp = sign * P[a]
+        zq = sign * Q[a]
+        if zp >= z_clip:
+            px[m] = P[b] / zp
+            py[m] = P[c] / zp
+            m += 1
+        if (zp >= z_clip) != (zq >= z_clip):
+            t = (z_clip - zp) / (zq - zp)
+            px[m] = (P[b] + t * (Q[b] - P[b])) / z_clip
+            py[m] = (P[c] + t * (Q[c] - P[c])) / z_clip
+            m += 1
+    return px, py, m
+
+
+@wp.func
+def polygon_bounds(px: wp.vec4d, py: wp.vec4d, m: int, margin: wp.float64) -> wp.vec4d:
+    """The polygon's (u_lo, u_hi, v_lo, v_hi), widened by ``margin``."""
+    u_lo = px[0]
+    u_hi = px[0]
+    v_lo = py[0]
+    v_hi = py[0]
+    for k in range(1, m):
+        u_lo = wp.min(u_lo, px[k])
+        u_hi = wp.max(u_hi, px[k])
+        v_lo = wp.min(v_lo, py[k])
+        v_hi = wp.max(v_hi, py[k])
+    return wp.vec4d(u_lo - margin, u_hi + margin, v_lo - margin, v_hi + margin)
+
+
 @wp.kernel(enable_backward=False)
 def bin_kernel(points: wp.array(dtype=wp.vec3), indices: wp.array(dtype=wp.int32), light: wp.vec3d, l: int, n: int,
                delta: wp.float64, uv_abs: wp.float64, order: wp.array(dtype=wp.int32), dmin: wp.array(dtype=wp.float64),
@@ -173,45 +215,14 @@ def bin_kernel(points: wp.array(dtype=wp.vec3), indices: wp.array(dtype=wp.int32
     entry.dmin = wp.float32(dm * wp.float64(0.999999))  # float32, rounded down
     entry.tri = f
     for face in range(6):
-        a = face / 2
         sign = one
         if face % 2 == 1:
             sign = -one
-        b = (a + 1) % 3
-        c = (a + 2) % 3
-        # Sutherland-Hodgman against depth >= z_clip, then the projection (u, v) = (x_b, x_c) / depth.
-        px = wp.vec4d()
-        py = wp.vec4d()
-        m = int(0)
-        for k in range(3):
-            P = verts[k]
-            Q = verts[(k + 1) % 3]
-            zp = sign * P[a]
-            zq = sign * Q[a]
-            if zp >= z_clip:
-                px[m] = P[b] / zp
-                py[m] = P[c] / zp
-                m += 1
-            if (zp >= z_clip) != (zq >= z_clip):
-                t = (z_clip - zp) / (zq - zp)
-                px[m] = (P[b] + t * (Q[b] - P[b])) / z_clip
-                py[m] = (P[c] + t * (Q[c] - P[c])) / z_clip
-                m += 1
+        px, py, m = face_projection(verts, face / 2, sign, z_clip)
         if m == 0:
             continue
-        u_lo = px[0]
-        u_hi = px[0]
-        v_lo = py[0]
-        v_hi = py[0]
-        for k in range(1, m):
-            u_lo = wp.min(u_lo, px[k])
-            u_hi = wp.max(u_hi, px[k])
-            v_lo = wp.min(v_lo, py[k])
-            v_hi = wp.max(v_hi, py[k])
-        u_lo -= margin
-        v_lo -= margin
-        u_hi += margin
-        v_hi += margin
+        box = polygon_bounds(px, py, m, margin)
+        u_lo, u_hi, v_lo, v_hi = box[0], box[1], box[2], box[3]
         if u_lo > one or v_lo > one or u_hi < -one or v_hi < -one:
             continue
         i0 = wp.clamp(int(wp.floor((wp.max(u_lo, -one) + one) * wp.float64(0.5) * nn)), 0, n - 1)

@@ -182,6 +182,102 @@ def make_ray_stack(size: int):
 
 
 @functools.cache
+def make_path(fx, raster_primary: bool, stack: int, report_truncated: bool, aovs: tuple, shadow_grid: bool,
+              mirrors: bool):
+    """The walk of one camera ray's tree, make_trace_kernel's inner loop: ``path(s, frags, mir, aov, r,
+    max_depth, i, pixel, samples, sample, x, row, truncated, rays)`` follows ``r`` (the camera ray) and
+    the rays it spawns to max_depth levels and returns (its colour, ``truncated`` plus the weight it cut
+    off, ``rays`` plus the rays it cast). ``truncated`` and ``rays`` go in and out, not a sum per sample,
+    so the kernel adds them in the order a single loop does: the image is the same to the bit."""
+    shade = make_shade(fx, shadow_grid)
+    surface = make_surface(fx.smooth, fx.texture, fx.vertex_color)
+    record_first_hit = make_record_first_hit(tuple(aovs), fx.texture, fx.vertex_color)
+    MIRRORS = fx.reflection and mirrors
+    first_hit = make_first_hit(raster_primary, MIRRORS, fx.culling)
+    REFLECTION, AOVS = fx.reflection, bool(aovs)
+    REFRACTION, ABSORPTION, TRUNCATED = fx.refraction, fx.absorption, report_truncated
+    RayRows, waiting, resumed = make_ray_stack(max(stack, 1))
+    COUNTS_T = wp.vec4i if REFRACTION else wp.vec3i
+
+    @wp.func
+    def path(s: SceneData, frags: Fragments, mir: Mirrors, aov: AovBuffers, camera: TreeRay, max_depth: int, i: int,
+             pixel: int, samples: int, sample: int, x: int, row: int, truncated_in: wp.vec3, rays_in: COUNTS_T):
+        r = camera
+        truncated = truncated_in
+        rays = rays_in
+        color = wp.vec3(0.0)
+        top = int(0)  # rays waiting on the stack
+        if wp.static(REFRACTION):
+            stack = RayRows()
+        while r.depth < max_depth:
+            # ---- nearest hit ----
+            h = first_hit(s, frags, mir, r, i, pixel * samples + sample, x, row, sample)
+            if h.face < 0:
+                if wp.static(ABSORPTION):
+                    if r.medium >= 0:
+                        r.weight = beer_forever(r.weight, s.absorption[r.medium])
+                color = color + wp.cw_mul(r.weight, s.background)
+            else:
+                hit = surface(s, h.face, h.u, h.v, h.normal, r.ray.d)
+                if wp.static(ABSORPTION):
+                    r.weight = absorbed(s, r.weight, r.medium, r.start, hit)
+                if wp.static(AOVS):
+                    if r.depth == 0:
+                        record_first_hit(aov, s, pixel, sample, h.face, h.u, h.v, hit, r.ray.o)
+                # ---- local shading ----
+                lit = shade(s, hit, -r.ray.d)
+                color = color + wp.cw_mul(r.weight, lit.color)
+                rays[1] += lit.shadow_rays
+                level = r.depth + 1  # the children's
+                # ---- mirror ----
+                if wp.static(REFLECTION):
+                    kr = s.kr[hit.material]
+                    if level < max_depth and wp.max(kr) > 0.0:
+                        chain = int(NO_CHAIN)
+                        if wp.static(MIRRORS):
+                            chain = mirror_chain(mir, r.chain, h.face)
+                        # a mirror's ray stays in the medium it came through
+                        r = TreeRay(spawn_ray(hit, wp.normalize(reflect(r.ray.d, hit.n))), wp.cw_mul(r.weight, kr),
+                                    hit.p, level, r.medium, chain, h.face)
+                        rays[2] += 1
+                        continue
+                    if wp.static(TRUNCATED):
+                        if level >= max_depth:
+                            truncated = truncated + wp.cw_mul(r.weight, kr)
+                # ---- dielectric ----
+                if wp.static(REFRACTION):
+                    eta = s.ior[hit.material]
+                    wanted = level < max_depth  # the children are traced, or (report_truncated) counted
+                    if wp.static(TRUNCATED):
+                        wanted = True
+                    if eta > 0.0 and wanted:
+                        ch = dielectric_children(s, h.face, hit, r.ray.d, r.weight, eta)
+                        if level < max_depth and (ch.has_r or ch.has_t):
+                            r = TreeRay(spawn_ray(hit, ch.d_r), ch.w_r, hit.p, level, ch.medium_r, NO_CHAIN, -1)
+                            if ch.has_t:  # else total internal reflection, or nothing transmitted
+                                if ch.has_r:  # the reflected ray waits, the refracted one goes on
+                                    stack[top] = waiting(r)
+                                    top += 1
+                                r = TreeRay(spawn_ray(hit, ch.d_t), ch.w_t, hit.p, level, ch.medium_t, NO_CHAIN, -1)
+                            rays[2] += wp.where(ch.has_r, 1, 0)
+                            rays[3] += wp.where(ch.has_t, 1, 0)
+                            continue
+                        if wp.static(TRUNCATED):
+                            if level >= max_depth:  # a child that carries nothing has weight +0
+                                truncated = truncated + ch.w_r + ch.w_t
+            # ---- next ray ----
+            if wp.static(REFRACTION):
+                if top > 0:  # this path has ended: the next waiting ray of the tree
+                    top -= 1
+                    r = resumed(stack[top])
+                    continue
+            break
+        return color, truncated, rays
+
+    return path
+
+
+@functools.cache
 def make_trace_kernel(fx, raster_primary: bool = False, stack: int = 0, report_truncated: bool = False,
                       aovs: tuple = (), shadow_grid: bool = False, mirrors: bool = False):
     """The kernel for one EffectSet; code for disabled effects is removed by wp.static. With
@@ -197,17 +293,11 @@ def make_trace_kernel(fx, raster_primary: bool = False, stack: int = 0, report_t
     missing), both averaged over the samples. With ``aovs`` (names, aov.py), each camera ray's first
     hit is also recorded into the AOV buffers; without, that code is absent. With fx.culling, camera,
     reflection and refraction rays pass through single-sided materials' back faces (shadow rays do not)."""
-    shade = make_shade(fx, shadow_grid)
-    surface = make_surface(fx.smooth, fx.texture, fx.vertex_color)
-    record_first_hit = make_record_first_hit(tuple(aovs), fx.texture, fx.vertex_color)
-    MIRRORS = fx.reflection and mirrors
-    first_hit = make_first_hit(raster_primary, MIRRORS, fx.culling)
-    REFLECTION, SUPERSAMPLING, AOVS = fx.reflection, fx.supersampling, bool(aovs)
-    REFRACTION, ABSORPTION, TRUNCATED = fx.refraction, fx.absorption, report_truncated
-    if REFRACTION and stack < 1:
+    if fx.refraction and stack < 1:
         raise ValueError("a kernel with refraction needs a stack: stack_size(max_depth)")
-    RayRows, waiting, resumed = make_ray_stack(max(stack, 1))
-    COUNTS = wp.vec4i if REFRACTION else wp.vec3i
+    path = make_path(fx, raster_primary, stack, report_truncated, tuple(aovs), shadow_grid, mirrors)
+    SUPERSAMPLING, TRUNCATED = fx.supersampling, report_truncated
+    COUNTS = wp.vec4i if fx.refraction else wp.vec3i
 
     @wp.kernel(module="unique", enable_backward=False)
     def trace(s: SceneData, c: CameraData, max_depth: int, k: int, first: int, tile_w: int, tile_h: int,
@@ -230,73 +320,8 @@ def make_trace_kernel(fx, raster_primary: bool = False, stack: int = 0, report_t
                 offset = sample_offset(sample, k)
             r = TreeRay(Ray(c.eye, camera_ray(c, x, row, offset[0], offset[1])), wp.vec3(1.0), c.eye, 0,
                         s.eye_medium, FROM_CAMERA, -1)
-            color = wp.vec3(0.0)
-            top = int(0)  # rays waiting on the stack
-            if wp.static(REFRACTION):
-                stack = RayRows()
-            while r.depth < max_depth:
-                # ---- nearest hit ----
-                h = first_hit(s, frags, mir, r, i, pixel * samples + sample, x, row, sample)
-                if h.face < 0:
-                    if wp.static(ABSORPTION):
-                        if r.medium >= 0:
-                            r.weight = beer_forever(r.weight, s.absorption[r.medium])
-                    color = color + wp.cw_mul(r.weight, s.background)
-                else:
-                    hit = surface(s, h.face, h.u, h.v, h.normal, r.ray.d)
-                    if wp.static(ABSORPTION):
-                        r.weight = absorbed(s, r.weight, r.medium, r.start, hit)
-                    if wp.static(AOVS):
-                        if r.depth == 0:
-                            record_first_hit(aov, s, pixel, sample, h.face, h.u, h.v, hit, r.ray.o)
-                    # ---- local shading ----
-                    lit = shade(s, hit, -r.ray.d)
-                    color = color + wp.cw_mul(r.weight, lit.color)
-                    rays[1] += lit.shadow_rays
-                    level = r.depth + 1  # the children's
-                    # ---- mirror ----
-                    if wp.static(REFLECTION):
-                        kr = s.kr[hit.material]
-                        if level < max_depth and wp.max(kr) > 0.0:
-                            chain = int(NO_CHAIN)
-                            if wp.static(MIRRORS):
-                                chain = mirror_chain(mir, r.chain, h.face)
-                            # a mirror's ray stays in the medium it came through
-                            r = TreeRay(spawn_ray(hit, wp.normalize(reflect(r.ray.d, hit.n))), wp.cw_mul(r.weight, kr),
-                                        hit.p, level, r.medium, chain, h.face)
-                            rays[2] += 1
-                            continue
-                        if wp.static(TRUNCATED):
-                            if level >= max_depth:
-                                truncated = truncated + wp.cw_mul(r.weight, kr)
-                    # ---- dielectric ----
-                    if wp.static(REFRACTION):
-                        eta = s.ior[hit.material]
-                        wanted = level < max_depth  # the children are traced, or (report_truncated) counted
-                        if wp.static(TRUNCATED):
-                            wanted = True
-                        if eta > 0.0 and wanted:
-                            ch = dielectric_children(s, h.face, hit, r.ray.d, r.weight, eta)
-                            if level < max_depth and (ch.has_r or ch.has_t):
-                                r = TreeRay(spawn_ray(hit, ch.d_r), ch.w_r, hit.p, level, ch.medium_r, NO_CHAIN, -1)
-                                if ch.has_t:  # else total internal reflection, or nothing transmitted
-                                    if ch.has_r:  # the reflected ray waits, the refracted one goes on
-                                        stack[top] = waiting(r)
-                                        top += 1
-                                    r = TreeRay(spawn_ray(hit, ch.d_t), ch.w_t, hit.p, level, ch.medium_t, NO_CHAIN, -1)
-                                rays[2] += wp.where(ch.has_r, 1, 0)
-                                rays[3] += wp.where(ch.has_t, 1, 0)
-                                continue
-                            if wp.static(TRUNCATED):
-                                if level >= max_depth:  # a child that carries nothing has weight +0
-                                    truncated = truncated + ch.w_r + ch.w_t
-                # ---- next ray ----
-                if wp.static(REFRACTION):
-                    if top > 0:  # this path has ended: the next waiting ray of the tree
-                        top -= 1
-                        r = resumed(stack[top])
-                        continue
-                break
+            color, truncated, rays = path(s, frags, mir, aov, r, max_depth, i, pixel, samples, sample, x, row,
+                                          truncated, rays)
             total = total + color
         image[pixel] = total / float(samples)
         if wp.static(TRUNCATED):
