@@ -14,7 +14,7 @@ import numpy as np
 from .._warp import init_warp, wp
 from ..geometry import Geometry, ShadowGridBuild, shadow_grid
 from ..kernels import (aov_buffers, aov_bytes, aov_sums, camera_data, empty_aov_buffers, make_shade_kernel,
-                       make_trace_kernel, raster_kernel)
+                       make_trace_kernel, raster_kernel, total_kernel)
 from ..options import RenderOptions
 from ..scene import EffectSet, camera_basis, validate_camera, validate_scene, validate_view, zbuffer_effects
 from ..timing import timed
@@ -216,7 +216,7 @@ class Renderer:
             shortcuts = choose_shortcuts(scene, o, plan, geom, self.caches)
             grid = self._shadow_grid(geom, shortcuts, times)
             data = geom.scene_data(scene, grid.grid if grid is not None else None)
-            mirrors = self._virtual_cameras(scene, plan, geom, shortcuts, times)
+            mirrors = self._virtual_cameras(scene, plan, geom, data, shortcuts, times)
             used = mirrors if mirrors is not None and mirrors.mirrors is not None else None  # None: no chain rasterized
             variant = TraceVariant(plan.fx, shortcuts.raster, plan.stack, o.report_truncated, o.aovs,
                                    grid is not None and grid.grid is not None, used is not None)
@@ -273,13 +273,14 @@ class Renderer:
         with timed(times, "shadow_grid"):
             return shadow_grid(geom, shortcuts.lights, memo=self.caches.shadow_grids, keep=SHADOW_GRIDS_KEPT)
 
-    def _virtual_cameras(self, scene, plan: FramePlan, geom: Geometry, shortcuts: Shortcuts, times: dict):
+    def _virtual_cameras(self, scene, plan: FramePlan, geom: Geometry, data, shortcuts: Shortcuts, times: dict):
         """The planar mirrors' virtual cameras the shortcuts chose, built or kept (None: reflection rays
-        traced); a MirrorFrame with no chain worth a raster is reported in the stats and not used."""
+        traced); a MirrorFrame with no chain worth a raster is reported in the stats and not used. ``data``:
+        the frame's tables (the probes read the triangles and materials alone; the tracer's own tables, so
+        that the Geometry's one kept set is not rebuilt twice a frame, with and without the grid)."""
         if not shortcuts.mirrors:
             return None
         o = self.options
-        data = geom.scene_data(scene)  # the probes need the triangles and materials alone
         with timed(times, "mirrors"):
             frame, _ = mirror_frame(scene, geom, data, plan.fx, shortcuts.view, plan.threads, plan.bands, o.device,
                                     self.caches, self._bands_pool(plan))
@@ -345,8 +346,15 @@ def _trace(scene, o: RenderOptions, plan: FramePlan, geom: Geometry, data, kerne
     return TracedFrame(image=pixels[0].copy(), truncated=pixels[1].copy() if o.report_truncated else None,
                        per_kind=counts.numpy().sum(0, dtype=np.int64),  # no int64 copy of every pixel's counts
                        buffers=buffers,
-                       mirrors_decided=int(mirrors.decided.numpy().sum()) if mirror_frame is not None else 0,
+                       mirrors_decided=_total(mirrors.decided, device) if mirror_frame is not None else 0,
                        nbytes=image.capacity + counts.capacity)
+
+
+def _total(values, device: str) -> int:
+    """The sum of an int32 array, taken on its device: 8 bytes come back."""
+    total = wp.zeros(1, dtype=wp.int64, device=device)
+    wp.launch(total_kernel, dim=values.shape[0], inputs=[values, total], device=device)
+    return int(total.numpy()[0])
 
 
 def _finish(scene, o: RenderOptions, plan: FramePlan, geom: Geometry, frame: TracedFrame) -> tuple:

@@ -140,14 +140,16 @@ class ZBuffer:
         with timed(self.times, "bin"):
             tile = self.tile
             tiles_x, tiles_y = -(-c.width // tile), -(-c.height // tile)
-            tile_count = wp.zeros(tiles_x * tiles_y, dtype=wp.int32, device=dev)
-            mask = wp.array(np.asarray(tiles if tiles is not None else [], np.int32), dtype=wp.int32, device=dev)
+            n_tiles = tiles_x * tiles_y
+            tile_count = wp.zeros(n_tiles, dtype=wp.int32, device=dev)
+            mask = (wp.array(np.asarray(tiles, np.int32), dtype=wp.int32, device=dev) if tiles is not None
+                    else wp.empty(0, dtype=wp.int32, device=dev))
             wp.launch(count_kernel, dim=g.triangle_count, inputs=[bounds, tile, tiles_x, mask, tile_count], device=dev)
-            tile_start = np.zeros(tiles_x * tiles_y + 1, np.int32)
-            tile_start[1:] = np.cumsum(tile_count.numpy())
-            self.pairs = int(tile_start[-1])
-            starts = wp.array(tile_start, dtype=wp.int32, device=dev)
-            cursor = wp.array(tile_start[:-1], dtype=wp.int32, device=dev)
+            # The scan on the device; the list's length (4 bytes) is all the host reads, to allocate it.
+            starts = wp.zeros(n_tiles + 1, dtype=wp.int32, device=dev)
+            wp.utils.array_scan(tile_count, starts[1:], inclusive=True)
+            self.pairs = int(starts[n_tiles:].numpy()[0])
+            cursor = wp.clone(starts[:n_tiles])
             faces = wp.empty(max(self.pairs, 1), dtype=wp.int32, device=dev)
             wp.launch(fill_kernel, dim=g.triangle_count, inputs=[bounds, tile, tiles_x, mask, cursor, faces], device=dev)
             wp.synchronize_device(dev)

@@ -17,7 +17,7 @@ from .clip import CLIP_SCALE
 from .dielectric import beer, beer_forever, fresnel_dielectric, refract
 from .hybrid import MARGIN_PX, uncertain, uncertain_np
 from .interaction import OFFSET_SCALE, make_surface, offset_ray_origin, reflect
-from .mirror import MARGIN_PX as MIRROR_MARGIN_PX, MAX_BOUNCES, Mirrors, gather_kernel, mirror_chain, mirror_hit, probe_kernel
+from .mirror import MARGIN_PX as MIRROR_MARGIN_PX, MAX_BOUNCES, Mirrors, gather_kernel, mirror_chain, mirror_hit, probe_kernel, total_kernel
 from .raster import Fragments, count_kernel, fill_kernel, project_kernel, raster_kernel
 from .shading import phong_diffuse, phong_specular
 from .shadow import grid_occluded
@@ -30,6 +30,6 @@ __all__ = ["CLIP_SCALE", "CameraData", "Fragments", "MARGIN_PX", "MAX_BOUNCES", 
            "Mirrors", "OFFSET_SCALE", "aov_buffers", "aov_bytes", "aov_sums", "camera_data", "camera_ray",
            "beer", "beer_forever", "count_kernel", "empty_aov_buffers", "fill_kernel", "fresnel_dielectric", "gather_kernel", "grid_occluded",
            "init_warp", "make_shade_kernel", "make_surface", "make_trace_kernel", "mirror_chain", "mirror_hit",
-           "offset_ray_origin", "phong_diffuse", "phong_specular", "probe_kernel", "project_kernel", "query_normal",
+           "offset_ray_origin", "phong_diffuse", "phong_specular", "probe_kernel", "project_kernel", "total_kernel", "query_normal",
            "raster_camera", "raster_kernel", "reflect", "refract", "sample_offset", "stack_size", "tile_order_pixel",
            "triangle", "uncertain", "uncertain_np", "unit_normal", "woop_hit", "wp"]

@@ -215,3 +215,10 @@ def probe_kernel(s: SceneData, c: CameraData, group: wp.array(dtype=wp.int32), p
             ray = spawn_ray(hit, wp.normalize(reflect(d, hit.ng)))
             o = ray.o
             d = ray.d
+
+
+@wp.kernel(enable_backward=False)
+def total_kernel(values: wp.array(dtype=wp.int32), total: wp.array(dtype=wp.int64)):
+    """total[0] += every values[i]: a per-sample count summed where it lives, so that a frame reads back
+    8 bytes for the stats rather than one int per sample."""
+    wp.atomic_add(total, 0, wp.int64(values[wp.tid()]))
