@@ -2,12 +2,17 @@
 each Warp module warprt has, then NVRTC (inside Warp, no driver needed) compiles each for every ARCHS.
 
     python -m benchmarks.cuda_compile          # exit 1, naming each module and NVRTC's first error line
+    python -m benchmarks.cuda_compile --json   # the same as one JSON object (the test reads it)
+
+Run it in a fresh process: it compiles every warprt module the process has loaded, and a process that has
+rendered much before (a test worker) holds hundreds of kernel variants.
 """
 
 from __future__ import annotations
 
 import argparse
 import contextlib
+import json
 import os
 import sys
 import tempfile
@@ -23,11 +28,8 @@ SCENES = Path(__file__).resolve().parent.parent / "scenes"
 # Turing, the oldest architecture CUDA 13 still targets, and Hopper, the H200 a session may be lent.
 ARCHS = (75, 90)
 
-# render()'s query options under the names they are getting; the old names are still accepted.
-RENAMED = {"primary": "primary_query", "shadows": "shadow_query", "reflections": "reflection_query"}
-
-TRACED = dict(primary="raytrace", shadows="bvh", reflections="bvh")
-SHORTCUTS = dict(primary="zbuffer", shadows="grid", reflections="mirrors")
+TRACED = dict(primary_query="raytrace", shadow_query="bvh", reflection_query="bvh")
+SHORTCUTS = dict(primary_query="zbuffer", shadow_query="grid", reflection_query="mirrors")
 EVERYTHING = dict(SHORTCUTS, aovs=AOVS, report_truncated=True)
 
 # (label, scene, overrides, render options). Each kernel switch (the shortcuts, AOVs, the truncated
@@ -45,14 +47,7 @@ RUNS = (
 
 
 def render(scene, **options):
-    """warprt.render with the query options under their new names where render() knows them."""
-    renamed = {RENAMED.get(k, k): v for k, v in options.items()}
-    try:
-        return warprt.render(scene, **renamed)
-    except TypeError as e:
-        if renamed == options or "unexpected keyword argument" not in str(e):
-            raise
-        return warprt.render(scene, **options)
+    return warprt.render(scene, **options)
 
 
 @dataclass
@@ -138,12 +133,19 @@ def compile_all(modules, out: Path, archs=ARCHS, ptx: bool = False) -> tuple[lis
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--ptx", action="store_true", help="PTX instead of CUBIN (NVRTC without its ptxas step)")
+    ap.add_argument("--json", action="store_true", help="print the runs, modules and results as one JSON object")
     args = ap.parse_args(argv)
     start = time.perf_counter()
-    render_every_path()
+    runs = render_every_path()
     modules = warprt_modules()
     with tempfile.TemporaryDirectory() as out:
         done, failed = compile_all(modules, Path(out), ptx=args.ptx)
+    if args.json:
+        print(json.dumps({"runs": [{"label": r.label, "variant": r.variant, "modules": [m.name for m in r.modules]}
+                                   for r in runs],
+                          "modules": [m.name for m in modules], "archs": list(ARCHS), "compiled": len(done),
+                          "failed": [str(f) for f in failed]}))
+        return 1 if failed else 0
     print(f"{len(modules)} modules x sm_{', sm_'.join(map(str, ARCHS))}: {len(done)} compiled, {len(failed)} failed "
           f"in {time.perf_counter() - start:.0f} s")
     for f in failed:
