@@ -16,7 +16,7 @@ from pathlib import Path
 
 from . import __version__, diagnostics
 from .errors import ArgumentError, SceneError, one_line
-from .options import RenderOptions
+from .options import DEVICES, RenderOptions
 from .scene import EFFECTS, input_kind
 from .timing import timed
 
@@ -62,7 +62,7 @@ OLD_FLAGS = {"--primary": "primary_query", "--shadow-rays": "shadow_query", "--r
 FLAGS = {
     "render": {o["name"]: _flag(o) for o in RENDER_OPTIONS},
     "load_scene": {"up": "--up", "camera": "--camera"},
-    "batch": {"workers": "--workers", "ray": "--ray", "shard": "--shard"},
+    "batch": {"workers": "--workers", "ray": "--ray", "shard": "--shard", "device": "--device"},
 }
 
 
@@ -336,8 +336,9 @@ stderr naming the job file and the field or frame, exit status 2, before anythin
 def cmd_batch(args) -> int:
     from .dataset import batch
 
+    _check_device(args.device)
     r = batch(args.job, args.output_dir, workers=args.workers, ray=args.ray, shard=args.shard, resume=args.resume,
-              quiet=args.quiet)
+              quiet=args.quiet, device=args.device)
     if not args.quiet:
         fps = f", {r.frames_per_second:.2f} frames/s" if r.frames_per_second else ""
         workers = f" on {r.workers} {r.backend} workers x {r.threads} threads" if r.workers else ""
@@ -381,6 +382,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--shard", metavar="I/N", help="render frames k with k mod N = I; 'auto' or 'auto/N' reads "
                                                   "SLURM_ARRAY_TASK_ID/COUNT or JOB_COMPLETION_INDEX")
     p.add_argument("--resume", action="store_true", help="skip frames whose manifest line and files exist")
+    p.add_argument("--device", choices=DEVICES, default="cpu",
+                   help="Warp device the workers render on (default: cpu); on cuda one worker unless --workers")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar (shown only on a terminal), no summary")
     p.add_argument("--debug", action="store_true", help="show tracebacks")
     p.set_defaults(func=cmd_batch)

@@ -80,3 +80,45 @@ def test_cli_run_writes_frames_and_manifest(tmp_path):
     rows = [json.loads(line) for line in (tmp_path / "manifest.jsonl").read_text().splitlines()]
     assert sorted(r["frame"] for r in rows) == [0, 1, 2]
     assert all((tmp_path / r["outputs"]["color"]).is_file() for r in rows)
+
+
+def _orbit(tmp_path, frames=2):
+    return write_job(tmp_path, f'scene = "{{scene}}"\noutput = "f/{{frame}}.png"\n'
+                               f'[set]\n"camera.width" = 16\n"camera.height" = 12\n[orbit]\nframes = {frames}\n')
+
+
+def test_device_cpu_renders_the_frames_and_the_manifest_names_the_device(tmp_path, capsys):
+    job = _orbit(tmp_path)
+    code, out, err = _main(["batch", job, "-o", tmp_path / "out", "-q", "--device", "cpu"], capsys)
+    assert code == 0, err
+    rows = [json.loads(line) for line in (tmp_path / "out" / "manifest.jsonl").read_text().splitlines()]
+    assert len(rows) == 2 and all(r["worker"]["device"] == "cpu" and r["stats"]["device"] == "cpu" for r in rows)
+
+
+@pytest.mark.parametrize("flags, expected", [
+    (["--device", "cuda"], "command line: --device: 'cuda' is not available on this machine"),
+    (["--device", "tpu"], "command line: argument --device: invalid choice: 'tpu'"),
+], ids=["cuda without a GPU", "unknown device"])
+def test_a_device_this_machine_lacks_is_one_line_exit_2(tmp_path, capsys, flags, expected):
+    import warp as wp
+
+    wp.init()
+    if flags[1] == "cuda" and wp.is_cuda_available():
+        pytest.skip("this machine has CUDA: the refusal is for machines without")
+    job = _orbit(tmp_path)
+    code, out, err = _main(["batch", job, "-o", tmp_path / "out", "-q", *flags], capsys)
+    assert code == 2 and len(err.splitlines()) == 1 and expected in err, err
+    assert not (tmp_path / "out").exists() or not list((tmp_path / "out").rglob("*.png"))
+
+
+def test_batch_refuses_a_device_before_any_worker_starts(tmp_path):
+    """Python callers: the device is checked first, and a GPU with Ray is refused (not built)."""
+    import warprt.dataset as dataset
+    from warprt.errors import ArgumentError
+
+    job = _orbit(tmp_path)
+    with pytest.raises(ArgumentError, match=r"batch\(\): device: 'cuda' with Ray is not supported"):
+        dataset.batch(job, tmp_path / "out", device="cuda", ray=True)
+    with pytest.raises(ArgumentError, match=r"batch\(\): device: expected a Warp device name"):
+        dataset.batch(job, tmp_path / "out", device="")
+    assert not (tmp_path / "out").exists() or not list((tmp_path / "out").rglob("*.png"))

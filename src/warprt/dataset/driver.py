@@ -10,7 +10,7 @@ import uuid
 import warnings
 from collections.abc import Sequence
 from contextlib import closing, contextmanager
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 from ..errors import ArgumentError, SceneError
@@ -98,7 +98,7 @@ class BatchResult(Sequence):
 
 def batch(job, output_dir=None, *, workers: int | None = None, ray=None, shard=None, resume: bool = False,
           quiet: bool = True, check: bool = True, on_frame=None, start_method: str | None = None,
-          summary: dict | None = None) -> BatchResult:
+          device: str = "cpu", summary: dict | None = None) -> BatchResult:
     """Render the frames of the job file ``job`` into ``output_dir`` (default: the job file's folder): a
     BatchResult, the manifest rows of this run's frames with its counts and seconds.
 
@@ -108,6 +108,9 @@ def batch(job, output_dir=None, *, workers: int | None = None, ray=None, shard=N
     k mod N = I). ``resume``: skip frames whose manifest line and files exist. ``check``: check every
     frame's scene here before any renders (a bad frame then fails at once; without, the worker that
     meets it fails the job). ``on_frame(row)`` is called here after each frame's line is written.
+    ``device``: the Warp device the frames render on ("cpu", "cuda", "cuda:1"); on a GPU one local worker
+    renders every frame unless ``workers`` says otherwise (the GPU is the parallelism, and one process
+    holds its context), and Ray is refused (its actors would need a GPU resource each: not built yet).
     ``summary``, deprecated: a dict given the result's counts and seconds. Bad input raises SceneError
     naming the job file and the field or frame."""
     if summary is not None:
@@ -116,7 +119,8 @@ def batch(job, output_dir=None, *, workers: int | None = None, ray=None, shard=N
     times, rendered, pool = {}, {}, None
     with timed(times, "seconds"):
         shard = _checked_arguments(shard, workers)
-        j = load_job(job, output_dir)
+        _check_device(device, ray)
+        j = replace(load_job(job, output_dir), device=device)
         # Without resume every frame of the shard is to render, so the local workers start now (forked, or
         # a fork server on a thread) and boot while this thread checks the job; a bad job terminates them.
         count = j.frame_count(shard)
@@ -146,6 +150,23 @@ def batch(job, output_dir=None, *, workers: int | None = None, ray=None, shard=N
     if summary is not None:
         summary.update(_summary_dict(result))
     return result
+
+
+def _check_device(device, ray):
+    """A device this machine has (before any worker starts), and not with Ray."""
+    if not isinstance(device, str) or not device:
+        raise ArgumentError("batch", "device", f"expected a Warp device name ('cpu', 'cuda'), got {device!r}")
+    if device == "cpu":
+        return
+    if ray:
+        raise ArgumentError("batch", "device", f"'{device}' with Ray is not supported: Ray's actors render on the CPU")
+    from .._warp import init_warp, wp
+
+    init_warp()
+    if not device.startswith("cuda") or not wp.is_cuda_available():
+        raise ArgumentError("batch", "device", f"'{device}' is not available on this machine "
+                                               f"(Warp's devices: {', '.join(d.alias for d in wp.get_devices())})")
+    wp.get_device(device)  # a CUDA ordinal this machine lacks raises here, before any worker starts
 
 
 def _checked_arguments(shard, workers):
@@ -275,7 +296,7 @@ def _start_local(j: Job, frames: int, workers: int | None, start_method: str | N
 
     from .local import LocalPool
 
-    n = workers or max(1, min(default_threads(), frames))
+    n = workers or (1 if j.device != "cpu" else max(1, min(default_threads(), frames)))
     threads = max(1, default_threads() // n)
     method = start_method or default_start_method()
     if method == "fork":

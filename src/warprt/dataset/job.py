@@ -76,6 +76,7 @@ class Job:
     frames: list = field(default_factory=list)
     cameras: list = field(default_factory=list)  # per camera: its fields (an orbit's are filled in by check_scene)
     camera_labels: list = field(default_factory=list)
+    device: str = "cpu"  # the Warp device the workers render on (batch()'s device)
 
     def spec(self) -> dict:
         """What a worker needs to hold the scene (picklable, small). ``warmup``: the overrides of one frame
@@ -93,7 +94,7 @@ class Job:
                 if len(warmup) == WARMUP_VARIANTS:
                     break
         return {"scene": str(self.scene_path), "aovs": list(self.aovs), "output_dir": str(self.output_dir),
-                "warmup": warmup}
+                "warmup": warmup, "device": self.device}
 
     def frame_count(self, shard: tuple[int, int] | None = None) -> int:
         """How many frames the job (or its shard) has, known before check_scene() expands an orbit."""

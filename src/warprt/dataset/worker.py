@@ -84,6 +84,7 @@ class FrameRenderer:
 
         self.image = image
         self.threads = threads
+        self.device = spec.get("device", "cpu")
         self.aovs = tuple(spec["aovs"])
         self.output_dir = Path(spec["output_dir"])
         self.scenes = FrameScenes(spec["scene"])
@@ -111,7 +112,7 @@ class FrameRenderer:
             self.lock_seconds = time.perf_counter() - t_lock
             for tiny, primary in tiny_frames:
                 try:
-                    image.render(tiny, threads=threads, aovs=self.aovs, primary_query=primary)
+                    image.render(tiny, threads=threads, aovs=self.aovs, primary_query=primary, device=self.device)
                 except SceneError:
                     pass  # a bad frame reports itself when it is rendered
         self.warmup_seconds = time.perf_counter() - t
@@ -143,7 +144,7 @@ class FrameRenderer:
         key = id(scene.objects)
         kept = self._renderers.pop(key, None)
         if kept is None or kept[0] is not scene.objects:
-            kept = (scene.objects, self.image.Renderer(scene, threads=self.threads, aovs=self.aovs))
+            kept = (scene.objects, self.image.Renderer(scene, threads=self.threads, aovs=self.aovs, device=self.device))
         else:
             kept[1].set_scene(scene, checked=True)
         self._renderers[key] = kept
@@ -165,7 +166,7 @@ class FrameRenderer:
         except Exception as e:  # a failed write (a full disk): not bad input
             return _internal(task, e)
         return {"ok": True, "frame": task["frame"], "stats": result.stats.to_dict(),
-                "worker": {"host": socket.gethostname(), "pid": os.getpid(), "threads": self.threads,
+                "worker": {"host": socket.gethostname(), "pid": os.getpid(), "device": self.device, "threads": self.threads,
                            "frames_done": next(self._done)},
                 "seconds": seconds}
 
