@@ -90,10 +90,16 @@ def frame_estimate(scene, samples: int, raster: bool, algorithm: str = "raytrace
     return out
 
 
-def available_memory() -> tuple[int | None, str]:
-    """The bytes this process can still take, and what sets that: the least of the memory the kernel
-    could give without swapping (MemAvailable), the room left under the cgroup's limit (a container's
-    memory.max, or memory.limit_in_bytes under cgroup v1) and under RLIMIT_AS. None where none is known."""
+def available_memory(device: str = "cpu") -> tuple[int | None, str]:
+    """The bytes this process can still take, and what sets that: on a GPU the device's free memory (the
+    frame's buffers live there); on the CPU the least of the memory the kernel could give without swapping
+    (MemAvailable), the room left under the cgroup's limit (a container's memory.max, or
+    memory.limit_in_bytes under cgroup v1) and under RLIMIT_AS. None where none is known."""
+    if device != "cpu":
+        from .._warp import wp
+
+        d = wp.get_device(device)
+        return (int(d.free_memory), f"free on {d.alias} ({d.name})") if d.is_cuda else (None, "")
     found = []
     meminfo = _read("/proc/meminfo")
     for line in meminfo.splitlines():
@@ -140,10 +146,10 @@ def _read(path) -> str:
         return ""
 
 
-def check_frame_memory(scene, estimate: dict):
-    """Refuse a frame that needs more memory than the machine has, before allocating any of it: one
-    line with both numbers, rather than an allocation failure deep in Warp or the kernel's OOM killer."""
-    available, what = available_memory()
+def check_frame_memory(scene, estimate: dict, device: str = "cpu"):
+    """Refuse a frame that needs more memory than the machine (or the GPU ``device``) has, before allocating
+    any of it: one line with both numbers, rather than an allocation failure deep in Warp or the OOM killer."""
+    available, what = available_memory(device)
     if available is None or estimate["total"] <= available:
         return
     cam = scene.camera

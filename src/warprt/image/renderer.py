@@ -210,7 +210,7 @@ class Renderer:
         with timed(times, "total"):
             plan = plan_frame(scene, o)
             estimate = frame_estimate(scene, plan.grid.per_pixel, plan.raster)
-            check_frame_memory(scene, _without_geometry(estimate, self._given))  # before any buffer
+            check_frame_memory(scene, _without_geometry(estimate, self._given), o.device)  # before any buffer
             with timed(times, "bvh"):
                 geom, geometry_info = self._frame_geometry(scene)
             shortcuts = choose_shortcuts(scene, o, plan, geom, self.caches)
@@ -408,11 +408,17 @@ def _launch_with_progress(kernel, inputs, n_pixels, threads, bands, device, coun
     (``counts``: each pixel's, or None where there are no rays to count)."""
     on_band = None
     if progress is not None:
-        # On the CPU the counts live in host memory and a finished band's counts are final.
+        # On the CPU the counts live in host memory and a finished band's counts are final; on a GPU (one
+        # band: the whole image) they are read back once the band is done, which the frame does anyway.
         counts_host = counts.numpy() if counts is not None and device == "cpu" else None
 
         def report(first, count):
-            rays = int(counts_host[first:first + count].sum(dtype=np.int64)) if counts_host is not None else 0
+            if counts is None:
+                rays = 0
+            elif counts_host is not None:
+                rays = int(counts_host[first:first + count].sum(dtype=np.int64))
+            else:
+                rays = int(counts[first:first + count].numpy().sum(dtype=np.int64))
             progress.band_done(count, rays)
 
         on_band = report
@@ -457,7 +463,7 @@ def _zbuffer_frame(scene, o: RenderOptions, geometry_for, progress, pool=None) -
         threads, bands = launch_plan(o.threads, o.bands, o.device)
         fx = zbuffer_effects(scene, o.effects, o.disable)
         estimate = frame_estimate(scene, sample_grid(scene, fx).per_pixel, True, algorithm="zbuffer")
-        check_frame_memory(scene, estimate)
+        check_frame_memory(scene, estimate, o.device)
         stats = RenderStats.begin(scene, fx, threads=threads, bands=bands, device=o.device, algorithm="zbuffer",
                                   variant=f"zbuffer_{fx.variant}", max_depth=1)
         stats.rays = {"primary": 0, "shadow": 0, "reflection": 0, "refraction": 0, "total": 0}  # visibility is rasterized
