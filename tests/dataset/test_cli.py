@@ -114,11 +114,11 @@ def test_a_device_this_machine_lacks_is_one_line_exit_2(tmp_path, capsys, flags,
 def test_batch_refuses_a_device_before_any_worker_starts(tmp_path):
     """Python callers: the device is checked first, and a GPU with Ray is refused (not built)."""
     import warprt.dataset as dataset
-    from warprt.errors import ArgumentError
+    from warprt import SceneError
 
     job = _orbit(tmp_path)
-    with pytest.raises(ArgumentError, match=r"batch\(\): device: 'cuda' with Ray is not supported"):
+    with pytest.raises(SceneError, match=r"batch\(\): device: 'cuda' with Ray is not supported"):
         dataset.batch(job, tmp_path / "out", device="cuda", ray=True)
-    with pytest.raises(ArgumentError, match=r"batch\(\): device: expected a Warp device name"):
+    with pytest.raises(SceneError, match=r"batch\(\): device: expected a Warp device name"):
         dataset.batch(job, tmp_path / "out", device="")
     assert not (tmp_path / "out").exists() or not list((tmp_path / "out").rglob("*.png"))
