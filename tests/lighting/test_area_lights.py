@@ -111,7 +111,7 @@ def test_a_rectangle_emits_from_its_normals_side_only():
 def test_an_object_emits_as_an_area_light_over_its_triangles():
     """object = "lamp": the plane's own triangles, turned to face down, light the point below its corner as
     the rectangle's form factor says (the points area-weighted over its two triangles: a coarser
-    stratification than the rectangle's own, measured 0.3 % at 256 points)."""
+    stratification than the rectangle's own; measured -0.32 %, -0.055 %, +0.0014 % at 16, 64, 256 points)."""
     lamp = {"shape": "plane", "name": "lamp", "size": [A, B], "rotate": [180.0, 0.0, 0.0],
             "translate": [A / 2, C, B / 2], "material": "plate"}
     light = {"type": "area", "radiance": [L_E] * 3, "object": "lamp"}
