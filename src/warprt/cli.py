@@ -224,6 +224,9 @@ def _describe_light(light) -> str:
     """One line of `warprt info`: the light's name, type and key numbers."""
     kind = light.type
     words = [f"{light.name or '-':<16} {kind:<11}"]
+    if kind == "area":
+        over = f"object {light.object!r}" if light.object is not None else light.shape
+        return " ".join(words + [f"{over} radiance {_rounded(light.radiance)}"])
     if light.position is not None:
         words.append(f"at {_rounded(light.position)}")
     if kind != "point" and light.direction is not None:

@@ -14,7 +14,8 @@ from __future__ import annotations
 
 import numpy as np
 from .._warp import wp
-from ..scene import eye_medium, vertex_normals
+from ..scene import (EMITTER_MATERIAL, EMITTER_MATERIAL_NAME, drawn_objects, emitter_of_triangles, emitter_samples,
+                     eye_medium, vertex_normals)
 from .bvh import build_mesh, eye_reach, frame_origin, objects_center, refit_mesh
 from .shadow_grid import ShadowGrid, empty_grid
 
@@ -70,6 +71,22 @@ def light_shape(light) -> LightShape:
 
 
 @wp.struct
+class AreaLights:
+    """The area lights (scene.area), read only where a scene has some (EffectSet.area_lights): per light its
+    radiance L_e and its first sample (first[num] the total), per sample its point (relative to the frame
+    origin), its unit normal on the emitting side and the area it stands for (A / N), and per triangle the
+    area light it emits for (-1: none)."""
+
+    num: int
+    first: wp.array(dtype=wp.int32)
+    radiance: wp.array(dtype=wp.vec3)
+    points: wp.array(dtype=wp.vec3)
+    normals: wp.array(dtype=wp.vec3)
+    dA: wp.array(dtype=float)
+    tri_emitter: wp.array(dtype=wp.int32)
+
+
+@wp.struct
 class SceneData:
     mesh: wp.uint64
     points: wp.array(dtype=wp.vec3)
@@ -100,6 +117,7 @@ class SceneData:
     ambient: wp.vec3  # C_amb
     background: wp.vec3
     shadow_grid: ShadowGrid  # the light-space structure (shadow_grid.py), read where shadow rays use it
+    area: AreaLights  # a stand-in of no lights where the scene has none
 
 
 class Geometry:
@@ -111,20 +129,22 @@ class Geometry:
         # build_bvh=False: the Z-buffer needs the triangles and tables but never a ray query, and
         # its timings must not pay for a BVH (about 1.5 s for a million triangles on the CPU).
         self.device = device
-        self.center, self.center_reach = objects_center(scene.objects)
+        objects = drawn_objects(scene)  # the scene's objects, then the area lights' own shapes
+        self.center, self.center_reach = objects_center(objects)
         # The origin the rule gives this eye (planned) and the one used (tests may move it: origin=).
         self.planned_origin = self.origin_for(scene.camera.eye)
         self.origin = np.asarray(self.planned_origin if origin is None else origin, np.float64)  # world position
         # Stand-ins and uploads kept for the next frames (scene_data, _textures), made on first use.
         self._no_grid = None  # the ShadowGrid of no grid
+        self._no_area = None  # the AreaLights of no area lights
         self._no_uvs = None  # the uv array of a frame without textures
         self._texture_cache: dict = {}  # (id(image), wrap) -> (image, wp.Texture2D): an image uploaded once
         # A triangle's material is a slot: the objects' material names in order of first use, so the
         # triangle arrays depend on the objects alone and a frame with other materials only swaps tables.
-        self.material_names = list(dict.fromkeys(obj.material for obj in scene.objects))
+        self.material_names = list(dict.fromkeys(obj.material for obj in objects))
         faces, mats, smooth, owner = [], [], [], []
         base = 0
-        for index, obj in enumerate(scene.objects):
+        for index, obj in enumerate(objects):
             owner.append(np.full(len(obj.faces), index, np.int32))
             faces.append(obj.faces + base)
             mats.append(np.full(len(obj.faces), self.material_names.index(obj.material), np.int32))
@@ -136,7 +156,7 @@ class Geometry:
             self.triangle_count = 0
         else:
             self.triangle_count = int(sum(len(f) for f in faces))
-        self.points_np, normals = self._placed(scene.objects)
+        self.points_np, normals = self._placed(objects)
         self.indices_np = np.ascontiguousarray(np.concatenate(faces).reshape(-1), np.int32)
         self.tri_material_np = np.concatenate(mats)
         self.tri_smooth_np = np.concatenate(smooth)
@@ -144,13 +164,13 @@ class Geometry:
         self.reach = float(np.abs(self.points_np).max(initial=0.0))  # the largest |coordinate|
         self.eye_reach = eye_reach(self.points_np)  # E: how far an eye may move and keep this BVH
         self._boxes = None  # triangle_boxes(), once asked for
-        self.object_face_counts = [len(obj.faces) for obj in scene.objects]
+        self.object_face_counts = [len(obj.faces) for obj in objects]
         self.object_ids = None  # object_tables(), once built
-        self._object_uv = [(len(obj.vertices), getattr(obj, "uv", None)) for obj in scene.objects]
+        self._object_uv = [(len(obj.vertices), getattr(obj, "uv", None)) for obj in objects]
         self.object_uv = None  # uv_tables(), once built
         self._uv_array = None  # uv_array(), once a frame has textures or the uv AOV is asked for
-        coloured = any(getattr(o, "colors", None) is not None for o in scene.objects)
-        rgb = [o.colors if getattr(o, "colors", None) is not None else np.ones((len(o.vertices), 3)) for o in scene.objects]
+        coloured = any(getattr(o, "colors", None) is not None for o in objects)
+        rgb = [o.colors if getattr(o, "colors", None) is not None else np.ones((len(o.vertices), 3)) for o in objects]
         colors = np.concatenate(rgb).astype(np.float32) if coloured and rgb else np.ones((1, 3), np.float32)
 
         d = device
@@ -192,14 +212,15 @@ class Geometry:
         The points are then a fresh build's to the bit; only the BVH's tree differs, which can break a
         tie between two equal hits the other way. False (nothing changed) where the objects differ in
         more than that, or there is no BVH: the caller builds a new Geometry."""
-        if self.mesh is None or self.triangle_count == 0 or len(scene.objects) != len(self.object_face_counts):
+        objects = drawn_objects(scene)
+        if self.mesh is None or self.triangle_count == 0 or len(objects) != len(self.object_face_counts):
             return False
         if any(len(o.faces) != n or len(o.vertices) != m for o, n, (m, _) in
-               zip(scene.objects, self.object_face_counts, self._object_uv)):
+               zip(objects, self.object_face_counts, self._object_uv)):
             return False
-        self.center, self.center_reach = objects_center(scene.objects)
+        self.center, self.center_reach = objects_center(objects)
         self.planned_origin = self.origin = self.origin_for(scene.camera.eye)
-        self.points_np, normals = self._placed(scene.objects)
+        self.points_np, normals = self._placed(objects)
         self.reach = float(np.abs(self.points_np).max(initial=0.0))
         self.eye_reach = eye_reach(self.points_np)
         self._boxes, self._tables = None, None  # the light positions and the eye's medium follow the origin
@@ -231,23 +252,26 @@ class Geometry:
         return bool(np.abs(np.asarray(eye, np.float64) - self.origin).max() <= self.eye_reach)
 
     def light_positions(self, scene) -> np.ndarray:
-        """The kernels' light positions (L, 3): relative to the origin in float64, then float32; NaN for a
-        directional light, which has none (the shadow grid then sends its rays to the BVH)."""
+        """The kernels' light positions (L, 3) of the Whitted lights (all but area lights): relative to the
+        origin in float64, then float32; NaN for a directional light, which has none (the shadow grid then
+        sends its rays to the BVH)."""
         return np.asarray([np.asarray(l.position, np.float64) - self.origin if l.position is not None
-                           else np.full(3, np.nan) for l in scene.lights], np.float32).reshape(-1, 3)
+                           else np.full(3, np.nan) for l in scene.lights if not l.area], np.float32).reshape(-1, 3)
 
     def scene_data(self, scene, shadow_grid: ShadowGrid | None = None) -> SceneData:
         """The kernels' view of these triangles for a frame of ``scene``: its materials and textures,
         lights, ambient, background and the eye's medium as small new arrays where they changed, and the
         shadow rays' grid if one is given; the triangle arrays and the BVH are shared, never rebuilt."""
-        m = [scene.materials[n] for n in self.material_names]
+        m = [EMITTER_MATERIAL if n == EMITTER_MATERIAL_NAME else scene.materials[n] for n in self.material_names]
         dielectric = any(x.dielectric for x in m)
+        area = [l for l in scene.lights if l.area]
         # With glass, the medium the eye is in (eye_medium) depends on the eye too.
         key = (tuple(m), tuple(scene.lights), tuple(scene.render.ambient), tuple(scene.render.background),
-               id(shadow_grid), tuple(scene.camera.eye) if dielectric else None)
+               id(shadow_grid), tuple(scene.camera.eye) if dielectric else None,
+               scene.render.light_samples if area else None)
         if self._tables is not None and self._tables[0] == key:
             return self._tables[1]
-        d, lights = self.device, scene.lights
+        d, lights = self.device, [l for l in scene.lights if not l.area]
         s = SceneData()
         s.mesh = self.mesh.id if self.mesh is not None else wp.uint64(0)
         s.points = self.points
@@ -279,8 +303,37 @@ class Geometry:
         if shadow_grid is None and self._no_grid is None:
             self._no_grid = empty_grid(d)
         s.shadow_grid = shadow_grid if shadow_grid is not None else self._no_grid
+        s.area = self._area_lights(scene, area)
         self._tables = (key, s, shadow_grid, textures)  # the grid and textures kept alive with their ids
         return s
+
+    def _area_lights(self, scene, area: list) -> AreaLights:
+        """The area lights' table for a frame: light_samples points each, relative to the origin (float64,
+        then float32), and each triangle's emitter; a stand-in of no lights (kept) for a scene without."""
+        d = self.device
+        if not area:
+            if self._no_area is None:
+                a = AreaLights()
+                a.num = 0
+                a.first = wp.zeros(1, dtype=wp.int32, device=d)
+                a.radiance, a.points, a.normals = (wp.zeros(1, dtype=wp.vec3, device=d) for _ in range(3))
+                a.dA = wp.zeros(1, dtype=float, device=d)
+                a.tri_emitter = wp.full(1, -1, dtype=wp.int32, device=d)
+                self._no_area = a
+            return self._no_area
+        k = int(np.sqrt(scene.render.light_samples))
+        samples = [emitter_samples(scene, light, k) for light in area]
+        vec = lambda rows: wp.array(np.asarray(rows, np.float32).reshape(-1, 3), dtype=wp.vec3, device=d)
+        a = AreaLights()
+        a.num = len(area)
+        a.first = wp.array(np.concatenate([[0], np.cumsum([len(p) for p, _, _ in samples])]).astype(np.int32),
+                           dtype=wp.int32, device=d)
+        a.radiance = vec([l.radiance for l in area])
+        a.points = vec(np.concatenate([p - self.origin for p, _, _ in samples]))
+        a.normals = vec(np.concatenate([n for _, n, _ in samples]))
+        a.dA = wp.array(np.concatenate([w for _, _, w in samples]).astype(np.float32), dtype=float, device=d)
+        a.tri_emitter = wp.array(emitter_of_triangles(scene), dtype=wp.int32, device=d)
+        return a
 
     def uv_array(self):
         """Every vertex's texture coordinates, (0, 0) on objects without: what textured shading and the uv

@@ -56,8 +56,9 @@ def shadows_from_grid(shadow_query: str, fx, geom: Geometry, lights: np.ndarray,
     frame's shadow rays save (about one per sample and light), and from the second frame with the same
     lights on (``frames``: the LightHistory count, this frame included) when it costs less than
     GRID_HORIZON such frames save; a grid ``kept`` for these lights costs nothing. Either way the image
-    is the traced one, to the bit."""
-    if not fx.shadows or geom.triangle_count == 0 or shadow_query == "bvh":
+    is the traced one, to the bit. A scene with area lights traces every shadow ray: the grid is built
+    around point lights, and an area light's rays run to many points of it."""
+    if not fx.shadows or geom.triangle_count == 0 or shadow_query == "bvh" or fx.area_lights:
         return False
     if shadow_query == "grid":
         return True
@@ -153,6 +154,8 @@ def choose_shortcuts(scene, o: RenderOptions, plan: FramePlan, geom: Geometry, c
                              grid_kept)
     reasons["shadows"] = (f"shadow_query={o.shadow_query}" + (f", frame {frames} with these lights" if traces_shadows
                                                                else ", no shadow rays"))
+    if traces_shadows and plan.fx.area_lights:
+        reasons["shadows"] += ", traced: the grid serves point lights, and the scene has area lights"
     mirrors, view, mirrors_kept = False, None, False
     if plan.mirrors:
         view = view_key(scene, geom, plan.fx)

@@ -16,7 +16,7 @@ from ..geometry import Geometry, ShadowGridBuild, shadow_grid
 from ..kernels import (aov_buffers, aov_bytes, aov_sums, camera_data, empty_aov_buffers, make_shade_kernel,
                        make_trace_kernel, raster_kernel, total_kernel)
 from ..options import RenderOptions
-from ..scene import EffectSet, camera_basis, validate_camera, validate_scene, validate_view, zbuffer_effects
+from ..scene import EffectSet, camera_basis, drawn_objects, validate_camera, validate_scene, validate_view, zbuffer_effects
 from ..timing import timed
 from .aovs import finish_aovs
 from .caches import SHADOW_GRIDS_KEPT, FrameCaches
@@ -246,7 +246,7 @@ class Renderer:
         eye = scene.camera.eye
         if self._given is not None:
             return self._given, given_geometry(self._given, eye)
-        keys, geom = _object_keys(scene.objects), self._geometry
+        keys, geom = _object_keys(drawn_objects(scene)), self._geometry
         if geom is not None and (geom.mesh is not None or not build_bvh):
             if objects_match(self._built_from, keys):
                 if np.array_equal(geom.origin_for(eye), geom.planned_origin) and geom.covers(eye):

@@ -3,6 +3,16 @@
 with ka, kd and ks read at the hit by one function (coefficients): the material's, times its
 textures and the vertex colour where the scene has them. The general light model (spot and
 directional lights, inverse-square falloff) scales C_l by light_weight; the seed's lights compile without it.
+
+Area lights (compiled only for scenes with some: EffectSet.area_lights) are integrated over their fixed
+sample points q (scene/area.py), each a point light of intensity L_e cos_q dA_q with inverse-square falloff:
+    sum_q vis_q L_e cos_q / r_q^2 dA_q (kd max(0, n.L_q) + ks max(0, r_q.v)^n),   dA_q = A / N,
+cos_q the cosine at the emitter (0 behind it: one-sided, as Mitsuba's ``area``). kd and ks are thus read
+as BRDF values, as for a point light with inverse_square falloff (whose radiance is C_l / r^2 kd n.L,
+Mitsuba's point emitter on a diffuse BSDF with kd = reflectance / pi): a Lambertian kd = reflectance / pi
+under an area emitter of radiance L_e gives Mitsuba's (reflectance / pi) integral L_e cos cos' / r^2 dA.
+A shadow ray runs to each sample on the BVH, stopping SHADOW_EPSILON of the way short of the emitter
+(Mitsuba's spawn_ray_to does likewise), so that the emitter's own triangles do not block it.
 """
 
 from __future__ import annotations
@@ -14,6 +24,7 @@ from ..geometry import LIGHT_DIRECTIONAL, LIGHT_SPOT, LightShape, SceneData
 from .interaction import Surface, reflect, spawn_ray
 from .shadow import make_occluded
 from .texture import texel
+from .triangle import triangle, unit_normal
 
 
 @wp.func
@@ -33,6 +44,20 @@ def phong_specular(ks: wp.vec3, shininess: float, n: wp.vec3, l: wp.vec3, v: wp.
 
 
 FAR = 1.0e30  # a shadow ray towards a directional light ends nowhere (the tracer's no-limit convention)
+SHADOW_EPSILON = 1.0e-3  # the share of an area light's shadow ray left short of its sample point
+
+
+@wp.func
+def emitted(s: SceneData, f: int, d: wp.vec3) -> wp.vec3:
+    """The radiance a ray along d sees at face f: its area light's L_e from the side its winding's
+    normal points to (Mitsuba's area emitter: one-sided, si.n the winding's normal), else nothing."""
+    e = s.area.tri_emitter[f]
+    if e < 0:
+        return wp.vec3(0.0)
+    p0, p1, p2 = triangle(s, f)
+    if wp.dot(d, unit_normal(p0, p1, p2)) >= 0.0:
+        return wp.vec3(0.0)
+    return s.area.radiance[e]
 
 
 @wp.func
@@ -103,16 +128,58 @@ def make_shade(fx, shadow_grid: bool = False):
     rays when fx.shadows, answered by the BVH or, with ``shadow_grid``, by the light-space grid (the
     same answers: kernels/shadow.py)."""
     return _make_shade(fx.ambient, fx.diffuse, fx.specular, fx.shadows, fx.texture, fx.vertex_color,
-                       fx.shadows and shadow_grid, fx.light_model)
+                       fx.shadows and shadow_grid, fx.light_model, fx.area_lights)
+
+
+@functools.cache
+def make_area_light(DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool):
+    """area_light(s, hit, k, v, out): ``out`` plus the light of every area light at the hit, over its
+    sample points, one shadow ray (the BVH's any-hit query) each where the point faces both ways."""
+    occluded = make_occluded(False)
+
+    @wp.func
+    def area_light(s: SceneData, hit: Surface, k: Coefficients, v: wp.vec3, out: ShadeResult) -> ShadeResult:
+        a = s.area
+        p = hit.p
+        n = hit.n
+        for j in range(a.num):
+            L_e = a.radiance[j]
+            for q in range(a.first[j], a.first[j + 1]):
+                to_q = a.points[q] - p
+                r2 = wp.dot(to_q, to_q)
+                if not (r2 > 0.0):
+                    continue
+                L = to_q / wp.sqrt(r2)
+                n_dot_l = wp.dot(n, L)
+                cos_q = -wp.dot(a.normals[q], L)
+                if n_dot_l > 0.0 and cos_q > 0.0:
+                    visible = True
+                    if wp.static(SHADOWS):
+                        o = spawn_ray(hit, L).o
+                        to_q_o = a.points[q] - o
+                        dist = wp.length(to_q_o)
+                        out.shadow_rays += 1
+                        visible = not occluded(s, -1, o, to_q_o / dist, dist * wp.static(1.0 - SHADOW_EPSILON))
+                    if visible:
+                        lit = wp.vec3(0.0)
+                        if wp.static(DIFFUSE):
+                            lit = lit + phong_diffuse(k.kd, n_dot_l)
+                        if wp.static(SPECULAR):
+                            lit = lit + phong_specular(k.ks, s.shininess[hit.material], n, L, v, n_dot_l)
+                        out.color = out.color + wp.cw_mul(L_e, lit) * (cos_q * a.dA[q] / r2)
+        return out
+
+    return area_light
 
 
 @functools.cache
 def _make_shade(AMBIENT: bool, DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool, TEXTURE: bool, VERTEX_COLOR: bool,
-                GRID: bool = False, LIGHT_MODEL: bool = False):
+                GRID: bool = False, LIGHT_MODEL: bool = False, AREA: bool = False):
     coefficients = make_coefficients(TEXTURE, VERTEX_COLOR)
 
     # Disabled terms are absent from the generated code (wp.static).
     occluded = make_occluded(GRID)
+    area_light = make_area_light(DIFFUSE, SPECULAR, SHADOWS)
 
     @wp.func
     def shade(s: SceneData, hit: Surface, v: wp.vec3) -> ShadeResult:
@@ -163,6 +230,8 @@ def _make_shade(AMBIENT: bool, DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool, TEX
                         if wp.static(SPECULAR):
                             lit = lit + phong_specular(k.ks, s.shininess[m], n, L, v, n_dot_l)
                         out.color = out.color + wp.cw_mul(C_l, lit)
+        if wp.static(AREA and (DIFFUSE or SPECULAR)):
+            out = area_light(s, hit, k, v, out)
         return out
 
     return shade

@@ -18,7 +18,7 @@ from .hybrid import uncertain
 from .interaction import Ray, Surface, hit_point_error, make_surface, offset_ray_origin, reflect, spawn_ray
 from .mirror import FROM_CAMERA, NO_CHAIN, Mirrors, mirror_chain, mirror_hit
 from .raster import Fragments
-from .shading import make_shade
+from .shading import emitted, make_shade
 from .triangle import query_normal, triangle, unit_normal, woop_hit
 
 # The ray tree is walked depth first: at a dielectric hit one child waits on the stack while the
@@ -194,7 +194,7 @@ def make_path(fx, raster_primary: bool, stack: int, report_truncated: bool, aovs
     record_first_hit = make_record_first_hit(tuple(aovs), fx.texture, fx.vertex_color)
     MIRRORS = fx.reflection and mirrors
     first_hit = make_first_hit(raster_primary, MIRRORS, fx.culling)
-    REFLECTION, AOVS = fx.reflection, bool(aovs)
+    REFLECTION, AOVS, AREA = fx.reflection, bool(aovs), fx.area_lights
     REFRACTION, ABSORPTION, TRUNCATED = fx.refraction, fx.absorption, report_truncated
     RayRows, waiting, resumed = make_ray_stack(max(stack, 1))
     COUNTS_T = wp.vec4i if REFRACTION else wp.vec3i
@@ -224,6 +224,9 @@ def make_path(fx, raster_primary: bool, stack: int, report_truncated: bool, aovs
                 if wp.static(AOVS):
                     if r.depth == 0:
                         record_first_hit(aov, s, pixel, sample, h.face, h.u, h.v, hit, r.ray.o)
+                # ---- emitted: an area light's own surface ----
+                if wp.static(AREA):
+                    color = color + wp.cw_mul(r.weight, emitted(s, h.face, r.ray.d))
                 # ---- local shading ----
                 lit = shade(s, hit, -r.ray.d)
                 color = color + wp.cw_mul(r.weight, lit.color)

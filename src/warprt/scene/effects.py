@@ -34,6 +34,9 @@ class EffectSet:
     # Likewise: whether some material is single-sided, so that camera, reflection and refraction rays
     # pass through its back faces (a scene file's materials are double-sided unless they say otherwise).
     culling: bool = False
+    # Likewise: whether some light is an area light, integrated over its sample points (shading.py) and
+    # whose emitting triangles show its radiance.
+    area_lights: bool = False
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -46,8 +49,8 @@ class EffectSet:
         diffuse, specular, shadows, reflection); the trace kernel's name adds its path, 'trace_adsSr_gshadow'."""
         letters = {"ambient": "a", "diffuse": "d", "specular": "s", "shadows": "S",
                    "reflection": "r", "supersampling": "x", "smooth": "n", "texture": "t", "vertex_color": "c",
-                   "refraction": "T", "absorption": "b", "light_model": "L", "culling": "C"}
-        flags = ("light_model",) * self.light_model + ("culling",) * self.culling
+                   "refraction": "T", "absorption": "b", "light_model": "L", "culling": "C", "area_lights": "A"}
+        flags = ("light_model",) * self.light_model + ("culling",) * self.culling + ("area_lights",) * self.area_lights
         return "".join(letters[n] for n in self.names + flags) or "none"
 
     def __str__(self) -> str:
@@ -59,7 +62,7 @@ def scene_effects(scene) -> EffectSet:
     used = {o.material for o in scene.objects}
     mats = [scene.materials[m] for m in used]
     amb = np.asarray(scene.render.ambient)
-    lit = any(max(l.color) > 0 for l in scene.lights)
+    lit = any(max(l.radiance if l.area else l.color) > 0 for l in scene.lights)
     kd = any(max(m.peak("kd")) > 0 for m in mats)
     ks = any(max(m.peak("ks")) > 0 for m in mats)
     return EffectSet(
@@ -76,8 +79,9 @@ def scene_effects(scene) -> EffectSet:
         # inside absorbing glass).
         refraction=scene.render.max_depth > 1 and any(m.dielectric for m in mats),
         absorption=any(m.dielectric and max(m.absorption) > 0 for m in mats),
-        light_model=not all(light.seed_point for light in scene.lights),
+        light_model=not all(light.seed_point for light in scene.lights if not light.area),
         culling=not all(m.double_sided for m in mats),
+        area_lights=any(light.area for light in scene.lights),
     )
 
 
@@ -107,7 +111,7 @@ def resolve_effects(scene, allow=None, disable=()) -> EffectSet:
     keep -= parse_effects(disable, None, "disable")
     on = {n: getattr(fx, n) and n in keep for n in EFFECTS}
     on["shadows"] = on["shadows"] and (on["diffuse"] or on["specular"])  # shadows only dim those terms
-    return EffectSet(**on, light_model=fx.light_model, culling=fx.culling)
+    return EffectSet(**on, light_model=fx.light_model, culling=fx.culling, area_lights=fx.area_lights)
 
 
 def zbuffer_effects(scene, effects=None, disable=()) -> EffectSet:

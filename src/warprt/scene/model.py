@@ -66,17 +66,19 @@ class RenderSettings:
     shadows: bool = True
     spp: int = 1  # k*k stratified samples per pixel
     effects: tuple | None = None  # None: every effect the scene calls for
+    light_samples: int = 16  # k*k stratified points on each area light, one shadow ray each
 
     def __post_init__(self):
-        _convert(self, vectors=("ambient", "background"), ints=("max_depth", "spp"))
+        _convert(self, vectors=("ambient", "background"), ints=("max_depth", "spp", "light_samples"))
         if self.effects is not None and not isinstance(self.effects, tuple):
             if isinstance(self.effects, str):
                 raise SceneError("RenderSettings", "effects", f"expected a list of effect names, got {show(self.effects)}")
             object.__setattr__(self, "effects", tuple(self.effects))
 
 
-LIGHT_TYPES = ("point", "spot", "directional")
+LIGHT_TYPES = ("point", "spot", "directional", "area")
 FALLOFFS = ("none", "inverse_square")
+AREA_SHAPES = ("rectangle", "disk")  # an area light's own shape; else it names an object (Light.object)
 
 
 @dataclass(frozen=True)
@@ -95,9 +97,27 @@ class Light:
     beam_width: float | None = None  # degrees, spot only; None: 3/4 of cutoff_angle (Mitsuba's default)
     falloff: str = "none"  # FALLOFFS; a directional light has none, whatever it says (irradiance)
     name: str = ""  # the author's name for a light read from a file, "" otherwise
+    # An area light (Mitsuba's ``area`` emitter): radiance L_e leaving one side of a surface, the side
+    # its normal points to; the surface is its own ``shape`` (AREA_SHAPES) or the triangles of the
+    # objects named ``object``. A rectangle is center +- u +- v (u and v its half-edges, as the columns
+    # of Mitsuba's rectangle to_world; normal u x v), or a normal and size = (width, height) around
+    # center; a disk has center, normal, radius.
+    radiance: tuple | None = None  # L_e, area lights only
+    shape: str | None = None
+    object: str | None = None
+    center: tuple | None = None
+    normal: tuple | None = None
+    u: tuple | None = None
+    v: tuple | None = None
+    size: tuple | None = None  # rectangle: (width, height) with normal
+    radius: float | None = None  # disk
 
     def __post_init__(self):
-        _convert(self, vectors=("position", "color", "direction"))
+        _convert(self, vectors=("position", "color", "direction", "radiance", "center", "normal", "u", "v"))
+        if self.size is not None and not isinstance(self.size, (tuple, str)):
+            v = self.size
+            scalar = isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, (bool, np.bool_))
+            object.__setattr__(self, "size", (float(v),) * 2 if scalar else _as_floats(self, "size", v))
         # Said once here for every reader (TOML target, glTF node -Z, Mitsuba to_world): a unit
         # direction. A zero or non-finite one is left for validate.py to name.
         d = self.direction
@@ -110,6 +130,10 @@ class Light:
     def beam(self) -> float:
         """beam_width in degrees, its default resolved."""
         return 0.75 * self.cutoff_angle if self.beam_width is None else self.beam_width
+
+    @property
+    def area(self) -> bool:
+        return self.type == "area"
 
     @property
     def seed_point(self) -> bool:

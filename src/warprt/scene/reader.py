@@ -14,7 +14,7 @@ from . import shapes
 from .camera import aspect_note, find_camera
 from .dielectric import warn_unclosed
 from .meshio import file_objects, read_mesh_file, warn_if_tiny, warn_if_unmapped
-from .model import DEFAULT_MATERIAL, FALLOFFS, LIGHT_TYPES, Camera, Light, Material, RenderSettings, Scene, SceneObject
+from .model import AREA_SHAPES, DEFAULT_MATERIAL, FALLOFFS, LIGHT_TYPES, Camera, Light, Material, RenderSettings, Scene, SceneObject
 from .placement import PlacementOverflow, read_placement, read_smooth, shape_fields, up_rotation
 from .texture import affine, checker_texture, image_texture
 from .toml_fields import TableReader, did_you_mean
@@ -22,8 +22,9 @@ from .validate import check_setting, validate_camera, validate_scene
 
 SECTIONS = {"camera", "render", "lights", "materials", "objects"}
 _CAMERA_KEYS = {"eye", "center", "up", "fovy", "near", "width", "height"}
-_RENDER_KEYS = {"ambient", "background", "max_depth", "shadows", "spp", "effects"}
+_RENDER_KEYS = {"ambient", "background", "max_depth", "shadows", "spp", "effects", "light_samples"}
 _LIGHT_KEYS = {"type", "position", "color", "direction", "target", "cutoff_angle", "beam_width", "falloff"}
+_AREA_KEYS = {"type", "radiance", "shape", "object", "center", "normal", "u", "v", "size", "radius"}
 _SPOT_KEYS = ("target", "cutoff_angle", "beam_width")  # meaningful only for a spot
 _MATERIAL_KEYS = {"ka", "kd", "ks", "shininess", "reflectivity", "ka_texture", "kd_texture", "ks_texture", "ior",
                   "transmittance", "absorption", "double_sided"}
@@ -117,13 +118,17 @@ def read_render(source: str, t: dict) -> RenderSettings:
         shadows=r.boolean("shadows", d.shadows),
         spp=spp,
         effects=effects,
+        light_samples=check_setting(source, "render.light_samples", "render.light_samples",
+                                    r.integer("light_samples", d.light_samples)),
     )
 
 
 def read_light(source: str, t: dict, i: int) -> Light:
     r = TableReader(source, t, f"lights[{i}]")
-    r.check_keys(_LIGHT_KEYS)
     kind = r.choice("type", LIGHT_TYPES, "point")
+    if kind == "area":
+        return read_area_light(r)
+    r.check_keys(_LIGHT_KEYS)
     for key in _SPOT_KEYS:
         if key in t and kind != "spot":
             r.fail(key, f"only a spot light has it (this light's type is {kind})")
@@ -149,6 +154,19 @@ def read_light(source: str, t: dict, i: int) -> Light:
     beam = r.number("beam_width", lo=0.0, hi=cutoff) if "beam_width" in t else None
     return Light(position=position, color=r.vector("color", d.color, nonneg=True), type=kind, direction=direction,
                  cutoff_angle=cutoff, beam_width=beam, falloff=r.choice("falloff", FALLOFFS, d.falloff))
+
+
+def read_area_light(r: TableReader) -> Light:
+    """A ``type = "area"`` light: the fields' types here, what goes with what in validate.py (for Python's
+    Light too)."""
+    r.check_keys(_AREA_KEYS, "key for an area light")
+    t = r.table
+    vectors = {k: r.vector(k) for k in ("center", "normal", "u", "v") if k in t}
+    return Light(type="area", radiance=r.vector("radiance", nonneg=True),
+                 shape=r.choice("shape", AREA_SHAPES) if "shape" in t else None,
+                 object=r.string("object") if "object" in t else None,
+                 size=r.vector("size", n=2, allow_scalar=True) if "size" in t else None,
+                 radius=r.number("radius") if "radius" in t else None, **vectors)
 
 
 def read_material(source: str, name: str, t, base: Path = Path(".")) -> Material:

@@ -11,14 +11,16 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import SceneError, show
-from .model import FALLOFFS, LIGHT_TYPES, Camera, Light, Scene
+from .model import AREA_SHAPES, FALLOFFS, LIGHT_TYPES, Camera, Light, Scene
 from .texture import Texture
+from .toml_fields import did_you_mean
 
 MAX_IMAGE_SIDE = 16384
 
 # The integer settings and their ranges; a square spp (k*k stratified samples) on top.
 SETTING_RANGES = {"camera.width": (1, MAX_IMAGE_SIDE), "camera.height": (1, MAX_IMAGE_SIDE),
-                  "render.spp": (1, 4096), "render.max_depth": (1, 1024)}
+                  "render.spp": (1, 4096), "render.max_depth": (1, 1024),
+                  "render.light_samples": (1, 4096)}
 
 # Warp's float32 ray-triangle test multiplies three coordinate differences (its T = U Az): for
 # geometry 1e14 from the eye that overflows and triangles silently vanish (measured: a sphere of
@@ -34,7 +36,7 @@ def check_setting(source: str, field: str, key: str, v) -> int:
     lo, hi = SETTING_RANGES[key]
     if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or not lo <= v <= hi:
         raise SceneError(source, field, f"expected an integer in [{lo}, {hi}], got {show(v)}")
-    if key == "render.spp" and math.isqrt(v) ** 2 != v:
+    if key in ("render.spp", "render.light_samples") and math.isqrt(v) ** 2 != v:
         raise SceneError(source, field, f"expected a square number of samples (k*k stratified: 1, 4, 9, 16, ...), got {v}")
     return int(v)
 
@@ -107,11 +109,75 @@ def _check_texture(source, field_name, t):
               and np.all(np.isfinite(t.image)) and t.image.min() >= 0):
         raise SceneError(source, field_name, "expected an (H, W, 3) image of finite non-negative linear values")
     _checked_textures.add(t)
-def _check_light(source, where, light, eye):
+def _check_area_light(source, where, light, eye, objects):
+    """An area light: a radiance >= 0 and either its own shape (a rectangle: u and v, or normal and size; a
+    disk: normal and radius; each around center) or the name of objects of the scene, not both."""
+    for key, v in (("position", light.position), ("direction", light.direction), ("beam_width", light.beam_width)):
+        if v is not None:
+            raise SceneError(source, f"{where}.{key}", "an area light has none: it emits from its shape or object")
+    for key, default in (("color", Light.color), ("falloff", Light.falloff), ("cutoff_angle", Light.cutoff_angle)):
+        if getattr(light, key) != default:
+            raise SceneError(source, f"{where}.{key}", "an area light has none: its light is its radiance")
+    if light.radiance is None:
+        raise SceneError(source, f"{where}.radiance", "is required for an area light: L_e = [r, g, b]")
+    _check_vector(source, f"{where}.radiance", light.radiance, nonneg=True)
+    if (light.shape is None) == (light.object is None):
+        raise SceneError(source, f"{where}.shape", "an area light takes a shape (\"rectangle\", \"disk\") or "
+                                                   "object = \"name\", one of the two")
+    if light.object is not None:
+        names = [o.name for o in objects]
+        if light.object not in names:
+            raise SceneError(source, f"{where}.object", f"no object named {show(light.object)}"
+                                                        f"{did_you_mean(str(light.object), names, ' (objects: ' + ', '.join(map(repr, names)) + ')' if names else ' (the scene has no objects)')}")
+        for key in ("center", "normal", "u", "v", "size", "radius"):
+            if getattr(light, key) is not None:
+                raise SceneError(source, f"{where}.{key}", "an area light on an object takes the object's triangles")
+        return
+    if light.shape not in AREA_SHAPES:
+        raise SceneError(source, f"{where}.shape", f"expected one of {', '.join(map(repr, AREA_SHAPES))}, "
+                                                   f"got {show(light.shape)}")
+    center = _check_vector(source, f"{where}.center", light.center) if light.center is not None else np.zeros(3)
+    _check_light_reach(source, where, center, eye, "center")
+    own = {"rectangle": ("u", "v", "normal", "size"), "disk": ("normal", "radius")}[light.shape]
+    for key in ("u", "v", "size", "radius"):
+        if getattr(light, key) is not None and key not in own:
+            raise SceneError(source, f"{where}.{key}", f"a {light.shape} has none")
+    if light.shape == "rectangle" and (light.u is not None or light.v is not None):
+        for key in ("u", "v"):
+            if getattr(light, key) is None:
+                raise SceneError(source, f"{where}.{key}", "a rectangle takes both half-edges u and v")
+        if light.normal is not None or light.size is not None:
+            raise SceneError(source, f"{where}.{'normal' if light.normal is not None else 'size'}",
+                             "give u and v (the half-edges) or normal and size, not both")
+        u = _check_vector(source, f"{where}.u", light.u)
+        v = _check_vector(source, f"{where}.v", light.v)
+        if not np.linalg.norm(np.cross(u, v)) > 0.0:
+            raise SceneError(source, f"{where}.v", "u and v must span a rectangle (not zero, not parallel)")
+        return
+    if light.normal is None:
+        raise SceneError(source, f"{where}.normal", f"is required for a {light.shape}" +
+                         (" (or the half-edges u and v)" if light.shape == "rectangle" else ""))
+    if not np.any(_check_vector(source, f"{where}.normal", light.normal)):
+        raise SceneError(source, f"{where}.normal", "must not be the zero vector")
+    if light.shape == "rectangle":
+        size = np.asarray(light.size if light.size is not None else (), np.float64)
+        if size.shape != (2,) or not np.all(np.isfinite(size)) or not np.all(size > 0):
+            raise SceneError(source, f"{where}.size", f"expected a number > 0 or [width, height] > 0, got "
+                                                      f"{show(light.size)}")
+    elif not _is_real(light.radius) or not math.isfinite(light.radius) or not light.radius > 0.0:
+        raise SceneError(source, f"{where}.radius", f"expected a number > 0, got {_num(light.radius)}")
+
+
+def _check_light(source, where, light, eye, objects=()):
     """A light of LIGHT_TYPES: a position where it has one (within float32 reach), a direction where it has
     one (not zero), a spot's cone (0 < beam_width <= cutoff_angle < 180 degrees), a falloff of FALLOFFS."""
     if light.type not in LIGHT_TYPES:
         raise SceneError(source, f"{where}.type", f"expected one of {', '.join(map(repr, LIGHT_TYPES))}, got {show(light.type)}")
+    if light.type == "area":
+        return _check_area_light(source, where, light, eye, objects)
+    for key in ("radiance", "shape", "object", "center", "normal", "u", "v", "size", "radius"):
+        if getattr(light, key) is not None:
+            raise SceneError(source, f"{where}.{key}", f"only an area light has it (this light's type is {light.type})")
     if light.falloff not in FALLOFFS:
         raise SceneError(source, f"{where}.falloff", f"expected one of {', '.join(map(repr, FALLOFFS))}, "
                                                      f"got {show(light.falloff)}")
@@ -139,9 +205,9 @@ def _check_light(source, where, light, eye):
                 raise SceneError(source, f"{where}.{key}", f"only a spot light has it (this light's type is {light.type})")
 
 
-def _check_light_reach(source, where, position, eye):
+def _check_light_reach(source, where, position, eye, key="position"):
     if np.abs(position - eye).max() > MAX_REACH:
-        raise SceneError(source, f"{where}.position", f"is more than {MAX_REACH:g} from camera.eye; "
+        raise SceneError(source, f"{where}.{key}", f"is more than {MAX_REACH:g} from camera.eye; "
                                                       "float32 ray tests cannot reach it")
 
 
@@ -204,9 +270,11 @@ def validate_scene(scene: Scene) -> CheckedContent:
     ambient, background = _check_render(src, scene.render)
     light_max, lights = np.zeros(3), []
     for i, light in enumerate(scene.lights):
-        _check_light(src, f"lights[{i}]", light, eye)
+        _check_light(src, f"lights[{i}]", light, eye, scene.objects)
         # inverse_square: C_l / r^2 has no bound short of the nearest surface; C_l is the bound at r >= 1.
-        light_max = light_max + np.asarray(light.color, np.float64)
+        # An area light's irradiance is at most pi L_e (the whole hemisphere), and its surface shows L_e.
+        light_max = light_max + (np.pi * np.asarray(light.radiance, np.float64) if light.type == "area"
+                                 else np.asarray(light.color, np.float64))
         if light.position is not None:
             lights.append((i, np.asarray(light.position, np.float64)))
     # Vertex colours multiply ka and kd: the brightest of them scales what a material can reflect.
@@ -271,7 +339,7 @@ def validate_view(scene: Scene, content: CheckedContent):
 def _check_render(src, r):
     ambient = _check_vector(src, "render.ambient", r.ambient, nonneg=True)
     background = _check_vector(src, "render.background", r.background, nonneg=True)
-    for key in ("render.max_depth", "render.spp"):
+    for key in ("render.max_depth", "render.spp", "render.light_samples"):
         check_setting(src, key, key, getattr(r, key.split(".")[1]))
     return ambient, background
 

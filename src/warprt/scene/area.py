@@ -1,0 +1,156 @@
+"""Area lights as geometry: the surface a ``type = "area"`` light emits from (its own rectangle or disk,
+drawn as triangles, or the triangles of the objects it names) and its fixed stratified sample points.
+
+The points are a pure function of the light and ``light_samples`` = k*k: the centres of a k x k grid of
+cells on the unit square, mapped as Mitsuba's shapes map a sample in their ``sample_position``: a
+rectangle's (2a - 1, 2b - 1) on its half-edges, a disk's concentric map (Shirley and Chiu), a mesh's
+triangle chosen by area from a and the rest of a with b on that triangle (Mitsuba's
+``square_to_uniform_triangle``). Each map preserves area, so each point stands for A / N of the surface.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+
+import numpy as np
+
+from .model import Material, SceneObject
+
+# The material slot of a shape light's own triangles: black, so that they show only their radiance.
+EMITTER_MATERIAL_NAME = "<area light>"
+EMITTER_MATERIAL = Material(kd=(0.0, 0.0, 0.0), ka=(0.0, 0.0, 0.0), ks=(0.0, 0.0, 0.0))
+DISK_SEGMENTS = 64  # the drawn disk's polygon (its samples lie on the true disk)
+
+
+def coordinate_system(n) -> tuple[np.ndarray, np.ndarray]:
+    """Two unit vectors s, t with (s, t, n) right-handed and orthonormal: Mitsuba's coordinate_system
+    (Duff et al. 2017), so that a rectangle given by its normal and size is oriented as Mitsuba would."""
+    n = np.asarray(n, np.float64)
+    sign = math.copysign(1.0, n[2])
+    a = -1.0 / (sign + n[2])
+    b = n[0] * n[1] * a
+    s = np.array([1.0 + sign * n[0] * n[0] * a, sign * b, -sign * n[0]])
+    t = np.array([b, sign + n[1] * n[1] * a, -n[1]])
+    return s, t
+
+
+def rectangle_axes(light) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(center, u, v) of a rectangle light: corners at center +- u +- v, emitting along u x v."""
+    c = np.asarray(light.center if light.center is not None else (0.0, 0.0, 0.0), np.float64)
+    if light.u is not None:
+        return c, np.asarray(light.u, np.float64), np.asarray(light.v, np.float64)
+    n = np.asarray(light.normal, np.float64)
+    s, t = coordinate_system(n / np.linalg.norm(n))
+    return c, s * (0.5 * light.size[0]), t * (0.5 * light.size[1])
+
+
+def _disk_axes(light) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
+    c = np.asarray(light.center if light.center is not None else (0.0, 0.0, 0.0), np.float64)
+    n = np.asarray(light.normal, np.float64)
+    s, t = coordinate_system(n / np.linalg.norm(n))
+    return c, s, t, float(light.radius)
+
+
+def light_normal(light) -> np.ndarray:
+    """The unit normal of a shape light, the side it emits to."""
+    if light.shape == "rectangle":
+        _, u, v = rectangle_axes(light)
+        n = np.cross(u, v)
+    else:
+        n = np.asarray(light.normal, np.float64)
+    return n / np.linalg.norm(n)
+
+
+@functools.lru_cache(maxsize=64)
+def shape_object(light) -> SceneObject:
+    """The triangles of a shape light, wound so that their normal is the light's (the same object for an
+    equal light, so that a Geometry built from it is kept across frames)."""
+    if light.shape == "rectangle":
+        c, u, v = rectangle_axes(light)
+        vertices = np.array([c - u - v, c + u - v, c + u + v, c - u + v])
+        faces = np.array([[0, 1, 2], [0, 2, 3]])
+    else:
+        c, s, t, r = _disk_axes(light)
+        theta = 2.0 * np.pi * np.arange(DISK_SEGMENTS) / DISK_SEGMENTS
+        rim = c + r * (np.cos(theta)[:, None] * s + np.sin(theta)[:, None] * t)
+        vertices = np.concatenate([c[None], rim])
+        i = np.arange(DISK_SEGMENTS)
+        faces = np.stack([np.zeros_like(i), 1 + i, 1 + (i + 1) % DISK_SEGMENTS], axis=1)
+    return SceneObject(light.name or f"area light ({light.shape})", vertices, faces, EMITTER_MATERIAL_NAME)
+
+
+def drawn_objects(scene) -> list:
+    """The objects the tracer draws: the scene's, then each shape light's own triangles."""
+    return list(scene.objects) + [shape_object(l) for l in scene.lights if l.area and l.shape is not None]
+
+
+def emitter_of_triangles(scene) -> np.ndarray:
+    """Per triangle of drawn_objects(scene), the index of the area light it belongs to among the scene's
+    area lights (their order in scene.lights), or -1."""
+    area = [l for l in scene.lights if l.area]
+    out = [np.full(len(o.faces), -1, np.int32) for o in scene.objects]
+    for j, light in enumerate(area):
+        if light.object is not None:
+            for i, o in enumerate(scene.objects):
+                if o.name == light.object:
+                    out[i][:] = j
+    out += [np.full(len(shape_object(l).faces), j, np.int32) for j, l in enumerate(area) if l.shape is not None]
+    return np.concatenate(out) if out else np.zeros(0, np.int32)
+
+
+def cell_centres(k: int) -> tuple[np.ndarray, np.ndarray]:
+    """(a, b): the centres of a k x k grid of cells on the unit square, row by row."""
+    c = (np.arange(k) + 0.5) / k
+    b, a = np.meshgrid(c, c, indexing="ij")
+    return a.reshape(-1), b.reshape(-1)
+
+
+def concentric_disk(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Shirley and Chiu's concentric map of the unit square onto the unit disk (Mitsuba's
+    square_to_uniform_disk_concentric): area-preserving, so equal cells become equal areas."""
+    x, y = 2.0 * a - 1.0, 2.0 * b - 1.0
+    wide = np.abs(x) > np.abs(y)
+    r = np.where(wide, x, y)
+    safe_x = np.where(x == 0.0, 1.0, x)
+    safe_y = np.where(y == 0.0, 1.0, y)
+    phi = np.where(wide, 0.25 * np.pi * y / safe_x, 0.5 * np.pi - 0.25 * np.pi * x / safe_y)
+    return np.stack([r * np.cos(phi), r * np.sin(phi)], axis=1) * ((x != 0.0) | (y != 0.0))[:, None]
+
+
+def emitter_samples(scene, light, k: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The k*k sample points of an area light in world space (float64): (points, unit normals, the area
+    each stands for), the normals on the emitting side."""
+    a, b = cell_centres(k)
+    count = k * k
+    if light.shape == "rectangle":
+        c, u, v = rectangle_axes(light)
+        points = c + (2.0 * a - 1.0)[:, None] * u + (2.0 * b - 1.0)[:, None] * v
+        area = 4.0 * float(np.linalg.norm(np.cross(u, v)))
+        normals = np.tile(light_normal(light), (count, 1))
+    elif light.shape == "disk":
+        c, s, t, r = _disk_axes(light)
+        d = concentric_disk(a, b) * r
+        points = c + d[:, :1] * s + d[:, 1:] * t
+        area = math.pi * r * r
+        normals = np.tile(light_normal(light), (count, 1))
+    else:
+        tri = np.concatenate([o.vertices[o.faces] for o in scene.objects if o.name == light.object])
+        cross = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+        areas = 0.5 * np.linalg.norm(cross, axis=1)
+        area = float(areas.sum())
+        cdf = np.cumsum(areas) / area
+        f = np.minimum(np.searchsorted(cdf, a, side="right"), len(areas) - 1)
+        lo = np.where(f > 0, cdf[f - 1], 0.0)
+        a_in = np.clip((a - lo) / np.maximum(cdf[f] - lo, 1e-300), 0.0, 1.0)  # a, reused within the triangle
+        t = np.sqrt(1.0 - a_in)
+        b1, b2 = 1.0 - t, t * b
+        p = tri[f]
+        points = p[:, 0] * (1.0 - b1 - b2)[:, None] + p[:, 1] * b1[:, None] + p[:, 2] * b2[:, None]
+        normals = cross[f] / np.maximum(np.linalg.norm(cross[f], axis=1, keepdims=True), 1e-300)
+    return points, normals, np.full(count, area / count)
+
+
+def emitter_area(scene, light) -> float:
+    """The emitting area of an area light."""
+    return float(emitter_samples(scene, light, 1)[2].sum())
