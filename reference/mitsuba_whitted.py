@@ -307,7 +307,7 @@ class _Tables:
         # whether its falloff is warprt's "none", which Mitsuba's point and spot emitters do not have
         # (a directional one's weight is its irradiance, with no distance in it).
         self.lights = [(emitter, light.falloff == "none" and light.type != "directional")
-                       for emitter, light in zip(emitters, scene.lights)]
+                       for emitter, light in zip(emitters, whitted_lights(scene))]
         mats = {sid: scene.materials[scene.objects[i].material] for sid, i in object_of_shape.items()}
         # Whether some material is single-sided: only then are hits tested for culling (as warprt's variants).
         self.culling = any(not m.double_sided for m in mats.values())
@@ -398,6 +398,11 @@ def _mesh(mi, name: str, vertices: np.ndarray, faces: np.ndarray, normals: np.nd
     return mesh
 
 
+def whitted_lights(scene) -> list:
+    """The scene's point, spot and directional lights, which the reference renders (not its area lights)."""
+    return [light for light in scene.lights if not light.area]
+
+
 class MitsubaScene:
     """One warprt Scene converted to Mitsuba once (meshes, Embree BVH, tables); renders it with
     any camera and switches. The integrator object is reused, so a repeated render of the same
@@ -432,7 +437,7 @@ class MitsubaScene:
                 bsdf = mi.load_dict({"type": ATTRIBUTES, "colored": colors is not None, **maps})
             shapes[key] = _mesh(mi, key, obj.vertices, obj.faces, normals, uv, colors, bsdf)
             object_of_shape[key] = i
-        emitters = [_emitter(mi, light) for light in scene.lights]
+        emitters = [_emitter(mi, light) for light in whitted_lights(scene)]
         self.mi_scene = mi.load_dict({"type": "scene", **shapes,
                                       **{f"light_{i:03d}": e for i, e in enumerate(emitters)}})
         self.integrator = mi.load_dict({"type": INTEGRATOR})
@@ -470,6 +475,8 @@ class MitsubaScene:
     def render(self, switches: Switches = Switches(), camera=None) -> np.ndarray:
         """Linear RGB float32 (H, W, 3), row 0 at the top."""
         mi = self.mi
+        if len(whitted_lights(self.scene)) != len(self.scene.lights):
+            raise ValueError("the reference renders point, spot and directional lights: area lights are not in it yet")
         k = math.isqrt(switches.spp)
         if k * k != switches.spp:
             raise ValueError(f"spp must be a square (k*k stratified samples), got {switches.spp}")
@@ -512,10 +519,10 @@ class MitsubaFileScene(MitsubaScene):
         self.integrator = mi.load_dict({"type": INTEGRATOR})
         own = any(m.textures for m in scene.materials.values())
         # The file's own point, spot and directional emitters, in the order the reader reads them into
-        # scene.lights (its area, constant and other emitters are not Whitted lights).
+        # scene.lights (its area lights follow them; constant and other emitters are not lights).
         emitters = [e for e in self.mi_scene.emitters() if reads_mitsuba_light(e)]
-        if len(emitters) != len(scene.lights):
-            raise ValueError(f"{path}: Mitsuba loads {len(emitters)} Whitted lights, the scene has {len(scene.lights)}")
+        if len(emitters) != len(whitted_lights(scene)):
+            raise ValueError(f"{path}: Mitsuba loads {len(emitters)} Whitted lights, the scene has {len(whitted_lights(scene))}")
         self.integrator.tables = _Tables(mi, dr, self.mi_scene, scene, object_of_shape, False, emitters,
                                          own_textures=own)
         self._sensors = {}

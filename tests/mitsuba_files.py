@@ -80,11 +80,15 @@ def floor(mi, size=2.0, bsdf=None):
     return {"type": "rectangle", "to_world": to_world, "bsdf": bsdf or {"type": "diffuse"}}
 
 
-def cornell_box(mi, width=64, height=48, point_light=(0.0, 0.9, 0.0), intensity=(1.0, 1.0, 1.0), fov_axis=None):
-    """mi.cornell_box() as it writes it (its area light included), at a test's image size, with a point
-    light added where the test wants one; fov_axis replaces the box's "smaller" when given."""
+def cornell_box(mi, width=64, height=48, point_light=(0.0, 0.9, 0.0), intensity=(1.0, 1.0, 1.0), fov_axis=None,
+                area_light=True):
+    """mi.cornell_box() as it writes it (its area light included unless area_light is False: the
+    reference renders Whitted lights only), at a test's image size, with a point light added where the
+    test wants one; fov_axis replaces the box's "smaller" when given."""
     d = mi.cornell_box()
     d["sensor"]["film"]["width"], d["sensor"]["film"]["height"] = width, height
+    if not area_light:
+        del d["light"]["emitter"]
     if fov_axis is not None:
         d["sensor"]["fov_axis"] = fov_axis
     if point_light is not None:

@@ -4,6 +4,7 @@ camera's fov axes and the Fresnel reflectances), and the command line on good an
 
 import math
 import os
+import re
 import subprocess
 import sys
 import warnings
@@ -57,9 +58,32 @@ def test_cornell_box_objects_are_its_shapes_where_mitsuba_puts_them(tmp_path):
     for name in ("white", "green", "red"):  # Mitsuba's diffuse BRDF is reflectance / pi
         assert np.allclose(scene.materials[name].kd, np.array(d[name]["reflectance"]["value"]) / math.pi, rtol=1e-6)
         assert scene.materials[name].ks == (0.0, 0.0, 0.0)
-    assert scene.lights[0].position == pytest.approx((0.0, 0.9, 0.0)) and scene.lights[0].falloff == "inverse_square"
+    point, area = scene.lights  # the Whitted lights first, then the area lights
+    assert point.position == pytest.approx((0.0, 0.9, 0.0)) and point.falloff == "inverse_square"
+    assert area.type == "area" and area.object == "light" and area.name == "light"
+    assert area.radiance == pytest.approx(d["light"]["emitter"]["radiance"]["value"])
     assert scene.render.ambient == (0.0, 0.0, 0.0)
-    assert len(warned) == 1 and "light" in warned[0] and "area emitter" in warned[0]
+    assert not warned
+
+
+def test_area_light_shines_from_the_side_mitsubas_emitter_does(tmp_path):
+    """Mitsuba's area emitter lights the side its shape's normal faces, and flip_normals turns it (the
+    buffers stay, the normals are negated at each hit): the triangles' winding faces that side."""
+    d = mf.cornell_box(mi, point_light=None)
+    d["flipped"] = {**d["light"], "flip_normals": True}
+    scene, _ = read(mf.write(tmp_path, "cornell.xml", d))
+    ms = mi.load_file(str(tmp_path / "cornell.xml"))
+    by_name = {o.name: o for o in scene.objects}
+    for shape in ms.shapes():
+        if shape.is_emitter():
+            # Mitsuba's own emitting side: the normal of a point it samples on the shape.
+            side = np.array(shape.sample_position(0.0, [0.3, 0.4]).n, np.float64)
+            o = by_name[shape.id()]
+            v = o.vertices[o.faces]
+            winding = np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0])
+            assert (winding @ side > 0).all(), shape.id()
+    assert [l.object for l in scene.lights] == ["light", "flipped"]
+    assert (np.asarray(by_name["flipped"].faces) == np.asarray(by_name["light"].faces)[:, ::-1]).all()
 
 
 @pytest.mark.parametrize("axis", ["x", "y", "diagonal", "smaller", "larger"])
@@ -190,8 +214,9 @@ def test_render_and_info_of_a_scene_file(tmp_path):
     assert r.returncode == 0, r.stderr
     assert Image.open(tmp_path / "c.png").size == (24, 18)
     r = warprt_cli("info", "cornell.xml", cwd=tmp_path)
-    assert r.returncode == 0 and "small-box" in r.stdout and "lights     1" in r.stdout
-    assert r.stderr.count("warning") == 1 and "area emitter" in r.stderr
+    assert r.returncode == 0 and "small-box" in r.stdout and "lights     2" in r.stdout
+    assert re.search(r"light\s+area\s+object 'light' radiance \[18.38", r.stdout), r.stdout
+    assert "warning" not in r.stderr
 
 
 @pytest.mark.parametrize("text, words", [
@@ -267,12 +292,16 @@ def test_wrapped_bsdfs_are_read_through_with_one_warning_each(tmp_path):
     assert len(warned) == 2 and "mask: its opacity" in warned[0] and "normalmap" in warned[1]
 
 
-def test_area_emitters_and_environment_maps_are_one_warning_each(tmp_path):
+def test_area_emitters_are_lights_environment_maps_and_textured_radiance_one_warning_each(tmp_path):
     mi.Bitmap(np.ones((4, 8, 3), np.float32)).write(str(tmp_path / "sky.exr"))
-    glow = {"type": "area", "radiance": {"type": "rgb", "value": [5.0, 5.0, 5.0]}}
+    glow = {"type": "area", "radiance": {"type": "rgb", "value": [5.0, 4.0, 3.0]}}
+    pattern = {"type": "area", "radiance": {"type": "checkerboard"}}
     d = {"type": "scene", "sensor": mf.sensor(mi, (0, 1, 3), (0, 0, 0)),
          "sky": {"type": "envmap", "filename": str(tmp_path / "sky.exr")},
-         "a": {**mf.floor(mi), "emitter": glow}, "b": {**mf.floor(mi), "emitter": dict(glow)}}
+         "a": {**mf.floor(mi), "emitter": glow}, "b": {**mf.floor(mi), "emitter": dict(glow)},
+         "c": {**mf.floor(mi), "emitter": pattern}}
     scene, warned = read(mf.write(tmp_path, "glow.xml", d))
-    assert scene.lights == [] and len(scene.objects) == 2
-    assert len(warned) == 2 and "area emitters" in warned[0] and "not a Whitted light" in warned[1]
+    assert [(l.type, l.object, l.radiance) for l in scene.lights] == [("area", "a", (5.0, 4.0, 3.0)),
+                                                                       ("area", "b", (5.0, 4.0, 3.0))]
+    assert len(scene.objects) == 3
+    assert len(warned) == 2 and "textured area emitter" in warned[0] and "not a Whitted light" in warned[1]

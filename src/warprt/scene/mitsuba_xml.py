@@ -26,14 +26,16 @@ from .texture import Texture
 #   sensor    perspective (thinlens as a pinhole, warned): to_world, Mitsuba's x_fov (whatever fov_axis
 #             said) -> vertical fovy, film size, near_clip -> camera.near; orthographic and others: an error
 #   shapes    every Mesh (ply, obj, serialized, rectangle, cube): positions, faces, normals, uv; sphere,
-#             disk and cylinder tessellated through their to_world; others (instances, curves): warned, skipped
+#             disk and cylinder tessellated through their to_world; others (instances, curves): warned, skipped;
+#             flip_normals: the other winding (Mitsuba negates the normals at each hit)
 #   bsdfs     diffuse -> kd; plastic -> kd + mirror k_r = F(0); roughplastic -> kd + Phong ks (phong_shininess);
 #             conductor, roughconductor -> mirror k_r = specular_reflectance x F(0) from eta, k (roughness
 #             ignored); dielectric, thindielectric -> glass, ior = int_ior / ext_ior; twosided -> its front
 #             BSDF; mask, bumpmap, normalmap -> the BSDF inside (warned); textures: bitmap (Mitsuba's own
 #             texels, to_uv), checkerboard; other BSDFs: one warning each, Mitsuba's default diffuse (0.5)
 #   emitters  point, spot, directional -> lights (inverse_square); constant -> background and ambient;
-#             area, envmap and others: one warning each, not lights
+#             area (an RGB radiance) -> an area light over its shape's triangles, emitting to the side
+#             their winding faces; a textured radiance, envmap and others: one warning each, not lights
 # Not read: the integrator and sampler (warprt's spp and max_depth apply), media, film crop and filter,
 # bitmap filter and wrap modes (warprt's bilinear repeat), textured specular or conductor colours (their
 # defaults, warned), mesh attributes (vertex colours), a spot's texture (warned), several sensors (the first).
@@ -110,15 +112,21 @@ def read_mitsuba_xml(path, params: dict | None = None) -> Scene:
     camera = reader.camera(ms.sensors())
     materials: dict[str, Material] = {}
     objects = []
+    area_lights = []
     for i, shape in enumerate(ms.shapes()):
         obj = reader.shape(i, shape, materials)
         if obj is not None:
             objects.append(obj)
+            light = reader.area_light(shape, obj.name)
+            if light is not None:
+                area_lights.append(light)
     lights, radiance = reader.emitters(ms.emitters())
     if not objects:
         raise SceneError(source, None, "no shape warprt can render (meshes, rectangle, cube, sphere, disk, cylinder)")
     render = RenderSettings(ambient=tuple(math.pi * radiance), background=tuple(radiance))
-    return Scene(camera=camera, render=render, lights=lights, materials=materials, objects=objects, source=source)
+    # The Whitted lights first, in scene.emitters() order (reads_mitsuba_light), then the area lights.
+    return Scene(camera=camera, render=render, lights=lights + area_lights, materials=materials, objects=objects,
+                 source=source)
 
 
 def mitsuba_camera(mi_scene, source: str) -> Camera:
@@ -230,14 +238,16 @@ class _Reader:
         kind = _class(shape)
         name = self._name(shape.id() or f"{kind.lower()}_{i}")
         field = f"shape {name}"
-        if shape.is_emitter():
-            self.warn_once("area", field, "area emitters are not Whitted lights: the shape is drawn, its light is not")
+        if not reads_mitsuba_shape(shape):
+            self.warn_once(("shape", kind), field, f"{kind} is not read (meshes, rectangle, cube, sphere, disk, "
+                                                   "cylinder are): skipped")
+            return None
         if shape.is_mesh():
             v = _array(shape.vertex_positions_buffer()).reshape(-1, 3)
             f = np.array(shape.faces_buffer(), np.int64).reshape(-1, 3)
             n = _array(shape.vertex_normals_buffer()).reshape(-1, 3) if shape.has_vertex_normals() else None
             uv = _array(shape.vertex_texcoords_buffer()).reshape(-1, 2) if shape.has_vertex_texcoords() else None
-        elif reads_mitsuba_shape(shape):
+        else:
             m = _matrix(self.mi.traverse(shape)["to_world"])
             v, f, n, uv = {"Sphere": _sphere, "Disk": _disk, "Cylinder": _cylinder}[kind]()
             v = v @ m[:3, :3].T + m[:3, 3]
@@ -246,13 +256,31 @@ class _Reader:
             n /= np.linalg.norm(n, axis=1, keepdims=True)
             if np.linalg.det(m[:3, :3]) < 0.0:  # a mirroring transform turns the winding inside out
                 f = f[:, ::-1]
-        else:
-            self.warn_once(("shape", kind), field, f"{kind} is not read (meshes, rectangle, cube, sphere, disk, "
-                                                   "cylinder are): skipped")
-            return None
+        if shape.has_flipped_normals():
+            # Mitsuba keeps the buffers and negates the normals at each hit (so its area emitter shines
+            # from the other side, and a dielectric's inside is its outside): the same as the other winding.
+            f = f[:, ::-1]
+            n = -n if n is not None else None
         material = self.material(shape.bsdf(), field, materials)
         return SceneObject(name=name, vertices=v, faces=f, material=material, smooth=n is not None,
                            normals=n, uv=uv)
+
+    def area_light(self, shape, name: str) -> Light | None:
+        """The area light of a shape with an ``area`` emitter: its radiance from the triangles of object
+        ``name``, one-sided to the side their winding faces (Mitsuba's normal side, flip_normals read)."""
+        if not shape.is_emitter():
+            return None
+        emitter = shape.emitter()
+        kind = _class(emitter)
+        if kind != "AreaLight":
+            self.warn_once(("emitter", kind), f"shape {name}", f"{kind} is not read: the shape is drawn, its light is not")
+            return None
+        p = self.mi.traverse(emitter)
+        if "radiance.value" not in p:
+            self.warn_once("area texture", f"shape {name}", "a textured area emitter radiance is not read: "
+                                                          "the shape is drawn, its light is not")
+            return None
+        return Light(type="area", radiance=_rgb(p["radiance.value"]), object=name, name=name)
 
     def _name(self, name: str) -> str:
         base, k = name, 1
@@ -391,7 +419,7 @@ class _Reader:
             elif kind == "ConstantBackgroundEmitter":
                 radiance = radiance + np.array(_rgb(p["radiance.value"]))
             elif kind == "AreaLight":
-                pass  # warned with its shape
+                pass  # read with its shape (area_light)
             else:
                 self.warn_once(("emitter", kind), f"emitter {name}", f"{kind} is not a Whitted light: skipped")
         return lights, radiance
