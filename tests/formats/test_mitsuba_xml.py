@@ -86,6 +86,16 @@ def test_area_light_shines_from_the_side_mitsubas_emitter_does(tmp_path):
     assert (np.asarray(by_name["flipped"].faces) == np.asarray(by_name["light"].faces)[:, ::-1]).all()
 
 
+def test_cornell_box_scene_file_is_mitsubas_box(tmp_path):
+    """scenes/cornell_box.xml is mi.cornell_box() as Mitsuba writes it, at 64 x 64: read, the same scene."""
+    ours = read_mitsuba_xml(Path(SRC).parent / "scenes" / "cornell_box.xml")
+    theirs = read_mitsuba_xml(mf.write(tmp_path, "cornell.xml", mf.cornell_box(mi, 64, 64, point_light=None)))
+    assert ours.camera == theirs.camera and ours.lights == theirs.lights and ours.materials == theirs.materials
+    assert [o.name for o in ours.objects] == [o.name for o in theirs.objects]
+    for a, b in zip(ours.objects, theirs.objects):
+        assert np.array_equal(a.vertices, b.vertices) and np.array_equal(a.faces, b.faces)
+
+
 @pytest.mark.parametrize("axis", ["x", "y", "diagonal", "smaller", "larger"])
 def test_camera_fov_axis_becomes_the_vertical_fov(tmp_path, axis):
     w, h, fov = 80, 50, 50.0
