@@ -476,7 +476,10 @@ class MitsubaScene:
         """Linear RGB float32 (H, W, 3), row 0 at the top."""
         mi = self.mi
         if len(whitted_lights(self.scene)) != len(self.scene.lights):
-            raise ValueError("the reference renders point, spot and directional lights: area lights are not in it yet")
+            from warprt import SceneError
+
+            raise SceneError(self.scene.source, "lights", "the reference renders point, spot and directional lights: "
+                                                          "area lights are not in it yet")
         k = math.isqrt(switches.spp)
         if k * k != switches.spp:
             raise ValueError(f"spp must be a square (k*k stratified samples), got {switches.spp}")
