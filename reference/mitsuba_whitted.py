@@ -400,7 +400,7 @@ def _mesh(mi, name: str, vertices: np.ndarray, faces: np.ndarray, normals: np.nd
 
 def whitted_lights(scene) -> list:
     """The scene's point, spot and directional lights, which the reference renders (not its area lights)."""
-    return [light for light in scene.lights if not light.area]
+    return [light for light in scene.lights if light.type != "area"]
 
 
 class MitsubaScene:
