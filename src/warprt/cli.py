@@ -96,6 +96,8 @@ def _add_scene_options(p: argparse.ArgumentParser):
     p.add_argument("--height", type=int, metavar="PIXELS", help="image height in pixels")
     p.add_argument("--spp", type=int, metavar="N", help="samples per pixel (a square: 1, 4, 9, 16, ...)")
     p.add_argument("--max-depth", type=int, metavar="N", help="ray levels: 1 = primary rays only, 2 = one reflection, ...")
+    p.add_argument("--light-samples", type=int, metavar="N",
+                   help="points per area light, one shadow ray each (a square: 16, 64, 256, ...; default 16)")
     p.add_argument("--no-shadows", action="store_true", help="switch shadow rays off")
     p.add_argument("--up", metavar="AXIS", help="a mesh file's up axis: x, y, z, -x, -y or -z (write --up=-z); "
                                                "default: what the file says (USD, glTF), else y")
@@ -109,7 +111,7 @@ def _load(args):
     overrides = _parse_set(args.set)
     # A flag's bad value is reported as that flag, not as the scene field it sets.
     for flag, key in (("width", "camera.width"), ("height", "camera.height"), ("spp", "render.spp"),
-                      ("max_depth", "render.max_depth")):
+                      ("max_depth", "render.max_depth"), ("light_samples", "render.light_samples")):
         v = getattr(args, flag)
         if v is not None:
             overrides[key] = check_setting("command line", "--" + flag.replace("_", "-"), key, v)

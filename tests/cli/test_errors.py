@@ -147,6 +147,8 @@ CASES = [
      "command line: --height: expected an integer in [1, 16384], got 100000"),
     ("--spp 5", ["render", "ok.toml", "--spp", "5"],
      "command line: --spp: expected a square number of samples (k*k stratified: 1, 4, 9, 16, ...), got 5"),
+    ("--light-samples 10", ["render", "ok.toml", "--light-samples", "10"],
+     "command line: --light-samples: expected a square number of samples (k*k stratified: 1, 4, 9, 16, ...), got 10"),
     ("--max-depth 0", ["render", "ok.toml", "--max-depth", "0"],
      "command line: --max-depth: expected an integer in [1, 1024], got 0"),
     ("--threads 0", ["render", "ok.toml", "--threads", "0"], "command line: --threads: expected an integer >= 1, got 0"),

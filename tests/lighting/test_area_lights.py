@@ -208,3 +208,23 @@ def test_the_area_light_code_is_absent_from_the_other_variants():
     markers = ("out = area_light(s, hit, k, v, out)", "emitted(s, h.face, r.ray.d)")
     assert not any(m in _generated_source(EffectSet()) for m in markers)
     assert all(m in _generated_source(EffectSet(area_lights=True)) for m in markers)
+
+
+def test_the_light_samples_flag_sets_the_scenes_light_samples(tmp_path):
+    """`warprt render --light-samples 4` renders what `--set render.light_samples=4` renders, and not what the
+    default 16 points render: the flag reaches the kernel."""
+    import subprocess
+    import sys
+
+    xml = Path(__file__).resolve().parents[2] / "scenes" / "cornell_box.xml"
+    env = {**__import__("os").environ, "PYTHONPATH": str(Path(warprt.__file__).resolve().parents[1])}
+
+    def render(*flags):
+        out = tmp_path / f"{len(list(tmp_path.iterdir()))}.npy"
+        r = subprocess.run([sys.executable, "-m", "warprt", "render", str(xml), "--width", "24", "--height", "24",
+                            "-o", str(out), "-q", *flags], capture_output=True, text=True, env=env)
+        assert r.returncode == 0, r.stderr
+        return np.load(out)
+
+    flag, setting, default = render("--light-samples", "4"), render("--set", "render.light_samples=4"), render()
+    assert np.array_equal(flag, setting) and not np.array_equal(flag, default)
