@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import signal
 import sys
@@ -222,13 +223,18 @@ def _rounded(v) -> list:
     return [round(float(x), 6) for x in v]
 
 
-def _describe_light(light) -> str:
-    """One line of `warprt info`: the light's name, type and key numbers."""
+def _describe_light(light, scene) -> str:
+    """One line of `warprt info`: the light's name, type and key numbers; an area light's emitting area
+    and power (pi L_e A: a one-sided Lambertian emitter's radiant flux, per channel)."""
+    from .scene import emitter_area
+
     kind = light.type
     words = [f"{light.name or '-':<16} {kind:<11}"]
     if kind == "area":
         over = f"object {light.object!r}" if light.object is not None else light.shape
-        return " ".join(words + [f"{over} radiance {_rounded(light.radiance)}"])
+        area = emitter_area(scene, light)
+        power = [math.pi * c * area for c in light.radiance]
+        return " ".join(words + [f"{over} radiance {_rounded(light.radiance)} area {area:.6g} power {_rounded(power)}"])
     if light.position is not None:
         words.append(f"at {_rounded(light.position)}")
     if kind != "point" and light.direction is not None:
@@ -263,7 +269,7 @@ def cmd_info(args) -> int:
             print(f"  {name:<16} {key} x {t.describe()}")
     print(f"lights     {len(scene.lights)}")
     for light in scene.lights:
-        print(f"  {_describe_light(light)}")
+        print(f"  {_describe_light(light, scene)}")
     if scene.cameras:
         print(f"cameras    {len(scene.cameras)} in the file")
         for c in scene.cameras:

@@ -124,3 +124,22 @@ def test_light_from_the_wrong_side_fails(scene, theirs):
 def test_the_whitted_reference_refuses_area_lights_rather_than_dropping_them(scene):
     with pytest.raises(SceneError, match="area lights are not in it yet"):
         render_mitsuba(scene)
+
+
+def test_info_gives_the_emitters_area_and_power_as_mitsuba_measures_them(mi, capsys):
+    """`warprt info`'s area is Mitsuba's own shape.surface_area() of the emitting shape, and its power
+    pi L_e A per channel (a one-sided Lambertian emitter's flux); a light at half the radiance reads half."""
+    from warprt.cli import main
+
+    assert main(["info", str(SCENE)]) == 0
+    import re
+
+    found = re.search(r"radiance \[[^]]*\] area (\S+) power \[([^]]*)\]", capsys.readouterr().out)
+    area, power = float(found[1]), [float(x) for x in found[2].split(",")]
+    shape = next(s for s in mi.load_file(str(SCENE)).shapes() if s.is_emitter())
+    theirs = float(np.asarray(shape.surface_area()).ravel()[0])
+    assert area == pytest.approx(theirs, rel=1e-5)
+    radiance = np.asarray(mi.traverse(shape.emitter())["radiance.value"]).ravel()
+    assert power == pytest.approx([np.pi * float(c) * theirs for c in radiance], rel=1e-5)
+    # The negative control: the power is not the radiance times the area without pi.
+    assert power != pytest.approx([float(c) * theirs for c in radiance], rel=1e-2)
