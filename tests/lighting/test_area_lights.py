@@ -119,12 +119,15 @@ def test_an_object_emits_as_an_area_light_over_its_triangles():
     assert floor_point([light], samples=256, objects=[lamp]) == pytest.approx(expected, rel=0.01)
 
 
-def test_an_area_lights_own_surface_shows_its_radiance_from_the_front_only():
+@pytest.mark.parametrize("algorithm", ["raytrace", "zbuffer"])
+def test_an_area_lights_own_surface_shows_its_radiance_from_the_front_only(algorithm):
+    """The tracer's camera rays and the Z-buffer's visible samples alike."""
     def seen_from(y):
         scene = warprt.load_dict({
             "camera": {"eye": [0.0, y, 0.0], "center": [0.0, 1.0, 0.0], "up": [0.0, 0.0, -1.0], "width": 1, "height": 1},
             "render": {"ambient": [0.0] * 3}, "lights": [disk(0.5, 1.0)], "materials": MATERIALS, "objects": [FLOOR]})
-        return warprt.render(scene, primary_query="raytrace")[0][0, 0]
+        options = {"primary_query": "raytrace"} if algorithm == "raytrace" else {"algorithm": "zbuffer"}
+        return warprt.render(scene, **options)[0][0, 0]
     assert np.array_equal(seen_from(0.5), [L_E] * 3)  # below, facing it: L_e
     assert np.array_equal(seen_from(3.0), [0.0] * 3)  # above: its back, black
 

@@ -1,5 +1,6 @@
 """The Z-buffer's shading pass: per pixel, the tracer's own hit record and local shading at each
-sample's visible point (the rasterizer's Fragments), box-filtered. No shadows, no reflections."""
+sample's visible point (the rasterizer's Fragments), box-filtered. No shadows, no reflections. An area
+light's own surface shows its radiance, as the tracer's camera rays see it."""
 
 from __future__ import annotations
 
@@ -10,7 +11,7 @@ from ..geometry import SceneData
 from .camera import CameraData, camera_ray, sample_offset
 from .interaction import make_surface
 from .raster import Fragments
-from .shading import make_shade
+from .shading import emitted, make_shade
 from .triangle import query_normal, triangle
 
 
@@ -19,7 +20,7 @@ def make_shade_kernel(fx):
     """The shading kernel for one EffectSet (shadows and reflection are ignored: a Z-buffer has neither)."""
     shade = make_shade(fx)
     surface = make_surface(fx.smooth, fx.texture, fx.vertex_color)
-    SUPERSAMPLING = fx.supersampling
+    SUPERSAMPLING, AREA = fx.supersampling, fx.area_lights
 
     @wp.kernel(module="unique", enable_backward=False)
     def shade_zbuffer(s: SceneData, c: CameraData, k: int, first_pixel: int, frags: Fragments,
@@ -46,6 +47,8 @@ def make_shade_kernel(fx):
             # side as in the tracer.
             uv = frags.uv[i]
             hit = surface(s, f, uv[0], uv[1], query_normal(p0, p1, p2), d)
+            if wp.static(AREA):
+                total = total + emitted(s, f, d)
             r = shade(s, hit, -d)
             total = total + r.color
         image[pixel] = total / float(samples)
