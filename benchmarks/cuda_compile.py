@@ -46,10 +46,6 @@ RUNS = (
 )
 
 
-def render(scene, **options):
-    return warprt.render(scene, **options)
-
-
 @dataclass
 class Run:
     label: str
@@ -63,7 +59,7 @@ def render_every_path(width: int = 16, height: int = 12) -> list[Run]:
     for label, name, overrides, options in RUNS:
         before = {id(m) for m in warprt_modules()}
         scene = warprt.load_scene(SCENES / f"{name}.toml", {"camera.width": width, "camera.height": height, **overrides})
-        variant = render(scene, **options).stats.variant
+        variant = warprt.render(scene, **options).stats.variant
         runs.append(Run(label, variant, [m for m in warprt_modules() if id(m) not in before]))
     return runs
 

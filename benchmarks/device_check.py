@@ -16,7 +16,6 @@ from pathlib import Path
 import numpy as np
 
 import warprt
-from benchmarks.cuda_compile import render
 from benchmarks.image_hashes import PATHS, cases
 from benchmarks.output import save
 
@@ -76,7 +75,7 @@ def compare(case: str, cpu, other) -> Comparison:
 def attempt(scene, device: str, options: dict):
     """The RenderResult, or the refusal's or the failure's message."""
     try:
-        return render(scene, device=device, **options)
+        return warprt.render(scene, device=device, **options)
     except warprt.SceneError as e:
         return f"refused: {e}"
     except Exception as e:  # a GPU-only failure is what this check is for: report it, check the rest
@@ -106,9 +105,9 @@ def check(device: str, quick: bool = False, only=None) -> list[Comparison]:
 
 
 def cuda_count() -> int:
-    import warp as wp
+    from warprt.kernels import init_warp, wp  # warprt's own start: quiet, its settings
 
-    wp.init()
+    init_warp()
     return wp.get_cuda_device_count()
 
 

@@ -256,7 +256,7 @@ class Geometry:
         origin in float64, then float32; NaN for a directional light, which has none (the shadow grid then
         sends its rays to the BVH)."""
         return np.asarray([np.asarray(l.position, np.float64) - self.origin if l.position is not None
-                           else np.full(3, np.nan) for l in scene.lights if not l.area], np.float32).reshape(-1, 3)
+                           else np.full(3, np.nan) for l in scene.whitted_lights], np.float32).reshape(-1, 3)
 
     def scene_data(self, scene, shadow_grid: ShadowGrid | None = None) -> SceneData:
         """The kernels' view of these triangles for a frame of ``scene``: its materials and textures,
@@ -264,14 +264,14 @@ class Geometry:
         shadow rays' grid if one is given; the triangle arrays and the BVH are shared, never rebuilt."""
         m = [EMITTER_MATERIAL if n == EMITTER_MATERIAL_NAME else scene.materials[n] for n in self.material_names]
         dielectric = any(x.dielectric for x in m)
-        area = [l for l in scene.lights if l.area]
+        area = scene.area_lights
         # With glass, the medium the eye is in (eye_medium) depends on the eye too.
         key = (tuple(m), tuple(scene.lights), tuple(scene.render.ambient), tuple(scene.render.background),
                id(shadow_grid), tuple(scene.camera.eye) if dielectric else None,
                scene.render.light_samples if area else None)
         if self._tables is not None and self._tables[0] == key:
             return self._tables[1]
-        d, lights = self.device, [l for l in scene.lights if not l.area]
+        d, lights = self.device, scene.whitted_lights
         s = SceneData()
         s.mesh = self.mesh.id if self.mesh is not None else wp.uint64(0)
         s.points = self.points

@@ -147,14 +147,11 @@ class Renderer:
     def __exit__(self, *exc):
         self.close()
 
-    def _bands_pool(self, threads, device: str | None = None) -> ThreadPoolExecutor | None:
-        """The pool a frame's bands run on where they run on several CPU threads (``threads``: a count, or
-        a FramePlan): kept from frame to frame, since handing bands to threads already started is what a
-        small frame can afford (benchmarks/ATTEMPTS.md, "A Renderer's threads")."""
-        if not isinstance(threads, int):
-            threads = threads.threads
-        device = device or self.options.device
-        if threads <= 1 or device != "cpu":
+    def _bands_pool(self, threads: int) -> ThreadPoolExecutor | None:
+        """The pool a frame's bands run on where they run on several CPU threads: kept from frame to frame,
+        since handing bands to threads already started is what a small frame can afford
+        (benchmarks/ATTEMPTS.md, "A Renderer's threads")."""
+        if threads <= 1 or self.options.device != "cpu":
             return None
         if self._pool is None or self._pool_threads != threads:
             self.close()
@@ -209,6 +206,7 @@ class Renderer:
         scene, o, times = self._scene, self.options, {}
         with timed(times, "total"):
             plan = plan_frame(scene, o)
+            pool = self._bands_pool(plan.threads)
             estimate = frame_estimate(scene, plan.grid.per_pixel, plan.raster)
             check_frame_memory(scene, _without_geometry(estimate, self._given), o.device)  # before any buffer
             with timed(times, "bvh"):
@@ -216,7 +214,7 @@ class Renderer:
             shortcuts = choose_shortcuts(scene, o, plan, geom, self.caches)
             grid = self._shadow_grid(geom, shortcuts, times)
             data = geom.scene_data(scene, grid.grid if grid is not None else None)
-            mirrors = self._virtual_cameras(scene, plan, geom, data, shortcuts, times)
+            mirrors = self._virtual_cameras(scene, plan, geom, data, shortcuts, times, pool)
             used = mirrors if mirrors is not None and mirrors.mirrors is not None else None  # None: no chain rasterized
             variant = TraceVariant(plan.fx, shortcuts.raster, plan.stack, o.report_truncated, o.aovs,
                                    grid is not None and grid.grid is not None, used is not None)
@@ -229,9 +227,9 @@ class Renderer:
             if shortcuts.raster:
                 with timed(times, "raster"):
                     zb = ZBuffer(scene, geom, replace(plan.fx, shadows=False, reflection=False), device=o.device)
-                    zb.rasterize(plan.threads, plan.bands, pool=self._bands_pool(plan))
+                    zb.rasterize(plan.threads, plan.bands, pool=pool)
             with timed(times, "trace"):
-                frame = _trace(scene, o, plan, geom, data, kernel, zb, used, progress, self._bands_pool(plan))
+                frame = _trace(scene, o, plan, geom, data, kernel, zb, used, progress, pool)
             result = _finish(scene, o, plan, geom, frame)
         stats = _frame_stats(scene, o, plan, shortcuts, variant, geom, geometry_info, grid, mirrors, zb, frame, times)
         stats.memory["estimate"] = estimate
@@ -273,7 +271,8 @@ class Renderer:
         with timed(times, "shadow_grid"):
             return shadow_grid(geom, shortcuts.lights, memo=self.caches.shadow_grids, keep=SHADOW_GRIDS_KEPT)
 
-    def _virtual_cameras(self, scene, plan: FramePlan, geom: Geometry, data, shortcuts: Shortcuts, times: dict):
+    def _virtual_cameras(self, scene, plan: FramePlan, geom: Geometry, data, shortcuts: Shortcuts, times: dict,
+                         pool):
         """The planar mirrors' virtual cameras the shortcuts chose, built or kept (None: reflection rays
         traced); a MirrorFrame with no chain worth a raster is reported in the stats and not used. ``data``:
         the frame's tables (the probes read the triangles and materials alone; the tracer's own tables, so
@@ -283,14 +282,14 @@ class Renderer:
         o = self.options
         with timed(times, "mirrors"):
             frame, _ = mirror_frame(scene, geom, data, plan.fx, shortcuts.view, plan.threads, plan.bands, o.device,
-                                    self.caches, self._bands_pool(plan))
+                                    self.caches, pool)
         return frame
 
     def _render_zbuffer(self, progress) -> RenderResult:
         """A frame by rasterization with the tracer's local shading (no shadows, no reflections)."""
         o = self.options
         result, _ = _zbuffer_frame(self._scene, o, lambda scene: self._frame_geometry(scene, False)[0], progress,
-                                   self._bands_pool(launch_plan(o.threads, o.bands, o.device)[0], o.device))
+                                   self._bands_pool(launch_plan(o.threads, o.bands, o.device)[0]))
         return result
 
 

@@ -82,13 +82,13 @@ def shape_object(light) -> SceneObject:
 
 def drawn_objects(scene) -> list:
     """The objects the tracer draws: the scene's, then each shape light's own triangles."""
-    return list(scene.objects) + [shape_object(l) for l in scene.lights if l.area and l.shape is not None]
+    return list(scene.objects) + [shape_object(l) for l in scene.area_lights if l.shape is not None]
 
 
 def emitter_of_triangles(scene) -> np.ndarray:
     """Per triangle of drawn_objects(scene), the index of the area light it belongs to among the scene's
     area lights (their order in scene.lights), or -1."""
-    area = [l for l in scene.lights if l.area]
+    area = scene.area_lights
     out = [np.full(len(o.faces), -1, np.int32) for o in scene.objects]
     for j, light in enumerate(area):
         if light.object is not None:

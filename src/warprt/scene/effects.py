@@ -79,7 +79,7 @@ def scene_effects(scene) -> EffectSet:
         # inside absorbing glass).
         refraction=scene.render.max_depth > 1 and any(m.dielectric for m in mats),
         absorption=any(m.dielectric and max(m.absorption) > 0 for m in mats),
-        light_model=not all(light.seed_point for light in scene.lights if not light.area),
+        light_model=not all(light.seed_point for light in scene.whitted_lights),
         culling=not all(m.double_sided for m in mats),
         area_lights=any(light.area for light in scene.lights),
     )

@@ -296,6 +296,16 @@ class Scene:
     def triangle_count(self) -> int:
         return int(sum(len(o.faces) for o in self.objects))
 
+    @property
+    def area_lights(self) -> list:
+        """The area lights, in the order of ``lights`` (an emitter's index in the kernels' area table)."""
+        return [light for light in self.lights if light.area]
+
+    @property
+    def whitted_lights(self) -> list:
+        """The point, spot and directional lights, in the order of ``lights`` (the kernels' light table)."""
+        return [light for light in self.lights if not light.area]
+
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
         v = np.concatenate([o.vertices for o in self.objects]) if self.objects else np.zeros((1, 3))
         return v.min(0), v.max(0)
