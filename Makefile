@@ -22,14 +22,17 @@ llvm:
 demo: install
 	warprt render -o warprt.png
 
-# Two worker processes (pytest-xdist), a test file each at a time: module fixtures stay shared.
+# Two worker processes (pytest-xdist), a test file each at a time: module fixtures stay shared. A worker
+# that crashes ends the run with the test it was running named: xdist's replacement worker can wait
+# forever under --dist loadfile (pytest-xdist #784, #1378), which CI sees only as its 90-minute timeout.
 TEST_WORKERS ?= 2
+XDIST := -n $(TEST_WORKERS) --max-worker-restart=0
 test: install-extras llvm
-	$(PYTHON) -m pytest -q -n $(TEST_WORKERS) --dist loadfile
+	$(PYTHON) -m pytest -q $(XDIST) --dist loadfile
 
 # The inner loop: every test not marked slow (pyproject.toml's markers), under a minute on 2 cores.
 quick: install-extras llvm
-	$(PYTHON) -m pytest -q -n $(TEST_WORKERS) -m "not slow"
+	$(PYTHON) -m pytest -q $(XDIST) -m "not slow"
 
 # The seed's Figures 6-8 and the cost-growth plot, into benchmarks/figures/.
 figures: install-extras

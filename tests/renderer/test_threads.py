@@ -2,10 +2,14 @@
 (or the end of a with block), and render() leaves none behind. No pool lives in module state."""
 
 import threading
+from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
+import warp as wp
+import warp._src.context as warp_context
 
 import warprt
+from warprt.image import launch_bands
 
 
 def band_threads() -> set[int]:
@@ -47,3 +51,40 @@ def test_a_with_block_closes_and_one_thread_starts_none():
     with warprt.Renderer(small(), threads=1) as r:
         r.render()
         assert band_threads() == before
+
+
+# --- Band threads only launch: the module is loaded before the bands start ----------------------------
+
+@wp.kernel
+def _fill(first: int, out: wp.array(dtype=int)):
+    out[wp.tid() + first] = wp.tid() + first
+
+
+def _loading_threads(monkeypatch, launch) -> set[str]:
+    """The names of the threads on which Warp loaded _fill's module while ``launch`` ran (a module with
+    no executable loaded on the CPU at the start)."""
+    _fill.module.unload()
+    loaders, real = set(), warp_context.Module.load
+
+    def load(module, device, *args, **kwargs):
+        if module is _fill.module and not module.execs:
+            loaders.add(threading.current_thread().name)
+        return real(module, device, *args, **kwargs)
+
+    monkeypatch.setattr(warp_context.Module, "load", load)
+    launch()
+    return loaders
+
+
+def test_band_threads_launch_a_module_already_loaded(monkeypatch):
+    """launch_bands loads the kernel's module on the calling thread: two bands starting at once would
+    both load it, and one load replaces the module the other band runs (a CI worker's segfault)."""
+    out = wp.zeros(64, dtype=int, device="cpu")
+    loaders = _loading_threads(monkeypatch, lambda: launch_bands(_fill, lambda first: [first, out], 64, 2, 16, "cpu"))
+    assert loaders == {threading.current_thread().name}
+    assert np.array_equal(out.numpy(), np.arange(64))
+    # The control: the same bands launched on a plain pool load the module on the band threads.
+    with ThreadPoolExecutor(2, thread_name_prefix="band") as pool:
+        plain = lambda: list(pool.map(lambda f: wp.launch(_fill, dim=8, inputs=[f, out], device="cpu"), range(0, 64, 8)))
+        loaders = _loading_threads(monkeypatch, plain)
+    assert loaders and all(name.startswith("band") for name in loaders)

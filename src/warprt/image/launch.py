@@ -67,6 +67,10 @@ def launch_bands(kernel, inputs_for, n_items: int, threads: int, bands: int, dev
         for r in ranges:
             run(r)
     else:
+        # Loaded (compiled, on a cold cache) here, not by the first launch of each band thread: two bands
+        # starting at once would both load the module, and a load replaces the module the other may be
+        # running (Warp's Module.load is not one critical section). About 8 us where it is loaded.
+        wp.load_module(kernel.module, device=device)
         if pool is not None:
             _run_bands(pool, run, ranges, stop)
         else:
