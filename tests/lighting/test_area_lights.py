@@ -132,6 +132,38 @@ def test_an_area_lights_own_surface_shows_its_radiance_from_the_front_only(algor
     assert np.array_equal(seen_from(3.0), [0.0] * 3)  # above: its back, black
 
 
+def mirrored_light_scene(**camera):
+    """A disk light over a floor, seen in a planar mirror: the light's own shape is drawn with a material
+    the scene's materials do not name."""
+    return warprt.load_dict({
+        "camera": {"eye": [0.0, 1.5, 4.0], "center": [0.0, 0.8, 0.0], "width": 48, "height": 36, **camera},
+        "lights": [disk(0.5, 2.0)],
+        "materials": {**MATERIALS, "mirror": {"kd": [0.05] * 3, "reflectivity": [0.8] * 3}},
+        "objects": [FLOOR, {"shape": "plane", "size": [4.0, 3.0], "rotate": [90.0, 0.0, 0.0],
+                            "translate": [0.0, 1.0, -1.0], "material": "mirror"}]})
+
+
+def test_a_mirror_shows_an_area_light_through_the_virtual_cameras_as_traced():
+    """The mirrors' shortcut reads every material slot's reflectivity, the area light's own shape's
+    included (a KeyError before): its image is the traced one, to the bit."""
+    scene = mirrored_light_scene()
+    traced, _ = warprt.render(scene, reflection_query="bvh")
+    r = warprt.Renderer(scene, reflection_query="mirrors")
+    r.render()
+    kept = r.render()  # the second frame of a view uses the kept virtual cameras
+    assert kept.stats.mirrors.get("rasters") == "reused" and np.array_equal(kept.image, traced)
+    assert traced.max() >= L_E * 0.8 * 0.99  # the disk seen in the mirror: L_e k_r
+
+
+def test_the_material_aov_of_an_area_lights_own_shape_is_minus_one():
+    """Looking straight up at the disk: no material of the scene's (a ValueError before)."""
+    scene = warprt.load_dict({
+        "camera": {"eye": [0.0, 0.5, 0.0], "center": [0.0, 1.0, 0.0], "up": [0.0, 0.0, -1.0], "width": 1, "height": 1},
+        "lights": [disk(0.5, 1.0)], "materials": MATERIALS, "objects": [FLOOR]})
+    aovs = warprt.render(scene, aovs=["material"], primary_query="raytrace").aovs
+    assert aovs["material"][0, 0] == -1
+
+
 # (c) a blocker's penumbra -----------------------------------------------------------------------
 
 AMBIENT = 0.1

@@ -258,11 +258,16 @@ class Geometry:
         return np.asarray([np.asarray(l.position, np.float64) - self.origin if l.position is not None
                            else np.full(3, np.nan) for l in scene.whitted_lights], np.float32).reshape(-1, 3)
 
+    def slot_materials(self, scene) -> list:
+        """The Material of each material slot: the scene's, and EMITTER_MATERIAL for the slot of the area
+        lights' own shapes (drawn_objects), which the scene's materials do not name."""
+        return [EMITTER_MATERIAL if n == EMITTER_MATERIAL_NAME else scene.materials[n] for n in self.material_names]
+
     def scene_data(self, scene, shadow_grid: ShadowGrid | None = None) -> SceneData:
         """The kernels' view of these triangles for a frame of ``scene``: its materials and textures,
         lights, ambient, background and the eye's medium as small new arrays where they changed, and the
         shadow rays' grid if one is given; the triangle arrays and the BVH are shared, never rebuilt."""
-        m = [EMITTER_MATERIAL if n == EMITTER_MATERIAL_NAME else scene.materials[n] for n in self.material_names]
+        m = self.slot_materials(scene)
         dielectric = any(x.dielectric for x in m)
         area = scene.area_lights
         # With glass, the medium the eye is in (eye_medium) depends on the eye too.
@@ -413,6 +418,7 @@ class Geometry:
         return self.object_uv
 
     def material_indices(self, scene) -> np.ndarray:
-        """Per material slot, the material's index in scene.materials (what the material AOV reports)."""
+        """Per material slot, the material's index in scene.materials (what the material AOV reports); -1 for
+        the area lights' own shapes, which have none of the scene's."""
         names = list(scene.materials)
-        return np.asarray([names.index(n) for n in self.material_names] or [0], np.int32)
+        return np.asarray([names.index(n) if n in scene.materials else -1 for n in self.material_names] or [0], np.int32)

@@ -45,7 +45,7 @@ def view_key(scene, geom, fx) -> tuple:
     Lights, colours and how much a mirror reflects are not in it: a frame that changes only those reuses
     the rasters."""
     spp = scene.render.spp if fx.supersampling else 1
-    kr = np.asarray([scene.materials[n].reflectivity for n in geom.material_names] or [[0, 0, 0]], np.float32)
+    kr = np.asarray([m.reflectivity for m in geom.slot_materials(scene)] or [[0, 0, 0]], np.float32)
     reflective = tuple(bool(r) for r in kr.reshape(-1, 3).max(axis=1) > 0.0)
     # The whole (frozen) Camera, so that a field it gains is part of the key too.
     return (scene.camera, int(spp), min(MAX_BOUNCES, scene.render.max_depth - 1), reflective)

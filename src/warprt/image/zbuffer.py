@@ -73,7 +73,7 @@ def culled_faces(scene, geometry: Geometry, eye) -> np.ndarray:
     """Per triangle, whether the camera at ``eye`` (relative to the frame origin) sees it from behind
     and its material is single-sided: what the tracer's rays pass through (trace.culled), so a plain
     Z-buffer image does not draw it. The eye's side of the triangle's plane, in float64."""
-    single = np.array([not scene.materials[n].double_sided for n in geometry.material_names] or [False])
+    single = np.array([not m.double_sided for m in geometry.slot_materials(scene)] or [False])
     faces = geometry.indices_np.reshape(-1, 3)[: geometry.triangle_count]
     p = geometry.points_np.astype(np.float64)[faces]
     n = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
