@@ -120,8 +120,8 @@ def _register_integrator(mi, dr):
                     dr.gather(mi.Float, t.shininess, idx, active))
             elif not active or si.shape is None:
                 return t.zero_material
-            else:
-                ka, kd, ks, kr, shininess = t.by_id[si.shape.id()]
+            else:  # an area light's own shape has no material: black, as warprt draws it
+                ka, kd, ks, kr, shininess = t.by_id.get(si.shape.id(), t.zero_material)
             if t.own_textures and s.texture:
                 # A scene file's own BSDFs: Mitsuba's evaluation of the diffuse texture the file gave.
                 albedo = si.bsdf().eval_diffuse_reflectance(si, active)
@@ -142,6 +142,8 @@ def _register_integrator(mi, dr):
             s, t = self.switches, self.tables
             ka, kd, ks, _, shininess = mat
             color = mi.Color3f(0.0)
+            if t.area:
+                color += self.emitted(scene, si, active)
             if s.ambient:
                 color += t.ambient * ka
             if not (s.diffuse or s.specular):
@@ -168,6 +170,40 @@ def _register_integrator(mi, dr):
                     r_dot_v = dr.dot(r, v)
                     term += dr.select(r_dot_v > 0.0, ks * dr.power(dr.maximum(r_dot_v, 0.0), shininess), 0.0)
                 color += dr.select(lit, light_color * term, 0.0)
+            for emitter in t.area:
+                color += self.area_light(scene, si, emitter, kd, ks, shininess, n, v, active)
+            return color
+
+        def emitted(self, scene, si, active):
+            """The radiance of an area emitter's surface seen at si: Mitsuba's own eval (one-sided: 0
+            where si.wi is behind the emitting side), 0 on shapes that emit nothing."""
+            if self.tables.jit:
+                return si.emitter(scene, active).eval(si, active)
+            emitter = si.emitter(scene, active) if active else None
+            return emitter.eval(si, active) if emitter is not None else mi.Color3f(0.0)
+
+        def area_light(self, scene, si, emitter, kd, ks, shininess, n, v, active):
+            """One area light at si: warprt's fixed sample points (the k x k cell centres of the unit square)
+            handed to Mitsuba's own emitter.sample_direction, which places each on the shape as its
+            sample_position does and weighs it L_e |cos'| A / r^2 (0 from behind: one-sided); each point,
+            weight / k^2, lights the Phong terms as a point light would, through one shadow ray."""
+            s, t = self.switches, self.tables
+            color = mi.Color3f(0.0)
+            for a, b in t.area_uv:
+                ds, weight = emitter.sample_direction(si, mi.Point2f(a, b), active)
+                L = ds.d
+                n_dot_l = dr.dot(n, L)
+                lit = active & (n_dot_l > 0.0) & (ds.pdf > 0.0)
+                if s.shadows:
+                    lit &= ~scene.ray_test(si.spawn_ray_to(ds.p), lit)
+                term = mi.Color3f(0.0)
+                if s.diffuse:
+                    term += kd * n_dot_l
+                if s.specular:
+                    r = 2.0 * n_dot_l * n - L
+                    r_dot_v = dr.dot(r, v)
+                    term += dr.select(r_dot_v > 0.0, ks * dr.power(dr.maximum(r_dot_v, 0.0), shininess), 0.0)
+                color += dr.select(lit, weight * term * t.area_share, 0.0)
             return color
 
         def intersect(self, scene, ray, flags, coherent, active):
@@ -295,8 +331,14 @@ class _Tables:
     """Per-scene constants the integrator reads: materials keyed by shape, lights, C_amb, background."""
 
     def __init__(self, mi, dr, mi_scene, scene, object_of_shape: dict, attributes: bool, emitters: list,
-                 own_textures: bool = False):
+                 own_textures: bool = False, area: list = ()):
         self.jit = dr.is_jit_v(mi.Float)
+        # The area lights' emitters, sampled at the cell centres of a k x k grid, each 1 / k^2 of the light.
+        self.area_shapes = [shape for shape, _ in area]  # kept alive: an emitter points to its shape
+        self.area = [emitter for _, emitter in area]
+        k = math.isqrt(scene.render.light_samples) if self.area else 0
+        self.area_uv = [((i + 0.5) / k, (j + 0.5) / k) for j in range(k) for i in range(k)]
+        self.area_share = 1.0 / (k * k) if self.area else 0.0
         self.attributes = attributes  # whether the shapes carry Attributes BSDFs (textures, vertex colours)
         # Whether textured materials take their texture from the shape's own Mitsuba BSDF (a scene file's).
         self.own_textures = own_textures
@@ -372,13 +414,51 @@ def _emitter(mi, light):
                                                                     up=up.tolist())})
 
 
+def _area_emitter(mi, light):
+    """Mitsuba's ``area`` emitter of a warprt area light's radiance (one-sided, as warprt's)."""
+    return mi.load_dict({"type": "area", "radiance": {"type": "rgb", "value": [float(c) for c in light.radiance]}})
+
+
+def _shape_light(mi, light):
+    """A rectangle or disk light as Mitsuba's own analytic shape with an area emitter: to_world maps its
+    local [-1, 1]^2 square (the unit disk) onto center + x u + y v, emitting along u x v."""
+    from warprt.scene import shape_frame
+
+    c, u, v = shape_frame(light)
+    m = np.eye(4)
+    m[:3, 0], m[:3, 1], m[:3, 2], m[:3, 3] = u, v, np.cross(u, v) / np.linalg.norm(np.cross(u, v)), c
+    return mi.load_dict({"type": light.shape, "to_world": mi.ScalarTransform4f(m), "emitter": _area_emitter(mi, light)})
+
+
+def _area_samplers(mi, scene, shapes_by_key: dict) -> list:
+    """Per area light (scene.area_lights' order), (shape, emitter): the emitter whose sample_direction places its points: a
+    shape light's own analytic shape (shapes_by_key["area_j"]), and for an object light a mesh of the
+    object's triangles as warprt reads them (Mitsuba's mesh sampling: a face by area, then the
+    triangle), outside the scene, which draws the object with its own emitter."""
+    samplers = []
+    for j, light in enumerate(scene.area_lights):
+        if light.shape is not None:
+            shape = shapes_by_key[f"area_{j:03d}"]
+            samplers.append((shape, shape.emitter()))
+            continue
+        objs = [o for o in scene.objects if o.name == light.object]
+        vertices = np.concatenate([o.vertices for o in objs])
+        offsets = np.cumsum([0] + [len(o.vertices) for o in objs])[:-1]
+        faces = np.concatenate([o.faces + off for o, off in zip(objs, offsets)])
+        mesh = _mesh(mi, f"sampler_{j:03d}", vertices, faces, None, emitter=_area_emitter(mi, light))
+        samplers.append((mesh, mesh.emitter()))  # the mesh kept: its emitter holds only a pointer to it
+    return samplers
+
+
 def _mesh(mi, name: str, vertices: np.ndarray, faces: np.ndarray, normals: np.ndarray | None,
-          uv: np.ndarray | None = None, colors: np.ndarray | None = None, bsdf=None):
+          uv: np.ndarray | None = None, colors: np.ndarray | None = None, bsdf=None, emitter=None):
     """A mi.Mesh from world-space float64 arrays (cast to Mitsuba's float32 storage), with its texture
-    coordinates and its vertex colours as the attribute "vertex_color"."""
+    coordinates and its vertex colours as the attribute "vertex_color"; ``emitter``: an area emitter on it."""
     props = mi.Properties()
     if bsdf is not None:
         props["bsdf"] = bsdf
+    if emitter is not None:
+        props["emitter"] = emitter
     mesh = mi.Mesh(name, len(vertices), len(faces), props=props, has_vertex_normals=normals is not None,
                    has_vertex_texcoords=uv is not None)
     params = mi.traverse(mesh)
@@ -399,7 +479,7 @@ def _mesh(mi, name: str, vertices: np.ndarray, faces: np.ndarray, normals: np.nd
 
 
 def whitted_lights(scene) -> list:
-    """The scene's point, spot and directional lights, which the reference renders (not its area lights)."""
+    """The scene's point, spot and directional lights (its area lights are integrated apart: area_light)."""
     return [light for light in scene.lights if light.type != "area"]
 
 
@@ -435,14 +515,19 @@ class MitsubaScene:
                         textures[id(t)] = _texture(mi, t)
                     maps[k] = textures[id(t)]
                 bsdf = mi.load_dict({"type": ATTRIBUTES, "colored": colors is not None, **maps})
-            shapes[key] = _mesh(mi, key, obj.vertices, obj.faces, normals, uv, colors, bsdf)
+            light = next((l for l in scene.area_lights if l.object is not None and l.object == obj.name), None)
+            shapes[key] = _mesh(mi, key, obj.vertices, obj.faces, normals, uv, colors, bsdf,
+                                emitter=_area_emitter(mi, light) if light is not None else None)
             object_of_shape[key] = i
+        for j, light in enumerate(scene.area_lights):
+            if light.shape is not None:
+                shapes[f"area_{j:03d}"] = _shape_light(mi, light)
         emitters = [_emitter(mi, light) for light in whitted_lights(scene)]
         self.mi_scene = mi.load_dict({"type": "scene", **shapes,
                                       **{f"light_{i:03d}": e for i, e in enumerate(emitters)}})
         self.integrator = mi.load_dict({"type": INTEGRATOR})
         self.integrator.tables = _Tables(mi, dr, self.mi_scene, scene, object_of_shape, attributes,
-                                           emitters)
+                                           emitters, area=_area_samplers(mi, scene, shapes))
         self._sensors = {}
         lo, hi = scene.bounds()
         self._extent = float(max(np.abs(hi - lo).max(), 1e-6))
@@ -475,11 +560,11 @@ class MitsubaScene:
     def render(self, switches: Switches = Switches(), camera=None) -> np.ndarray:
         """Linear RGB float32 (H, W, 3), row 0 at the top."""
         mi = self.mi
-        if len(whitted_lights(self.scene)) != len(self.scene.lights):
+        if switches.tree and self.scene.area_lights:
             from warprt import SceneError
 
-            raise SceneError(self.scene.source, "lights", "the reference renders point, spot and directional lights: "
-                                                          "area lights are not in it yet")
+            raise SceneError(self.scene.source, "lights", "the reference's ray tree (glass) does not take area "
+                                                          "lights yet")
         k = math.isqrt(switches.spp)
         if k * k != switches.spp:
             raise ValueError(f"spp must be a square (k*k stratified samples), got {switches.spp}")
@@ -527,7 +612,7 @@ class MitsubaFileScene(MitsubaScene):
         if len(emitters) != len(whitted_lights(scene)):
             raise ValueError(f"{path}: Mitsuba loads {len(emitters)} Whitted lights, the scene has {len(whitted_lights(scene))}")
         self.integrator.tables = _Tables(mi, dr, self.mi_scene, scene, object_of_shape, False, emitters,
-                                         own_textures=own)
+                                         own_textures=own, area=_area_samplers(mi, scene, {}))
         self._sensors = {}
         lo, hi = scene.bounds()
         self._extent = float(max(np.abs(hi - lo).max(), 1e-6))

@@ -52,6 +52,16 @@ def _disk_axes(light) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
     return c, s, t, float(light.radius)
 
 
+def shape_frame(light) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(center, u, v) of a rectangle or disk light in world space (float64): its sample (a, b) of the unit
+    square lies at center + x u + y v, (x, y) = (2a - 1, 2b - 1) on a rectangle and the concentric map of
+    (a, b) on a disk (u and v then the radius along its axes); it emits along u x v."""
+    if light.shape == "rectangle":
+        return rectangle_axes(light)
+    c, s, t, r = _disk_axes(light)
+    return c, s * r, t * r
+
+
 def light_normal(light) -> np.ndarray:
     """The unit normal of a shape light, the side it emits to."""
     if light.shape == "rectangle":
@@ -140,11 +150,13 @@ def emitter_samples(scene, light, k: int) -> tuple[np.ndarray, np.ndarray, np.nd
         areas = 0.5 * np.linalg.norm(cross, axis=1)
         area = float(areas.sum())
         cdf = np.cumsum(areas) / area
-        f = np.minimum(np.searchsorted(cdf, a, side="right"), len(areas) - 1)
+        # Mitsuba's mesh sample_position: b picks a triangle by area and is reused within it, then
+        # square_to_uniform_triangle(a, b'): barycentrics (1 - t, t b'), t = sqrt(1 - a).
+        f = np.minimum(np.searchsorted(cdf, b, side="right"), len(areas) - 1)
         lo = np.where(f > 0, cdf[f - 1], 0.0)
-        a_in = np.clip((a - lo) / np.maximum(cdf[f] - lo, 1e-300), 0.0, 1.0)  # a, reused within the triangle
-        t = np.sqrt(1.0 - a_in)
-        b1, b2 = 1.0 - t, t * b
+        b_in = np.clip((b - lo) / np.maximum(cdf[f] - lo, 1e-300), 0.0, 1.0)
+        t = np.sqrt(1.0 - a)
+        b1, b2 = 1.0 - t, t * b_in
         p = tri[f]
         points = p[:, 0] * (1.0 - b1 - b2)[:, None] + p[:, 1] * b1[:, None] + p[:, 2] * b2[:, None]
         normals = cross[f] / np.maximum(np.linalg.norm(cross[f], axis=1, keepdims=True), 1e-300)
