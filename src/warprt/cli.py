@@ -267,8 +267,9 @@ def cmd_info(args) -> int:
     for name in (m for m in scene.materials if m in used):
         for key, t in scene.materials[name].textures.items():
             print(f"  {name:<16} {key} x {t.describe()}")
-    print(f"lights     {len(scene.lights)}")
-    for light in scene.lights:
+    emissive = scene.emissive_lights
+    print(f"lights     {len(scene.lights)}" + (f" and {len(emissive)} emissive objects" if emissive else ""))
+    for light in scene.lights + emissive:
         print(f"  {_describe_light(light, scene)}")
     if scene.cameras:
         print(f"cameras    {len(scene.cameras)} in the file")

@@ -124,3 +124,14 @@ def test_the_reference_refuses_area_lights_with_glass_in_one_line():
     glass = replace(scene, materials={**scene.materials, "ball": replace(scene.materials["ball"], ior=1.5)})
     with pytest.raises(SceneError, match="ray tree"):
         render_mitsuba(glass)
+
+
+def test_an_emissive_material_matches_the_reference():
+    """The emitting box by its material's emission rather than a [[lights]] entry: the reference puts
+    Mitsuba's area emitter on the same mesh (Scene.area_lights lists it either way)."""
+    scene = lit_room()
+    lamp = scene.lights[2]
+    emissive = replace(scene, lights=[l for l in scene.lights if l is not lamp],
+                       materials={**scene.materials, "lamp": replace(scene.materials["lamp"], emission=lamp.radiance)})
+    ssim, mean_rel = agreement(warprt.render(emissive)[0], render_mitsuba(emissive))
+    assert ssim >= SSIM_MIN and mean_rel <= MEAN_REL_MAX, (ssim, mean_rel)

@@ -2,9 +2,10 @@
 frame may change without loading the scene again, each read and written as NumPy arrays.
 
     materials.<name>.ka | kd | ks | reflectivity | transmittance | absorption   (3,)
+    materials.<name>.emission                   (3,), where the material emits (an area light's L_e)
     materials.<name>.shininess | ior                                            ()
     materials.<name>.ka_texture | kd_texture | ks_texture     (H, W, 3) linear float32, row 0 the image's top
-    lights.<i>.position | color | direction                                     (3,)
+    lights.<i>.position | color | direction | radiance (an area light's)         (3,)
     objects.<name>.vertices                                                     (N, 3), world space
     camera.eye | center | up                                                    (3,)
     camera.fovy                                                                 ()
@@ -27,7 +28,7 @@ from ..errors import SceneError
 MATERIAL_COLOURS = ("ka", "kd", "ks", "reflectivity")
 DIELECTRIC_COLOURS = ("transmittance", "absorption")
 TEXTURES = ("ka_texture", "kd_texture", "ks_texture")
-LIGHT_VECTORS = ("position", "color", "direction")
+LIGHT_VECTORS = ("position", "color", "direction", "radiance")
 CAMERA_VECTORS = ("eye", "center", "up")
 SOURCE = "Renderer.params"
 
@@ -40,6 +41,8 @@ def _names(scene) -> list[str]:
         if m.dielectric:
             out += [f"materials.{name}.{k}" for k in ("ior",) + DIELECTRIC_COLOURS]
         out += [f"materials.{name}.{k}" for k in TEXTURES if _image_texture(m, k) is not None]
+        if m.emission is not None:
+            out.append(f"materials.{name}.emission")
     for i, light in enumerate(scene.lights):
         out += [f"lights.{i}.{k}" for k in LIGHT_VECTORS if getattr(light, k) is not None]
     out += [f"objects.{name}.vertices" for name in _object_names(scene)]

@@ -62,7 +62,7 @@ def scene_effects(scene) -> EffectSet:
     used = {o.material for o in scene.objects}
     mats = [scene.materials[m] for m in used]
     amb = np.asarray(scene.render.ambient)
-    lit = any(max(l.radiance if l.area else l.color) > 0 for l in scene.lights)
+    lit = any(max(l.radiance if l.area else l.color) > 0 for l in scene.whitted_lights + scene.area_lights)
     kd = any(max(m.peak("kd")) > 0 for m in mats)
     ks = any(max(m.peak("ks")) > 0 for m in mats)
     return EffectSet(
@@ -81,7 +81,7 @@ def scene_effects(scene) -> EffectSet:
         absorption=any(m.dielectric and max(m.absorption) > 0 for m in mats),
         light_model=not all(light.seed_point for light in scene.whitted_lights),
         culling=not all(m.double_sided for m in mats),
-        area_lights=any(light.area for light in scene.lights),
+        area_lights=bool(scene.area_lights),
     )
 
 

@@ -163,6 +163,9 @@ class Material:
     transmittance: tuple = (1.0, 1.0, 1.0)  # k_t, only with ior
     absorption: tuple = (0.0, 0.0, 0.0)  # sigma per scene unit (Beer's law), only with ior
     double_sided: bool = True  # False: back faces culled (an opaque material only)
+    # L_e: every object of this material is an area light of this radiance (Scene.emissive_lights),
+    # emitting to the side its winding faces, as an ``area`` emitter on a Mitsuba shape or a glTF emissive.
+    emission: tuple | None = None
     # Whether ka (its value; its texture) was left to follow kd: a material made again with another kd
     # (Renderer.params) keeps following it, as a file that leaves ka out would.
     ka_follows_kd: bool = field(default=False, init=False, compare=False, repr=False)
@@ -170,7 +173,7 @@ class Material:
 
     def __post_init__(self):
         # reflectivity, transmittance and absorption may be one number, as in the scene file.
-        _convert(self, vectors=("kd", "ka", "ks", "reflectivity", "transmittance", "absorption"),
+        _convert(self, vectors=("kd", "ka", "ks", "reflectivity", "transmittance", "absorption", "emission"),
                  scalar_ok=("reflectivity", "transmittance", "absorption"))
         if self.ka is None:
             object.__setattr__(self, "ka", self.kd)
@@ -298,8 +301,21 @@ class Scene:
 
     @property
     def area_lights(self) -> list:
-        """The area lights, in the order of ``lights`` (an emitter's index in the kernels' area table)."""
-        return [light for light in self.lights if light.area]
+        """The area lights, in the order of ``lights``, then the emissive materials' (emissive_lights): an
+        emitter's index in the kernels' area table."""
+        return [light for light in self.lights if light.area] + self.emissive_lights
+
+    @property
+    def emissive_lights(self) -> list:
+        """An area light per object name whose material has an emission (Material.emission), over that
+        object's triangles, in the order of the objects: what a material's emission is, made explicit."""
+        lights, named = [], set()
+        for o in self.objects:
+            m = self.materials.get(o.material) if isinstance(self.materials, dict) else None
+            if m is not None and m.emission is not None and max(m.emission) > 0.0 and o.name not in named:
+                named.add(o.name)
+                lights.append(Light(type="area", radiance=m.emission, object=o.name, name=f"{o.name} ({o.material})"))
+        return lights
 
     @property
     def whitted_lights(self) -> list:

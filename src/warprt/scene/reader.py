@@ -27,7 +27,7 @@ _LIGHT_KEYS = {"type", "position", "color", "direction", "target", "cutoff_angle
 _AREA_KEYS = {"type", "radiance", "shape", "object", "center", "normal", "u", "v", "size", "radius"}
 _SPOT_KEYS = ("target", "cutoff_angle", "beam_width")  # meaningful only for a spot
 _MATERIAL_KEYS = {"ka", "kd", "ks", "shininess", "reflectivity", "ka_texture", "kd_texture", "ks_texture", "ior",
-                  "transmittance", "absorption", "double_sided"}
+                  "transmittance", "absorption", "double_sided", "emission"}
 _DIELECTRIC_KEYS = ("transmittance", "absorption")  # meaningful only with an ior
 _TEXTURE_KEYS = {"image", "checker", "scale", "offset", "srgb"}
 
@@ -208,6 +208,7 @@ def read_material(source: str, name: str, t, base: Path = Path(".")) -> Material
         kd_texture=tex.get("kd"), ka_texture=ka_texture, ks_texture=tex.get("ks"),
         ior=ior,
         double_sided=r.boolean("double_sided", d.double_sided),
+        emission=r.vector("emission", None, nonneg=True) if "emission" in t else None,
         **dielectric,
     )
 

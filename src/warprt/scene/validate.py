@@ -285,6 +285,8 @@ def validate_scene(scene: Scene) -> CheckedContent:
         for key in ("kd", "ks", "reflectivity", "ka"):
             _check_vector(src, f"materials.{name}.{key}", getattr(m, key), nonneg=True)
         _check_number(src, f"materials.{name}.shininess", m.shininess)
+        if m.emission is not None:
+            _check_vector(src, f"materials.{name}.emission", m.emission, nonneg=True)
         for key in ("ka", "kd", "ks"):
             _check_texture(src, f"materials.{name}.{key}_texture", getattr(m, f"{key}_texture", None))
         _check_dielectric(src, f"materials.{name}", m)
@@ -316,9 +318,27 @@ def validate_scene(scene: Scene) -> CheckedContent:
         if len(v):
             objects.append((i, obj.name, v.min(axis=0), v.max(axis=0)))
             _check_object_reach(src, *objects[-1], eye)
+    light_max = light_max + _check_emissive_objects(src, scene)
     content = CheckedContent(tuple(lights), light_max, tuple(peaks), color_max, kr_max, coef_max, tuple(objects))
     _check_overflow(src, scene.render, ambient, background, content)
     return content
+
+
+def _check_emissive_objects(src, scene: Scene) -> np.ndarray:
+    """An emissive material's objects are area lights named by their object names: a name must not also
+    name an object that does not emit so, nor the object of a [[lights]] area light (two emitters on one
+    surface). Returns pi L_e summed over them (what they can add to a point's irradiance)."""
+    emissive = {light.object: light.radiance for light in scene.emissive_lights}
+    for i, o in enumerate(scene.objects):
+        if o.name in emissive and scene.materials[o.material].emission != emissive[o.name]:
+            raise SceneError(src, f"objects[{i}].name", f"'{o.name}' also names an object of an emissive material, "
+                                                        f"whose light would cover both; give each emitting object its "
+                                                        f"own name")
+    for i, light in enumerate(scene.lights):
+        if light.area and light.object in emissive:
+            raise SceneError(src, f"lights[{i}].object", f"'{light.object}' emits already (its material's emission); "
+                                                         f"give it one area light")
+    return sum((np.pi * np.asarray(l.radiance, np.float64) for l in scene.emissive_lights), np.zeros(3))
 
 
 def validate_view(scene: Scene, content: CheckedContent):

@@ -37,8 +37,7 @@ _WRAP = {10497: "repeat", 33071: "clamp", 33648: "mirror"}  # the sampler's wrap
 # Like every glTF material unless it says doubleSided, it is single-sided (three.js: FrontSide).
 GLTF_DEFAULT_MATERIAL = Material(kd=(1.0, 1.0, 1.0), ka=(1.0, 1.0, 1.0), ks=(0.0, 0.0, 0.0), double_sided=False)
 _UNREAD_MATERIAL_EXTENSIONS = {"KHR_materials_volume": "volume",
-                               "KHR_materials_clearcoat": "clearcoat", "KHR_materials_sheen": "sheen",
-                               "KHR_materials_emissive_strength": "emission"}
+                               "KHR_materials_clearcoat": "clearcoat", "KHR_materials_sheen": "sheen"}
 
 
 def read_gltf(path: Path) -> MeshFile:
@@ -177,6 +176,22 @@ class _Document:
         # wrapT acts on the glTF v, which runs down the image, ours up: clamp and mirror commute with v -> 1 - v.
         return texture.wrapped(*wrap)
 
+    def emission(self, m: dict, where: str) -> tuple | None:
+        """The material's radiance L_e, as Blender's importer reads it: emissiveFactor times
+        KHR_materials_emissive_strength's emissiveStrength (1 without it); None where it is black. An
+        emissiveTexture is not read (its factor is, with a warning)."""
+        factor = m.get("emissiveFactor", [0.0, 0.0, 0.0])
+        strength = m.get("extensions", {}).get("KHR_materials_emissive_strength", {}).get("emissiveStrength", 1.0)
+        bad = lambda x: isinstance(x, bool) or not isinstance(x, (int, float)) or not math.isfinite(x) or x < 0
+        if not isinstance(factor, list) or len(factor) != 3 or any(bad(x) for x in factor):
+            raise SceneError(self.src, f"{where}.emissiveFactor", f"expected 3 non-negative numbers, got {show(factor)}")
+        if bad(strength):
+            raise SceneError(self.src, f"{where}.emissiveStrength", f"expected a non-negative number, got {show(strength)}")
+        if "emissiveTexture" in m and max(factor) > 0.0:
+            warn(self.src, where, "the emissive texture is not read: the material emits its emissiveFactor everywhere")
+        emission = tuple(float(x) * float(strength) for x in factor)
+        return emission if max(emission) > 0.0 else None
+
     def material(self, i: int) -> tuple[Material, int]:
         """materials[i] as Phong (the base colour, times its texture, is kd and ka; metallic-roughness
         has no Phong term here) and the texture coordinate set its texture reads."""
@@ -192,10 +207,9 @@ class _Document:
         kd = tuple(float(x) for x in factor[:3])
         if m.get("alphaMode", "OPAQUE") != "OPAQUE" or (len(factor) > 3 and factor[3] < 1.0):
             warn(self.src, where, "transparency (alphaMode, base colour alpha) is not rendered; the material is opaque")
-        if any(x > 0 for x in m.get("emissiveFactor", [0, 0, 0])) or "emissiveTexture" in m:
-            warn(self.src, where, "emission is not rendered")
+        emission = self.emission(m, where)
         for ext, what in _UNREAD_MATERIAL_EXTENSIONS.items():
-            if ext in m.get("extensions", {}) and what != "emission":
+            if ext in m.get("extensions", {}):
                 warn(self.src, where, f"{what} ({ext}) is not rendered")
         texture, tex_coord = None, 0
         if info is not None:
@@ -207,7 +221,7 @@ class _Document:
         if not isinstance(double_sided, bool):
             raise SceneError(self.src, f"{where}.doubleSided", f"expected true or false, got {show(double_sided)}")
         material = Material(kd=kd, ka=kd, ks=(0.0, 0.0, 0.0), kd_texture=texture, ka_texture=texture,
-                            double_sided=double_sided)
+                            double_sided=double_sided, emission=emission)
         dielectric = dielectric_from_gltf(m, self.src, where)
         if dielectric:  # KHR_materials_volume: "the doubleSided property has no effect on volume boundaries"
             dielectric["double_sided"] = True
