@@ -263,3 +263,15 @@ def test_the_light_samples_flag_sets_the_scenes_light_samples(tmp_path):
 
     flag, setting, default = render("--light-samples", "4"), render("--set", "render.light_samples=4"), render()
     assert np.array_equal(flag, setting) and not np.array_equal(flag, default)
+
+
+def test_an_area_lights_radiance_is_a_renderer_parameter():
+    def scene(radiance):
+        return warprt.load_dict({"camera": {"eye": [2.0, 1.5, 2.0], "center": [0.0, 0.0, 0.0], "width": 24, "height": 18},
+                                 "lights": [disk(0.5, 1.0, radiance=radiance)], "materials": MATERIALS, "objects": [FLOOR]})
+    r = warprt.Renderer(scene([L_E] * 3))
+    before = r.render().image
+    assert "lights.0.radiance" in r.params and np.array_equal(r.params["lights.0.radiance"], [L_E] * 3)
+    r.params["lights.0.radiance"] = [1.0, 2.0, 3.0]
+    after = r.render().image
+    assert np.array_equal(after, warprt.render(scene([1.0, 2.0, 3.0]))[0]) and not np.array_equal(after, before)
