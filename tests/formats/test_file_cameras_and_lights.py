@@ -305,10 +305,11 @@ def test_usd_lux_lights(tmp_path):
         lights = read_mesh_file(tmp_path / "l.usda").lights
     messages = [str(x.message) for x in w]
     assert sum("/World/Bulb" in m and "approximated by a point" in m for m in messages) == 1
-    assert sum("/World/Panel" in m and "RectLight is not a Whitted light: skipped" in m for m in messages) == 1
+    assert not any("/World/Panel" in m for m in messages)  # an area light now (test_usd_area_lights)
     assert sum("/World/Sky" in m and "DomeLight is not a Whitted light: skipped" in m for m in messages) == 1
     assert not any("/World/Dot" in m for m in messages)
-    bulb, sun, lamp, dot = lights
+    bulb, sun, lamp, dot, panel = lights
+    assert (panel.type, panel.shape) == ("area", "rectangle")
     np.testing.assert_allclose(dot.position, [0.0, 9.0, 0.0])
     assert (bulb.type, bulb.name, bulb.falloff) == ("point", "Bulb", "inverse_square")
     np.testing.assert_allclose(bulb.position, [1.0, 5.0, -2.0])
@@ -320,6 +321,43 @@ def test_usd_lux_lights(tmp_path):
     np.testing.assert_allclose(lamp.position, [0.0, 3.0, 0.0])
     np.testing.assert_allclose(lamp.direction, [0.0, -1.0, 0.0], atol=1e-7)  # -z turned -90 degrees about x
     assert lamp.cutoff_angle == pytest.approx(30.0) and lamp.beam_width == pytest.approx(30.0 * 0.75)
+
+
+def test_usd_area_lights(tmp_path):
+    """UsdLux's RectLight (width along its x, height along its y) and DiskLight (radius > 0) emit along the
+    prim's -z: turned -90 degrees about x at y = 3 they face down. Radiance intensity x 2^exposure x colour,
+    over the area with normalize; lengths in metres (metersPerUnit 0.5 halves them)."""
+    from pxr import Gf, Usd, UsdGeom, UsdLux
+
+    stage = Usd.Stage.CreateNew(str(tmp_path / "a.usda"))
+    UsdGeom.SetStageMetersPerUnit(stage, 0.5)
+    usd_box(stage, "/World/Box", [0, 0.5, 0], [1, 1, 1])
+    rect = UsdLux.RectLight.Define(stage, "/World/Panel")
+    rect.CreateWidthAttr(4.0)
+    rect.CreateHeightAttr(2.0)
+    rect.CreateIntensityAttr(3.0)
+    rect.CreateColorAttr(Gf.Vec3f(1.0, 0.5, 0.25))
+    UsdGeom.Xformable(rect).AddTranslateOp().Set(Gf.Vec3d(0.0, 6.0, 0.0))
+    UsdGeom.Xformable(rect).AddRotateXOp().Set(-90.0)
+    disk = UsdLux.DiskLight.Define(stage, "/World/Lamp")
+    disk.CreateRadiusAttr(1.0)
+    disk.CreateIntensityAttr(2.0)
+    disk.CreateNormalizeAttr(True)
+    UsdGeom.Xformable(disk).AddTranslateOp().Set(Gf.Vec3d(2.0, 6.0, 0.0))
+    UsdGeom.Xformable(disk).AddRotateXOp().Set(-90.0)
+    stage.GetRootLayer().Save()
+
+    panel, lamp = read_mesh_file(tmp_path / "a.usda").lights
+    assert (panel.type, panel.shape, lamp.type, lamp.shape) == ("area", "rectangle", "area", "disk")
+    np.testing.assert_allclose(panel.center, [0.0, 3.0, 0.0], atol=1e-12)
+    # local y (height 2 -> 1 m, half 0.5) turned to -z; local x (width 4 -> 2 m, half 1) stays x: u x v points down
+    np.testing.assert_allclose(panel.u, [0.0, 0.0, -0.5], atol=1e-12)
+    np.testing.assert_allclose(panel.v, [1.0, 0.0, 0.0], atol=1e-12)
+    np.testing.assert_allclose(panel.radiance, [3.0, 1.5, 0.75])
+    np.testing.assert_allclose(lamp.center, [1.0, 3.0, 0.0], atol=1e-12)
+    np.testing.assert_allclose(lamp.normal, [0.0, -1.0, 0.0], atol=1e-12)
+    assert lamp.radius == pytest.approx(0.5)
+    np.testing.assert_allclose(lamp.radiance, [2.0 / (math.pi * 0.25)] * 3)  # normalize: over its area
 
 
 # --- glTF's default material ----------------------------------------------------------------------------

@@ -185,9 +185,11 @@ class _Stage:
                                 horizontal / vertical if authored else None)
 
     def _light(self, prim) -> Light | None:
-        """A UsdLux light as a Whitted one: C_l = intensity x 2^exposure x colour; sphere and disk lights
-        a point at their centre, distant lights directional along the prim's -z, a ShapingAPI cone a spot
-        (cone:angle the cutoff, cone:softness the share of it the profile falls over)."""
+        """A UsdLux light: C_l = intensity x 2^exposure x colour. A RectLight (width x height) or a DiskLight
+        of radius > 0 is an area light of radiance C_l (over its area with normalize) emitting along the
+        prim's -z, as UsdLux defines them; a sphere light, or a disk of radius 0, a point at its centre;
+        distant lights directional along the prim's -z; a ShapingAPI cone on a point a spot (cone:angle the
+        cutoff, cone:softness the share of it the profile falls over)."""
         from pxr import UsdLux
 
         where, t = str(prim.GetPath()), self.time
@@ -203,6 +205,8 @@ class _Stage:
         if prim.IsA(UsdLux.DistantLight):
             return Light(position=None, color=c_l, type="directional", direction=direction, falloff="inverse_square",
                          name=name)
+        if prim.IsA(UsdLux.RectLight) or (prim.IsA(UsdLux.DiskLight) and (UsdLux.DiskLight(prim).GetRadiusAttr().Get(t) or 0) > 0):
+            return self._area_light(prim, m, c_l, name)
         if not (prim.IsA(UsdLux.SphereLight) or prim.IsA(UsdLux.DiskLight)):
             warn(self.src, where, f"a {prim.GetTypeName()} is not a Whitted light: skipped")
             return None
@@ -219,6 +223,38 @@ class _Stage:
         softness = min(max(float(shaping.GetShapingConeSoftnessAttr().Get(t) or 0.0), 0.0), 1.0)
         return Light(position=position, color=c_l, type="spot", direction=direction, cutoff_angle=float(angle),
                      beam_width=float(angle) * (1.0 - softness), falloff="inverse_square", name=name)
+
+    def _area_light(self, prim, m: np.ndarray, c_l: tuple, name: str) -> Light:
+        """A RectLight or DiskLight as an area light: its local x-y extent placed by the prim's transform
+        (in metres), emitting along its -z; radiance C_l, divided by the area where normalize is on."""
+        from pxr import UsdLux
+
+        where, t = str(prim.GetPath()), self.time
+        api = UsdLux.LightAPI(prim)
+        linear = m[:3, :3] * self.meters
+        center = tuple(float(x) for x in m[:3, 3])
+        if prim.HasAPI(UsdLux.ShapingAPI):
+            warn(self.src, where, "shaping (a cone) is not read for an area light: it emits over its hemisphere")
+        if prim.IsA(UsdLux.RectLight):
+            rect = UsdLux.RectLight(prim)
+            width, height = float(rect.GetWidthAttr().Get(t)), float(rect.GetHeightAttr().Get(t))
+            if rect.GetTextureFileAttr().Get(t):
+                warn(self.src, where, "the light's texture is not read: it emits its colour everywhere")
+            # u x v along -z: u the local y half-edge, v the local x one.
+            u, v = linear @ [0.0, 0.5 * height, 0.0], linear @ [0.5 * width, 0.0, 0.0]
+            area = 4.0 * float(np.linalg.norm(np.cross(u, v)))
+            light = dict(shape="rectangle", center=center, u=tuple(map(float, u)), v=tuple(map(float, v)))
+        else:
+            radius = float(UsdLux.DiskLight(prim).GetRadiusAttr().Get(t))
+            x, y, z = (linear @ e for e in np.eye(3))
+            r = radius * float(np.linalg.norm(x))
+            if not (np.isclose(np.linalg.norm(x), np.linalg.norm(y), rtol=1e-6) and abs(np.dot(x, y)) < 1e-6 * np.dot(x, x)):
+                warn(self.src, where, f"a non-uniformly scaled disk light is read as a disk of radius {r:g}")
+            normal = -np.cross(x, y)
+            area = math.pi * r * r
+            light = dict(shape="disk", center=center, normal=tuple(map(float, normal / np.linalg.norm(normal))), radius=r)
+        radiance = np.asarray(c_l, np.float64) / (area if api.GetNormalizeAttr().Get(t) else 1.0)
+        return Light(type="area", radiance=tuple(map(float, radiance)), name=name, **light)
 
     def _drawn(self, prim, under=None) -> bool:
         from pxr import UsdGeom
