@@ -15,11 +15,13 @@ from .._warp import init_warp, wp
 from ..geometry import Geometry, ShadowGridBuild, shadow_grid
 from ..kernels import (aov_buffers, aov_bytes, aov_sums, camera_data, empty_aov_buffers, make_shade_kernel,
                        make_trace_kernel, raster_kernel, total_kernel)
+from ..errors import ArgumentError
 from ..options import RenderOptions
 from ..scene import EffectSet, camera_basis, drawn_objects, validate_camera, validate_scene, validate_view, zbuffer_effects
 from ..timing import timed
 from .aovs import finish_aovs
 from .caches import SHADOW_GRIDS_KEPT, FrameCaches
+from .grad import backward as grad_backward, record_first_hits, refusal as grad_refusal
 from .launch import bands_of, launch_bands, launch_plan
 from .memory import check_frame_memory, frame_estimate, frame_memory
 from .mirrors import MirrorFrame, empty_mirrors, mirror_frame
@@ -131,6 +133,7 @@ class Renderer:
         self._built_from: list = []  # _object_keys of the objects self._geometry holds
         self._scene, self._checked, self._checked_for = None, None, None
         self._pool: ThreadPoolExecutor | None = None  # the frames' band threads, from the first that needs them
+        self._first_hits = None  # (scene, Geometry, FirstHits) of the last grad=True frame, for backward()
         self._pool_threads = 0
         self.set_scene(scene)
 
@@ -197,15 +200,22 @@ class Renderer:
                 and all(a[0] == b[0] and a[1] is b[1] for a, b in zip(materials, content[1]))
                 and objects_match(objects, content[2]))
 
-    def render(self, *, progress=None) -> RenderResult:
+    def render(self, *, progress=None, grad: bool = False) -> RenderResult:
         """One frame of the scene, with the Whitted tracer (or, algorithm="zbuffer", by rasterization with
-        the same local shading); ``progress``: a progress.Progress told of each band done."""
+        the same local shading); ``progress``: a progress.Progress told of each band done. With ``grad``,
+        the same image, and what backward() needs is recorded (image/grad.py says what is differentiated)."""
+        self._first_hits = None
+        if grad and self.options.algorithm == "zbuffer":
+            raise ArgumentError("render", "grad", "gradients follow the ray tracer: use algorithm='raytrace'")
         if self.options.algorithm == "zbuffer":
             return self._render_zbuffer(progress)
         init_warp()
         scene, o, times = self._scene, self.options, {}
         with timed(times, "total"):
             plan = plan_frame(scene, o)
+            why = grad_refusal(scene, plan.fx) if grad else None
+            if why is not None:
+                raise ArgumentError("render", "grad", why)
             pool = self._bands_pool(plan.threads)
             estimate = frame_estimate(scene, plan.grid.per_pixel, plan.raster)
             check_frame_memory(scene, _without_geometry(estimate, self._given), o.device)  # before any buffer
@@ -231,9 +241,25 @@ class Renderer:
             with timed(times, "trace"):
                 frame = _trace(scene, o, plan, geom, data, kernel, zb, used, progress, pool)
             result = _finish(scene, o, plan, geom, frame)
+            if grad:
+                with timed(times, "grad_record"):
+                    self._first_hits = (scene, geom, record_first_hits(scene, geom, data, plan.fx, o.device))
         stats = _frame_stats(scene, o, plan, shortcuts, variant, geom, geometry_info, grid, mirrors, zb, frame, times)
         stats.memory["estimate"] = estimate
         return RenderResult(result[0], stats, result[1])
+
+    def backward(self, d_image, wrt=None) -> dict:
+        """d(sum(d_image * image)) / d(param) at the last frame, rendered with grad=True, for each name in
+        ``wrt`` (r.params names: materials.<name>.ka | kd | ks | shininess, lights.<i>.color | position;
+        all of them by default): a dict of float64 NumPy arrays shaped as the parameters; kd's carries ka's
+        where ka follows kd (as r.params keeps it following). ``d_image``: the derivative of a loss with
+        respect to the image, (height, width, 3), a NumPy or Warp array."""
+        if self._first_hits is None:
+            raise ArgumentError("backward", "render", "no frame was rendered with grad=True since the last change")
+        scene, geom, hits = self._first_hits
+        if scene is not self._scene:
+            raise ArgumentError("backward", "render", "the scene changed since render(grad=True): render it again")
+        return grad_backward(scene, geom, hits, d_image, wrt, self.options.device)
 
     # ---- Phases -------------------------------------------------------------------------------------
 

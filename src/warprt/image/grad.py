@@ -1,0 +1,137 @@
+"""Derivatives of an image (issue 30, its first part): Renderer.render(grad=True) records each pixel's first
+hit and the lights it sees; Renderer.backward(d_image, wrt) returns d(sum(d_image * image)) / d(param)
+for the parameters named as r.params names them, through a differentiable replay of the camera rays'
+local shading (kernels/grad.py) on a wp.Tape.
+
+What is differentiated, and what is held: the hits (the faces and barycentrics) and the visibility of
+each light are held fixed, as a visibility-fixed derivative is (a shadow's edge moving with a light has
+no derivative here); the local Phong terms are exact functions of the material colours and exponents
+and of the lights' colours and positions. Covered for now: one sample per pixel, camera rays only (no
+mirror or glass ray levels), point lights (falloff none or inverse_square), untextured materials
+without vertex colours, no area lights; any other scene is refused in one line naming what is not yet
+differentiated, so a gradient is never silently partial.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .._warp import wp
+from ..errors import ArgumentError
+from ..kernels.camera import camera_data
+from ..kernels.grad import MAX_GRAD_LIGHTS, make_grad_record_kernel, make_grad_shade_kernel
+from ..scene import camera_basis
+
+SOURCE = "Renderer.backward"
+MATERIAL_KEYS = ("ka", "kd", "ks", "shininess")
+LIGHT_KEYS = ("color", "position")
+
+
+def refusal(scene, fx) -> str | None:
+    """Why render(grad=True) cannot differentiate this scene yet (None: it can)."""
+    if fx.supersampling:
+        return "one sample per pixel (render.spp = 1) is differentiated for now"
+    if fx.reflection or fx.refraction:
+        return "the camera rays' first hits are differentiated for now, not mirror or glass ray levels (max_depth = 1)"
+    if fx.texture or fx.vertex_color:
+        return "textures and vertex colours are not differentiated yet"
+    if fx.area_lights:
+        return "area lights are not differentiated yet"
+    if any(light.type != "point" for light in scene.whitted_lights):
+        return "point lights are differentiated for now, not spot or directional ones"
+    if len(scene.whitted_lights) > MAX_GRAD_LIGHTS:
+        return f"at most {MAX_GRAD_LIGHTS} lights are differentiated (Warp's unrolled loop)"
+    return None
+
+
+@dataclass
+class FirstHits:
+    """What a grad=True frame recorded: per pixel the first hit's face (-1: none), barycentrics and ray
+    direction, and per pixel and light whether the hit saw the light."""
+
+    face: wp.array
+    bary: wp.array
+    dirs: wp.array
+    visible: wp.array
+    width: int
+    height: int
+    lights: int
+    smooth: bool
+
+
+def record_first_hits(scene, geom, data, fx, device: str) -> FirstHits:
+    """Run the record kernel for a frame of ``scene`` on ``geom`` and its tables ``data``."""
+    cam = scene.camera
+    n, L = cam.width * cam.height, len(scene.whitted_lights)
+    face = wp.empty(n, dtype=int, device=device)
+    bary = wp.zeros(n, dtype=wp.vec2, device=device)
+    dirs = wp.empty(n, dtype=wp.vec3, device=device)
+    visible = wp.zeros(max(n * L, 1), dtype=int, device=device)
+    c = camera_data(camera_basis(cam), geom.eye_offset(cam.eye))
+    kernel = make_grad_record_kernel(L, fx.smooth, fx.shadows, fx.culling)
+    wp.launch(kernel, dim=n, inputs=[data, c, face, bary, dirs, visible], device=device)
+    return FirstHits(face, bary, dirs, visible, cam.width, cam.height, L, fx.smooth)
+
+
+def parameter_names(scene) -> list[str]:
+    """The r.params names backward() can differentiate with respect to."""
+    names = [f"materials.{m}.{k}" for m in scene.materials for k in MATERIAL_KEYS]
+    names += [f"lights.{i}.{k}" for i, light in enumerate(scene.lights) if not light.area for k in LIGHT_KEYS]
+    return names
+
+
+def backward(scene, geom, hits: FirstHits, d_image, wrt, device: str) -> dict:
+    """{name: d(sum(d_image * image)) / d(param)} for each name in ``wrt`` (parameter_names), each shaped
+    as the parameter: (3,) for colours and positions, () for an exponent."""
+    known = parameter_names(scene)
+    wrt = list(known if wrt is None else wrt)
+    for name in wrt:
+        if name not in known:
+            why = ("not a parameter backward() differentiates yet (materials.<name>.ka | kd | ks | shininess, "
+                   "lights.<i>.color | position)")
+            raise ArgumentError("backward", str(name), why)
+    d = np.asarray(d_image.numpy() if isinstance(d_image, wp.array) else d_image, np.float32)
+    if d.shape != (hits.height, hits.width, 3) or not np.all(np.isfinite(d)):
+        raise ArgumentError("backward", "d_image", f"expected finite values of shape {(hits.height, hits.width, 3)}, "
+                                                   f"got {d.shape}")
+    mats = geom.slot_materials(scene)
+    vec = lambda rows: wp.array(np.asarray(rows, np.float32).reshape(-1, 3), dtype=wp.vec3, device=device,  # noqa: E731
+                                requires_grad=True)
+    ka, kd, ks = (vec([getattr(m, k) for m in mats] or [[0, 0, 0]]) for k in ("ka", "kd", "ks"))
+    shininess = wp.array(np.asarray([m.shininess for m in mats] or [0.0], np.float32), dtype=float, device=device,
+                         requires_grad=True)
+    lights = scene.whitted_lights
+    light_pos = vec(geom.light_positions(scene) if lights else [[0, 0, 0]])
+    light_color = vec([l.color for l in lights] or [[0, 0, 0]])
+    inverse_square = wp.array(np.asarray([l.falloff == "inverse_square" for l in lights] or [0], np.int32),
+                              dtype=int, device=device)
+    image = wp.zeros(hits.width * hits.height, dtype=wp.vec3, device=device, requires_grad=True)
+    kernel = make_grad_shade_kernel(hits.lights, hits.smooth)
+    tape = wp.Tape()
+    with tape:
+        wp.launch(kernel, dim=hits.width * hits.height,
+                  inputs=[geom.points, geom.indices, geom.normals, geom.tri_material, geom.tri_smooth, ka, kd, ks,
+                          shininess, light_pos, light_color, inverse_square, wp.vec3(*scene.render.ambient),
+                          wp.vec3(*scene.render.background), hits.face, hits.bary, hits.dirs, hits.visible],
+                  outputs=[image], device=device)
+    tape.backward(grads={image: wp.array(d.reshape(-1, 3), dtype=wp.vec3, device=device)})
+    slot = {name: i for i, name in enumerate(geom.material_names)}
+    whitted = [i for i, light in enumerate(scene.lights) if not light.area]
+    arrays = {"ka": ka, "kd": kd, "ks": ks, "shininess": shininess, "color": light_color, "position": light_pos}
+    grads = {k: a.grad.numpy() for k, a in arrays.items()}
+    out = {}
+    for name in wrt:
+        section, owner, key = name.split(".")
+        if section == "materials":
+            if owner not in slot:  # a material no object uses
+                out[name] = np.zeros(() if key == "shininess" else (3,))
+                continue
+            out[name] = grads[key][slot[owner]].astype(np.float64)
+            if key == "kd" and scene.materials[owner].ka_follows_kd:  # ka is kd there (r.params keeps it so)
+                out[name] = out[name] + grads["ka"][slot[owner]]
+        else:
+            out[name] = grads[key][whitted.index(int(owner))].astype(np.float64)
+    tape.zero()
+    return out
