@@ -20,6 +20,8 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
+
 import warprt
 from warprt.image import AOVS
 
@@ -43,6 +45,8 @@ RUNS = (
     ("absorbing glass", "glass_cube", {}, TRACED),
     ("light model, single-sided", "sun", {"materials.wall.double_sided": False}, TRACED),
     ("vertex colours, AOVs", "vertex_colors", {}, dict(TRACED, aovs=AOVS)),
+    ("area lights (Mitsuba's Cornell box)", "cornell_box.xml", {}, TRACED),
+    ("gradients: record and differentiable shading", "seed", {"render.max_depth": 1}, dict(TRACED, grad=True)),
 )
 
 
@@ -58,8 +62,14 @@ def render_every_path(width: int = 16, height: int = 12) -> list[Run]:
     runs = []
     for label, name, overrides, options in RUNS:
         before = {id(m) for m in warprt_modules()}
-        scene = warprt.load_scene(SCENES / f"{name}.toml", {"camera.width": width, "camera.height": height, **overrides})
-        variant = warprt.render(scene, **options).stats.variant
+        path = SCENES / (name if "." in name else f"{name}.toml")
+        scene = warprt.load_scene(path, {"camera.width": width, "camera.height": height, **overrides})
+        options = dict(options)
+        grad = options.pop("grad", False)
+        with warprt.Renderer(scene, **options) as r:
+            variant = r.render(grad=grad).stats.variant
+            if grad:  # the differentiable kernel loads with its first backward pass
+                r.backward(np.zeros((height, width, 3), np.float32))
         runs.append(Run(label, variant, [m for m in warprt_modules() if id(m) not in before]))
     return runs
 
