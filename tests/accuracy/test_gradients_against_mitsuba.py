@@ -98,3 +98,44 @@ def test_mitsubas_ad_without_shadows_is_not_warprts(ours, weights):
     _, grads = ours
     _, m_grads = mitsuba_gradients(scene(), weights, shadows=False)
     assert {"materials.floor.kd", "lights.0.color", "lights.1.color"} <= set(compared(grads, m_grads))
+
+
+def mitsuba_vertex_gradients(s, weights, detach: bool = False) -> np.ndarray:
+    """Mitsuba's AD of the same loss with respect to the first object's vertex positions: its intersection
+    recomputed differentiably at the hit face (the camera ray fixed, the hit sliding over the moved
+    triangle); with ``detach`` (RayFlags.DetachShape) the hit does not follow the vertices: the control."""
+    mitsuba_variant()
+    import drjit as dr
+    import mitsuba as mi
+
+    ms = mitsuba_scene(s)
+    integ = ms.integrator
+    integ.switches = Switches.for_effects(resolve_effects(s), s.render)
+    params = mi.traverse(ms.mi_scene)
+    key = "object_00000.vertex_positions"
+    dr.enable_grad(params[key])
+    params.update()
+    idx = dr.arange(mi.UInt32, HEIGHT * WIDTH)
+    pos = mi.Point2f((mi.Float(idx % WIDTH) + 0.5) / WIDTH, (mi.Float(idx // WIDTH) + 0.5) / HEIGHT)
+    ray, _ = ms.sensor(s.camera, 1).sample_ray(0.0, 0.5, pos, mi.Point2f(0.5, 0.5))
+    flags = mi.RayFlags.Minimal | mi.RayFlags.ShadingFrame | (mi.RayFlags.DetachShape if detach else mi.RayFlags.Empty)
+    si = integ.intersect(ms.mi_scene, ray, flags, True, mi.Bool(True))
+    hit = si.is_valid()
+    side = dr.select(dr.dot(si.n, ray.d) > 0.0, -1.0, 1.0)
+    n = dr.select(dr.isfinite(si.sh_frame.n.x), si.sh_frame.n, si.n) * side
+    color = dr.select(hit, integ.local(ms.mi_scene, si, integ.material(si, hit), n, -ray.d, hit), integ.tables.background)
+    w = weights.reshape(-1, 3)
+    dr.backward(dr.sum(color.x * mi.Float(w[:, 0]) + color.y * mi.Float(w[:, 1]) + color.z * mi.Float(w[:, 2])))
+    return np.array(dr.grad(params[key]), np.float64).reshape(-1, 3)
+
+
+def test_vertex_gradients_equal_mitsubas_ad(weights):
+    from grad.test_first_hit_gradients import floor_scene
+
+    r = warprt.Renderer(floor_scene())
+    r.render(grad=True)
+    ours = r.backward(weights, wrt=["objects.floor.vertices"])["objects.floor.vertices"]
+    theirs = mitsuba_vertex_gradients(floor_scene(), weights)
+    np.testing.assert_allclose(ours, theirs, rtol=REL, atol=REL * np.abs(theirs).max())
+    detached = mitsuba_vertex_gradients(floor_scene(), weights, detach=True)  # the control
+    assert np.abs(detached - ours).max() > 0.1 * np.abs(ours).max()

@@ -112,7 +112,7 @@ def test_the_shading_kernel_passes_warps_gradcheck():
     hits = warprt.image.record_first_hits(s, geom, geom.scene_data(s), resolve_effects(s), "cpu")
     mats = geom.slot_materials(s)
     vec = lambda rows: wp.array(np.asarray(rows, np.float32), dtype=wp.vec3, requires_grad=True)  # noqa: E731
-    inputs = [geom.points, geom.indices, geom.normals, geom.tri_material, geom.tri_smooth,
+    inputs = [wp.vec3(*geom.eye_offset(s.camera.eye)), geom.points, geom.indices, geom.normals, geom.tri_material, geom.tri_smooth,
               vec([m.ka for m in mats]), vec([m.kd for m in mats]), vec([m.ks for m in mats]),
               wp.array([m.shininess for m in mats], dtype=float, requires_grad=True),
               vec(geom.light_positions(s)), vec([l.color for l in s.lights]),
@@ -136,7 +136,7 @@ def test_a_gradient_of_another_image_is_refused_in_one_line(weights):
     r.render(grad=True)
     with pytest.raises(SceneError, match="d_image"):
         r.backward(weights[:-1])
-    with pytest.raises(SceneError, match="objects.ball.vertices"):
+    with pytest.raises(SceneError, match="objects.ball.vertices"):  # smooth: its normals would move too
         r.backward(weights, wrt=["objects.ball.vertices"])
 
 
@@ -152,3 +152,60 @@ def test_what_is_not_differentiated_yet_is_refused_in_one_line(change, why):
         doc[key] = {**doc.get(key, {}), **value} if isinstance(value, dict) else value
     with pytest.raises(SceneError, match=why):
         warprt.Renderer(warprt.load_dict(doc)).render(grad=True)
+
+
+# --- Vertices: the hit point moves with them ------------------------------------------------------------
+
+# A two-triangle floor reaching beyond the view, planar: moving a vertex tilts its triangles by a little, so
+# no pixel changes face by more than that (a crease between two triangles of other normals, or an edge in
+# view, would move with the vertices, and its moving edge is what the hits held fixed leave out).
+TILT = [[-20.0, 0.0, -20.0], [20.0, 0.4, -20.0], [20.0, 0.4, 20.0], [-20.0, 0.0, 20.0]]
+
+
+STEEP = [0.0, 4.0, 3.0]  # looking down steeply enough that the floor's far edge is out of view
+
+
+def floor_scene(vertices=None, eye=STEEP):
+    """The floor (flat shading) with a box on it, lit by the two lights; no shadows, so that moving the
+    floor moves no shadow's edge (visibility is held fixed)."""
+    return warprt.load_dict({
+        "camera": {"eye": eye, "center": [0.0, 0.5, 0.0], "width": WIDTH, "height": HEIGHT},
+        "render": {"ambient": [0.2] * 3, "max_depth": 1, "shadows": False}, "lights": LIGHTS, "materials": MATERIALS,
+        "objects": [{"shape": "triangles", "name": "floor", "vertices": vertices or TILT, "faces": [[0, 1, 2], [0, 2, 3]],
+                     "material": "floor"},
+                    {"shape": "box", "name": "crate", "translate": [0.0, 0.5, 0.0], "material": "ball"}]})
+
+
+def test_vertex_gradients_equal_central_differences(weights):
+    """Every coordinate of the floor's four vertices: the camera rays' hits slide over the moved
+    triangles, their normals turn; the box's silhouette does not move, so nothing but shading changes."""
+    r = warprt.Renderer(floor_scene())
+    r.render(grad=True)
+    g = r.backward(weights, wrt=["objects.floor.vertices", "objects.crate.vertices"])["objects.floor.vertices"]
+    assert g.shape == (4, 3)
+    fd = np.zeros((4, 3))
+    for i in range(4):
+        for c in range(3):
+            up, down = np.array(TILT), np.array(TILT)
+            up[i, c] += 1e-3
+            down[i, c] -= 1e-3
+            fd[i, c] = (loss(floor_scene(up.tolist()), weights) - loss(floor_scene(down.tolist()), weights)) / 2e-3
+    np.testing.assert_allclose(g, fd, rtol=5e-3, atol=5e-3 * np.abs(fd).max())
+
+
+def test_an_edge_moving_in_view_is_outside_the_gradient(weights):
+    """The control: seen from lower down, the floor's far edge is in view against the background, and
+    raising a far vertex moves it across pixels; that edge's jump is what the held hits leave out, so the
+    differences of that height disagree with the gradient while a near vertex still agrees."""
+    eye = [0.0, 2.0, 5.0]
+    r = warprt.Renderer(floor_scene(eye=eye))
+    r.render(grad=True)
+    g = r.backward(weights, wrt=["objects.floor.vertices"])["objects.floor.vertices"]
+
+    def fd(i, c):
+        up, down = np.array(TILT), np.array(TILT)
+        up[i, c] += 1e-3
+        down[i, c] -= 1e-3
+        return (loss(floor_scene(up.tolist(), eye), weights) - loss(floor_scene(down.tolist(), eye), weights)) / 2e-3
+    assert abs(g[2, 1] - fd(2, 1)) <= 5e-3 * abs(fd(2, 1))  # a near vertex (z = 20): its edges out of view
+    assert abs(g[0, 1] - fd(0, 1)) > 0.5 * abs(fd(0, 1))  # the far one: its edge moves in view

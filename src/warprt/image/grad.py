@@ -3,10 +3,10 @@ hit and the lights it sees; Renderer.backward(d_image, wrt) returns d(sum(d_imag
 for the parameters named as r.params names them, through a differentiable replay of the camera rays'
 local shading (kernels/grad.py) on a wp.Tape.
 
-What is differentiated, and what is held: the hits (the faces and barycentrics) and the visibility of
-each light are held fixed, as a visibility-fixed derivative is (a shadow's edge moving with a light has
-no derivative here); the local Phong terms are exact functions of the material colours and exponents
-and of the lights' colours and positions. Covered for now: one sample per pixel, camera rays only (no
+What is differentiated, and what is held: each pixel's face and the visibility of each light are held
+fixed, as a visibility-fixed derivative is (an edge or a shadow's edge moving across pixels has no
+derivative here); the local Phong terms are exact functions of the material colours and exponents, of
+the lights' colours and positions, and of a flat object's vertices (the hit recomputed on the moved face). Covered for now: one sample per pixel, camera rays only (no
 mirror or glass ray levels), point lights (falloff none or inverse_square), untextured materials
 without vertex colours, no area lights; any other scene is refused in one line naming what is not yet
 differentiated, so a gradient is never silently partial.
@@ -23,6 +23,7 @@ from ..errors import ArgumentError
 from ..kernels.camera import camera_data
 from ..kernels.grad import MAX_GRAD_LIGHTS, make_grad_record_kernel, make_grad_shade_kernel
 from ..scene import camera_basis
+from .params import object_names
 
 SOURCE = "Renderer.backward"
 MATERIAL_KEYS = ("ka", "kd", "ks", "shininess")
@@ -76,9 +77,11 @@ def record_first_hits(scene, geom, data, fx, device: str) -> FirstHits:
 
 
 def parameter_names(scene) -> list[str]:
-    """The r.params names backward() can differentiate with respect to."""
+    """The r.params names backward() can differentiate with respect to: the flat objects' vertices too
+    (a smooth object's vertex normals would move with them, which is not differentiated yet)."""
     names = [f"materials.{m}.{k}" for m in scene.materials for k in MATERIAL_KEYS]
     names += [f"lights.{i}.{k}" for i, light in enumerate(scene.lights) if not light.area for k in LIGHT_KEYS]
+    names += [f"objects.{name}.vertices" for name, i in object_names(scene).items() if not scene.objects[i].smooth]
     return names
 
 
@@ -90,7 +93,7 @@ def backward(scene, geom, hits: FirstHits, d_image, wrt, device: str) -> dict:
     for name in wrt:
         if name not in known:
             why = ("not a parameter backward() differentiates yet (materials.<name>.ka | kd | ks | shininess, "
-                   "lights.<i>.color | position)")
+                   "lights.<i>.color | position, a flat object's objects.<name>.vertices)")
             raise ArgumentError("backward", str(name), why)
     d = np.asarray(d_image.numpy() if isinstance(d_image, wp.array) else d_image, np.float32)
     if d.shape != (hits.height, hits.width, 3) or not np.all(np.isfinite(d)):
@@ -108,11 +111,14 @@ def backward(scene, geom, hits: FirstHits, d_image, wrt, device: str) -> dict:
     inverse_square = wp.array(np.asarray([l.falloff == "inverse_square" for l in lights] or [0], np.int32),
                               dtype=int, device=device)
     image = wp.zeros(hits.width * hits.height, dtype=wp.vec3, device=device, requires_grad=True)
-    kernel = make_grad_shade_kernel(hits.lights, hits.smooth)
+    moving = any(name.startswith("objects.") for name in wrt)
+    points = wp.array(geom.points_np, dtype=wp.vec3, device=device, requires_grad=True) if moving else geom.points
+    kernel = make_grad_shade_kernel(hits.lights, hits.smooth, moving)
+    eye = wp.vec3(*geom.eye_offset(scene.camera.eye))
     tape = wp.Tape()
     with tape:
         wp.launch(kernel, dim=hits.width * hits.height,
-                  inputs=[geom.points, geom.indices, geom.normals, geom.tri_material, geom.tri_smooth, ka, kd, ks,
+                  inputs=[eye, points, geom.indices, geom.normals, geom.tri_material, geom.tri_smooth, ka, kd, ks,
                           shininess, light_pos, light_color, inverse_square, wp.vec3(*scene.render.ambient),
                           wp.vec3(*scene.render.background), hits.face, hits.bary, hits.dirs, hits.visible],
                   outputs=[image], device=device)
@@ -121,10 +127,16 @@ def backward(scene, geom, hits: FirstHits, d_image, wrt, device: str) -> dict:
     whitted = [i for i, light in enumerate(scene.lights) if not light.area]
     arrays = {"ka": ka, "kd": kd, "ks": ks, "shininess": shininess, "color": light_color, "position": light_pos}
     grads = {k: a.grad.numpy() for k, a in arrays.items()}
+    if moving:
+        point_grads = points.grad.numpy().astype(np.float64)
+        starts = np.cumsum([0] + [len(o.vertices) for o in scene.objects])
     out = {}
     for name in wrt:
         section, owner, key = name.split(".")
-        if section == "materials":
+        if section == "objects":  # the points are the objects' vertices in order, less the frame origin
+            i = object_names(scene)[owner]
+            out[name] = point_grads[starts[i]:starts[i + 1]]
+        elif section == "materials":
             if owner not in slot:  # a material no object uses
                 out[name] = np.zeros(() if key == "shininess" else (3,))
                 continue

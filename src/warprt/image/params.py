@@ -45,7 +45,7 @@ def _names(scene) -> list[str]:
             out.append(f"materials.{name}.emission")
     for i, light in enumerate(scene.lights):
         out += [f"lights.{i}.{k}" for k in LIGHT_VECTORS if getattr(light, k) is not None]
-    out += [f"objects.{name}.vertices" for name in _object_names(scene)]
+    out += [f"objects.{name}.vertices" for name in object_names(scene)]
     out += [f"camera.{k}" for k in CAMERA_VECTORS + ("fovy",)]
     return out
 
@@ -55,7 +55,7 @@ def _image_texture(material, key: str):
     return t if t is not None and t.image is not None else None
 
 
-def _object_names(scene) -> dict:
+def object_names(scene) -> dict:
     """Object name -> index in scene.objects; an object whose name is not its own (several objects share
     it) is named by its index."""
     names = [o.name for o in scene.objects]
@@ -141,7 +141,7 @@ def _split(name, scene) -> tuple[str, object, str]:
     if section == "lights":
         return section, int(owner), key
     if section == "objects":
-        return section, _object_names(scene)[owner], key
+        return section, object_names(scene)[owner], key
     return section, owner, key
 
 

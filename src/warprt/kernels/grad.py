@@ -68,12 +68,15 @@ def make_grad_record_kernel(L: int, smooth: bool, shadows: bool, cull: bool):
 
 
 @functools.cache
-def make_grad_shade_kernel(L: int, smooth: bool):
+def make_grad_shade_kernel(L: int, smooth: bool, vertices: bool = False):
     """shade(...): each pixel's colour from the recorded hit and visibility and the differentiable
-    material and light arrays; the background where the camera ray met nothing."""
+    material and light arrays; the background where the camera ray met nothing. With ``vertices``, the
+    hit's barycentrics are those of the camera ray (from ``eye``) and the recorded face recomputed from
+    ``points`` by a differentiable Moller-Trumbore test, so that the hit point moves with the vertices
+    (Warp's mesh query gives the points no adjoint); without, the recorded ones."""
 
     @wp.kernel(module="unique")
-    def shade(points: wp.array(dtype=wp.vec3), indices: wp.array(dtype=int), normals: wp.array(dtype=wp.vec3),
+    def shade(eye: wp.vec3, points: wp.array(dtype=wp.vec3), indices: wp.array(dtype=int), normals: wp.array(dtype=wp.vec3),
               tri_material: wp.array(dtype=int), tri_smooth: wp.array(dtype=int),
               ka: wp.array(dtype=wp.vec3), kd: wp.array(dtype=wp.vec3), ks: wp.array(dtype=wp.vec3),
               shininess: wp.array(dtype=float), light_pos: wp.array(dtype=wp.vec3),
@@ -93,6 +96,16 @@ def make_grad_shade_kernel(L: int, smooth: bool):
             p2 = points[i2]
             u = bary[pixel][0]
             v = bary[pixel][1]
+            if wp.static(vertices):
+                e1 = p1 - p0
+                e2 = p2 - p0
+                pv = wp.cross(d, e2)
+                inv = 1.0 / wp.dot(e1, pv)
+                tv = eye - p0
+                b1 = wp.dot(tv, pv) * inv
+                b2 = wp.dot(d, wp.cross(tv, e1)) * inv
+                u = 1.0 - b1 - b2  # Warp's convention: u weighs the face's first vertex, v its second
+                v = b1
             w = 1.0 - u - v
             p = p0 * u + p1 * v + p2 * w
             ng = wp.normalize(wp.cross(p1 - p0, p2 - p0))
