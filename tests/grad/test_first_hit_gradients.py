@@ -114,12 +114,12 @@ def test_the_shading_kernel_passes_warps_gradcheck():
     vec = lambda rows: wp.array(np.asarray(rows, np.float32), dtype=wp.vec3, requires_grad=True)  # noqa: E731
     inputs = [wp.vec3(*geom.eye_offset(s.camera.eye)), geom.points, geom.indices, geom.normals, geom.tri_material, geom.tri_smooth,
               vec([m.ka for m in mats]), vec([m.kd for m in mats]), vec([m.ks for m in mats]),
-              wp.array([m.shininess for m in mats], dtype=float, requires_grad=True),
+              wp.array([m.shininess for m in mats], dtype=float, requires_grad=True), vec([m.reflectivity for m in mats]),
               vec(geom.light_positions(s)), vec([l.color for l in s.lights]),
               wp.array([l.falloff == "inverse_square" for l in s.lights], dtype=int),
               wp.vec3(0.2, 0.2, 0.2), wp.vec3(0.0, 0.0, 0.0), hits.face, hits.bary, hits.dirs, hits.visible]
     image = wp.zeros(12 * 9, dtype=wp.vec3, requires_grad=True)
-    kernel = make_grad_shade_kernel(hits.lights, hits.smooth)
+    kernel = make_grad_shade_kernel(hits.lights, hits.levels, hits.smooth)
     assert warp.autograd.gradcheck(kernel, dim=12 * 9, inputs=inputs, outputs=[image], eps=1e-3, atol=2e-2, rtol=2e-2,
                                  show_summary=False, raise_exception=False,
                                  input_output_mask=[(k, "image") for k in ("ka", "kd", "ks", "light_color")])
@@ -142,7 +142,7 @@ def test_a_gradient_of_another_image_is_refused_in_one_line(weights):
 
 @pytest.mark.parametrize("change, why", [
     ({"render": {"spp": 4}}, "one sample per pixel"),
-    ({"render": {"max_depth": 3}, "materials": {"floor": {"reflectivity": 0.5}}}, "first hits"),
+    ({"render": {"max_depth": 3}, "materials": {"floor": {"ior": 1.5}}}, "glass"),
     ({"lights": [{"type": "directional", "direction": [0.0, -1.0, 0.0]}]}, "point lights"),
 ])
 def test_what_is_not_differentiated_yet_is_refused_in_one_line(change, why):
@@ -209,3 +209,53 @@ def test_an_edge_moving_in_view_is_outside_the_gradient(weights):
         return (loss(floor_scene(up.tolist(), eye), weights) - loss(floor_scene(down.tolist(), eye), weights)) / 2e-3
     assert abs(g[2, 1] - fd(2, 1)) <= 5e-3 * abs(fd(2, 1))  # a near vertex (z = 20): its edges out of view
     assert abs(g[0, 1] - fd(0, 1)) > 0.5 * abs(fd(0, 1))  # the far one: its edge moves in view
+
+
+# --- Mirrors: the ray levels the tracer spawns while k_r > 0 ---------------------------------------------
+
+MIRROR = {"materials.floor.reflectivity": [0.5, 0.4, 0.3]}
+MIRROR_PARAMETERS = {"materials.floor.reflectivity": [0.5, 0.4, 0.3], "materials.ball.kd": MATERIALS["ball"]["kd"],
+                     "materials.ball.ks": MATERIALS["ball"]["ks"], "lights.0.color": LIGHTS[0]["color"],
+                     "lights.1.position": LIGHTS[1]["position"]}
+
+
+def mirror_scene(changes: dict | None = None, max_depth: int = 3):
+    return scene({**MIRROR, **(changes or {})}, max_depth=max_depth)
+
+
+@pytest.fixture(scope="module")
+def mirror_gradients(weights):
+    r = warprt.Renderer(mirror_scene())
+    assert np.array_equal(r.render(grad=True).image, warprt.render(mirror_scene())[0])
+    return r.backward(weights, wrt=list(MIRROR_PARAMETERS))
+
+
+def mirror_differences(name, weights, max_depth=3) -> np.ndarray:
+    value = np.asarray(MIRROR_PARAMETERS[name], np.float64)
+    out = []
+    for c in range(3):
+        h = 1e-3 * max(abs(value[c]), 1.0)
+        up, down = value.copy(), value.copy()
+        up[c] += h
+        down[c] -= h
+        out.append((loss(mirror_scene({name: up.tolist()}, max_depth), weights)
+                    - loss(mirror_scene({name: down.tolist()}, max_depth), weights)) / (2 * h))
+    return np.asarray(out)
+
+
+@pytest.mark.parametrize("name", MIRROR_PARAMETERS)
+def test_gradients_through_mirror_rays_equal_central_differences(mirror_gradients, weights, name):
+    """The floor a mirror (k_r (0.5, 0.4, 0.3), three ray levels): the sphere seen in it, its k_r's own
+    derivative (the reflected radiance and the background the reflected rays meet)."""
+    fd = mirror_differences(name, weights)
+    np.testing.assert_allclose(mirror_gradients[name], fd, rtol=REL, atol=REL * np.abs(fd).max())
+
+
+def test_gradients_of_the_first_level_alone_are_not_the_mirrors(weights):
+    """The control: the same scene at max_depth 1 (no mirror rays) has other gradients than the
+    differences of the mirroring render."""
+    r = warprt.Renderer(mirror_scene(max_depth=1))
+    r.render(grad=True)
+    first = r.backward(weights, wrt=["materials.ball.kd"])["materials.ball.kd"]
+    fd = mirror_differences("materials.ball.kd", weights)
+    assert np.abs(first - fd).max() > 0.1 * np.abs(fd).max()

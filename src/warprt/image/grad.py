@@ -1,13 +1,13 @@
-"""Derivatives of an image (issue 30, its first part): Renderer.render(grad=True) records each pixel's first
-hit and the lights it sees; Renderer.backward(d_image, wrt) returns d(sum(d_image * image)) / d(param)
+"""Derivatives of an image (issue 30, its first parts): Renderer.render(grad=True) records, per pixel and ray
+level (the camera ray, then the mirror rays the tracer follows), the hit and the lights it sees; Renderer.backward(d_image, wrt) returns d(sum(d_image * image)) / d(param)
 for the parameters named as r.params names them, through a differentiable replay of the camera rays'
-local shading (kernels/grad.py) on a wp.Tape.
+local shading over the levels (kernels/grad.py) on a wp.Tape.
 
 What is differentiated, and what is held: each pixel's face and the visibility of each light are held
 fixed, as a visibility-fixed derivative is (an edge or a shadow's edge moving across pixels has no
 derivative here); the local Phong terms are exact functions of the material colours and exponents, of
-the lights' colours and positions, and of a flat object's vertices (the hit recomputed on the moved face). Covered for now: one sample per pixel, camera rays only (no
-mirror or glass ray levels), point lights (falloff none or inverse_square), untextured materials
+the lights' colours and positions, and of a flat object's vertices (the hit recomputed on the moved face). Covered for now: one sample per pixel, camera and mirror rays (no
+glass), point lights (falloff none or inverse_square), untextured materials
 without vertex colours, no area lights; any other scene is refused in one line naming what is not yet
 differentiated, so a gradient is never silently partial.
 """
@@ -26,7 +26,8 @@ from ..scene import camera_basis
 from .params import object_names
 
 SOURCE = "Renderer.backward"
-MATERIAL_KEYS = ("ka", "kd", "ks", "shininess")
+MATERIAL_KEYS = ("ka", "kd", "ks", "shininess", "reflectivity")
+MAX_GRAD_DEPTH = 16  # ray levels, unrolled as the lights are
 LIGHT_KEYS = ("color", "position")
 
 
@@ -34,8 +35,10 @@ def refusal(scene, fx) -> str | None:
     """Why render(grad=True) cannot differentiate this scene yet (None: it can)."""
     if fx.supersampling:
         return "one sample per pixel (render.spp = 1) is differentiated for now"
-    if fx.reflection or fx.refraction:
-        return "the camera rays' first hits are differentiated for now, not mirror or glass ray levels (max_depth = 1)"
+    if fx.refraction:
+        return "glass (the ray tree) is not differentiated yet; mirrors and camera rays are"
+    if fx.reflection and scene.render.max_depth > MAX_GRAD_DEPTH:
+        return f"at most {MAX_GRAD_DEPTH} ray levels (render.max_depth) are differentiated (Warp's unrolled loop)"
     if fx.texture or fx.vertex_color:
         return "textures and vertex colours are not differentiated yet"
     if fx.area_lights:
@@ -49,8 +52,9 @@ def refusal(scene, fx) -> str | None:
 
 @dataclass
 class FirstHits:
-    """What a grad=True frame recorded: per pixel the first hit's face (-1: none), barycentrics and ray
-    direction, and per pixel and light whether the hit saw the light."""
+    """What a grad=True frame recorded: per pixel and ray level (``levels``: the camera ray, then the mirror
+    rays) the hit's face (-1: none, -2: no ray at that level), barycentrics and ray direction, and per
+    light whether the hit saw it."""
 
     face: wp.array
     bary: wp.array
@@ -59,6 +63,7 @@ class FirstHits:
     width: int
     height: int
     lights: int
+    levels: int
     smooth: bool
 
 
@@ -66,14 +71,15 @@ def record_first_hits(scene, geom, data, fx, device: str) -> FirstHits:
     """Run the record kernel for a frame of ``scene`` on ``geom`` and its tables ``data``."""
     cam = scene.camera
     n, L = cam.width * cam.height, len(scene.whitted_lights)
-    face = wp.empty(n, dtype=int, device=device)
-    bary = wp.zeros(n, dtype=wp.vec2, device=device)
-    dirs = wp.empty(n, dtype=wp.vec3, device=device)
-    visible = wp.zeros(max(n * L, 1), dtype=int, device=device)
+    D = scene.render.max_depth if fx.reflection else 1
+    face = wp.empty(n * D, dtype=int, device=device)
+    bary = wp.zeros(n * D, dtype=wp.vec2, device=device)
+    dirs = wp.zeros(n * D, dtype=wp.vec3, device=device)
+    visible = wp.zeros(max(n * D * L, 1), dtype=int, device=device)
     c = camera_data(camera_basis(cam), geom.eye_offset(cam.eye))
-    kernel = make_grad_record_kernel(L, fx.smooth, fx.shadows, fx.culling)
-    wp.launch(kernel, dim=n, inputs=[data, c, face, bary, dirs, visible], device=device)
-    return FirstHits(face, bary, dirs, visible, cam.width, cam.height, L, fx.smooth)
+    kernel = make_grad_record_kernel(L, D, fx.smooth, fx.shadows, fx.culling)
+    wp.launch(kernel, dim=n, inputs=[data, c, D, face, bary, dirs, visible], device=device)
+    return FirstHits(face, bary, dirs, visible, cam.width, cam.height, L, D, fx.smooth)
 
 
 def parameter_names(scene) -> list[str]:
@@ -85,6 +91,11 @@ def parameter_names(scene) -> list[str]:
     return names
 
 
+def _vertices_refusal(hits: "FirstHits") -> str | None:
+    return ("vertices are differentiated through camera rays alone for now (a mirror ray's origin and direction "
+            "move with them too)" if hits.levels > 1 else None)
+
+
 def backward(scene, geom, hits: FirstHits, d_image, wrt, device: str) -> dict:
     """{name: d(sum(d_image * image)) / d(param)} for each name in ``wrt`` (parameter_names), each shaped
     as the parameter: (3,) for colours and positions, () for an exponent."""
@@ -92,9 +103,11 @@ def backward(scene, geom, hits: FirstHits, d_image, wrt, device: str) -> dict:
     wrt = list(known if wrt is None else wrt)
     for name in wrt:
         if name not in known:
-            why = ("not a parameter backward() differentiates yet (materials.<name>.ka | kd | ks | shininess, "
-                   "lights.<i>.color | position, a flat object's objects.<name>.vertices)")
+            why = ("not a parameter backward() differentiates yet (materials.<name>.ka | kd | ks | shininess | "
+                   "reflectivity, lights.<i>.color | position, a flat object's objects.<name>.vertices)")
             raise ArgumentError("backward", str(name), why)
+        if name.startswith("objects.") and _vertices_refusal(hits):
+            raise ArgumentError("backward", str(name), _vertices_refusal(hits))
     d = np.asarray(d_image.numpy() if isinstance(d_image, wp.array) else d_image, np.float32)
     if d.shape != (hits.height, hits.width, 3) or not np.all(np.isfinite(d)):
         raise ArgumentError("backward", "d_image", f"expected finite values of shape {(hits.height, hits.width, 3)}, "
@@ -102,7 +115,7 @@ def backward(scene, geom, hits: FirstHits, d_image, wrt, device: str) -> dict:
     mats = geom.slot_materials(scene)
     vec = lambda rows: wp.array(np.asarray(rows, np.float32).reshape(-1, 3), dtype=wp.vec3, device=device,  # noqa: E731
                                 requires_grad=True)
-    ka, kd, ks = (vec([getattr(m, k) for m in mats] or [[0, 0, 0]]) for k in ("ka", "kd", "ks"))
+    ka, kd, ks, kr = (vec([getattr(m, k) for m in mats] or [[0, 0, 0]]) for k in ("ka", "kd", "ks", "reflectivity"))
     shininess = wp.array(np.asarray([m.shininess for m in mats] or [0.0], np.float32), dtype=float, device=device,
                          requires_grad=True)
     lights = scene.whitted_lights
@@ -113,19 +126,20 @@ def backward(scene, geom, hits: FirstHits, d_image, wrt, device: str) -> dict:
     image = wp.zeros(hits.width * hits.height, dtype=wp.vec3, device=device, requires_grad=True)
     moving = any(name.startswith("objects.") for name in wrt)
     points = wp.array(geom.points_np, dtype=wp.vec3, device=device, requires_grad=True) if moving else geom.points
-    kernel = make_grad_shade_kernel(hits.lights, hits.smooth, moving)
+    kernel = make_grad_shade_kernel(hits.lights, hits.levels, hits.smooth, moving)
     eye = wp.vec3(*geom.eye_offset(scene.camera.eye))
     tape = wp.Tape()
     with tape:
         wp.launch(kernel, dim=hits.width * hits.height,
                   inputs=[eye, points, geom.indices, geom.normals, geom.tri_material, geom.tri_smooth, ka, kd, ks,
-                          shininess, light_pos, light_color, inverse_square, wp.vec3(*scene.render.ambient),
+                          shininess, kr, light_pos, light_color, inverse_square, wp.vec3(*scene.render.ambient),
                           wp.vec3(*scene.render.background), hits.face, hits.bary, hits.dirs, hits.visible],
                   outputs=[image], device=device)
     tape.backward(grads={image: wp.array(d.reshape(-1, 3), dtype=wp.vec3, device=device)})
     slot = {name: i for i, name in enumerate(geom.material_names)}
     whitted = [i for i, light in enumerate(scene.lights) if not light.area]
-    arrays = {"ka": ka, "kd": kd, "ks": ks, "shininess": shininess, "color": light_color, "position": light_pos}
+    arrays = {"ka": ka, "kd": kd, "ks": ks, "shininess": shininess, "reflectivity": kr, "color": light_color,
+              "position": light_pos}
     grads = {k: a.grad.numpy() for k, a in arrays.items()}
     if moving:
         point_grads = points.grad.numpy().astype(np.float64)

@@ -17,7 +17,7 @@ import functools
 from .._warp import wp
 from ..geometry import SceneData
 from .camera import CameraData, camera_ray
-from .interaction import make_surface, spawn_ray
+from .interaction import make_surface, reflect, spawn_ray
 from .shading import phong_specular
 from .shadow import make_occluded
 from .trace import culled, past
@@ -26,51 +26,67 @@ MAX_GRAD_LIGHTS = 16  # Warp's max_unroll: a longer static loop would silently t
 
 
 @functools.cache
-def make_grad_record_kernel(L: int, smooth: bool, shadows: bool, cull: bool):
-    """record(s, c, face, bary, dirs, visible): per pixel (row-major, row 0 the top) the face of the camera
-    ray's first hit (-1 for none), its barycentrics (u on the face's first vertex, v on its second), the
-    ray's direction, and per light whether the hit sees it (1 where n.L > 0 and no shadow ray is blocked)."""
+def make_grad_record_kernel(L: int, D: int, smooth: bool, shadows: bool, cull: bool):
+    """record(s, c, max_depth, face, bary, dirs, visible): per pixel (row-major, row 0 the top) and ray level
+    (D at most: the camera ray, then the mirror rays the tracer spawns while k_r > 0 and max_depth allows),
+    the face of the level's hit (-1: it met nothing, -2: no ray at that level), its barycentrics (u on the
+    face's first vertex, v on its second), the ray's direction, and per light whether the hit sees it (1
+    where n.L > 0 and no shadow ray is blocked): the tracer's own surface, spawn_ray and any-hit query."""
     surface = make_surface(smooth)
     occluded = make_occluded(False)
 
     @wp.kernel(module="unique", enable_backward=False)
-    def record(s: SceneData, c: CameraData, face: wp.array(dtype=int), bary: wp.array(dtype=wp.vec2),
+    def record(s: SceneData, c: CameraData, max_depth: int, face: wp.array(dtype=int), bary: wp.array(dtype=wp.vec2),
                dirs: wp.array(dtype=wp.vec3), visible: wp.array(dtype=int)):
         pixel = wp.tid()
         x = pixel % c.width
         row = pixel / c.width
+        o = c.eye
         d = camera_ray(c, x, row, 0.5, 0.5)
-        dirs[pixel] = d
-        q = wp.mesh_query_ray(s.mesh, c.eye, d, 1.0e30)
-        if wp.static(cull):
-            while q.result and culled(s, q.face, d):
-                q = wp.mesh_query_ray(s.mesh, past(s, q.face, q.u, q.v, d), d, 1.0e30)
-        face[pixel] = -1
-        if q.result:
-            face[pixel] = q.face
-            bary[pixel] = wp.vec2(q.u, q.v)
-            hit = surface(s, q.face, q.u, q.v, q.normal, d)
-            for l in range(wp.static(L)):
-                to_light = s.light_pos[l] - hit.p
-                L_dir = wp.normalize(to_light)
-                seen = int(0)
-                if wp.dot(hit.n, L_dir) > 0.0:
-                    seen = 1
-                    if wp.static(shadows):
-                        o = spawn_ray(hit, L_dir).o
-                        to_light_o = s.light_pos[l] - o
-                        dist = wp.length(to_light_o)
-                        if occluded(s, l, o, to_light_o / dist, dist):
-                            seen = 0
-                visible[pixel * wp.static(L) + l] = seen
+        alive = True
+        for level in range(wp.static(D)):
+            k = pixel * wp.static(D) + level
+            face[k] = -2
+            if alive:
+                dirs[k] = d
+                q = wp.mesh_query_ray(s.mesh, o, d, 1.0e30)
+                if wp.static(cull):
+                    while q.result and culled(s, q.face, d):
+                        q = wp.mesh_query_ray(s.mesh, past(s, q.face, q.u, q.v, d), d, 1.0e30)
+                face[k] = -1
+                alive = False
+                if q.result:
+                    face[k] = q.face
+                    bary[k] = wp.vec2(q.u, q.v)
+                    hit = surface(s, q.face, q.u, q.v, q.normal, d)
+                    for l in range(wp.static(L)):
+                        to_light = s.light_pos[l] - hit.p
+                        L_dir = wp.normalize(to_light)
+                        seen = int(0)
+                        if wp.dot(hit.n, L_dir) > 0.0:
+                            seen = 1
+                            if wp.static(shadows):
+                                so = spawn_ray(hit, L_dir).o
+                                to_light_o = s.light_pos[l] - so
+                                dist = wp.length(to_light_o)
+                                if occluded(s, l, so, to_light_o / dist, dist):
+                                    seen = 0
+                        visible[k * wp.static(L) + l] = seen
+                    if level + 1 < max_depth and wp.max(s.kr[hit.material]) > 0.0:
+                        ray = spawn_ray(hit, wp.normalize(reflect(d, hit.n)))
+                        o = ray.o
+                        d = ray.d
+                        alive = True
 
     return record
 
 
 @functools.cache
-def make_grad_shade_kernel(L: int, smooth: bool, vertices: bool = False):
+def make_grad_shade_kernel(L: int, D: int, smooth: bool, vertices: bool = False):
     """shade(...): each pixel's colour from the recorded hit and visibility and the differentiable
-    material and light arrays; the background where the camera ray met nothing. With ``vertices``, the
+    material and light arrays, over the recorded ray levels (D at most), each weighted by the product of
+    the k_r of the mirrors before it; the background where a ray met nothing. With ``vertices`` (camera
+    rays alone, D = 1), the
     hit's barycentrics are those of the camera ray (from ``eye``) and the recorded face recomputed from
     ``points`` by a differentiable Moller-Trumbore test, so that the hit point moves with the vertices
     (Warp's mesh query gives the points no adjoint); without, the recorded ones."""
@@ -79,57 +95,64 @@ def make_grad_shade_kernel(L: int, smooth: bool, vertices: bool = False):
     def shade(eye: wp.vec3, points: wp.array(dtype=wp.vec3), indices: wp.array(dtype=int), normals: wp.array(dtype=wp.vec3),
               tri_material: wp.array(dtype=int), tri_smooth: wp.array(dtype=int),
               ka: wp.array(dtype=wp.vec3), kd: wp.array(dtype=wp.vec3), ks: wp.array(dtype=wp.vec3),
-              shininess: wp.array(dtype=float), light_pos: wp.array(dtype=wp.vec3),
+              shininess: wp.array(dtype=float), kr: wp.array(dtype=wp.vec3), light_pos: wp.array(dtype=wp.vec3),
               light_color: wp.array(dtype=wp.vec3), inverse_square: wp.array(dtype=int),
               ambient: wp.vec3, background: wp.vec3, face: wp.array(dtype=int), bary: wp.array(dtype=wp.vec2),
               dirs: wp.array(dtype=wp.vec3), visible: wp.array(dtype=int), image: wp.array(dtype=wp.vec3)):
         pixel = wp.tid()
-        f = face[pixel]
-        color = background
-        if f >= 0:
-            d = dirs[pixel]
-            i0 = indices[3 * f]
-            i1 = indices[3 * f + 1]
-            i2 = indices[3 * f + 2]
-            p0 = points[i0]
-            p1 = points[i1]
-            p2 = points[i2]
-            u = bary[pixel][0]
-            v = bary[pixel][1]
-            if wp.static(vertices):
-                e1 = p1 - p0
-                e2 = p2 - p0
-                pv = wp.cross(d, e2)
-                inv = 1.0 / wp.dot(e1, pv)
-                tv = eye - p0
-                b1 = wp.dot(tv, pv) * inv
-                b2 = wp.dot(d, wp.cross(tv, e1)) * inv
-                u = 1.0 - b1 - b2  # Warp's convention: u weighs the face's first vertex, v its second
-                v = b1
-            w = 1.0 - u - v
-            p = p0 * u + p1 * v + p2 * w
-            ng = wp.normalize(wp.cross(p1 - p0, p2 - p0))
-            side = 1.0
-            if wp.dot(ng, d) > 0.0:
-                side = -1.0
-            n = ng * side
-            if wp.static(smooth):
-                if tri_smooth[f] != 0:
-                    ns = normals[i0] * u + normals[i1] * v + normals[i2] * w
-                    if wp.length(ns) > 0.0:
-                        n = wp.normalize(ns) * side
-            m = tri_material[f]
-            color = wp.cw_mul(ambient, ka[m])
-            for l in range(wp.static(L)):
-                if visible[pixel * wp.static(L) + l] != 0:
-                    to_light = light_pos[l] - p
-                    L_dir = wp.normalize(to_light)
-                    n_dot_l = wp.dot(n, L_dir)
-                    C_l = light_color[l]
-                    if inverse_square[l] != 0:
-                        C_l = C_l / wp.dot(to_light, to_light)
-                    lit = kd[m] * n_dot_l + phong_specular(ks[m], shininess[m], n, L_dir, -d, n_dot_l)
-                    color = color + wp.cw_mul(C_l, lit)
+        color = wp.vec3(0.0)
+        weight = wp.vec3(1.0)
+        for level in range(wp.static(D)):
+            k = pixel * wp.static(D) + level
+            f = face[k]
+            if f == -1:
+                color = color + wp.cw_mul(weight, background)
+            if f >= 0:
+                d = dirs[k]
+                i0 = indices[3 * f]
+                i1 = indices[3 * f + 1]
+                i2 = indices[3 * f + 2]
+                p0 = points[i0]
+                p1 = points[i1]
+                p2 = points[i2]
+                u = bary[k][0]
+                v = bary[k][1]
+                if wp.static(vertices):
+                    e1 = p1 - p0
+                    e2 = p2 - p0
+                    pv = wp.cross(d, e2)
+                    inv = 1.0 / wp.dot(e1, pv)
+                    tv = eye - p0
+                    b1 = wp.dot(tv, pv) * inv
+                    b2 = wp.dot(d, wp.cross(tv, e1)) * inv
+                    u = 1.0 - b1 - b2  # Warp's convention: u weighs the face's first vertex, v its second
+                    v = b1
+                w = 1.0 - u - v
+                p = p0 * u + p1 * v + p2 * w
+                ng = wp.normalize(wp.cross(p1 - p0, p2 - p0))
+                side = 1.0
+                if wp.dot(ng, d) > 0.0:
+                    side = -1.0
+                n = ng * side
+                if wp.static(smooth):
+                    if tri_smooth[f] != 0:
+                        ns = normals[i0] * u + normals[i1] * v + normals[i2] * w
+                        if wp.length(ns) > 0.0:
+                            n = wp.normalize(ns) * side
+                m = tri_material[f]
+                local = wp.cw_mul(ambient, ka[m])
+                for l in range(wp.static(L)):
+                    if visible[k * wp.static(L) + l] != 0:
+                        to_light = light_pos[l] - p
+                        L_dir = wp.normalize(to_light)
+                        n_dot_l = wp.dot(n, L_dir)
+                        C_l = light_color[l]
+                        if inverse_square[l] != 0:
+                            C_l = C_l / wp.dot(to_light, to_light)
+                        lit = kd[m] * n_dot_l + phong_specular(ks[m], shininess[m], n, L_dir, -d, n_dot_l)
+                        local = local + wp.cw_mul(C_l, lit)
+                color = color + wp.cw_mul(weight, local)
+                weight = wp.cw_mul(weight, kr[m])
         image[pixel] = color
 
     return shade
