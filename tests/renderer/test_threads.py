@@ -5,6 +5,7 @@ import threading
 from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
+import pytest
 import warp as wp
 import warp._src.context as warp_context
 
@@ -88,3 +89,51 @@ def test_band_threads_launch_a_module_already_loaded(monkeypatch):
         plain = lambda: list(pool.map(lambda f: wp.launch(_fill, dim=8, inputs=[f, out], device="cpu"), range(0, 64, 8)))
         loaders = _loading_threads(monkeypatch, plain)
     assert loaders and all(name.startswith("band") for name in loaders)
+
+
+class _Counting:
+    """A progress object that counts the bands that finish."""
+
+    def __init__(self):
+        self.done, self.lock = 0, threading.Lock()
+
+    def begin(self, tiles, pixels):
+        pass
+
+    def end(self):
+        pass
+
+    def band_done(self, pixels, rays):
+        with self.lock:
+            self.done += 1
+
+
+def test_a_ctrl_c_while_a_band_thread_starts_leaves_no_band_running(monkeypatch):
+    """ThreadPoolExecutor records a thread it starts only after Thread.start() returns; a KeyboardInterrupt
+    there (start() waits for the new thread: a Ctrl-C can land in it) used to leave a thread shutdown() did
+    not join, taking the frame's bands after render() had raised (CI's segfault). Band threads now all start
+    with the pool, before any band is queued: the interrupt lands there, no band runs, no thread stays."""
+    import time
+
+    real_start, fired = threading.Thread.start, []
+
+    def start(thread):
+        real_start(thread)
+        if thread.name.startswith("warprt") and not fired:
+            fired.append(thread.name)
+            raise KeyboardInterrupt
+
+    # Two long bands (about 0.2 s each): one left running would finish after render() has raised.
+    scene = warprt.load_scene().with_camera(width=320, height=240).with_render(spp=16)
+    warprt.render(scene.with_camera(width=8, height=6), threads=1)  # kernels loaded, outside the patch
+    monkeypatch.setattr(threading.Thread, "start", start)
+    progress = _Counting()
+    with pytest.raises(KeyboardInterrupt):
+        warprt.render(scene, threads=2, bands=2, progress=progress, primary_query="raytrace", shadow_query="bvh")
+    at_raise = progress.done
+    time.sleep(1.0)
+    assert fired and progress.done == at_raise
+    deadline = time.monotonic() + 5.0
+    while time.monotonic() < deadline and any(t.name.startswith("warprt") for t in threading.enumerate()):
+        time.sleep(0.01)
+    assert not any(t.name.startswith("warprt") for t in threading.enumerate())

@@ -34,6 +34,26 @@ def bands_of(n_items: int, n_bands: int) -> list[tuple[int, int]]:
 POLL_SECONDS = 0.02  # how late a Ctrl-C may be noticed while bands run
 
 
+def band_pool(threads: int) -> ThreadPoolExecutor:
+    """A pool of ``threads`` band threads, every one started now, before any band is queued.
+    ThreadPoolExecutor starts its threads on demand inside submit(), and records a thread only after its
+    Thread.start() returns: a Ctrl-C landing in that window (start() waits for the thread) leaves a running
+    thread that shutdown() does not join, and it went on taking the interrupted frame's bands after
+    render() had raised, into buffers already let go (CI's segfault, caught in tests/cli/test_wild_inputs'
+    SIGINT test). Here a frame's submit() never starts a thread."""
+    pool = ThreadPoolExecutor(max_workers=threads, thread_name_prefix="warprt")
+    gate = threading.Barrier(threads + 1)  # each start-up task holds its thread until all have started
+    try:
+        for _ in range(threads):
+            pool.submit(gate.wait)
+        gate.wait()
+    except BaseException:
+        gate.abort()
+        pool.shutdown(wait=False, cancel_futures=True)
+        raise
+    return pool
+
+
 def launch_bands(kernel, inputs_for, n_items: int, threads: int, bands: int, device: str, on_band=None,
                  pool: ThreadPoolExecutor | None = None):
     """Launch ``kernel`` over ranges of [0, n_items), with ``inputs_for(first)`` as its inputs; on the
@@ -74,15 +94,20 @@ def launch_bands(kernel, inputs_for, n_items: int, threads: int, bands: int, dev
         if pool is not None:
             _run_bands(pool, run, ranges, stop)
         else:
-            with ThreadPoolExecutor(max_workers=threads, thread_name_prefix="warprt") as own:
+            own = band_pool(threads)
+            try:
                 _run_bands(own, run, ranges, stop)
+            finally:
+                own.shutdown(wait=True)
     wp.synchronize_device(device)
 
 
 def _run_bands(pool: ThreadPoolExecutor, run, ranges, stop: threading.Event):
     """Submit a band per range and wait for them; see launch_bands for what an exception does."""
-    futures = [pool.submit(run, r) for r in ranges]
+    futures = []
     try:
+        for r in ranges:
+            futures.append(pool.submit(run, r))
         # Waited for in short steps: a SIGINT that lands just before the main thread blocks does not
         # wake it (CPython runs the handler at its next bytecode), and Ctrl-C would then wait for
         # the whole frame (measured: 1 time in 12 when it came at the end of the first band).

@@ -22,7 +22,7 @@ from ..timing import timed
 from .aovs import finish_aovs
 from .caches import SHADOW_GRIDS_KEPT, FrameCaches
 from .grad import backward as grad_backward, record_first_hits, refusal as grad_refusal
-from .launch import bands_of, launch_bands, launch_plan
+from .launch import band_pool, bands_of, launch_bands, launch_plan
 from .memory import check_frame_memory, frame_estimate, frame_memory
 from .mirrors import MirrorFrame, empty_mirrors, mirror_frame
 from .plan import FramePlan, Shortcuts, choose_shortcuts, plan_frame
@@ -158,7 +158,7 @@ class Renderer:
             return None
         if self._pool is None or self._pool_threads != threads:
             self.close()
-            self._pool, self._pool_threads = ThreadPoolExecutor(max_workers=threads, thread_name_prefix="warprt"), threads
+            self._pool, self._pool_threads = band_pool(threads), threads
             weakref.finalize(self, self._pool.shutdown, wait=False)
         return self._pool
 
