@@ -170,8 +170,8 @@ def _register_integrator(mi, dr):
                     r_dot_v = dr.dot(r, v)
                     term += dr.select(r_dot_v > 0.0, ks * dr.power(dr.maximum(r_dot_v, 0.0), shininess), 0.0)
                 color += dr.select(lit, light_color * term, 0.0)
-            for emitter in t.area:
-                color += self.area_light(scene, si, emitter, kd, ks, shininess, n, v, active)
+            for emitter, shape in zip(t.area, t.area_shapes):
+                color += self.area_light(scene, si, emitter, shape, kd, ks, shininess, n, v, active)
             return color
 
         def emitted(self, scene, si, active):
@@ -182,20 +182,31 @@ def _register_integrator(mi, dr):
             emitter = si.emitter(scene, active) if active else None
             return emitter.eval(si, active) if emitter is not None else mi.Color3f(0.0)
 
-        def area_light(self, scene, si, emitter, kd, ks, shininess, n, v, active):
+        def area_light(self, scene, si, emitter, shape, kd, ks, shininess, n, v, active):
             """One area light at si: warprt's fixed sample points (the k x k cell centres of the unit square)
             handed to Mitsuba's own emitter.sample_direction, which places each on the shape as its
             sample_position does and weighs it L_e |cos'| A / r^2 (0 from behind: one-sided); each point,
             weight / k^2, lights the Phong terms as a point light would, through one shadow ray."""
             s, t = self.switches, self.tables
             color = mi.Color3f(0.0)
+            sphere = shape.shape_type() == mi.ShapeType.Sphere
+            if sphere:  # Mitsuba's sphere samples directions by its cone: its sample_position is warprt's rule
+                radiance, area = mi.Color3f(mi.traverse(emitter)["radiance.value"]), shape.surface_area()
             for a, b in t.area_uv:
-                ds, weight = emitter.sample_direction(si, mi.Point2f(a, b), active)
-                L = ds.d
+                if sphere:
+                    ps = shape.sample_position(si.time, mi.Point2f(a, b), active)
+                    to_p = ps.p - si.p
+                    dist2 = dr.squared_norm(to_p)
+                    L = to_p / dr.sqrt(dist2)
+                    cos_e = -dr.dot(ps.n, L)
+                    weight, target, ok = radiance * (cos_e * area / dist2), ps.p, cos_e > 0.0
+                else:
+                    ds, weight = emitter.sample_direction(si, mi.Point2f(a, b), active)
+                    L, target, ok = ds.d, ds.p, ds.pdf > 0.0
                 n_dot_l = dr.dot(n, L)
-                lit = active & (n_dot_l > 0.0) & (ds.pdf > 0.0)
+                lit = active & (n_dot_l > 0.0) & ok
                 if s.shadows:
-                    lit &= ~scene.ray_test(si.spawn_ray_to(ds.p), lit)
+                    lit &= ~scene.ray_test(si.spawn_ray_to(target), lit)
                 term = mi.Color3f(0.0)
                 if s.diffuse:
                     term += kd * n_dot_l
@@ -424,6 +435,9 @@ def _shape_light(mi, light):
     local [-1, 1]^2 square (the unit disk) onto center + x u + y v, emitting along u x v."""
     from warprt.scene import shape_frame
 
+    if light.shape == "sphere":
+        return mi.load_dict({"type": "sphere", "center": [float(x) for x in (light.center or (0.0, 0.0, 0.0))],
+                             "radius": float(light.radius), "emitter": _area_emitter(mi, light)})
     c, u, v = shape_frame(light)
     m = np.eye(4)
     m[:3, 0], m[:3, 1], m[:3, 2], m[:3, 3] = u, v, np.cross(u, v) / np.linalg.norm(np.cross(u, v)), c

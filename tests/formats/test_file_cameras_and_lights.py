@@ -304,16 +304,17 @@ def test_usd_lux_lights(tmp_path):
     with pytest.warns(UserWarning) as w:
         lights = read_mesh_file(tmp_path / "l.usda").lights
     messages = [str(x.message) for x in w]
-    assert sum("/World/Bulb" in m and "approximated by a point" in m for m in messages) == 1
+    assert not any("/World/Bulb" in m for m in messages)  # a sphere light now (radius 0.1)
     assert not any("/World/Panel" in m for m in messages)  # an area light now (test_usd_area_lights)
     assert sum("/World/Sky" in m and "DomeLight is not a Whitted light: skipped" in m for m in messages) == 1
     assert not any("/World/Dot" in m for m in messages)
     bulb, sun, lamp, dot, panel = lights
     assert (panel.type, panel.shape) == ("area", "rectangle")
     np.testing.assert_allclose(dot.position, [0.0, 9.0, 0.0])
-    assert (bulb.type, bulb.name, bulb.falloff) == ("point", "Bulb", "inverse_square")
-    np.testing.assert_allclose(bulb.position, [1.0, 5.0, -2.0])
-    np.testing.assert_allclose(bulb.color, np.array([1.0, 0.5, 0.25]) * 30.0 * 2.0 ** 2)
+    assert (bulb.type, bulb.name, bulb.shape) == ("area", "Bulb", "sphere")
+    np.testing.assert_allclose(bulb.center, [1.0, 5.0, -2.0])
+    assert bulb.radius == pytest.approx(0.1)
+    np.testing.assert_allclose(bulb.radiance, np.array([1.0, 0.5, 0.25]) * 30.0 * 2.0 ** 2)
     assert sun.type == "directional" and sun.position is None
     np.testing.assert_allclose(sun.direction, rotation_matrix([1, 0, 0], -50.0) @ [0, 0, -1.0], atol=1e-7)
     np.testing.assert_allclose(sun.color, [2.0] * 3)

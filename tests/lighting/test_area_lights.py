@@ -7,6 +7,7 @@ radiance L_e at irradiance E has radiance kd E (Mitsuba's reflectance / pi times
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import numpy as np
@@ -206,6 +207,9 @@ def test_two_renders_of_an_area_light_are_the_same_to_the_bit():
     ({"lights": [{"type": "area", "radiance": [1.0] * 3, "object": "lamp"}]}, "lights[0].object"),
     ({"lights": [{"type": "area", "radiance": [1.0] * 3, "shape": "disk", "normal": [0.0, -1.0, 0.0]}]},
      "lights[0].radius"),
+    ({"lights": [{"type": "area", "radiance": [1.0] * 3, "shape": "sphere", "radius": 0.0}]}, "lights[0].radius"),
+    ({"lights": [{"type": "area", "radiance": [1.0] * 3, "shape": "sphere", "radius": 1.0, "normal": [0.0, 1.0, 0.0]}]},
+     "lights[0].normal"),
 ])
 def test_a_bad_area_light_is_one_line_naming_its_field(change, field):
     with pytest.raises(SceneError) as e:
@@ -275,3 +279,27 @@ def test_an_area_lights_radiance_is_a_renderer_parameter():
     r.params["lights.0.radiance"] = [1.0, 2.0, 3.0]
     after = r.render().image
     assert np.array_equal(after, warprt.render(scene([1.0, 2.0, 3.0]))[0]) and not np.array_equal(after, before)
+
+
+
+# (f) a sphere light ---------------------------------------------------------------------------------
+
+def test_a_sphere_light_lights_a_point_below_it_as_its_closed_form_says():
+    """A sphere of radiance L_e and radius R centred d above a floor point: irradiance pi L_e (R / d)^2
+    (its visible cap, all above the horizon); the samples lie on the true sphere (Mitsuba's
+    square_to_uniform_sphere), half of them facing away, and the error falls as they grow."""
+    R, D = 0.5, 2.0
+    expected = KD * math.pi * L_E * (R / D) ** 2
+    sphere = {"type": "area", "radiance": [L_E] * 3, "shape": "sphere", "center": [0.0, D, 0.0], "radius": R}
+    errors = {n: abs(floor_point([sphere], samples=n) / expected - 1.0) for n in (16, 64, 256)}
+    assert errors[16] < 0.03 and errors[256] < 0.002
+    assert errors[256] < errors[64] < errors[16]
+
+
+def test_a_sphere_light_is_drawn_at_its_radiance():
+    scene = warprt.load_dict({
+        "camera": {"eye": [0.0, 1.0, 3.0], "center": [0.0, 1.0, 0.0], "width": 1, "height": 1},
+        "render": {"ambient": [0.0] * 3},
+        "lights": [{"type": "area", "radiance": [L_E] * 3, "shape": "sphere", "center": [0.0, 1.0, 0.0], "radius": 0.5}],
+        "materials": MATERIALS, "objects": [FLOOR]})
+    assert np.array_equal(warprt.render(scene, primary_query="raytrace")[0][0, 0], [L_E] * 3)

@@ -21,6 +21,7 @@ from .model import Material, SceneObject
 EMITTER_MATERIAL_NAME = "<area light>"
 EMITTER_MATERIAL = Material(kd=(0.0, 0.0, 0.0), ka=(0.0, 0.0, 0.0), ks=(0.0, 0.0, 0.0))
 DISK_SEGMENTS = 64  # the drawn disk's polygon (its samples lie on the true disk)
+SPHERE_SUBDIVISIONS = 4  # the drawn sphere's icosphere (5,120 triangles; its samples lie on the true sphere)
 
 
 def coordinate_system(n) -> tuple[np.ndarray, np.ndarray]:
@@ -62,6 +63,10 @@ def shape_frame(light) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return c, s * r, t * r
 
 
+def _sphere_center(light) -> np.ndarray:
+    return np.asarray(light.center if light.center is not None else (0.0, 0.0, 0.0), np.float64)
+
+
 def light_normal(light) -> np.ndarray:
     """The unit normal of a shape light, the side it emits to."""
     if light.shape == "rectangle":
@@ -80,6 +85,11 @@ def shape_object(light) -> SceneObject:
         c, u, v = rectangle_axes(light)
         vertices = np.array([c - u - v, c + u - v, c + u + v, c - u + v])
         faces = np.array([[0, 1, 2], [0, 2, 3]])
+    elif light.shape == "sphere":
+        from .shapes import sphere
+
+        unit, faces = sphere(1.0, SPHERE_SUBDIVISIONS)
+        vertices = _sphere_center(light) + light.radius * unit
     else:
         c, s, t, r = _disk_axes(light)
         theta = 2.0 * np.pi * np.arange(DISK_SEGMENTS) / DISK_SEGMENTS
@@ -144,6 +154,14 @@ def emitter_samples(scene, light, k: int) -> tuple[np.ndarray, np.ndarray, np.nd
         points = c + d[:, :1] * s + d[:, 1:] * t
         area = math.pi * r * r
         normals = np.tile(light_normal(light), (count, 1))
+    elif light.shape == "sphere":
+        # Mitsuba's sphere sample_position: square_to_uniform_sphere (z = 1 - 2b, phi = 2 pi a) about the
+        # world axes, scaled by the radius; the normal points out.
+        z = 1.0 - 2.0 * b
+        ring = np.sqrt(np.maximum(1.0 - z * z, 0.0))
+        normals = np.stack([ring * np.cos(2.0 * np.pi * a), ring * np.sin(2.0 * np.pi * a), z], axis=1)
+        points = _sphere_center(light) + light.radius * normals
+        area = 4.0 * math.pi * light.radius ** 2
     else:
         tri = np.concatenate([o.vertices[o.faces] for o in scene.objects if o.name == light.object])
         cross = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])

@@ -78,7 +78,7 @@ class RenderSettings:
 
 LIGHT_TYPES = ("point", "spot", "directional", "area")
 FALLOFFS = ("none", "inverse_square")
-AREA_SHAPES = ("rectangle", "disk")  # an area light's own shape; else it names an object (Light.object)
+AREA_SHAPES = ("rectangle", "disk", "sphere")  # an area light's own shape; else it names an object (Light.object)
 
 
 @dataclass(frozen=True)

@@ -111,7 +111,7 @@ def _check_texture(source, field_name, t):
     _checked_textures.add(t)
 def _check_area_light(source, where, light, eye, objects):
     """An area light: a radiance >= 0 and either its own shape (a rectangle: u and v, or normal and size; a
-    disk: normal and radius; each around center) or the name of objects of the scene, not both."""
+    disk: normal and radius; a sphere: radius; each around center) or the name of objects of the scene, not both."""
     for key, v in (("position", light.position), ("direction", light.direction), ("beam_width", light.beam_width)):
         if v is not None:
             raise SceneError(source, f"{where}.{key}", "an area light has none: it emits from its shape or object")
@@ -122,7 +122,7 @@ def _check_area_light(source, where, light, eye, objects):
         raise SceneError(source, f"{where}.radiance", "is required for an area light: L_e = [r, g, b]")
     _check_vector(source, f"{where}.radiance", light.radiance, nonneg=True)
     if (light.shape is None) == (light.object is None):
-        raise SceneError(source, f"{where}.shape", "an area light takes a shape (\"rectangle\", \"disk\") or "
+        raise SceneError(source, f"{where}.shape", "an area light takes a shape (\"rectangle\", \"disk\", \"sphere\") or "
                                                    "object = \"name\", one of the two")
     if light.object is not None:
         names = [o.name for o in objects]
@@ -138,10 +138,14 @@ def _check_area_light(source, where, light, eye, objects):
                                                    f"got {show(light.shape)}")
     center = _check_vector(source, f"{where}.center", light.center) if light.center is not None else np.zeros(3)
     _check_light_reach(source, where, center, eye, "center")
-    own = {"rectangle": ("u", "v", "normal", "size"), "disk": ("normal", "radius")}[light.shape]
-    for key in ("u", "v", "size", "radius"):
+    own = {"rectangle": ("u", "v", "normal", "size"), "disk": ("normal", "radius"), "sphere": ("radius",)}[light.shape]
+    for key in ("u", "v", "size", "radius", "normal"):
         if getattr(light, key) is not None and key not in own:
             raise SceneError(source, f"{where}.{key}", f"a {light.shape} has none")
+    if light.shape == "sphere":
+        if not _is_real(light.radius) or not math.isfinite(light.radius) or not light.radius > 0.0:
+            raise SceneError(source, f"{where}.radius", f"expected a number > 0, got {_num(light.radius)}")
+        return
     if light.shape == "rectangle" and (light.u is not None or light.v is not None):
         for key in ("u", "v"):
             if getattr(light, key) is None:

@@ -185,9 +185,10 @@ class _Stage:
                                 horizontal / vertical if authored else None)
 
     def _light(self, prim) -> Light | None:
-        """A UsdLux light: C_l = intensity x 2^exposure x colour. A RectLight (width x height) or a DiskLight
-        of radius > 0 is an area light of radiance C_l (over its area with normalize) emitting along the
-        prim's -z, as UsdLux defines them; a sphere light, or a disk of radius 0, a point at its centre;
+        """A UsdLux light: C_l = intensity x 2^exposure x colour. A RectLight (width x height), a DiskLight
+        of radius > 0 (emitting along the prim's -z, as UsdLux defines them) or a SphereLight of radius > 0
+        (outwards) is an area light of radiance C_l (over its area with normalize); a sphere light of radius 0
+        or treatAsPoint, or a disk of radius 0, a point at its centre;
         distant lights directional along the prim's -z; a ShapingAPI cone on a point a spot (cone:angle the
         cutoff, cone:softness the share of it the profile falls over)."""
         from pxr import UsdLux
@@ -205,16 +206,14 @@ class _Stage:
         if prim.IsA(UsdLux.DistantLight):
             return Light(position=None, color=c_l, type="directional", direction=direction, falloff="inverse_square",
                          name=name)
-        if prim.IsA(UsdLux.RectLight) or (prim.IsA(UsdLux.DiskLight) and (UsdLux.DiskLight(prim).GetRadiusAttr().Get(t) or 0) > 0):
+        sized = (prim.IsA(UsdLux.DiskLight) and (UsdLux.DiskLight(prim).GetRadiusAttr().Get(t) or 0) > 0) or (
+            prim.IsA(UsdLux.SphereLight) and (UsdLux.SphereLight(prim).GetRadiusAttr().Get(t) or 0) > 0
+            and not UsdLux.SphereLight(prim).GetTreatAsPointAttr().Get(t))
+        if prim.IsA(UsdLux.RectLight) or sized:
             return self._area_light(prim, m, c_l, name)
         if not (prim.IsA(UsdLux.SphereLight) or prim.IsA(UsdLux.DiskLight)):
             warn(self.src, where, f"a {prim.GetTypeName()} is not a Whitted light: skipped")
             return None
-        shape = UsdLux.SphereLight(prim) if prim.IsA(UsdLux.SphereLight) else UsdLux.DiskLight(prim)
-        radius = shape.GetRadiusAttr().Get(t)
-        as_point = prim.IsA(UsdLux.SphereLight) and shape.GetTreatAsPointAttr().Get(t)  # the author's own point
-        if radius and float(radius) > 0 and not as_point:
-            warn(self.src, where, f"a {prim.GetTypeName()} of radius {float(radius):g} is approximated by a point")
         position = tuple(float(x) for x in m[:3, 3])
         shaping = UsdLux.ShapingAPI(prim)
         angle = shaping.GetShapingConeAngleAttr().Get(t) if prim.HasAPI(UsdLux.ShapingAPI) else None
@@ -225,8 +224,9 @@ class _Stage:
                      beam_width=float(angle) * (1.0 - softness), falloff="inverse_square", name=name)
 
     def _area_light(self, prim, m: np.ndarray, c_l: tuple, name: str) -> Light:
-        """A RectLight or DiskLight as an area light: its local x-y extent placed by the prim's transform
-        (in metres), emitting along its -z; radiance C_l, divided by the area where normalize is on."""
+        """A RectLight, DiskLight or SphereLight as an area light: its extent placed by the prim's transform
+        (in metres), a rectangle or disk emitting along its -z, a sphere outwards; radiance C_l, divided by
+        the area where normalize is on."""
         from pxr import UsdLux
 
         where, t = str(prim.GetPath()), self.time
@@ -245,14 +245,24 @@ class _Stage:
             area = 4.0 * float(np.linalg.norm(np.cross(u, v)))
             light = dict(shape="rectangle", center=center, u=tuple(map(float, u)), v=tuple(map(float, v)))
         else:
-            radius = float(UsdLux.DiskLight(prim).GetRadiusAttr().Get(t))
+            sphere = prim.IsA(UsdLux.SphereLight)
+            radius = float((UsdLux.SphereLight(prim) if sphere else UsdLux.DiskLight(prim)).GetRadiusAttr().Get(t))
             x, y, z = (linear @ e for e in np.eye(3))
             r = radius * float(np.linalg.norm(x))
-            if not (np.isclose(np.linalg.norm(x), np.linalg.norm(y), rtol=1e-6) and abs(np.dot(x, y)) < 1e-6 * np.dot(x, x)):
-                warn(self.src, where, f"a non-uniformly scaled disk light is read as a disk of radius {r:g}")
-            normal = -np.cross(x, y)
-            area = math.pi * r * r
-            light = dict(shape="disk", center=center, normal=tuple(map(float, normal / np.linalg.norm(normal))), radius=r)
+            uniform = np.isclose(np.linalg.norm(x), np.linalg.norm(y), rtol=1e-6) and abs(np.dot(x, y)) < 1e-6 * np.dot(x, x)
+            if sphere:
+                uniform = uniform and np.isclose(np.linalg.norm(x), np.linalg.norm(z), rtol=1e-6)
+            if not uniform:
+                kind = "sphere" if sphere else "disk"
+                warn(self.src, where, f"a non-uniformly scaled {kind} light is read as a {kind} of radius {r:g}")
+            if sphere:
+                area = 4.0 * math.pi * r * r
+                light = dict(shape="sphere", center=center, radius=r)
+            else:
+                normal = -np.cross(x, y)
+                area = math.pi * r * r
+                light = dict(shape="disk", center=center, normal=tuple(map(float, normal / np.linalg.norm(normal))),
+                             radius=r)
         radiance = np.asarray(c_l, np.float64) / (area if api.GetNormalizeAttr().Get(t) else 1.0)
         return Light(type="area", radiance=tuple(map(float, radiance)), name=name, **light)
 
