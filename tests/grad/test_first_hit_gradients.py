@@ -227,7 +227,11 @@ def mirror_scene(changes: dict | None = None, max_depth: int = 3):
 def mirror_gradients(weights):
     r = warprt.Renderer(mirror_scene())
     assert np.array_equal(r.render(grad=True).image, warprt.render(mirror_scene())[0])
-    return r.backward(weights, wrt=list(MIRROR_PARAMETERS))
+    everything = r.backward(weights)  # by default every parameter this frame differentiates: not the vertices
+    assert not any(name.startswith("objects.") for name in everything)
+    with pytest.raises(SceneError, match="camera rays alone"):
+        r.backward(weights, wrt=[f"objects.{mirror_scene().objects[0].name}.vertices"])
+    return {name: everything[name] for name in MIRROR_PARAMETERS}
 
 
 def mirror_differences(name, weights, max_depth=3) -> np.ndarray:

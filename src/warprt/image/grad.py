@@ -92,6 +92,7 @@ def parameter_names(scene) -> list[str]:
 
 
 def _vertices_refusal(hits: "FirstHits") -> str | None:
+    """Why backward() cannot give this frame's vertex gradients yet (None: it can)."""
     return ("vertices are differentiated through camera rays alone for now (a mirror ray's origin and direction "
             "move with them too)" if hits.levels > 1 else None)
 
@@ -100,7 +101,9 @@ def backward(scene, geom, hits: FirstHits, d_image, wrt, device: str) -> dict:
     """{name: d(sum(d_image * image)) / d(param)} for each name in ``wrt`` (parameter_names), each shaped
     as the parameter: (3,) for colours and positions, () for an exponent."""
     known = parameter_names(scene)
-    wrt = list(known if wrt is None else wrt)
+    if wrt is None:  # everything this frame can be differentiated in
+        wrt = [n for n in known if not (n.startswith("objects.") and _vertices_refusal(hits))]
+    wrt = list(wrt)
     for name in wrt:
         if name not in known:
             why = ("not a parameter backward() differentiates yet (materials.<name>.ka | kd | ks | shininess | "
