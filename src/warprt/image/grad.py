@@ -23,6 +23,7 @@ from ..errors import ArgumentError
 from ..kernels.camera import camera_data
 from ..kernels.grad import MAX_GRAD_LIGHTS, make_grad_record_kernel, make_grad_shade_kernel
 from ..scene import camera_basis
+from .launch import launch_bands
 from .params import object_names
 
 SOURCE = "Renderer.backward"
@@ -67,8 +68,9 @@ class FirstHits:
     smooth: bool
 
 
-def record_first_hits(scene, geom, data, fx, device: str) -> FirstHits:
-    """Run the record kernel for a frame of ``scene`` on ``geom`` and its tables ``data``."""
+def record_first_hits(scene, geom, data, fx, device: str, threads: int = 1, bands: int = 1, pool=None) -> FirstHits:
+    """Run the record kernel for a frame of ``scene`` on ``geom`` and its tables ``data``, in ``bands`` bands
+    of pixels on ``threads`` threads (launch_bands; ``pool`` the Renderer's)."""
     cam = scene.camera
     n, L = cam.width * cam.height, len(scene.whitted_lights)
     D = scene.render.max_depth if fx.reflection else 1
@@ -78,7 +80,8 @@ def record_first_hits(scene, geom, data, fx, device: str) -> FirstHits:
     visible = wp.zeros(max(n * D * L, 1), dtype=int, device=device)
     c = camera_data(camera_basis(cam), geom.eye_offset(cam.eye))
     kernel = make_grad_record_kernel(L, D, fx.smooth, fx.shadows, fx.culling)
-    wp.launch(kernel, dim=n, inputs=[data, c, D, face, bary, dirs, visible], device=device)
+    launch_bands(kernel, lambda first: [data, c, D, first, face, bary, dirs, visible], n, threads, bands, device,
+                 pool=pool)
     return FirstHits(face, bary, dirs, visible, cam.width, cam.height, L, D, fx.smooth)
 
 

@@ -243,7 +243,8 @@ class Renderer:
             result = _finish(scene, o, plan, geom, frame)
             if grad:
                 with timed(times, "grad_record"):
-                    self._first_hits = (scene, geom, record_first_hits(scene, geom, data, plan.fx, o.device))
+                    self._first_hits = (scene, geom, record_first_hits(scene, geom, data, plan.fx, o.device,
+                                                                       plan.threads, plan.bands, pool))
         stats = _frame_stats(scene, o, plan, shortcuts, variant, geom, geometry_info, grid, mirrors, zb, frame, times)
         stats.memory["estimate"] = estimate
         return RenderResult(result[0], stats, result[1])

@@ -27,7 +27,7 @@ MAX_GRAD_LIGHTS = 16  # Warp's max_unroll: a longer static loop would silently t
 
 @functools.cache
 def make_grad_record_kernel(L: int, D: int, smooth: bool, shadows: bool, cull: bool):
-    """record(s, c, max_depth, face, bary, dirs, visible): per pixel (row-major, row 0 the top) and ray level
+    """record(s, c, max_depth, first, face, bary, dirs, visible): per pixel (from ``first``) (row-major, row 0 the top) and ray level
     (D at most: the camera ray, then the mirror rays the tracer spawns while k_r > 0 and max_depth allows),
     the face of the level's hit (-1: it met nothing, -2: no ray at that level), its barycentrics (u on the
     face's first vertex, v on its second), the ray's direction, and per light whether the hit sees it (1
@@ -36,9 +36,9 @@ def make_grad_record_kernel(L: int, D: int, smooth: bool, shadows: bool, cull: b
     occluded = make_occluded(False)
 
     @wp.kernel(module="unique", enable_backward=False)
-    def record(s: SceneData, c: CameraData, max_depth: int, face: wp.array(dtype=int), bary: wp.array(dtype=wp.vec2),
-               dirs: wp.array(dtype=wp.vec3), visible: wp.array(dtype=int)):
-        pixel = wp.tid()
+    def record(s: SceneData, c: CameraData, max_depth: int, first: int, face: wp.array(dtype=int),
+               bary: wp.array(dtype=wp.vec2), dirs: wp.array(dtype=wp.vec3), visible: wp.array(dtype=int)):
+        pixel = first + wp.tid()
         x = pixel % c.width
         row = pixel / c.width
         o = c.eye
