@@ -276,6 +276,7 @@ def test_an_area_lights_radiance_is_a_renderer_parameter():
     r = warprt.Renderer(scene([L_E] * 3))
     before = r.render().image
     assert "lights.0.radiance" in r.params and np.array_equal(r.params["lights.0.radiance"], [L_E] * 3)
+    assert "lights.0.color" not in r.params  # an area light has none (its light is its radiance)
     r.params["lights.0.radiance"] = [1.0, 2.0, 3.0]
     after = r.render().image
     assert np.array_equal(after, warprt.render(scene([1.0, 2.0, 3.0]))[0]) and not np.array_equal(after, before)

@@ -44,7 +44,8 @@ def _names(scene) -> list[str]:
         if m.emission is not None:
             out.append(f"materials.{name}.emission")
     for i, light in enumerate(scene.lights):
-        out += [f"lights.{i}.{k}" for k in LIGHT_VECTORS if getattr(light, k) is not None]
+        out += [f"lights.{i}.{k}" for k in LIGHT_VECTORS if getattr(light, k) is not None
+                and not (light.area and k == "color")]  # an area light's light is its radiance
     out += [f"objects.{name}.vertices" for name in object_names(scene)]
     out += [f"camera.{k}" for k in CAMERA_VECTORS + ("fovy",)]
     return out
