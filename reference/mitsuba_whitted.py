@@ -155,24 +155,30 @@ def _register_integrator(mi, dr):
                 if unscaled:
                     # warprt's falloff "none" (the seed's model): Mitsuba's weight times r^2, r its ds.dist.
                     light_color = light_color * dr.square(ds.dist)
-                L = ds.d
-                n_dot_l = dr.dot(n, L)
-                lit = active & (n_dot_l > 0.0)
-                if s.shadows:
-                    # Mitsuba's own offset (spawn_ray_to), to the emitter's sampled point (for a
-                    # directional light, beyond the scene's bounding sphere) and any-hit query.
-                    lit &= ~scene.ray_test(si.spawn_ray_to(ds.p), lit)
-                term = mi.Color3f(0.0)
-                if s.diffuse:
-                    term += kd * n_dot_l
-                if s.specular:
-                    r = 2.0 * n_dot_l * n - L
-                    r_dot_v = dr.dot(r, v)
-                    term += dr.select(r_dot_v > 0.0, ks * dr.power(dr.maximum(r_dot_v, 0.0), shininess), 0.0)
+                # The emitter's sampled point: for a directional light, beyond the scene's bounding sphere.
+                term, lit = self.phong(scene, si, ds.d, ds.p, active, kd, ks, shininess, n, v)
                 color += dr.select(lit, light_color * term, 0.0)
             for emitter, shape in zip(t.area, t.area_shapes):
                 color += self.area_light(scene, si, emitter, shape, kd, ks, shininess, n, v, active)
             return color
+
+        def phong(self, scene, si, L, target, lit, kd, ks, shininess, n, v):
+            """(kd n.L + ks max(0, r.v)^n, where it is lit): the Phong terms at si of light from direction L
+            and point ``target``, lit where ``lit``, n.L > 0 and, with shadows, Mitsuba's own offset
+            (spawn_ray_to) and any-hit query find nothing on the way."""
+            s = self.switches
+            n_dot_l = dr.dot(n, L)
+            lit = lit & (n_dot_l > 0.0)
+            if s.shadows:
+                lit &= ~scene.ray_test(si.spawn_ray_to(target), lit)
+            term = mi.Color3f(0.0)
+            if s.diffuse:
+                term += kd * n_dot_l
+            if s.specular:
+                r = 2.0 * n_dot_l * n - L
+                r_dot_v = dr.dot(r, v)
+                term += dr.select(r_dot_v > 0.0, ks * dr.power(dr.maximum(r_dot_v, 0.0), shininess), 0.0)
+            return term, lit
 
         def emitted(self, scene, si, active):
             """The radiance of an area emitter's surface seen at si: Mitsuba's own eval (one-sided: 0
@@ -187,7 +193,7 @@ def _register_integrator(mi, dr):
             handed to Mitsuba's own emitter.sample_direction, which places each on the shape as its
             sample_position does and weighs it L_e |cos'| A / r^2 (0 from behind: one-sided); each point,
             weight / k^2, lights the Phong terms as a point light would, through one shadow ray."""
-            s, t = self.switches, self.tables
+            t = self.tables
             color = mi.Color3f(0.0)
             sphere = shape.shape_type() == mi.ShapeType.Sphere
             if sphere:  # Mitsuba's sphere samples directions by its cone: its sample_position is warprt's rule
@@ -203,17 +209,7 @@ def _register_integrator(mi, dr):
                 else:
                     ds, weight = emitter.sample_direction(si, mi.Point2f(a, b), active)
                     L, target, ok = ds.d, ds.p, ds.pdf > 0.0
-                n_dot_l = dr.dot(n, L)
-                lit = active & (n_dot_l > 0.0) & ok
-                if s.shadows:
-                    lit &= ~scene.ray_test(si.spawn_ray_to(target), lit)
-                term = mi.Color3f(0.0)
-                if s.diffuse:
-                    term += kd * n_dot_l
-                if s.specular:
-                    r = 2.0 * n_dot_l * n - L
-                    r_dot_v = dr.dot(r, v)
-                    term += dr.select(r_dot_v > 0.0, ks * dr.power(dr.maximum(r_dot_v, 0.0), shininess), 0.0)
+                term, lit = self.phong(scene, si, L, target, active & ok, kd, ks, shininess, n, v)
                 color += dr.select(lit, weight * term * t.area_share, 0.0)
             return color
 
@@ -244,34 +240,47 @@ def _register_integrator(mi, dr):
 
         @dr.syntax
         def sample(self, scene, sampler, ray, medium=None, active=True):
-            t = self.tables
-            max_depth = self.switches.max_depth if self.switches.reflection else 1
             ray = mi.Ray3f(ray)
             active = mi.Bool(active)
             weight = mi.Color3f(1.0)
             color = mi.Color3f(0.0)
             depth = mi.UInt32(0)
+            while active:
+                ray, color, weight, active = self.level(scene, ray, depth, color, weight, active)
+                depth += 1
+            return color, mi.Bool(True), []
+
+        def max_depth(self) -> int:
+            """The ray levels sample() follows: the switches' max_depth with mirrors, else the camera rays'."""
+            return self.switches.max_depth if self.switches.reflection else 1
+
+        def level(self, scene, ray, depth, color, weight, active, detach: bool = False):
+            """One ray level of sample(): the hit of ``ray`` (level ``depth``), its background or local colour
+            times ``weight`` added to ``color``, and the mirror ray it spawns while k_r > 0 and max_depth
+            allows. Returns (ray, color, weight, active) for the next level; straight-line code, so that a
+            caller may also unroll the levels in Python (Mitsuba's AD then needs no symbolic loop). With
+            ``detach`` (RayFlags.DetachShape), the hits do not follow the shapes' parameters under AD."""
+            t = self.tables
             # Without the UV flag, si.uv holds the triangle's barycentrics, not the mesh's texture coordinates.
             flags = mi.RayFlags.Minimal | mi.RayFlags.ShadingFrame
             if t.attributes or t.own_textures:
                 flags = flags | mi.RayFlags.UV
-            while active:
-                si = self.intersect(scene, ray, flags, depth == 0, active)
-                hit = si.is_valid()
-                color = dr.select(active & ~hit, color + weight * t.background, color)
-                active &= hit
-                # Two-sided surfaces: both normals turned to face the incoming ray, by the geometric side.
-                side = dr.select(dr.dot(si.n, ray.d) > 0.0, -1.0, 1.0)
-                # Where interpolated vertex normals cancel (normalised zero: NaN), the face normal.
-                n = dr.select(dr.isfinite(si.sh_frame.n.x), si.sh_frame.n, si.n) * side
-                mat = self.material(si, active)
-                color = dr.select(active, color + weight * self.local(scene, si, mat, n, -ray.d, active), color)
-                depth += 1
-                kr = mat[3]
-                active &= (depth < max_depth) & (dr.max(kr) > 0.0)
-                weight *= kr
-                ray = si.spawn_ray(dr.normalize(ray.d - 2.0 * dr.dot(ray.d, n) * n))
-            return color, mi.Bool(True), []
+            if detach:
+                flags = flags | mi.RayFlags.DetachShape
+            si = self.intersect(scene, ray, flags, depth == 0, active)
+            hit = si.is_valid()
+            color = dr.select(active & ~hit, color + weight * t.background, color)
+            active &= hit
+            # Two-sided surfaces: both normals turned to face the incoming ray, by the geometric side.
+            side = dr.select(dr.dot(si.n, ray.d) > 0.0, -1.0, 1.0)
+            # Where interpolated vertex normals cancel (normalised zero: NaN), the face normal.
+            n = dr.select(dr.isfinite(si.sh_frame.n.x), si.sh_frame.n, si.n) * side
+            mat = self.material(si, active)
+            color = dr.select(active, color + weight * self.local(scene, si, mat, n, -ray.d, active), color)
+            kr = mat[3]
+            active &= (depth + 1 < self.max_depth()) & (dr.max(kr) > 0.0)
+            weight *= kr
+            return si.spawn_ray(dr.normalize(ray.d - 2.0 * dr.dot(ray.d, n) * n)), color, weight, active
 
         def aov_names(self):
             return []

@@ -26,6 +26,25 @@ REL = 1e-4
 COLOURS = ("ka", "kd", "ks", "shininess", "kr")  # the reference's tables; kr is r.params' reflectivity
 
 
+def backpropagated(ms, s, weights, detach: bool = False):
+    """Mitsuba's image of ``s`` (its MitsubaScene ``ms``) at the pixel centres, the reference's sample() with
+    its levels (integ.level) unrolled in Python, straight-line code with no symbolic loop for reverse mode
+    to replay; dr.backward of sum(weights * image) done. Returns the image (a Color3f per pixel)."""
+    import drjit as dr
+    import mitsuba as mi
+
+    integ = ms.integrator
+    idx = dr.arange(mi.UInt32, HEIGHT * WIDTH)
+    pos = mi.Point2f((mi.Float(idx % WIDTH) + 0.5) / WIDTH, (mi.Float(idx // WIDTH) + 0.5) / HEIGHT)
+    ray, _ = ms.sensor(s.camera, 1).sample_ray(0.0, 0.5, pos, mi.Point2f(0.5, 0.5))
+    color, weight, active = mi.Color3f(0.0), mi.Color3f(1.0), mi.Bool(True)
+    for depth in range(integ.max_depth()):
+        ray, color, weight, active = integ.level(ms.mi_scene, ray, depth, color, weight, active, detach)
+    w = weights.reshape(-1, 3)
+    dr.backward(dr.sum(color.x * mi.Float(w[:, 0]) + color.y * mi.Float(w[:, 1]) + color.z * mi.Float(w[:, 2])))
+    return color
+
+
 def mitsuba_gradients(s, weights, shadows: bool = True) -> tuple[np.ndarray, dict]:
     """Mitsuba's image and its AD gradients of sum(weights * image) by r.params name (materials' colours
     and exponents, summed over their objects' table rows; lights' colours)."""
@@ -42,26 +61,7 @@ def mitsuba_gradients(s, weights, shadows: bool = True) -> tuple[np.ndarray, dic
     for p in emitters:
         dr.enable_grad(p["intensity.value"])
         p.update()
-    idx = dr.arange(mi.UInt32, HEIGHT * WIDTH)
-    pos = mi.Point2f((mi.Float(idx % WIDTH) + 0.5) / WIDTH, (mi.Float(idx // WIDTH) + 0.5) / HEIGHT)
-    ray, _ = ms.sensor(s.camera, 1).sample_ray(0.0, 0.5, pos, mi.Point2f(0.5, 0.5))
-    # The reference's sample(), its levels unrolled in Python: straight-line code, no symbolic loop for
-    # reverse mode to replay.
-    color, weight, active = mi.Color3f(0.0), mi.Color3f(1.0), mi.Bool(True)
-    for depth in range(integ.switches.max_depth):
-        si = integ.intersect(ms.mi_scene, ray, mi.RayFlags.Minimal | mi.RayFlags.ShadingFrame, depth == 0, active)
-        hit = si.is_valid()
-        color = dr.select(active & ~hit, color + weight * t.background, color)
-        active &= hit
-        side = dr.select(dr.dot(si.n, ray.d) > 0.0, -1.0, 1.0)
-        n = dr.select(dr.isfinite(si.sh_frame.n.x), si.sh_frame.n, si.n) * side
-        mat = integ.material(si, active)
-        color = dr.select(active, color + weight * integ.local(ms.mi_scene, si, mat, n, -ray.d, active), color)
-        active &= (depth + 1 < integ.switches.max_depth) & (dr.max(mat[3]) > 0.0)
-        weight *= mat[3]
-        ray = si.spawn_ray(dr.normalize(ray.d - 2.0 * dr.dot(ray.d, n) * n))
-    w = weights.reshape(-1, 3)
-    dr.backward(dr.sum(color.x * mi.Float(w[:, 0]) + color.y * mi.Float(w[:, 1]) + color.z * mi.Float(w[:, 2])))
+    color = backpropagated(ms, s, weights)
     image = np.stack([np.array(c) for c in (color.x, color.y, color.z)], -1).reshape(HEIGHT, WIDTH, 3)
     table = {k: np.array(dr.grad(getattr(t, k)), np.float64).reshape(len(np.array(t.shininess)), -1) for k in COLOURS}
     out = {}
@@ -124,17 +124,7 @@ def mitsuba_vertex_gradients(s, weights, detach: bool = False) -> np.ndarray:
     key = "object_00000.vertex_positions"
     dr.enable_grad(params[key])
     params.update()
-    idx = dr.arange(mi.UInt32, HEIGHT * WIDTH)
-    pos = mi.Point2f((mi.Float(idx % WIDTH) + 0.5) / WIDTH, (mi.Float(idx // WIDTH) + 0.5) / HEIGHT)
-    ray, _ = ms.sensor(s.camera, 1).sample_ray(0.0, 0.5, pos, mi.Point2f(0.5, 0.5))
-    flags = mi.RayFlags.Minimal | mi.RayFlags.ShadingFrame | (mi.RayFlags.DetachShape if detach else mi.RayFlags.Empty)
-    si = integ.intersect(ms.mi_scene, ray, flags, True, mi.Bool(True))
-    hit = si.is_valid()
-    side = dr.select(dr.dot(si.n, ray.d) > 0.0, -1.0, 1.0)
-    n = dr.select(dr.isfinite(si.sh_frame.n.x), si.sh_frame.n, si.n) * side
-    color = dr.select(hit, integ.local(ms.mi_scene, si, integ.material(si, hit), n, -ray.d, hit), integ.tables.background)
-    w = weights.reshape(-1, 3)
-    dr.backward(dr.sum(color.x * mi.Float(w[:, 0]) + color.y * mi.Float(w[:, 1]) + color.z * mi.Float(w[:, 2])))
+    backpropagated(ms, s, weights, detach)
     return np.array(dr.grad(params[key]), np.float64).reshape(-1, 3)
 
 
