@@ -307,7 +307,9 @@ def _register_integrator(mi, dr):
             return self.textures[name].eval(si, active)
 
         def sample(self, ctx, si, sample1, sample2, active=True):  # the integrator never scatters
-            return mi.BSDFSample3f(), mi.Color3f(0.0)
+            # Zeros, not uninitialised: a symbolic call of another integrator (Mitsuba's direct) traces every
+            # live BSDF instance, these too (it failed after a test had built one: "callable returned an empty array").
+            return dr.zeros(mi.BSDFSample3f), mi.Color3f(0.0)
 
         def eval(self, ctx, si, wo, active=True):
             return mi.Color3f(0.0)
