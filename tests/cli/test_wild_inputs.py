@@ -21,6 +21,7 @@ import numpy as np
 import pytest
 
 import warprt
+from bands import BandCounter
 from marks import slow
 from scenekit import to_toml, write_scene
 from warprt import Camera, Light, Material, RenderSettings, Scene, SceneError, SceneObject
@@ -495,26 +496,6 @@ def test_what_is_not_numbers_is_a_scene_error_naming_the_field(make, field):
     assert e.value.field == field
 
 
-class _Interrupting:
-    """A progress object that interrupts the render when ``when(n)`` is true of the n-th finished band,
-    and records every band that finishes."""
-
-    def __init__(self, interrupt):
-        self.interrupt, self.done, self.lock = interrupt, 0, threading.Lock()
-
-    def begin(self, tiles, pixels):
-        pass
-
-    def end(self):
-        pass
-
-    def band_done(self, pixels, rays):
-        with self.lock:
-            self.done += 1
-            n = self.done
-        self.interrupt(n)
-
-
 def _interrupted(progress):
     scene = warprt.load_scene(Path(__file__).parents[2] / "scenes" / "cornell.toml")
     scene = scene.with_camera(width=96, height=72).with_render(spp=16)
@@ -537,7 +518,7 @@ def test_keyboard_interrupt_from_a_band_stops_the_render_s_bands():
         if n == 2:
             raise KeyboardInterrupt
 
-    at_raise, later = _interrupted(_Interrupting(interrupt))
+    at_raise, later = _interrupted(BandCounter(interrupt))
     assert later == at_raise
     assert at_raise <= 3
 
@@ -560,7 +541,7 @@ def test_a_sigint_during_a_render_stops_its_bands():
 
     previous = signal.signal(signal.SIGINT, handler)
     try:
-        at_raise, later = _interrupted(_Interrupting(interrupt))
+        at_raise, later = _interrupted(BandCounter(interrupt))
     finally:
         signal.signal(signal.SIGINT, previous)
     assert later == at_raise

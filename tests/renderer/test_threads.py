@@ -10,6 +10,7 @@ import warp as wp
 import warp._src.context as warp_context
 
 import warprt
+from bands import BandCounter
 from warprt.image import launch_bands
 
 
@@ -91,23 +92,6 @@ def test_band_threads_launch_a_module_already_loaded(monkeypatch):
     assert loaders and all(name.startswith("band") for name in loaders)
 
 
-class _Counting:
-    """A progress object that counts the bands that finish."""
-
-    def __init__(self):
-        self.done, self.lock = 0, threading.Lock()
-
-    def begin(self, tiles, pixels):
-        pass
-
-    def end(self):
-        pass
-
-    def band_done(self, pixels, rays):
-        with self.lock:
-            self.done += 1
-
-
 def test_a_ctrl_c_while_a_band_thread_starts_leaves_no_band_running(monkeypatch):
     """ThreadPoolExecutor records a thread it starts only after Thread.start() returns; a KeyboardInterrupt
     there (start() waits for the new thread: a Ctrl-C can land in it) used to leave a thread shutdown() did
@@ -127,7 +111,7 @@ def test_a_ctrl_c_while_a_band_thread_starts_leaves_no_band_running(monkeypatch)
     scene = warprt.load_scene().with_camera(width=320, height=240).with_render(spp=16)
     warprt.render(scene.with_camera(width=8, height=6), threads=1)  # kernels loaded, outside the patch
     monkeypatch.setattr(threading.Thread, "start", start)
-    progress = _Counting()
+    progress = BandCounter()
     with pytest.raises(KeyboardInterrupt):
         warprt.render(scene, threads=2, bands=2, progress=progress, primary_query="raytrace", shadow_query="bvh")
     at_raise = progress.done
