@@ -16,6 +16,12 @@ Knobs (warprt.render on the scene, everything else as the scene file says):
   resolution: a half- and a quarter-size image at 1, 4, 16 spp, upscaled to the reference size by
   bilinear interpolation in linear RGB (pixel centres aligned, edges clamped); the upscale is timed too.
 Error: SSIM (7x7 window, channels averaged) and PSNR of linear RGB clamped to [0, 1] (reference/compare.py).
+
+Scenes lit by area lights (a Mitsuba file: scenes/cornell_box.xml) are measured against Mitsuba's own
+``direct`` integrator on the file, converged (4096 independent samples per pixel, box filter), with one more
+knob: light samples 1, 4, 16, 64, 256 (k x k points per light, one shadow ray each) at every spp, up to
+1024 shadow rays per pixel and light. Mitsuba's ``direct`` integrator itself is timed at 1..1024 spp with its
+independent and its stratified sampler: the Mitsuba frame that reaches the same error as warprt's.
 """
 
 from __future__ import annotations
@@ -33,6 +39,7 @@ import warprt
 from benchmarks.output import link, save
 from benchmarks.timing import SCENES, cpu_name, ms, once, timed_result
 from reference.compare import metrics
+from reference.mitsuba_direct import SAMPLERS, DirectRenderer
 from reference.mitsuba_whitted import Switches, mitsuba_scene, mitsuba_variant
 from warprt.scene import resolve_effects
 from warprt.geometry import Geometry
@@ -44,17 +51,22 @@ RESULTS = ROOT / "results"
 THRESHOLDS = (0.99, 0.999)
 
 FULL = {"box": (320, 240), "ref_spp": 256, "ref_depth": 64, "spps": [1, 4, 16, 64], "grid_depths": [1, 2, 3, 4, 8],
-        "depths": list(range(1, 9)), "scales": [2, 4], "scale_spps": [1, 4, 16], "repeat": 3}
+        "depths": list(range(1, 9)), "scales": [2, 4], "scale_spps": [1, 4, 16], "repeat": 3,
+        "light_samples": [1, 4, 16, 64, 256], "max_light_rays": 1024, "direct_ref_spp": 4096,
+        "direct_spps": [1, 4, 16, 64, 256, 1024]}
 QUICK = {"box": (96, 72), "ref_spp": 16, "ref_depth": 16, "spps": [1, 4], "grid_depths": [1, 2, 3],
-         "depths": [1, 2, 3], "scales": [2], "scale_spps": [1], "repeat": 1}
+         "depths": [1, 2, 3], "scales": [2], "scale_spps": [1], "repeat": 1,
+         "light_samples": [1, 4, 16], "max_light_rays": 64, "direct_ref_spp": 1024, "direct_spps": [1, 16, 64]}
+DIRECT_PASS = 256  # Mitsuba's direct integrator renders its reference in passes of this many samples per pixel
 CHEAP = 0.3  # seconds: frames faster than this are timed as the median of `repeat` renders, others once
 NOISE = 0.15  # relative: times closer than this are a tie, broken by the number of rays traced
 
 
 def reference_size(camera, box) -> tuple[int, int]:
-    """The scene's image shrunk to fit ``box``, aspect kept, both sides multiples of 4 (so the half-
-    and quarter-size images have the same aspect and pixel grid)."""
-    s = min(box[0] / camera.width, box[1] / camera.height, 1.0)
+    """The scene's image scaled to fit ``box``, aspect kept, both sides multiples of 4 (so the half-
+    and quarter-size images have the same aspect and pixel grid): shrunk, or enlarged where the file's
+    image is smaller than the box (a Mitsuba file's 64 x 64 film)."""
+    s = min(box[0] / camera.width, box[1] / camera.height)
     return max(4, round(camera.width * s / 4) * 4), max(4, round(camera.height * s / 4) * 4)
 
 
@@ -78,10 +90,12 @@ def upscale_bilinear(image: np.ndarray, width: int, height: int) -> np.ndarray:
 
 
 def describe(p: dict) -> str:
-    """A setting in words: '16 spp, 3 ray levels, shadows, 160x120 upscaled'."""
+    """A setting in words: '16 spp, 3 ray levels, shadows, 160x120 upscaled' (', 16 light samples' where
+    the scene has area lights)."""
     levels = f"{p['depth']} ray level{'s' * (p['depth'] > 1)}"
     size = f", {p['width']}x{p['height']} upscaled" if p["scale"] > 1 else ""
-    return f"{p['spp']} spp, {levels}, {'shadows' if p['shadows'] else 'no shadows'}{size}"
+    lights = f", {p['light_samples']} light sample{'s' * (p['light_samples'] > 1)}" if p.get("light_samples") else ""
+    return f"{p['spp']} spp, {levels}{lights}, {'shadows' if p['shadows'] else 'no shadows'}{size}"
 
 
 def measure(scene, geometry, p: dict, ref: np.ndarray, repeat: int) -> tuple[dict, np.ndarray]:
@@ -90,10 +104,14 @@ def measure(scene, geometry, p: dict, ref: np.ndarray, repeat: int) -> tuple[dic
     W, H = ref.shape[1], ref.shape[0]
     w, h = W // p["scale"], H // p["scale"]
     s = scene.with_camera(width=w, height=h).with_render(spp=p["spp"], max_depth=p["depth"], shadows=True)
+    if p.get("light_samples"):
+        s = s.with_render(light_samples=p["light_samples"])
     kw = {"disable": [] if p["shadows"] else ["shadows"]}
     result, t = timed_result(s, geometry, 1, warmup_size=(8, 6), **kw)
-    if t < CHEAP and repeat > 1:
-        result, t = timed_result(s, geometry, repeat, **kw)
+    if repeat > 1:
+        # Warmed up at full size this time: the frame above may have compiled a kernel the small warm-up did
+        # not need (at 8 x 6 the tracer finds every first hit; at full size the Z-buffer may).
+        result, t = timed_result(s, geometry, repeat if t < CHEAP else 1, **kw)
     image = result.image
     if p["scale"] > 1:
         image, t_up = once(lambda: upscale_bilinear(result.image, W, H))
@@ -105,21 +123,25 @@ def measure(scene, geometry, p: dict, ref: np.ndarray, repeat: int) -> tuple[dic
 
 def sweep(scene, geometry, ref, cfg) -> tuple[list[dict], dict, dict, int, bool]:
     """Measure every setting once: the spp x ray-level grid with shadows (ray levels 1..8 at the
-    lowest spp), shadows off and the smaller images at the scene's own ray levels. A grid row stops
-    where a level traced no reflection ray (its count equals the level before's): no deeper level can
-    change a pixel then. Returns the points, the point and image for the agreement check, the rows
-    that stopped early ({spp: last level}), the baseline ray levels, and whether ray levels matter at all."""
+    lowest spp), shadows off and the smaller images at the scene's own ray levels; with area lights, the
+    spp x light-samples grid (up to cfg["max_light_rays"] shadow rays per pixel and light), the others at
+    the scene's own light samples. A grid row stops where a level traced no reflection ray (its count
+    equals the level before's): no deeper level can change a pixel then. Returns the points, the point
+    and image for the agreement check, the rows that stopped early ({spp: last level}), the baseline ray
+    levels, and whether ray levels matter at all."""
     reflective = resolve_effects(scene.with_render(max_depth=max(cfg["depths"]))).reflection
     base_depth = scene.render.max_depth if reflective else 1
+    base_ls = scene.render.light_samples if scene.area_lights else None
     points, images = {}, {}
 
-    def point(spp, depth, shadows=True, scale=1):
-        key = (spp, depth, shadows, scale)
+    def point(spp, depth, shadows=True, scale=1, ls=base_ls):
+        key = (spp, depth, shadows, scale, ls)
         if key not in points:
-            points[key], images[key] = measure(scene, geometry, dict(zip(("spp", "depth", "shadows", "scale"), key)),
+            points[key], images[key] = measure(scene, geometry, dict(zip(("spp", "depth", "shadows", "scale",
+                                                                           "light_samples"), key)),
                                                ref, cfg["repeat"])
             m = points[key]
-            print(f"    {describe(m):<46} {ms(m['seconds']):>9}  SSIM {m['ssim']:.5f}  PSNR {m['psnr']:6.2f} dB", flush=True)
+            print(f"    {describe(m):<66} {ms(m['seconds']):>9}  SSIM {m['ssim']:.5f}  PSNR {m['psnr']:6.2f} dB", flush=True)
         return points[key]
 
     last, stopped = {}, {}  # spp -> deepest ray level measured in its grid row; rows that stopped early
@@ -135,19 +157,77 @@ def sweep(scene, geometry, ref, cfg) -> tuple[list[dict], dict, dict, int, bool]
                     stopped[spp] = d
                 break
             rays = m["reflection_rays"]
+    if base_ls:
+        for spp in cfg["spps"]:
+            for ls in sorted({*cfg["light_samples"], base_ls}):
+                if spp * ls <= cfg["max_light_rays"]:
+                    point(spp, base_depth, ls=ls)
     for spp in cfg["spps"]:
         point(spp, base_depth, shadows=False)
     for scale in cfg["scales"]:
         for spp in cfg["scale_spps"]:
             point(spp, base_depth, scale=scale)
-    same = (cfg["spps"][-2], last[cfg["spps"][-2]], True, 1)  # warprt against Mitsuba at these settings
+    same = (cfg["spps"][-2], last[cfg["spps"][-2]], True, 1, base_ls)  # warprt against Mitsuba at these settings
     return list(points.values()), {"point": points[same], "image": images[same]}, stopped, base_depth, reflective
 
 
-def at_depth(points, spp: int, depth: int, shadows=True, scale=1) -> dict:
+def direct_sweep(direct: dict, ref: np.ndarray, cfg: dict) -> list[dict]:
+    """Mitsuba's direct integrator at each of cfg["direct_spps"] with each sampler (``direct``: sampler ->
+    DirectRenderer): warm time (a first, untimed frame at that spp; the median of ``repeat`` for cheap
+    frames) and error against the reference, each frame with its own seeds (none the reference's)."""
+    out = []
+    for sampler, render in direct.items():
+        for spp in cfg["direct_spps"]:
+            kw = {"samples_per_pass": DIRECT_PASS}
+            render(spp, seed=1000, **kw)  # compiles the kernels of this wavefront size
+            seed = iter(range(1001, 2000))
+            image, t = once(lambda: render(spp, seed=next(seed), **kw))
+            if t < CHEAP and cfg["repeat"] > 1:
+                times = [t] + [once(lambda: render(spp, seed=next(seed), **kw))[1] for _ in range(cfg["repeat"] - 1)]
+                t = float(np.median(times))
+            ssim, psnr, _, _ = metrics(image, ref)
+            out.append({"sampler": sampler, "spp": spp, "seconds": t, "ssim": ssim, "psnr": psnr})
+            print(f"    Mitsuba direct, {sampler} sampler, {spp} spp{'':<22} {ms(t):>9}  SSIM {ssim:.5f}  PSNR {psnr:6.2f} dB",
+                  flush=True)
+    return out
+
+
+def mitsuba_at(direct: list[dict], ssim: float) -> dict | None:
+    """Mitsuba's cost to reach ``ssim`` with one sampler's frames ``direct`` (ascending spp): between the two
+    measured frames whose errors bracket it, spp and time interpolated on log(1 - SSIM) (Monte Carlo error
+    falls as a power of spp: a line there); at most the 1-spp frame where that already does better
+    ("bound": True); None where no frame measured reaches it."""
+    err = lambda d: max(1.0 - d["ssim"], 1e-9)  # noqa: E731
+    e = max(1.0 - ssim, 1e-9)
+    if err(direct[0]) <= e:
+        return {"spp": direct[0]["spp"], "seconds": direct[0]["seconds"], "bound": True}
+    for a, b in zip(direct, direct[1:]):
+        if err(b) <= e:
+            f = (math.log(err(a)) - math.log(e)) / max(math.log(err(a)) - math.log(err(b)), 1e-12)
+            lerp = lambda x, y: math.exp(math.log(x) + f * (math.log(y) - math.log(x)))  # noqa: E731
+            return {"spp": lerp(a["spp"], b["spp"]), "seconds": lerp(a["seconds"], b["seconds"]), "bound": False}
+    return None
+
+
+def equal_error(points: list[dict], direct: list[dict]) -> list[dict]:
+    """For each of warprt's Pareto points and each Mitsuba sampler: Mitsuba's spp and time at the same
+    SSIM (mitsuba_at) and warprt's time over Mitsuba's (None where Mitsuba's frames do not reach it)."""
+    rows = []
+    for p in pareto(points):
+        row = {"point": points.index(p), "mitsuba": {}}
+        for sampler in dict.fromkeys(d["sampler"] for d in direct):
+            m = mitsuba_at([d for d in direct if d["sampler"] == sampler], p["ssim"])
+            row["mitsuba"][sampler] = None if m is None else {**m, "ratio": p["seconds"] / m["seconds"]}
+        rows.append(row)
+    return rows
+
+
+def at_depth(points, spp: int, depth: int, shadows=True, scale=1, light_samples=None) -> dict:
     """The point for (spp, depth): the deepest measured level up to ``depth`` (a grid row that stopped
-    early stands for every deeper level, which renders the same image)."""
-    row = [p for p in points if p["spp"] == spp and p["shadows"] == shadows and p["scale"] == scale and p["depth"] <= depth]
+    early stands for every deeper level, which renders the same image); at ``light_samples`` where the
+    scene has area lights."""
+    row = [p for p in points if p["spp"] == spp and p["shadows"] == shadows and p["scale"] == scale and p["depth"] <= depth
+           and p.get("light_samples") == light_samples]
     return max(row, key=lambda p: p["depth"])
 
 
@@ -179,36 +259,68 @@ def scene_run(path: Path, cfg: dict) -> dict:
     name = path.stem
     print(f"  {name}: {scene.triangle_count:,} triangles, {W}x{H}", flush=True)
 
-    mi_scene = mitsuba_scene(scene)
-    ref, t_ref = once(lambda: mi_scene.render(Switches(max_depth=cfg["ref_depth"], spp=cfg["ref_spp"])))
-    # The reference's own error: a quarter of its samples and half its ray levels against it.
-    coarse = mi_scene.render(Switches(max_depth=cfg["ref_depth"] // 2, spp=cfg["ref_spp"] // 4))
+    area = bool(scene.area_lights)
+    if area:
+        # Area lights: Mitsuba's own direct integrator on the file, converged, is the reference (the Whitted
+        # reference integrates the lights at warprt's own sample points: the agreement check below).
+        fx = resolve_effects(scene)
+        if path.suffix.lower() != ".xml" or fx.reflection or fx.refraction:
+            raise SystemExit(f"accuracy_cost: {path}: a scene with area lights is measured against Mitsuba's direct "
+                             "integrator on a Mitsuba file without mirrors or glass")
+        direct = {sampler: DirectRenderer(path, W, H, sampler) for sampler in SAMPLERS}
+        spp = cfg["direct_ref_spp"]
+        ref, t_ref = once(lambda: direct["independent"](spp, seed=0, samples_per_pass=DIRECT_PASS))
+        coarse = direct["independent"](spp // 4, seed=1, samples_per_pass=DIRECT_PASS)
+        reference = {"integrator": "direct", "sampler": "independent", "spp": spp, "seconds": t_ref}
+        check = {"spp": spp // 4}
+    else:
+        mi_scene = mitsuba_scene(scene)
+        ref, t_ref = once(lambda: mi_scene.render(Switches(max_depth=cfg["ref_depth"], spp=cfg["ref_spp"])))
+        # The reference's own error: a quarter of its samples and half its ray levels against it.
+        coarse = mi_scene.render(Switches(max_depth=cfg["ref_depth"] // 2, spp=cfg["ref_spp"] // 4))
+        reference = {"integrator": "whitted", "spp": cfg["ref_spp"], "depth": cfg["ref_depth"], "seconds": t_ref}
+        check = {"spp": cfg["ref_spp"] // 4, "depth": cfg["ref_depth"] // 2}
     ref_check = metrics(coarse, ref)
-    print(f"    reference {cfg['ref_spp']} spp, {cfg['ref_depth']} levels: {t_ref:.1f} s; at 1/4 the spp and 1/2 the "
-          f"levels SSIM {ref_check[0]:.5f}, PSNR {ref_check[1]:.1f} dB", flush=True)
+    reference["check"] = {**check, "ssim": ref_check[0], "psnr": ref_check[1]}
+    print(f"    reference {describe_reference(reference)}: {t_ref:.1f} s; its self-check "
+          f"SSIM {ref_check[0]:.5f}, PSNR {ref_check[1]:.1f} dB", flush=True)
 
     geometry, t_geometry = once(lambda: Geometry(scene))
     measured, same, stopped, base_depth, reflective = sweep(scene, geometry, ref, cfg)
-    # Where warprt and Mitsuba disagree at identical settings: error no knob can remove.
+    # Where warprt and Mitsuba disagree at identical settings: error no knob can remove (with area lights:
+    # the Whitted reference integrates them at warprt's own sample points).
     sp = same["point"]
-    agree = metrics(same["image"], mi_scene.render(Switches(max_depth=sp["depth"], spp=sp["spp"])))
+    same_scene = scene.with_render(light_samples=sp["light_samples"]) if area else scene
+    agree = metrics(same["image"], mitsuba_scene(same_scene).render(Switches(max_depth=sp["depth"], spp=sp["spp"])))
     front = pareto(measured)
-    return {
+    out = {
         "scene": f"scenes/{path.name}", "name": name, "triangles": scene.triangle_count, "size": [W, H],
         "base_depth": base_depth, "reflective": reflective, "rows_stopped": {str(k): v for k, v in stopped.items()},
+        "base_light_samples": scene.render.light_samples if area else None,
         "geometry_seconds": t_geometry,
-        "reference": {"spp": cfg["ref_spp"], "depth": cfg["ref_depth"], "seconds": t_ref,
-                      "check": {"spp": cfg["ref_spp"] // 4, "depth": cfg["ref_depth"] // 2,
-                                "ssim": ref_check[0], "psnr": ref_check[1]}},
-        "agreement": {"spp": sp["spp"], "depth": sp["depth"], "ssim": agree[0], "psnr": agree[1]},
+        "reference": reference,
+        "agreement": {"spp": sp["spp"], "depth": sp["depth"], "light_samples": sp.get("light_samples"),
+                      "ssim": agree[0], "psnr": agree[1]},
         "points": measured,
         "pareto": [measured.index(p) for p in front],
         "cheapest": {str(t): (measured.index(c) if (c := cheapest(measured, t)) else None) for t in THRESHOLDS},
     }
+    if area:
+        out["direct"] = direct_sweep(direct, ref, cfg)
+        out["equal_error"] = equal_error(measured, out["direct"])
+    return out
+
+
+def describe_reference(ref: dict) -> str:
+    if ref["integrator"] == "direct":
+        return (f"Mitsuba's direct integrator, {ref['spp']} spp ({ref['sampler']} sampler); self-check: "
+                f"{ref['check']['spp']} spp, other seeds")
+    return (f"Whitted, {ref['spp']} spp, {ref['depth']} levels; self-check: {ref['check']['spp']} spp, "
+            f"{ref['check']['depth']} levels")
 
 
 def scene_paths(only=None) -> list[Path]:
-    paths = sorted(SCENES.glob("*.toml"))
+    paths = sorted([*SCENES.glob("*.toml"), *SCENES.glob("*.xml")], key=lambda p: p.stem)
     if only:
         wanted = set(only)
         paths = [p for p in paths if p.stem in wanted]
@@ -260,7 +372,14 @@ def families(r: dict) -> list[tuple[str, list[dict], str]]:
     pts, d0 = r["points"], r["base_depth"]
     spp1 = min(p["spp"] for p in pts)
     spps = sorted({p["spp"] for p in pts if p["scale"] == 1})
-    out = [(f"samples per pixel ({d0} levels)", [at_depth(pts, spp, d0) for spp in spps], "o")]
+    ls0 = r.get("base_light_samples")
+    out = [(f"samples per pixel ({d0} level{'s' * (d0 > 1)}" + (f", {ls0} light samples)" if ls0 else ")"),
+            [at_depth(pts, spp, d0, light_samples=ls0) for spp in spps], "o")]
+    if ls0:
+        for spp in spps:
+            row = sorted([p for p in pts if p["spp"] == spp and p["shadows"] and p["scale"] == 1], key=lambda p: p["light_samples"])
+            if len(row) > 1:
+                out.append((f"light samples ({spp} spp)", row, "D"))
     if r["reflective"]:
         out.append((f"ray levels 1..8 ({spp1} spp)", sorted([p for p in pts if p["spp"] == spp1 and p["shadows"]
                                                              and p["scale"] == 1], key=lambda p: p["depth"]), "^"))
@@ -294,6 +413,11 @@ def plot_scene(r: dict, path: Path) -> Path:
         front = [pts[i] for i in r["pareto"]]
         ax.step(t(front), [value(p) for p in front], where="post", color="black", lw=1.2, alpha=0.7,
                 label="Pareto front", zorder=3)
+        for sampler, style in (("independent", "--"), ("stratified", ":")):
+            ds = [d for d in r.get("direct", []) if d["sampler"] == sampler]
+            if ds:
+                ax.plot(t(ds), [value(d) for d in ds], "v" + style, color="dimgrey", ms=4, lw=1, zorder=2,
+                        label=f"Mitsuba direct, {sampler} sampler ({ds[0]['spp']}..{ds[-1]['spp']} spp)")
         ax.set_xscale("log")
         ax.set_xlabel("warm render time (ms)")
         ax.grid(True, which="both", alpha=0.3)
@@ -312,8 +436,9 @@ def plot_scene(r: dict, path: Path) -> Path:
     axes[0].legend(fontsize=7)
     w, h = r["size"]
     ref = r["reference"]
-    fig.suptitle(f"{r['scene']} ({r['triangles']:,} triangles) at {w}x{h}: error against Mitsuba "
-                 f"({ref['spp']} spp, {ref['depth']} levels) and warprt's time")
+    what = (f"Mitsuba's direct integrator ({ref['spp']} spp)" if ref.get("integrator") == "direct"
+            else f"Mitsuba ({ref['spp']} spp, {ref['depth']} levels)")
+    fig.suptitle(f"{r['scene']} ({r['triangles']:,} triangles) at {w}x{h}: error against {what} and the time")
     fig.tight_layout()
     fig.savefig(path, dpi=100)
     plt.close(fig)
@@ -364,6 +489,12 @@ def report(data: dict, relative_to: Path | str | None = ROOT) -> str:
         "against itself. Its own error is smaller than that (an edge pixel's error with k x k stratum centres falls "
         "as 1/k), but a threshold above the self-check's SSIM is beyond what this reference can resolve: the table "
         "says so where that happens.",
+        f"- Scenes lit by area lights (a Mitsuba file): the reference is Mitsuba's own `direct` integrator on the file at "
+        f"{cfg['direct_ref_spp']} spp (independent sampler, box filter, in passes of {DIRECT_PASS}), each image scaled to "
+        f"fit the same box; self-check: {cfg['direct_ref_spp'] // 4} spp at other seeds against it (its error is about "
+        "half the self-check's: the two errors add). One more knob: light samples "
+        f"{', '.join(map(str, cfg['light_samples']))} (k x k points per light, a shadow ray each) at every spp, up to "
+        f"{cfg['max_light_rays']} shadow rays per pixel and light; the other sweeps at the scene's own light samples.",
         "- Error: SSIM (7x7 window) and PSNR of linear RGB clamped to [0, 1].",
         f"- Knobs: spp {', '.join(map(str, cfg['spps']))} x ray levels {', '.join(map(str, cfg['grid_depths']))} with shadows "
         f"(the grid; ray levels {cfg['depths'][0]}..{cfg['depths'][-1]} at {cfg['spps'][0]} spp; a row stops at the first "
@@ -396,7 +527,8 @@ def report(data: dict, relative_to: Path | str | None = ROOT) -> str:
         best = max(pts, key=lambda p: p["ssim"])
         lines.append(f"| {r['name']} | {r['triangles']:,} | {r['size'][0]}x{r['size'][1]} | {cell(0.99)} | {cell(0.999)} | "
                      f"{describe(best)}: SSIM {best['ssim']:.4f}, {best['psnr']:.1f} dB, {ms(best['seconds'])} | "
-                     f"SSIM {a['ssim']:.5f} ({a['spp']} spp, {a['depth']} level{'s' * (a['depth'] > 1)}) | SSIM {chk['ssim']:.5f} |")
+                     f"SSIM {a['ssim']:.5f} ({a['spp']} spp, {a['depth']} level{'s' * (a['depth'] > 1)}"
+                     + (f", {a['light_samples']} light samples" if a.get("light_samples") else "") + f") | SSIM {chk['ssim']:.5f} |")
     lines.append("")
     for r in data["scenes"]:
         lines += [f"### {r['scene']}", "",
@@ -410,7 +542,53 @@ def report(data: dict, relative_to: Path | str | None = ROOT) -> str:
         front = [r["points"][i] for i in r["pareto"]]
         lines += ["Pareto front: " + "; ".join(f"{describe(p)} {ms(p['seconds'])} SSIM {p['ssim']:.4f}" for p in front)
                   + ".", ""]
+        if "direct" in r:
+            lines += soft_shadows(r)
     return "\n".join(lines)
+
+
+def soft_shadows(r: dict) -> list[str]:
+    """The light-samples rows of an area-lit scene: SSIM and time per (spp, light samples), and Mitsuba's
+    direct integrator at the spp that reaches the same error."""
+    pts = [p for p in r["points"] if p["shadows"] and p["scale"] == 1]
+    spps = sorted({p["spp"] for p in pts})
+    counts = sorted({p["light_samples"] for p in pts})
+    at = {(p["spp"], p["light_samples"]): p for p in pts}
+    ref = r["reference"]
+    lines = [f"What soft shadows cost: SSIM against {describe_reference(ref)} (self-check SSIM "
+             f"{ref['check']['ssim']:.5f}) and warm time, per light samples (rows) and spp (columns); "
+             "k x k light samples trace k x k shadow rays per pixel sample and light.", "",
+             "| light samples | " + " | ".join(f"{s} spp" for s in spps) + " |",
+             "|---:|" + "---|" * len(spps)]
+    for ls in counts:
+        cells = [f"{at[(s, ls)]['ssim']:.4f}, {ms(at[(s, ls)]['seconds'])}" if (s, ls) in at else "-" for s in spps]
+        lines.append(f"| {ls} | " + " | ".join(cells) + " |")
+    direct = r["direct"]
+    lines += ["", "Mitsuba's `direct` integrator on the same file (one emitter and one BSDF sample per sample, MIS), warm:", "",
+              "| sampler | " + " | ".join(f"{d['spp']} spp" for d in direct if d["sampler"] == direct[0]["sampler"]) + " |",
+              "|---|" + "---|" * sum(d["sampler"] == direct[0]["sampler"] for d in direct)]
+    for sampler in dict.fromkeys(d["sampler"] for d in direct):
+        lines.append(f"| {sampler} | " + " | ".join(f"{d['ssim']:.4f}, {ms(d['seconds'])}" for d in direct
+                                                    if d["sampler"] == sampler) + " |")
+    samplers = list(dict.fromkeys(d["sampler"] for d in direct))
+    lines += ["", "At the same error: each point of warprt's Pareto front, and the spp and warm time at which Mitsuba's "
+              "`direct` integrator reaches its SSIM (interpolated between the two measured frames around it on a "
+              "log scale of 1 - SSIM; the ratio is warprt's time over Mitsuba's, below 1 warprt is faster):", "",
+              "| warprt | SSIM | time | " + " | ".join(f"Mitsuba, {s} sampler | ratio" for s in samplers) + " |",
+              "|---|---:|---:|" + "---|---:|" * len(samplers)]
+    for row in r["equal_error"]:
+        p = r["points"][row["point"]]
+        cells = []
+        for s in samplers:
+            m = row["mitsuba"][s]
+            if m is None:
+                cells += [f"not reached at {max(d['spp'] for d in direct if d['sampler'] == s)} spp", "-"]
+            elif m["bound"]:
+                cells += [f"1 spp does better: {ms(m['seconds'])}", f">= {m['ratio']:.2f}x"]
+            else:
+                cells += [f"{m['spp']:.0f} spp, {ms(m['seconds'])}", f"{m['ratio']:.2f}x"]
+        lines.append(f"| {describe(p)} | {p['ssim']:.4f} | {ms(p['seconds'])} | " + " | ".join(cells) + " |")
+    return lines + [""]
 
 
 def main(argv=None):

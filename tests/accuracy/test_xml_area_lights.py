@@ -17,6 +17,7 @@ import pytest
 import warprt
 from reference import mitsuba_variant
 from reference.compare import metrics
+from reference.mitsuba_direct import render_direct
 
 pytestmark = [pytest.mark.accuracy, pytest.mark.slow]
 
@@ -36,28 +37,6 @@ def mi():
     return mitsuba
 
 
-def mitsuba_direct(mi, path, spp: int, seed: int) -> np.ndarray:
-    """Mitsuba's direct integrator on the file's scene through its own sensor (to_world, x_fov, clip
-    planes, film size) with a box filter and an independent sampler."""
-    ms = mi.load_file(str(path))
-    sensor = ms.sensors()[0]
-    p = mi.traverse(sensor)
-    width, height = (int(v) for v in sensor.film().size())
-
-    def scalar(key):
-        return float(np.ravel(np.array(p[key]))[0])
-
-    box = mi.load_dict({
-        "type": "perspective", "fov_axis": "x", "fov": scalar("x_fov"),
-        "near_clip": scalar("near_clip"), "far_clip": scalar("far_clip"),
-        "to_world": mi.ScalarTransform4f(np.array(p["to_world"].matrix, np.float64).reshape(4, 4)),
-        "film": {"type": "hdrfilm", "width": width, "height": height, "rfilter": {"type": "box"},
-                 "pixel_format": "rgb", "component_format": "float32"},
-        "sampler": {"type": "independent", "sample_count": spp}})
-    image = mi.render(ms, sensor=box, integrator=mi.load_dict({"type": "direct"}), spp=spp, seed=seed)
-    return np.array(image, np.float64)[..., :3]
-
-
 def mean_rel(ours, theirs) -> float:
     a, b = np.clip(ours, 0.0, 1.0), np.clip(theirs, 0.0, 1.0)
     return float(np.abs(a - b).mean() / b.mean())
@@ -70,7 +49,7 @@ def scene():
 
 @pytest.fixture(scope="module")
 def theirs(mi):
-    return mitsuba_direct(mi, SCENE, MITSUBA_SPP, seed=0)
+    return render_direct(SCENE, MITSUBA_SPP, seed=0)
 
 
 def render(scene) -> np.ndarray:
@@ -86,7 +65,7 @@ def with_area_light(scene, **changes):
 
 
 def test_mitsubas_noise_is_well_below_the_threshold(mi, theirs):
-    other = mitsuba_direct(mi, SCENE, MITSUBA_SPP, seed=1)
+    other = render_direct(SCENE, MITSUBA_SPP, seed=1)
     ssim = metrics(theirs, other)[0]
     print(f"Mitsuba direct {MITSUBA_SPP} spp, seed 0 against seed 1: SSIM {ssim:.4f}, mean |diff| {mean_rel(other, theirs):.4f}")
     assert 1.0 - ssim <= 0.25 * (1.0 - SSIM_MIN)

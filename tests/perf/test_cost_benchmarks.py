@@ -64,7 +64,24 @@ def test_reference_size_keeps_the_aspect_inside_the_box():
     assert accuracy_cost.reference_size(Camera(width=640, height=480), box) == (320, 240)
     assert accuracy_cost.reference_size(Camera(width=560, height=560), box) == (240, 240)
     assert accuracy_cost.reference_size(Camera(width=640, height=360), box) == (320, 180)
-    assert accuracy_cost.reference_size(Camera(width=160, height=120), box) == (160, 120)  # never enlarged
+    # A smaller image is enlarged to the box (Mitsuba's Cornell box file has a 64 x 64 film).
+    assert accuracy_cost.reference_size(Camera(width=160, height=120), box) == (320, 240)
+    assert accuracy_cost.reference_size(Camera(width=64, height=64), box) == (240, 240)
+
+
+def test_mitsuba_at_recovers_the_spp_of_a_power_law_between_measured_frames():
+    """Frames whose error falls as 0.1 / spp, timed 10 ms per spp: SSIM 0.95 is reached at exactly 2 spp and
+    20 ms, 0.99 at 10 spp; an SSIM the 1-spp frame already beats costs at most that frame; one beyond
+    the last frame measured is not reached."""
+    frames = [{"spp": n, "seconds": 0.01 * n, "ssim": 1.0 - 0.1 / n} for n in (1, 4, 16)]
+    m = accuracy_cost.mitsuba_at(frames, 0.95)
+    assert m["spp"] == pytest.approx(2.0) and m["seconds"] == pytest.approx(0.02) and not m["bound"]
+    assert accuracy_cost.mitsuba_at(frames, 0.99)["spp"] == pytest.approx(10.0)
+    assert accuracy_cost.mitsuba_at(frames, 0.8) == {"spp": 1, "seconds": 0.01, "bound": True}
+    assert accuracy_cost.mitsuba_at(frames, 0.999) is None
+    rows = accuracy_cost.equal_error([{"seconds": 0.01, "ssim": 0.95, "rays": 1}],
+                                     [{**f, "sampler": "independent"} for f in frames])
+    assert rows[0]["mitsuba"]["independent"]["ratio"] == pytest.approx(0.5)
 
 
 def _p(seconds, ssim, rays=100):
@@ -116,6 +133,29 @@ def test_accuracy_cost_quick_run_measures_what_each_knob_buys(tmp_path):
     # At identical settings warprt and Mitsuba render the same image, up to a few edge pixels.
     assert r["agreement"]["ssim"] > 0.999
     assert all(math.isfinite(p["seconds"]) and p["seconds"] > 0 for p in r["points"])
+
+
+@slow
+def test_accuracy_cost_measures_what_light_samples_buy_against_mitsubas_direct_integrator(tmp_path):
+    """Mitsuba's Cornell box file, lit by its area emitter: against Mitsuba's converged direct integrator,
+    more points on the light bring warprt closer at every spp (the model's physics), warprt agrees with the
+    reference's deterministic integrator at the same sample points, Mitsuba's own error falls as its spp
+    grow, and the report gives Mitsuba's cost at warprt's error."""
+    accuracy_cost.main(["--quick", "--scenes", "cornell_box", "-o", str(tmp_path / "accuracy_cost.md")])
+    _links_resolve(tmp_path / "accuracy_cost.md")
+    (r,) = json.loads((tmp_path / "accuracy_cost.json").read_text())["scenes"]
+    assert r["reference"]["integrator"] == "direct" and r["reference"]["check"]["ssim"] > 0.998
+    pts = {(p["spp"], p["light_samples"]): p for p in r["points"] if p["shadows"] and p["scale"] == 1}
+    for spp in (1, 4):
+        assert pts[(spp, 1)]["ssim"] < pts[(spp, 4)]["ssim"] < pts[(spp, 16)]["ssim"]
+    # At a square size the box's corner edges pass through pixel centres, ties either side of which is right:
+    # SSIM 0.9966 at 72 x 72 (at 100 x 75, no ties, 1.000000: tests/accuracy/test_area_lights_reference.py).
+    assert r["agreement"]["ssim"] > 0.995 and r["agreement"]["light_samples"] == 16
+    for sampler in ("independent", "stratified"):
+        errs = [1.0 - d["ssim"] for d in r["direct"] if d["sampler"] == sampler]
+        assert errs == sorted(errs, reverse=True) and len(errs) == 3
+    assert len(r["equal_error"]) == len(r["pareto"])
+    assert "What soft shadows cost" in (tmp_path / "accuracy_cost.md").read_text()
 
 
 def _targets_row(text: str, start: str) -> list[str]:
