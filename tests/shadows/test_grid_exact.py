@@ -123,6 +123,29 @@ def test_each_cell_lists_its_triangles_nearest_the_light_first():
     assert np.all((np.diff(dmin) >= 0) | first_of_cell[1:])
 
 
+def _lists(build) -> tuple:
+    g = build.grid
+    return g.start.numpy().tolist(), g.entries.numpy()["tri"].tolist(), g.entries.numpy()["dmin"].tolist()
+
+
+def test_threads_taking_the_triangles_in_any_order_build_the_same_lists():
+    """On a GPU many threads claim a cell's slots at once, in no set order: launched farthest the light
+    first (the worst order), the lists are the nearest-first build's, entry for entry, after the per-cell
+    sort; without the sort (the negative control) they are not, and are no longer nearest first."""
+    scene = at(None, 16)
+    geom = Geometry(scene)
+    nearest, _ = grid_of(geom, scene)
+    farthest, _ = grid_of(geom, scene, thread_order="farthest")
+    assert nearest.entries == farthest.entries > 100_000
+    assert _lists(farthest) == _lists(nearest)
+    unsorted, _ = grid_of(geom, scene, thread_order="farthest", sort_cells=False)
+    start, tris, dmin = _lists(unsorted)
+    assert tris != _lists(nearest)[1] and sorted(tris) == sorted(_lists(nearest)[1])
+    first_of_cell = np.zeros(len(dmin), bool)
+    first_of_cell[[i for i in start[:-1] if i < len(dmin)]] = True
+    assert not np.all((np.diff(dmin) >= 0) | first_of_cell[1:])
+
+
 LAMP = {"shape": "sphere", "radius": 0.2, "subdivisions": 2, "material": "m", "translate": [0.0, 2.0, 0.0]}
 FLOOR = {"shape": "plane", "size": [8.0, 8.0], "material": "m"}
 

@@ -23,8 +23,12 @@ than o, and so gives the same answer, provided each list holds every triangle Wo
 - A spot light's shadow rays are a point light's (o to its position): its cube map is the same. A
   directional light has no position (NaN in ``lights``): its rays, to infinity, go to the BVH.
 
-The lists are filled by one CPU launch per light, whose threads Warp runs in order, so each cell keeps
-the triangles' sorted order; the structure is built on the CPU for every device and copied over.
+The lists are built on the geometry's device by one launch per light: a count pass and a fill pass whose
+threads claim their slots with atomics (on a GPU many threads write one cell at once), then one thread per
+cell sorts its list back into the triangles' nearest-first rank, so the structure is the same on every
+device whatever order the threads ran in (on the CPU, one thread in order, the sort finds the lists sorted).
+The ranks (an argsort of the distances) and the lists' prefix sum are computed on the host: a build runs
+once per light placement, not per frame.
 """
 
 from __future__ import annotations
@@ -194,11 +198,13 @@ def polygon_bounds(px: wp.vec4d, py: wp.vec4d, m: int, margin: wp.float64) -> wp
 
 @wp.kernel(enable_backward=False)
 def bin_kernel(points: wp.array(dtype=wp.vec3), indices: wp.array(dtype=wp.int32), light: wp.vec3d, l: int, n: int,
-               delta: wp.float64, uv_abs: wp.float64, order: wp.array(dtype=wp.int32), dmin: wp.array(dtype=wp.float64),
-               fill: int, cursor: wp.array(dtype=wp.int32), entries: wp.array(dtype=GridEntry)):
-    """Triangle order[tid], nearest the light first: count it (fill = 0: cursor[cell] += 1) or append it
-    (fill = 1) in every cell of light l its widened projection may cover."""
-    f = order[wp.tid()]
+               delta: wp.float64, uv_abs: wp.float64, sequence: wp.array(dtype=wp.int32), rank: wp.array(dtype=wp.int32),
+               dmin: wp.array(dtype=wp.float64), fill: int, cursor: wp.array(dtype=wp.int32),
+               entries: wp.array(dtype=GridEntry), entry_rank: wp.array(dtype=wp.int32)):
+    """Triangle sequence[tid]: count it (fill = 0: cursor[cell] += 1) or append it with its rank nearest the
+    light (fill = 1: at the slot cursor[cell]++ it claims) in every cell of light l its widened projection
+    may cover. Atomics: any number of threads may write one cell at once."""
+    f = sequence[wp.tid()]
     dm = dmin[f]
     q0, q1, q2 = corners(points, indices, f)
     verts = wp.mat33d()
@@ -241,10 +247,30 @@ def bin_kernel(points: wp.array(dtype=wp.vec3), indices: wp.array(dtype=wp.int32
                     if not polygon_overlaps_box(px, py, m, cu0, cu1, cv0, cv1):
                         continue
                 cell = base + j * n + i
-                e = cursor[cell]
-                cursor[cell] = e + 1
+                e = wp.atomic_add(cursor, cell, 1)
                 if fill != 0:
                     entries[e] = entry
+                    entry_rank[e] = rank[f]
+
+
+@wp.kernel(enable_backward=False)
+def sort_cells_kernel(start: wp.array(dtype=wp.int32), first_cell: int, entries: wp.array(dtype=GridEntry),
+                      entry_rank: wp.array(dtype=wp.int32)):
+    """Cell first_cell + tid's list sorted by rank, nearest the light first (insertion sort: linear on a
+    list already in order, as one CPU thread leaves it)."""
+    c = first_cell + wp.tid()
+    lo = start[c]
+    hi = start[c + 1]
+    for k in range(lo + 1, hi):
+        e = entries[k]
+        r = entry_rank[k]
+        j = k - 1
+        while j >= lo and entry_rank[j] > r:
+            entries[j + 1] = entries[j]
+            entry_rank[j + 1] = entry_rank[j]
+            j -= 1
+        entries[j + 1] = e
+        entry_rank[j + 1] = r
 
 
 class ShadowGridBuild:
@@ -253,16 +279,20 @@ class ShadowGridBuild:
     ``entries``, ``light_ok`` and ``reason``."""
 
     def __init__(self, points: np.ndarray, indices: np.ndarray, lights: np.ndarray, n: int, device="cpu",
-                 max_bytes: int = MAX_BYTES, delta_eps: float = DELTA_EPS, uv_abs: float = UV_ABS):
+                 max_bytes: int = MAX_BYTES, delta_eps: float = DELTA_EPS, uv_abs: float = UV_ABS,
+                 thread_order: str = "nearest", sort_cells: bool = True):
         """``points`` (V, 3) and ``indices`` (3T,) as the kernels read them (float32, relative to the
-        frame origin), ``lights`` (L, 3): the kernels' float32 light positions. delta_eps = uv_abs = 0
-        builds the structure without its margin (the tests' negative control)."""
+        frame origin), ``lights`` (L, 3): the kernels' float32 light positions; built on ``device``.
+        delta_eps = uv_abs = 0 builds the structure without its margin, sort_cells=False without its sort
+        (the tests' negative controls); thread_order "farthest" launches the triangles farthest the light
+        first, the worst order a GPU's threads may take them in (the tests': the same structure must come
+        out)."""
         times: dict = {}
         with timed(times, "build"):
-            self._build(points, indices, lights, n, device, max_bytes, delta_eps, uv_abs)
+            self._build(points, indices, lights, n, device, max_bytes, delta_eps, uv_abs, thread_order, sort_cells)
         self.seconds = times["build"]
 
-    def _build(self, points, indices, lights, n, device, max_bytes, delta_eps, uv_abs):
+    def _build(self, points, indices, lights, n, device, max_bytes, delta_eps, uv_abs, thread_order, sort_cells):
         self.n = n
         points = np.ascontiguousarray(points, np.float32)
         indices = np.ascontiguousarray(indices, np.int32)
@@ -274,33 +304,38 @@ class ShadowGridBuild:
         delta = delta_eps * D
         self.delta = delta
         cells = n_lights * 6 * n * n
-        p_wp = wp.array(points, dtype=wp.vec3, device="cpu")
-        i_wp = wp.array(indices, dtype=wp.int32, device="cpu")
+        p_wp = wp.array(points, dtype=wp.vec3, device=device)
+        i_wp = wp.array(indices, dtype=wp.int32, device=device)
         ok = np.zeros(max(n_lights, 1), np.int32)
-        dmins, orders = [], []
+        dmins, sequences, ranks = {}, {}, {}
         for l in range(n_lights):
             if not placed[l]:
-                dmins.append(None)
-                orders.append(None)
                 continue
-            dm = wp.zeros(max(tris, 1), dtype=wp.float64, device="cpu")
-            wp.launch(distance_kernel, dim=tris, inputs=[p_wp, i_wp, wp.vec3d(*lights[l]), dm], device="cpu")
+            dm = wp.zeros(max(tris, 1), dtype=wp.float64, device=device)
+            wp.launch(distance_kernel, dim=tris, inputs=[p_wp, i_wp, wp.vec3d(*lights[l]), dm], device=device)
             near = dm.numpy()[:tris]
             ok[l] = int(tris > 0 and near.min() >= NEAR_LIGHT * D)
-            dmins.append(dm)
-            orders.append(wp.array(np.argsort(near, kind="stable").astype(np.int32), dtype=wp.int32, device="cpu"))
+            order = np.argsort(near, kind="stable").astype(np.int32)
+            rank = np.empty(max(tris, 1), np.int32)
+            rank[order] = np.arange(tris, dtype=np.int32)
+            dmins[l] = dm
+            sequences[l] = wp.array(order if thread_order == "nearest" else order[::-1].copy(), dtype=wp.int32,
+                                    device=device)
+            ranks[l] = wp.array(rank, dtype=wp.int32, device=device)
         self.light_ok = ok[:n_lights]
-        counts = wp.zeros(max(cells, 1), dtype=wp.int32, device="cpu")
-        no_entries = wp.zeros(1, dtype=GridEntry, device="cpu")
+        counts = wp.zeros(max(cells, 1), dtype=wp.int32, device=device)
         on_grid = [l for l in range(n_lights) if ok[l]]
 
-        def bin_light(l, fill, cursor, entries):
+        def bin_light(l, fill, cursor, entries, entry_rank):
             wp.launch(bin_kernel, dim=tris, inputs=[p_wp, i_wp, wp.vec3d(*lights[l]), l, n, wp.float64(delta),
-                                                    wp.float64(uv_abs), orders[l], dmins[l], fill, cursor, entries],
-                      device="cpu")
+                                                    wp.float64(uv_abs), sequences[l], ranks[l], dmins[l], fill, cursor,
+                                                    entries, entry_rank], device=device)
 
-        with ThreadPoolExecutor(max_workers=max(1, len(on_grid))) as pool:  # one launch per light, in parallel
-            list(pool.map(lambda l: bin_light(l, 0, counts, no_entries), on_grid))
+        # On the CPU one launch per light, the lights in parallel (a launch runs on one thread); on a GPU, in turn.
+        workers = max(1, len(on_grid)) if wp.get_device(device).is_cpu else 1
+        with ThreadPoolExecutor(max_workers=workers) as pool:
+            none = wp.zeros(1, dtype=GridEntry, device=device), wp.zeros(1, dtype=wp.int32, device=device)
+            list(pool.map(lambda l: bin_light(l, 0, counts, *none), on_grid))
             start = np.zeros(cells + 1, np.int64)
             start[1:] = np.cumsum(counts.numpy()[:cells])
             self.entries = int(start[-1])
@@ -312,13 +347,20 @@ class ShadowGridBuild:
             elif self.nbytes > max_bytes or self.entries >= 2**31:
                 self.reason = f"{self.nbytes / 2**20:.0f} MiB would exceed the {max_bytes / 2**20:.0f} MiB budget"
             else:
-                entries = wp.zeros(max(self.entries, 1), dtype=GridEntry, device="cpu")
-                cursor = wp.array(start[:-1].astype(np.int32), dtype=wp.int32, device="cpu")
-                list(pool.map(lambda l: bin_light(l, 1, cursor, entries), on_grid))
+                entries = wp.zeros(max(self.entries, 1), dtype=GridEntry, device=device)
+                entry_rank = wp.zeros(max(self.entries, 1), dtype=wp.int32, device=device)
+                start_wp = wp.array(start.astype(np.int32), dtype=wp.int32, device=device)
+                cursor = wp.clone(start_wp[:cells])
+                list(pool.map(lambda l: bin_light(l, 1, cursor, entries, entry_rank), on_grid))
+                if sort_cells:
+                    per_light = 6 * n * n
+                    list(pool.map(lambda l: wp.launch(sort_cells_kernel, dim=per_light,
+                                                      inputs=[start_wp, l * per_light, entries, entry_rank],
+                                                      device=device), on_grid))
                 g = ShadowGrid()
                 g.n = n
-                g.start = wp.array(start.astype(np.int32), dtype=wp.int32, device=device)
-                g.entries = entries if device == "cpu" else wp.clone(entries, device=device)
+                g.start = start_wp
+                g.entries = entries
                 g.light_ok = wp.array(ok, dtype=wp.int32, device=device)
                 g.delta = float(delta)
                 self.grid = g
