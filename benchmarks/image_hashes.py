@@ -4,7 +4,7 @@
     python -m benchmarks.image_hashes --check benchmarks/image_hashes.txt
 
 A refactor that keeps every image bit-identical leaves the list unchanged. Each scene in scenes/
-at 320x240 and the built-in default scene at 640x480, at 1 and 4 samples per pixel, on the traced
+(TOML and Mitsuba XML) at 320x240 and the built-in default scene at 640x480, at 1 and 4 samples per pixel, on the traced
 path (every ray from the BVH), the hybrid and grid and mirror shortcuts, the auto policy, with AOVs
 and the truncated weights asked for, and the Z-buffer algorithm. Ray counts are hashed with them.
 """
@@ -36,7 +36,7 @@ PATHS = {
 
 
 def cases():
-    files = [None] + sorted(SCENES.glob("*.toml"))
+    files = [None] + sorted([*SCENES.glob("*.toml"), *SCENES.glob("*.xml")], key=lambda p: p.stem)
     for path in files:
         size = (640, 480) if path is None else (320, 240)
         for spp in (1, 4):
