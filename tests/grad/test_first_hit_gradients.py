@@ -141,7 +141,6 @@ def test_a_gradient_of_another_image_is_refused_in_one_line(weights):
 
 
 @pytest.mark.parametrize("change, why", [
-    ({"render": {"spp": 4}}, "one sample per pixel"),
     ({"render": {"max_depth": 3}, "materials": {"floor": {"ior": 1.5}}}, "glass"),
     ({"lights": [{"type": "directional", "direction": [0.0, -1.0, 0.0]}]}, "point lights"),
 ])

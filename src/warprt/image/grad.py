@@ -1,19 +1,21 @@
-"""Derivatives of an image (issue 30, its first parts): Renderer.render(grad=True) records, per pixel and ray
-level (the camera ray, then the mirror rays the tracer follows), the hit and the lights it sees; Renderer.backward(d_image, wrt) returns d(sum(d_image * image)) / d(param)
+"""Derivatives of an image (issue 30, its first parts): Renderer.render(grad=True) records, per camera ray
+(render.spp of them a pixel, where the trace kernel puts them) and ray level (the camera ray, then the
+mirror rays the tracer follows), the hit and the lights it sees; Renderer.backward(d_image, wrt) returns d(sum(d_image * image)) / d(param)
 for the parameters named as r.params names them, through a differentiable replay of the camera rays'
 local shading over the levels (kernels/grad.py) on a wp.Tape.
 
 What is differentiated, and what is held: each pixel's face and the visibility of each light are held
 fixed, as a visibility-fixed derivative is (an edge or a shadow's edge moving across pixels has no
 derivative here); the local Phong terms are exact functions of the material colours and exponents, of
-the lights' colours and positions, and of a flat object's vertices (the hit recomputed on the moved face). Covered for now: one sample per pixel, camera and mirror rays (no
-glass), point lights (falloff none or inverse_square), untextured materials
+the lights' colours and positions, and of a flat object's vertices (the hit recomputed on the moved face). The image is the mean of each pixel's rays, as the
+trace kernel makes it. Covered for now: any render.spp, camera and mirror rays (no glass), point lights (falloff none or inverse_square), untextured materials
 without vertex colours, no area lights; any other scene is refused in one line naming what is not yet
 differentiated, so a gradient is never silently partial.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -21,9 +23,10 @@ import numpy as np
 from .._warp import wp
 from ..errors import ArgumentError
 from ..kernels.camera import camera_data
-from ..kernels.grad import MAX_GRAD_LIGHTS, make_grad_record_kernel, make_grad_shade_kernel
+from ..kernels.grad import MAX_GRAD_LIGHTS, make_grad_record_kernel, make_grad_shade_kernel, sample_mean
 from ..scene import camera_basis
 from .launch import launch_bands
+from .memory import available_memory, human
 from .params import object_names
 
 SOURCE = "Renderer.backward"
@@ -34,8 +37,6 @@ LIGHT_KEYS = ("color", "position")
 
 def refusal(scene, fx) -> str | None:
     """Why render(grad=True) cannot differentiate this scene yet (None: it can)."""
-    if fx.supersampling:
-        return "one sample per pixel (render.spp = 1) is differentiated for now"
     if fx.refraction:
         return "glass (the ray tree) is not differentiated yet; mirrors and camera rays are"
     if fx.reflection and scene.render.max_depth > MAX_GRAD_DEPTH:
@@ -51,11 +52,38 @@ def refusal(scene, fx) -> str | None:
     return None
 
 
+# Bytes per camera ray and level of the record (face, barycentrics, direction: 4 + 8 + 12, then 4 a light),
+# and per camera ray of the replay (its colour and adjoint, the adjoint handed to the tape: 3 x 12).
+RECORD_BYTES_PER_LEVEL, RECORD_BYTES_PER_LIGHT, REPLAY_BYTES_PER_RAY = 24, 4, 36
+
+
+def record_bytes(scene, fx) -> int:
+    """What render(grad=True) and backward() hold for a frame's record and replay, in bytes: per camera
+    ray (width x height x spp) and ray level."""
+    cam, r = scene.camera, scene.render
+    rays = cam.width * cam.height * (r.spp if fx.supersampling else 1)
+    levels = r.max_depth if fx.reflection else 1
+    per_level = RECORD_BYTES_PER_LEVEL + RECORD_BYTES_PER_LIGHT * len(scene.whitted_lights)
+    return rays * (levels * per_level + REPLAY_BYTES_PER_RAY)
+
+
+def check_record_memory(scene, fx, device: str):
+    """Refuse, in one line naming the budget and the settings that reduce it, a grad=True frame whose
+    record would not fit in the memory this process can still take (before the frame allocates anything)."""
+    need = record_bytes(scene, fx)
+    available, what = available_memory(device)
+    if available is not None and need > available:
+        raise ArgumentError("render", "grad", f"the gradient's record of this frame needs about {human(need)} "
+                            f"(per camera ray and ray level), more than the {human(available)} {what}: lower "
+                            f"render.spp, render.max_depth or camera.width and camera.height")
+
+
 @dataclass
 class FirstHits:
-    """What a grad=True frame recorded: per pixel and ray level (``levels``: the camera ray, then the mirror
-    rays) the hit's face (-1: none, -2: no ray at that level), barycentrics and ray direction, and per
-    light whether the hit saw it."""
+    """What a grad=True frame recorded: per camera ray (``samples`` per pixel, ray pixel * samples +
+    sample, the tracer's strata) and ray level (``levels``: the camera ray, then the mirror rays) the
+    hit's face (-1: none, -2: no ray at that level), barycentrics and ray direction, and per light
+    whether the hit saw it."""
 
     face: wp.array
     bary: wp.array
@@ -66,13 +94,16 @@ class FirstHits:
     lights: int
     levels: int
     smooth: bool
+    samples: int = 1
 
 
 def record_first_hits(scene, geom, data, fx, device: str, threads: int = 1, bands: int = 1, pool=None) -> FirstHits:
     """Run the record kernel for a frame of ``scene`` on ``geom`` and its tables ``data``, in ``bands`` bands
-    of pixels on ``threads`` threads (launch_bands; ``pool`` the Renderer's)."""
+    of camera rays on ``threads`` threads (launch_bands; ``pool`` the Renderer's): render.spp of them per
+    pixel, where the trace kernel puts them (its k x k strata)."""
     cam = scene.camera
-    n, L = cam.width * cam.height, len(scene.whitted_lights)
+    k = math.isqrt(scene.render.spp) if fx.supersampling else 1
+    n, L = cam.width * cam.height * k * k, len(scene.whitted_lights)
     D = scene.render.max_depth if fx.reflection else 1
     face = wp.empty(n * D, dtype=int, device=device)
     bary = wp.zeros(n * D, dtype=wp.vec2, device=device)
@@ -80,9 +111,9 @@ def record_first_hits(scene, geom, data, fx, device: str, threads: int = 1, band
     visible = wp.zeros(max(n * D * L, 1), dtype=int, device=device)
     c = camera_data(camera_basis(cam), geom.eye_offset(cam.eye))
     kernel = make_grad_record_kernel(L, D, fx.smooth, fx.shadows, fx.culling)
-    launch_bands(kernel, lambda first: [data, c, D, first, face, bary, dirs, visible], n, threads, bands, device,
+    launch_bands(kernel, lambda first: [data, c, D, k, first, face, bary, dirs, visible], n, threads, bands, device,
                  pool=pool)
-    return FirstHits(face, bary, dirs, visible, cam.width, cam.height, L, D, fx.smooth)
+    return FirstHits(face, bary, dirs, visible, cam.width, cam.height, L, D, fx.smooth, k * k)
 
 
 def parameter_names(scene) -> list[str]:
@@ -98,6 +129,48 @@ def _vertices_refusal(hits: "FirstHits") -> str | None:
     """Why backward() cannot give this frame's vertex gradients yet (None: it can)."""
     return ("vertices are differentiated through camera rays alone for now (a mirror ray's origin and direction "
             "move with them too)" if hits.levels > 1 else None)
+
+
+def replay(scene, geom, hits: FirstHits, device: str, vertices: bool = False) -> tuple[wp.array, dict]:
+    """The differentiable replay of a recorded frame (kernels/grad.py's shade kernel), launched on the
+    current wp.Tape if there is one: (each camera ray's colour, one per pixel and sample; the arrays it
+    differentiates, by key: ka, kd, ks, shininess, reflectivity per material slot, color and position per
+    Whitted light, and with ``vertices`` the geometry's points)."""
+    mats = geom.slot_materials(scene)
+    vec = lambda rows: wp.array(np.asarray(rows, np.float32).reshape(-1, 3), dtype=wp.vec3, device=device,  # noqa: E731
+                                requires_grad=True)
+    ka, kd, ks, kr = (vec([getattr(m, k) for m in mats] or [[0, 0, 0]]) for k in ("ka", "kd", "ks", "reflectivity"))
+    shininess = wp.array(np.asarray([m.shininess for m in mats] or [0.0], np.float32), dtype=float, device=device,
+                         requires_grad=True)
+    lights = scene.whitted_lights
+    light_pos = vec(geom.light_positions(scene) if lights else [[0, 0, 0]])
+    light_color = vec([l.color for l in lights] or [[0, 0, 0]])
+    inverse_square = wp.array(np.asarray([l.falloff == "inverse_square" for l in lights] or [0], np.int32),
+                              dtype=int, device=device)
+    n = hits.width * hits.height * hits.samples
+    rays = wp.zeros(n, dtype=wp.vec3, device=device, requires_grad=True)
+    points = wp.array(geom.points_np, dtype=wp.vec3, device=device, requires_grad=True) if vertices else geom.points
+    kernel = make_grad_shade_kernel(hits.lights, hits.levels, hits.smooth, vertices)
+    eye = wp.vec3(*geom.eye_offset(scene.camera.eye))
+    wp.launch(kernel, dim=n,
+              inputs=[eye, points, geom.indices, geom.normals, geom.tri_material, geom.tri_smooth, ka, kd, ks,
+                      shininess, kr, light_pos, light_color, inverse_square, wp.vec3(*scene.render.ambient),
+                      wp.vec3(*scene.render.background), hits.face, hits.bary, hits.dirs, hits.visible],
+              outputs=[rays], device=device)
+    arrays = {"ka": ka, "kd": kd, "ks": ks, "shininess": shininess, "reflectivity": kr, "color": light_color,
+              "position": light_pos}
+    if vertices:
+        arrays["points"] = points
+    return rays, arrays
+
+
+def replay_image(scene, geom, hits: FirstHits, device: str) -> np.ndarray:
+    """The image the replay makes of a recorded frame, (height, width, 3): the forward's, to float32
+    rounding, where the replay models what the forward traced (what the tests check)."""
+    rays, _ = replay(scene, geom, hits, device)
+    image = wp.empty(hits.width * hits.height, dtype=wp.vec3, device=device)
+    wp.launch(sample_mean, dim=hits.width * hits.height, inputs=[rays, hits.samples], outputs=[image], device=device)
+    return image.numpy().reshape(hits.height, hits.width, 3)
 
 
 def backward(scene, geom, hits: FirstHits, d_image, wrt, device: str) -> dict:
@@ -118,37 +191,18 @@ def backward(scene, geom, hits: FirstHits, d_image, wrt, device: str) -> dict:
     if d.shape != (hits.height, hits.width, 3) or not np.all(np.isfinite(d)):
         raise ArgumentError("backward", "d_image", f"expected finite values of shape {(hits.height, hits.width, 3)}, "
                                                    f"got {d.shape}")
-    mats = geom.slot_materials(scene)
-    vec = lambda rows: wp.array(np.asarray(rows, np.float32).reshape(-1, 3), dtype=wp.vec3, device=device,  # noqa: E731
-                                requires_grad=True)
-    ka, kd, ks, kr = (vec([getattr(m, k) for m in mats] or [[0, 0, 0]]) for k in ("ka", "kd", "ks", "reflectivity"))
-    shininess = wp.array(np.asarray([m.shininess for m in mats] or [0.0], np.float32), dtype=float, device=device,
-                         requires_grad=True)
-    lights = scene.whitted_lights
-    light_pos = vec(geom.light_positions(scene) if lights else [[0, 0, 0]])
-    light_color = vec([l.color for l in lights] or [[0, 0, 0]])
-    inverse_square = wp.array(np.asarray([l.falloff == "inverse_square" for l in lights] or [0], np.int32),
-                              dtype=int, device=device)
-    image = wp.zeros(hits.width * hits.height, dtype=wp.vec3, device=device, requires_grad=True)
     moving = any(name.startswith("objects.") for name in wrt)
-    points = wp.array(geom.points_np, dtype=wp.vec3, device=device, requires_grad=True) if moving else geom.points
-    kernel = make_grad_shade_kernel(hits.lights, hits.levels, hits.smooth, moving)
-    eye = wp.vec3(*geom.eye_offset(scene.camera.eye))
     tape = wp.Tape()
     with tape:
-        wp.launch(kernel, dim=hits.width * hits.height,
-                  inputs=[eye, points, geom.indices, geom.normals, geom.tri_material, geom.tri_smooth, ka, kd, ks,
-                          shininess, kr, light_pos, light_color, inverse_square, wp.vec3(*scene.render.ambient),
-                          wp.vec3(*scene.render.background), hits.face, hits.bary, hits.dirs, hits.visible],
-                  outputs=[image], device=device)
-    tape.backward(grads={image: wp.array(d.reshape(-1, 3), dtype=wp.vec3, device=device)})
+        rays, arrays = replay(scene, geom, hits, device, moving)
+    # The image is the mean of each pixel's rays (sample_mean): its adjoint, d_image / samples to each ray.
+    d_rays = np.repeat(d.reshape(-1, 3), hits.samples, axis=0) / np.float32(hits.samples)
+    tape.backward(grads={rays: wp.array(d_rays, dtype=wp.vec3, device=device)})
     slot = {name: i for i, name in enumerate(geom.material_names)}
     whitted = [i for i, light in enumerate(scene.lights) if not light.area]
-    arrays = {"ka": ka, "kd": kd, "ks": ks, "shininess": shininess, "reflectivity": kr, "color": light_color,
-              "position": light_pos}
-    grads = {k: a.grad.numpy() for k, a in arrays.items()}
+    grads = {k: a.grad.numpy() for k, a in arrays.items() if k != "points"}
     if moving:
-        point_grads = points.grad.numpy().astype(np.float64)
+        point_grads = arrays["points"].grad.numpy().astype(np.float64)
         starts = np.cumsum([0] + [len(o.vertices) for o in scene.objects])
     out = {}
     for name in wrt:

@@ -16,7 +16,7 @@ import functools
 
 from .._warp import wp
 from ..geometry import SceneData
-from .camera import CameraData, camera_ray
+from .camera import CameraData, camera_ray, sample_offset
 from .interaction import make_surface, reflect, spawn_ray
 from .shading import phong_specular
 from .shadow import make_occluded
@@ -27,7 +27,9 @@ MAX_GRAD_LIGHTS = 16  # Warp's max_unroll: a longer static loop would silently t
 
 @functools.cache
 def make_grad_record_kernel(L: int, D: int, smooth: bool, shadows: bool, cull: bool):
-    """record(s, c, max_depth, first, face, bary, dirs, visible): per pixel (from ``first``) (row-major, row 0 the top) and ray level
+    """record(s, c, max_depth, k, first, face, bary, dirs, visible): per camera ray (from ``first``: ray
+    pixel * k^2 + sample, pixels row-major, row 0 the top; sample j k + i the tracer's stratum (i, j),
+    camera.sample_offset, the pixel's centre where k = 1) and ray level
     (D at most: the camera ray, then the mirror rays the tracer spawns while k_r > 0 and max_depth allows),
     the face of the level's hit (-1: it met nothing, -2: no ray at that level), its barycentrics (u on the
     face's first vertex, v on its second), the ray's direction, and per light whether the hit sees it (1
@@ -36,28 +38,30 @@ def make_grad_record_kernel(L: int, D: int, smooth: bool, shadows: bool, cull: b
     occluded = make_occluded(False)
 
     @wp.kernel(module="unique", enable_backward=False)
-    def record(s: SceneData, c: CameraData, max_depth: int, first: int, face: wp.array(dtype=int),
+    def record(s: SceneData, c: CameraData, max_depth: int, k: int, first: int, face: wp.array(dtype=int),
                bary: wp.array(dtype=wp.vec2), dirs: wp.array(dtype=wp.vec3), visible: wp.array(dtype=int)):
-        pixel = first + wp.tid()
+        ray = first + wp.tid()
+        pixel = ray / (k * k)
         x = pixel % c.width
         row = pixel / c.width
+        offset = sample_offset(ray % (k * k), k)  # the trace kernel's: (0.5, 0.5) exactly where k = 1
         o = c.eye
-        d = camera_ray(c, x, row, 0.5, 0.5)
+        d = camera_ray(c, x, row, offset[0], offset[1])
         alive = True
         for level in range(wp.static(D)):
-            k = pixel * wp.static(D) + level
-            face[k] = -2
+            j = ray * wp.static(D) + level
+            face[j] = -2
             if alive:
-                dirs[k] = d
+                dirs[j] = d
                 q = wp.mesh_query_ray(s.mesh, o, d, 1.0e30)
                 if wp.static(cull):
                     while q.result and culled(s, q.face, d):
                         q = wp.mesh_query_ray(s.mesh, past(s, q.face, q.u, q.v, d), d, 1.0e30)
-                face[k] = -1
+                face[j] = -1
                 alive = False
                 if q.result:
-                    face[k] = q.face
-                    bary[k] = wp.vec2(q.u, q.v)
+                    face[j] = q.face
+                    bary[j] = wp.vec2(q.u, q.v)
                     hit = surface(s, q.face, q.u, q.v, q.normal, d)
                     for l in range(wp.static(L)):
                         to_light = s.light_pos[l] - hit.p
@@ -71,11 +75,11 @@ def make_grad_record_kernel(L: int, D: int, smooth: bool, shadows: bool, cull: b
                                 dist = wp.length(to_light_o)
                                 if occluded(s, l, so, to_light_o / dist, dist):
                                     seen = 0
-                        visible[k * wp.static(L) + l] = seen
+                        visible[j * wp.static(L) + l] = seen
                     if level + 1 < max_depth and wp.max(s.kr[hit.material]) > 0.0:
-                        ray = spawn_ray(hit, wp.normalize(reflect(d, hit.n)))
-                        o = ray.o
-                        d = ray.d
+                        spawned = spawn_ray(hit, wp.normalize(reflect(d, hit.n)))
+                        o = spawned.o
+                        d = spawned.d
                         alive = True
 
     return record
@@ -83,7 +87,8 @@ def make_grad_record_kernel(L: int, D: int, smooth: bool, shadows: bool, cull: b
 
 @functools.cache
 def make_grad_shade_kernel(L: int, D: int, smooth: bool, vertices: bool = False):
-    """shade(...): each pixel's colour from the recorded hit and visibility and the differentiable
+    """shade(...): each camera ray's colour (one per pixel and sample, as recorded; sample_mean makes
+    them the image) from the recorded hit and visibility and the differentiable
     material and light arrays, over the recorded ray levels (D at most), each weighted by the product of
     the k_r of the mirrors before it; the background where a ray met nothing. With ``vertices`` (camera
     rays alone, D = 1), the
@@ -99,11 +104,11 @@ def make_grad_shade_kernel(L: int, D: int, smooth: bool, vertices: bool = False)
               light_color: wp.array(dtype=wp.vec3), inverse_square: wp.array(dtype=int),
               ambient: wp.vec3, background: wp.vec3, face: wp.array(dtype=int), bary: wp.array(dtype=wp.vec2),
               dirs: wp.array(dtype=wp.vec3), visible: wp.array(dtype=int), image: wp.array(dtype=wp.vec3)):
-        pixel = wp.tid()
+        ray = wp.tid()
         color = wp.vec3(0.0)
         weight = wp.vec3(1.0)
         for level in range(wp.static(D)):
-            k = pixel * wp.static(D) + level
+            k = ray * wp.static(D) + level
             f = face[k]
             if f == -1:
                 color = color + wp.cw_mul(weight, background)
@@ -153,6 +158,19 @@ def make_grad_shade_kernel(L: int, D: int, smooth: bool, vertices: bool = False)
                         local = local + wp.cw_mul(C_l, lit)
                 color = color + wp.cw_mul(weight, local)
                 weight = wp.cw_mul(weight, kr[m])
-        image[pixel] = color
+        image[ray] = color
 
     return shade
+
+
+@wp.kernel(enable_backward=False)
+def sample_mean(rays: wp.array(dtype=wp.vec3), samples: int, image: wp.array(dtype=wp.vec3)):
+    """Each pixel's colour from its ``samples`` camera rays' (in sample order) as the trace kernel makes it,
+    their sum divided by their number, so the replayed image is the traced one to float32 rounding. Its
+    adjoint, linear, is d_image / samples to each ray (image/grad.py gives it to the tape); this kernel
+    has none, its loop being dynamic."""
+    pixel = wp.tid()
+    total = wp.vec3(0.0)
+    for sample in range(samples):
+        total = total + rays[pixel * samples + sample]
+    image[pixel] = total / float(samples)
