@@ -1,18 +1,19 @@
 """Derivatives of an image (issue 30, its first parts): Renderer.render(grad=True) records, per camera ray
 (render.spp of them a pixel, where the trace kernel puts them) and ray level (the camera ray, then the
-mirror rays the tracer follows), the hit and the lights it sees; Renderer.backward(d_image, wrt) returns d(sum(d_image * image)) / d(param)
-for the parameters named as r.params names them, through a differentiable replay of the camera rays'
-local shading over the levels (kernels/grad.py) on a wp.Tape.
+mirror rays the tracer follows), the hit and the lights it sees; Renderer.backward(d_image, wrt) returns
+d(sum(d_image * image)) / d(param) for the parameters named as r.params names them, through a
+differentiable replay of the rays' local shading over the levels (kernels/grad.py) on a wp.Tape.
 
-What is differentiated, and what is held: each pixel's face and the visibility of each light are held
+What is differentiated, and what is held: each ray's face and the visibility of each light are held
 fixed, as a visibility-fixed derivative is (an edge or a shadow's edge moving across pixels has no
 derivative here); the local Phong terms are exact functions of the material colours and exponents, of
-the lights' colours and positions, and of a flat object's vertices (the hit recomputed on the moved face). The image is the mean of each pixel's rays, as the
-trace kernel makes it. Covered for now: any render.spp, camera and mirror rays (no glass), point lights (falloff none or inverse_square), untextured materials
-without vertex colours, no area lights; any other scene is refused in one line naming what is not yet
-differentiated, so a gradient is never silently partial.
+the lights' colours, positions and directions (point, spot and directional lights, shading's light
+model: a spot's cone, 1 / r^2 falloff), and of a flat object's vertices (the hit recomputed on the moved
+face). The image is the mean of each pixel's rays, as the trace kernel makes it. Covered for now: any
+render.spp, camera and mirror rays (no glass), untextured materials without vertex colours, no area
+lights; any other scene is refused in one line naming what is not yet differentiated, so a gradient is
+never silently partial.
 """
-
 from __future__ import annotations
 
 import math
@@ -24,6 +25,7 @@ from .._warp import wp
 from ..errors import ArgumentError
 from ..kernels.camera import camera_data
 from ..kernels.grad import MAX_GRAD_LIGHTS, make_grad_record_kernel, make_grad_shade_kernel, sample_mean
+from ..geometry import LightShape, light_shape
 from ..scene import camera_basis
 from .launch import launch_bands
 from .memory import available_memory, human
@@ -32,7 +34,7 @@ from .params import object_names
 SOURCE = "Renderer.backward"
 MATERIAL_KEYS = ("ka", "kd", "ks", "shininess", "reflectivity")
 MAX_GRAD_DEPTH = 16  # ray levels, unrolled as the lights are
-LIGHT_KEYS = ("color", "position")
+LIGHT_KEYS = ("color", "position", "direction")
 
 
 def refusal(scene, fx) -> str | None:
@@ -45,8 +47,6 @@ def refusal(scene, fx) -> str | None:
         return "textures and vertex colours are not differentiated yet"
     if fx.area_lights:
         return "area lights are not differentiated yet"
-    if any(light.type != "point" for light in scene.whitted_lights):
-        return "point lights are differentiated for now, not spot or directional ones"
     if len(scene.whitted_lights) > MAX_GRAD_LIGHTS:
         return f"at most {MAX_GRAD_LIGHTS} lights are differentiated (Warp's unrolled loop)"
     return None
@@ -95,6 +95,7 @@ class FirstHits:
     levels: int
     smooth: bool
     samples: int = 1
+    light_model: bool = False  # shading's general light model (spot, directional, falloff), as the frame's
 
 
 def record_first_hits(scene, geom, data, fx, device: str, threads: int = 1, bands: int = 1, pool=None) -> FirstHits:
@@ -110,17 +111,18 @@ def record_first_hits(scene, geom, data, fx, device: str, threads: int = 1, band
     dirs = wp.zeros(n * D, dtype=wp.vec3, device=device)
     visible = wp.zeros(max(n * D * L, 1), dtype=int, device=device)
     c = camera_data(camera_basis(cam), geom.eye_offset(cam.eye))
-    kernel = make_grad_record_kernel(L, D, fx.smooth, fx.shadows, fx.culling)
+    kernel = make_grad_record_kernel(L, D, fx.smooth, fx.shadows, fx.culling, fx.light_model)
     launch_bands(kernel, lambda first: [data, c, D, k, first, face, bary, dirs, visible], n, threads, bands, device,
                  pool=pool)
-    return FirstHits(face, bary, dirs, visible, cam.width, cam.height, L, D, fx.smooth, k * k)
+    return FirstHits(face, bary, dirs, visible, cam.width, cam.height, L, D, fx.smooth, k * k, fx.light_model)
 
 
 def parameter_names(scene) -> list[str]:
     """The r.params names backward() can differentiate with respect to: the flat objects' vertices too
     (a smooth object's vertex normals would move with them, which is not differentiated yet)."""
     names = [f"materials.{m}.{k}" for m in scene.materials for k in MATERIAL_KEYS]
-    names += [f"lights.{i}.{k}" for i, light in enumerate(scene.lights) if not light.area for k in LIGHT_KEYS]
+    names += [f"lights.{i}.{k}" for i, light in enumerate(scene.lights) if not light.area for k in LIGHT_KEYS
+              if getattr(light, k) is not None]  # as r.params has them: no position for a directional light
     names += [f"objects.{name}.vertices" for name, i in object_names(scene).items() if not scene.objects[i].smooth]
     return names
 
@@ -131,11 +133,31 @@ def _vertices_refusal(hits: "FirstHits") -> str | None:
             "move with them too)" if hits.levels > 1 else None)
 
 
+@dataclass
+class ReplayLaunch:
+    """The differentiable replay of a recorded frame, ready to launch: kernels/grad.py's shade kernel
+    over ``dim`` camera rays with ``inputs``, writing each ray's colour to ``rays``; ``arrays`` the
+    inputs it differentiates, by key: ka, kd, ks, shininess, reflectivity per material slot, color,
+    position and direction per Whitted light, and with vertices the geometry's points."""
+
+    kernel: object
+    dim: int
+    inputs: list
+    rays: wp.array
+    arrays: dict
+
+
 def replay(scene, geom, hits: FirstHits, device: str, vertices: bool = False) -> tuple[wp.array, dict]:
-    """The differentiable replay of a recorded frame (kernels/grad.py's shade kernel), launched on the
-    current wp.Tape if there is one: (each camera ray's colour, one per pixel and sample; the arrays it
-    differentiates, by key: ka, kd, ks, shininess, reflectivity per material slot, color and position per
-    Whitted light, and with ``vertices`` the geometry's points)."""
+    """replay_launch's kernel launched, on the current wp.Tape if there is one: (each camera ray's
+    colour, one per pixel and sample, the arrays it differentiates)."""
+    r = replay_launch(scene, geom, hits, device, vertices)
+    wp.launch(r.kernel, dim=r.dim, inputs=r.inputs, outputs=[r.rays], device=device)
+    return r.rays, r.arrays
+
+
+def replay_launch(scene, geom, hits: FirstHits, device: str, vertices: bool = False) -> ReplayLaunch:
+    """The replay of ``hits`` (a frame of ``scene`` on ``geom``) with its differentiable arrays made from
+    the scene's values; with ``vertices``, the points too (the hits recomputed on the moved faces)."""
     mats = geom.slot_materials(scene)
     vec = lambda rows: wp.array(np.asarray(rows, np.float32).reshape(-1, 3), dtype=wp.vec3, device=device,  # noqa: E731
                                 requires_grad=True)
@@ -145,23 +167,25 @@ def replay(scene, geom, hits: FirstHits, device: str, vertices: bool = False) ->
     lights = scene.whitted_lights
     light_pos = vec(geom.light_positions(scene) if lights else [[0, 0, 0]])
     light_color = vec([l.color for l in lights] or [[0, 0, 0]])
-    inverse_square = wp.array(np.asarray([l.falloff == "inverse_square" for l in lights] or [0], np.int32),
-                              dtype=int, device=device)
+    shapes = [light_shape(l) for l in lights] or [LightShape()]
+    ints = lambda values: wp.array(np.asarray(values, np.int32), dtype=int, device=device)  # noqa: E731
+    inverse_square, kind = ints([x.inverse_square for x in shapes]), ints([x.kind for x in shapes])
+    axis = vec([list(x.direction) for x in shapes])  # unit, as Light keeps it: backward() projects its adjoint
+    cone = wp.array(np.asarray([[x.cos_cutoff, x.cos_beam, x.cutoff, x.inv_ramp] for x in shapes], np.float32),
+                    dtype=wp.vec4, device=device)
     n = hits.width * hits.height * hits.samples
     rays = wp.zeros(n, dtype=wp.vec3, device=device, requires_grad=True)
     points = wp.array(geom.points_np, dtype=wp.vec3, device=device, requires_grad=True) if vertices else geom.points
-    kernel = make_grad_shade_kernel(hits.lights, hits.levels, hits.smooth, vertices)
+    kernel = make_grad_shade_kernel(hits.lights, hits.levels, hits.smooth, vertices, hits.light_model)
     eye = wp.vec3(*geom.eye_offset(scene.camera.eye))
-    wp.launch(kernel, dim=n,
-              inputs=[eye, points, geom.indices, geom.normals, geom.tri_material, geom.tri_smooth, ka, kd, ks,
-                      shininess, kr, light_pos, light_color, inverse_square, wp.vec3(*scene.render.ambient),
-                      wp.vec3(*scene.render.background), hits.face, hits.bary, hits.dirs, hits.visible],
-              outputs=[rays], device=device)
+    inputs = [eye, points, geom.indices, geom.normals, geom.tri_material, geom.tri_smooth, ka, kd, ks, shininess, kr,
+              light_pos, light_color, inverse_square, kind, axis, cone, wp.vec3(*scene.render.ambient),
+              wp.vec3(*scene.render.background), hits.face, hits.bary, hits.dirs, hits.visible]
     arrays = {"ka": ka, "kd": kd, "ks": ks, "shininess": shininess, "reflectivity": kr, "color": light_color,
-              "position": light_pos}
+              "position": light_pos, "direction": axis}
     if vertices:
         arrays["points"] = points
-    return rays, arrays
+    return ReplayLaunch(kernel, n, inputs, rays, arrays)
 
 
 def replay_image(scene, geom, hits: FirstHits, device: str) -> np.ndarray:
@@ -183,7 +207,7 @@ def backward(scene, geom, hits: FirstHits, d_image, wrt, device: str) -> dict:
     for name in wrt:
         if name not in known:
             why = ("not a parameter backward() differentiates yet (materials.<name>.ka | kd | ks | shininess | "
-                   "reflectivity, lights.<i>.color | position, a flat object's objects.<name>.vertices)")
+                   "reflectivity, lights.<i>.color | position | direction, a flat object's objects.<name>.vertices)")
             raise ArgumentError("backward", str(name), why)
         if name.startswith("objects.") and _vertices_refusal(hits):
             raise ArgumentError("backward", str(name), _vertices_refusal(hits))
@@ -219,5 +243,8 @@ def backward(scene, geom, hits: FirstHits, d_image, wrt, device: str) -> dict:
                 out[name] = out[name] + grads["ka"][slot[owner]]
         else:
             out[name] = grads[key][whitted.index(int(owner))].astype(np.float64)
+            if key == "direction":  # Light keeps d / |d| of the d it is given, |d| = 1: (I - d d^T) adjoint
+                unit = np.asarray(scene.lights[int(owner)].direction, np.float64)
+                out[name] = out[name] - unit * (unit @ out[name])
     tape.zero()
     return out

@@ -1,12 +1,13 @@
 """Gradients of an image through its camera rays' first hits (image/grad.py): a record kernel and a
 differentiable shading kernel.
 
-The record kernel finds each pixel's first hit as the tracer does (the camera ray through the pixel's
-centre, the BVH's closest hit, single-sided back faces passed through) and which Whitted lights it sees
-(the tracer's own spawn_ray and any-hit query): what the gradient holds fixed. The shading kernel
-recomputes the local Phong model at those hits from arrays a wp.Tape differentiates (the material
-colours and exponents per slot, the lights' positions and colours): C = C_amb ka + sum_l vis_l C_l w_l
-(kd n.L + ks max(0, r.v)^n), w_l = 1 / r^2 for inverse_square. Its lights loop is unrolled
+The record kernel finds each camera ray's hits as the tracer does (the rays through the centres of the
+pixel's strata, the BVH's closest hit, single-sided back faces passed through, the mirror rays) and which
+Whitted lights each hit sees (the tracer's own spawn_ray, light model and any-hit query): what the
+gradient holds fixed. The shading kernel recomputes the local Phong model at those hits from arrays a
+wp.Tape differentiates (the material colours and exponents per slot, the lights' positions, colours and
+directions): C = C_amb ka + sum_l vis_l C_l w_l (kd n.L + ks max(0, r.v)^n), w_l a spot's cone times
+1 / r^2 for inverse_square (light_factor, shading.light_weight's arithmetic). Its lights loop is unrolled
 (wp.static): Warp does not replay a dynamic loop backwards, and a loop longer than max_unroll becomes one.
 """
 
@@ -15,25 +16,52 @@ from __future__ import annotations
 import functools
 
 from .._warp import wp
-from ..geometry import SceneData
+from ..geometry import LIGHT_DIRECTIONAL, LIGHT_SPOT, SceneData
 from .camera import CameraData, camera_ray, sample_offset
 from .interaction import make_surface, reflect, spawn_ray
-from .shading import phong_specular
+from .shading import FAR, light_weight, phong_specular
 from .shadow import make_occluded
 from .trace import culled, past
 
 MAX_GRAD_LIGHTS = 16  # Warp's max_unroll: a longer static loop would silently turn dynamic
 
 
+@wp.func
+def spot_cone(cone: wp.vec4, cos_theta: float) -> float:
+    """shading.spot_profile with its cone as numbers, differentiable in cos_theta: cone = (cos cutoff,
+    cos beam, cutoff, 1 / (cutoff - beam)), LightShape's; 1 within the beam, 0 beyond the cutoff, linear
+    in the angle between."""
+    if cos_theta <= cone[0]:
+        return 0.0
+    if cos_theta >= cone[1]:
+        return 1.0
+    return (cone[2] - wp.acos(cos_theta)) * cone[3]
+
+
+@wp.func
+def light_factor(kind: int, cone: wp.vec4, inverse_square: int, axis: wp.vec3, to_light: wp.vec3,
+                 L: wp.vec3) -> float:
+    """shading.light_weight over arrays a tape differentiates (the light's axis among them): a spot's
+    profile at the angle between -L and its axis, over r^2 for inverse_square; the same arithmetic."""
+    w = 1.0
+    if kind == wp.static(LIGHT_SPOT):
+        w = spot_cone(cone, -wp.dot(L, axis))
+    if inverse_square != 0:
+        w = w / wp.dot(to_light, to_light)
+    return w
+
+
 @functools.cache
-def make_grad_record_kernel(L: int, D: int, smooth: bool, shadows: bool, cull: bool):
+def make_grad_record_kernel(L: int, D: int, smooth: bool, shadows: bool, cull: bool, light_model: bool = False):
     """record(s, c, max_depth, k, first, face, bary, dirs, visible): per camera ray (from ``first``: ray
     pixel * k^2 + sample, pixels row-major, row 0 the top; sample j k + i the tracer's stratum (i, j),
     camera.sample_offset, the pixel's centre where k = 1) and ray level
     (D at most: the camera ray, then the mirror rays the tracer spawns while k_r > 0 and max_depth allows),
     the face of the level's hit (-1: it met nothing, -2: no ray at that level), its barycentrics (u on the
     face's first vertex, v on its second), the ray's direction, and per light whether the hit sees it (1
-    where n.L > 0 and no shadow ray is blocked): the tracer's own surface, spawn_ray and any-hit query."""
+    where n.L > 0 and no shadow ray is blocked): the tracer's own surface, spawn_ray and any-hit query.
+    With ``light_model`` (spot and directional lights, falloff), shading's general light model: a spot
+    outside its cone is not seen, a directional light lies along -direction, its shadow ray unbounded."""
     surface = make_surface(smooth)
     occluded = make_occluded(False)
 
@@ -64,16 +92,31 @@ def make_grad_record_kernel(L: int, D: int, smooth: bool, shadows: bool, cull: b
                     bary[j] = wp.vec2(q.u, q.v)
                     hit = surface(s, q.face, q.u, q.v, q.normal, d)
                     for l in range(wp.static(L)):
-                        to_light = s.light_pos[l] - hit.p
-                        L_dir = wp.normalize(to_light)
+                        lit = True
+                        directional = False
+                        if wp.static(light_model):  # shading's: its test, then its shadow ray
+                            shape = s.light_shape[l]
+                            directional = shape.kind == wp.static(LIGHT_DIRECTIONAL)
+                            to_light = -shape.direction
+                            if not directional:
+                                to_light = s.light_pos[l] - hit.p
+                            L_dir = wp.normalize(to_light)
+                            lit = light_weight(shape, to_light, L_dir) > 0.0
+                        else:
+                            to_light = s.light_pos[l] - hit.p
+                            L_dir = wp.normalize(to_light)
                         seen = int(0)
-                        if wp.dot(hit.n, L_dir) > 0.0:
+                        if lit and wp.dot(hit.n, L_dir) > 0.0:
                             seen = 1
                             if wp.static(shadows):
                                 so = spawn_ray(hit, L_dir).o
                                 to_light_o = s.light_pos[l] - so
                                 dist = wp.length(to_light_o)
-                                if occluded(s, l, so, to_light_o / dist, dist):
+                                sd = to_light_o / dist
+                                if directional:  # its position is NaN: the ray above is replaced
+                                    sd = L_dir
+                                    dist = FAR
+                                if occluded(s, l, so, sd, dist):
                                     seen = 0
                         visible[j * wp.static(L) + l] = seen
                     if level + 1 < max_depth and wp.max(s.kr[hit.material]) > 0.0:
@@ -86,7 +129,7 @@ def make_grad_record_kernel(L: int, D: int, smooth: bool, shadows: bool, cull: b
 
 
 @functools.cache
-def make_grad_shade_kernel(L: int, D: int, smooth: bool, vertices: bool = False):
+def make_grad_shade_kernel(L: int, D: int, smooth: bool, vertices: bool = False, light_model: bool = False):
     """shade(...): each camera ray's colour (one per pixel and sample, as recorded; sample_mean makes
     them the image) from the recorded hit and visibility and the differentiable
     material and light arrays, over the recorded ray levels (D at most), each weighted by the product of
@@ -94,7 +137,9 @@ def make_grad_shade_kernel(L: int, D: int, smooth: bool, vertices: bool = False)
     rays alone, D = 1), the
     hit's barycentrics are those of the camera ray (from ``eye``) and the recorded face recomputed from
     ``points`` by a differentiable Moller-Trumbore test, so that the hit point moves with the vertices
-    (Warp's mesh query gives the points no adjoint); without, the recorded ones."""
+    (Warp's mesh query gives the points no adjoint); without, the recorded ones. With ``light_model``,
+    shading's general light model (light_factor): a directional light's L is -its axis, a spot's C_l is
+    weighted by its cone, an inverse_square light's by 1 / r^2; without, the seed's point lights."""
 
     @wp.kernel(module="unique")
     def shade(eye: wp.vec3, points: wp.array(dtype=wp.vec3), indices: wp.array(dtype=int), normals: wp.array(dtype=wp.vec3),
@@ -102,6 +147,7 @@ def make_grad_shade_kernel(L: int, D: int, smooth: bool, vertices: bool = False)
               ka: wp.array(dtype=wp.vec3), kd: wp.array(dtype=wp.vec3), ks: wp.array(dtype=wp.vec3),
               shininess: wp.array(dtype=float), kr: wp.array(dtype=wp.vec3), light_pos: wp.array(dtype=wp.vec3),
               light_color: wp.array(dtype=wp.vec3), inverse_square: wp.array(dtype=int),
+              light_kind: wp.array(dtype=int), light_axis: wp.array(dtype=wp.vec3), light_cone: wp.array(dtype=wp.vec4),
               ambient: wp.vec3, background: wp.vec3, face: wp.array(dtype=int), bary: wp.array(dtype=wp.vec2),
               dirs: wp.array(dtype=wp.vec3), visible: wp.array(dtype=int), image: wp.array(dtype=wp.vec3)):
         ray = wp.tid()
@@ -148,12 +194,18 @@ def make_grad_shade_kernel(L: int, D: int, smooth: bool, vertices: bool = False)
                 local = wp.cw_mul(ambient, ka[m])
                 for l in range(wp.static(L)):
                     if visible[k * wp.static(L) + l] != 0:
-                        to_light = light_pos[l] - p
-                        L_dir = wp.normalize(to_light)
-                        n_dot_l = wp.dot(n, L_dir)
                         C_l = light_color[l]
-                        if inverse_square[l] != 0:
-                            C_l = C_l / wp.dot(to_light, to_light)
+                        if wp.static(light_model):
+                            to_light = -light_axis[l]
+                            if light_kind[l] != wp.static(LIGHT_DIRECTIONAL):
+                                to_light = light_pos[l] - p
+                            L_dir = wp.normalize(to_light)
+                            C_l = C_l * light_factor(light_kind[l], light_cone[l], inverse_square[l], light_axis[l],
+                                                     to_light, L_dir)
+                        else:  # the seed's point lights: no falloff
+                            to_light = light_pos[l] - p
+                            L_dir = wp.normalize(to_light)
+                        n_dot_l = wp.dot(n, L_dir)
                         lit = kd[m] * n_dot_l + phong_specular(ks[m], shininess[m], n, L_dir, -d, n_dot_l)
                         local = local + wp.cw_mul(C_l, lit)
                 color = color + wp.cw_mul(weight, local)
