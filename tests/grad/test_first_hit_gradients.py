@@ -143,6 +143,14 @@ def test_what_is_not_differentiated_yet_is_refused_in_one_line(change, why):
         warprt.Renderer(warprt.load_dict(doc)).render(grad=True)
 
 
+@pytest.mark.parametrize("off", ["specular", "ambient", "diffuse"])
+def test_a_phong_term_switched_off_is_refused_in_one_line(off):
+    """The replay shades every Phong term: with one switched off (render.effects, or disable) its
+    gradient would be another image's (ks had a gradient with specular off, before this was refused)."""
+    with pytest.raises(SceneError, match=f"{off} switched off"):
+        warprt.Renderer(scene(), disable=[off]).render(grad=True)
+
+
 # --- Vertices: the hit point moves with them ------------------------------------------------------------
 
 # A two-triangle floor reaching beyond the view, planar: moving a vertex tilts its triangles by a little, so

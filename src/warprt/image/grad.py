@@ -28,7 +28,7 @@ from ..kernels.camera import camera_data
 from ..kernels.grad import (MAX_GRAD_LIGHTS, TEXTURE_CHECKER, TEXTURE_CLAMP, TEXTURE_IMAGE, TEXTURE_MIRROR, TEXTURE_NONE,
                             TEXTURE_WRAP, make_grad_record_kernel, make_grad_shade_kernel, sample_mean)
 from ..geometry import LightShape, light_shape
-from ..scene import camera_basis
+from ..scene import camera_basis, scene_effects
 from .launch import launch_bands
 from .memory import available_memory, human
 from .params import object_names
@@ -42,6 +42,13 @@ LIGHT_KEYS = ("color", "position", "direction")
 
 def refusal(scene, fx) -> str | None:
     """Why render(grad=True) cannot differentiate this scene yet (None: it can)."""
+    # The replay shades every Phong term. One the scene's values leave out (every ks 0) is right to shade:
+    # its derivative is not 0. One switched off (render.effects, effects=, disable=) would give another
+    # image's gradient.
+    called = scene_effects(scene)
+    off = [name for name in ("ambient", "diffuse", "specular") if getattr(called, name) and not getattr(fx, name)]
+    if off:
+        return f"the gradient's replay shades every Phong term: {', '.join(off)} switched off is not differentiated yet"
     if fx.refraction:
         return "glass (the ray tree) is not differentiated yet; mirrors and camera rays are"
     if fx.reflection and scene.render.max_depth > MAX_GRAD_DEPTH:
