@@ -15,12 +15,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-import warp as wp
 import warp.autograd
 
 import warprt
 from warprt import SceneError
-from warprt.kernels import make_grad_shade_kernel
 from warprt.scene import resolve_effects
 
 WIDTH, HEIGHT = 48, 36
@@ -110,19 +108,10 @@ def test_the_shading_kernel_passes_warps_gradcheck():
     r.render()
     geom = r.geometry
     hits = warprt.image.record_first_hits(s, geom, geom.scene_data(s), resolve_effects(s), "cpu")
-    mats = geom.slot_materials(s)
-    vec = lambda rows: wp.array(np.asarray(rows, np.float32), dtype=wp.vec3, requires_grad=True)  # noqa: E731
-    inputs = [wp.vec3(*geom.eye_offset(s.camera.eye)), geom.points, geom.indices, geom.normals, geom.tri_material, geom.tri_smooth,
-              vec([m.ka for m in mats]), vec([m.kd for m in mats]), vec([m.ks for m in mats]),
-              wp.array([m.shininess for m in mats], dtype=float, requires_grad=True), vec([m.reflectivity for m in mats]),
-              vec(geom.light_positions(s)), vec([l.color for l in s.lights]),
-              wp.array([l.falloff == "inverse_square" for l in s.lights], dtype=int),
-              wp.vec3(0.2, 0.2, 0.2), wp.vec3(0.0, 0.0, 0.0), hits.face, hits.bary, hits.dirs, hits.visible]
-    image = wp.zeros(12 * 9, dtype=wp.vec3, requires_grad=True)
-    kernel = make_grad_shade_kernel(hits.lights, hits.levels, hits.smooth)
-    assert warp.autograd.gradcheck(kernel, dim=12 * 9, inputs=inputs, outputs=[image], eps=1e-3, atol=2e-2, rtol=2e-2,
-                                 show_summary=False, raise_exception=False,
-                                 input_output_mask=[(k, "image") for k in ("ka", "kd", "ks", "light_color")])
+    launch = warprt.image.replay_launch(s, geom, hits, "cpu")
+    assert warp.autograd.gradcheck(launch.kernel, dim=launch.dim, inputs=launch.inputs, outputs=[launch.rays], eps=1e-3,
+                                   atol=2e-2, rtol=2e-2, show_summary=False, raise_exception=False,
+                                   input_output_mask=[(k, "image") for k in ("ka", "kd", "ks", "light_color")])
 
 
 def test_a_gradient_of_another_image_is_refused_in_one_line(weights):
@@ -141,9 +130,9 @@ def test_a_gradient_of_another_image_is_refused_in_one_line(weights):
 
 
 @pytest.mark.parametrize("change, why", [
-    ({"render": {"spp": 4}}, "one sample per pixel"),
     ({"render": {"max_depth": 3}, "materials": {"floor": {"ior": 1.5}}}, "glass"),
-    ({"lights": [{"type": "directional", "direction": [0.0, -1.0, 0.0]}]}, "point lights"),
+    ({"lights": [{"type": "area", "shape": "rectangle", "center": [0.0, 3.0, 0.0], "normal": [0.0, -1.0, 0.0],
+                  "size": [1.0, 1.0], "radiance": [1.0, 1.0, 1.0]}]}, "area lights"),
 ])
 def test_what_is_not_differentiated_yet_is_refused_in_one_line(change, why):
     doc = {"camera": {"width": 8, "height": 6}, "lights": [{"position": [0.0, 3.0, 0.0]}],
@@ -152,6 +141,14 @@ def test_what_is_not_differentiated_yet_is_refused_in_one_line(change, why):
         doc[key] = {**doc.get(key, {}), **value} if isinstance(value, dict) else value
     with pytest.raises(SceneError, match=why):
         warprt.Renderer(warprt.load_dict(doc)).render(grad=True)
+
+
+@pytest.mark.parametrize("off", ["specular", "ambient", "diffuse"])
+def test_a_phong_term_switched_off_is_refused_in_one_line(off):
+    """The replay shades every Phong term: with one switched off (render.effects, or disable) its
+    gradient would be another image's (ks had a gradient with specular off, before this was refused)."""
+    with pytest.raises(SceneError, match=f"{off} switched off"):
+        warprt.Renderer(scene(), disable=[off]).render(grad=True)
 
 
 # --- Vertices: the hit point moves with them ------------------------------------------------------------

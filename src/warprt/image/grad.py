@@ -1,19 +1,23 @@
-"""Derivatives of an image (issue 30, its first parts): Renderer.render(grad=True) records, per pixel and ray
-level (the camera ray, then the mirror rays the tracer follows), the hit and the lights it sees; Renderer.backward(d_image, wrt) returns d(sum(d_image * image)) / d(param)
-for the parameters named as r.params names them, through a differentiable replay of the camera rays'
-local shading over the levels (kernels/grad.py) on a wp.Tape.
+"""Derivatives of an image (issue 30, its first parts): Renderer.render(grad=True) records, per camera ray
+(render.spp of them a pixel, where the trace kernel puts them) and ray level (the camera ray, then the
+mirror rays the tracer follows), the hit and the lights it sees; Renderer.backward(d_image, wrt) returns
+d(sum(d_image * image)) / d(param) for the parameters named as r.params names them, through a
+differentiable replay of the rays' local shading over the levels (kernels/grad.py) on a wp.Tape.
 
-What is differentiated, and what is held: each pixel's face and the visibility of each light are held
+What is differentiated, and what is held: each ray's face and the visibility of each light are held
 fixed, as a visibility-fixed derivative is (an edge or a shadow's edge moving across pixels has no
 derivative here); the local Phong terms are exact functions of the material colours and exponents, of
-the lights' colours and positions, and of a flat object's vertices (the hit recomputed on the moved face). Covered for now: one sample per pixel, camera and mirror rays (no
-glass), point lights (falloff none or inverse_square), untextured materials
-without vertex colours, no area lights; any other scene is refused in one line naming what is not yet
-differentiated, so a gradient is never silently partial.
+the lights' colours, positions and directions (point, spot and directional lights, shading's light
+model: a spot's cone, 1 / r^2 falloff), of image textures' texels (the forward's bilinear wp.Texture2D
+lookup written over a wp.array: kernels.bilinear), and of a flat object's vertices (the hit recomputed on
+the moved face). The image is the mean of each pixel's rays, as the trace kernel makes it. Covered for
+now: any render.spp, camera and mirror rays (no glass), image and checker textures, no vertex colours, no
+area lights; any other scene is refused in one line naming what is not yet differentiated, so a gradient is
+never silently partial.
 """
-
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -21,41 +25,75 @@ import numpy as np
 from .._warp import wp
 from ..errors import ArgumentError
 from ..kernels.camera import camera_data
-from ..kernels.grad import MAX_GRAD_LIGHTS, make_grad_record_kernel, make_grad_shade_kernel
-from ..scene import camera_basis
+from ..kernels.grad import (MAX_GRAD_LIGHTS, TEXTURE_CHECKER, TEXTURE_CLAMP, TEXTURE_IMAGE, TEXTURE_MIRROR, TEXTURE_NONE,
+                            TEXTURE_WRAP, make_grad_record_kernel, make_grad_shade_kernel, sample_mean)
+from ..geometry import LightShape, light_shape
+from ..scene import camera_basis, scene_effects
 from .launch import launch_bands
+from .memory import available_memory, human
 from .params import object_names
 
 SOURCE = "Renderer.backward"
 MATERIAL_KEYS = ("ka", "kd", "ks", "shininess", "reflectivity")
+TEXTURE_KEYS = ("ka_texture", "kd_texture", "ks_texture")  # an image texture's texels, as r.params has them
 MAX_GRAD_DEPTH = 16  # ray levels, unrolled as the lights are
-LIGHT_KEYS = ("color", "position")
+LIGHT_KEYS = ("color", "position", "direction")
 
 
 def refusal(scene, fx) -> str | None:
     """Why render(grad=True) cannot differentiate this scene yet (None: it can)."""
-    if fx.supersampling:
-        return "one sample per pixel (render.spp = 1) is differentiated for now"
+    # The replay shades every Phong term. One the scene's values leave out (every ks 0) is right to shade:
+    # its derivative is not 0. One switched off (render.effects, effects=, disable=) would give another
+    # image's gradient.
+    called = scene_effects(scene)
+    off = [name for name in ("ambient", "diffuse", "specular") if getattr(called, name) and not getattr(fx, name)]
+    if off:
+        return f"the gradient's replay shades every Phong term: {', '.join(off)} switched off is not differentiated yet"
     if fx.refraction:
         return "glass (the ray tree) is not differentiated yet; mirrors and camera rays are"
     if fx.reflection and scene.render.max_depth > MAX_GRAD_DEPTH:
         return f"at most {MAX_GRAD_DEPTH} ray levels (render.max_depth) are differentiated (Warp's unrolled loop)"
-    if fx.texture or fx.vertex_color:
-        return "textures and vertex colours are not differentiated yet"
+    if fx.vertex_color:
+        return "vertex colours are not differentiated yet"
     if fx.area_lights:
         return "area lights are not differentiated yet"
-    if any(light.type != "point" for light in scene.whitted_lights):
-        return "point lights are differentiated for now, not spot or directional ones"
     if len(scene.whitted_lights) > MAX_GRAD_LIGHTS:
         return f"at most {MAX_GRAD_LIGHTS} lights are differentiated (Warp's unrolled loop)"
     return None
 
 
+# Bytes per camera ray and level of the record (face, barycentrics, direction: 4 + 8 + 12, then 4 a light),
+# and per camera ray of the replay (its colour and adjoint, the adjoint handed to the tape: 3 x 12).
+RECORD_BYTES_PER_LEVEL, RECORD_BYTES_PER_LIGHT, REPLAY_BYTES_PER_RAY = 24, 4, 36
+
+
+def record_bytes(scene, fx) -> int:
+    """What render(grad=True) and backward() hold for a frame's record and replay, in bytes: per camera
+    ray (width x height x spp) and ray level."""
+    cam, r = scene.camera, scene.render
+    rays = cam.width * cam.height * (r.spp if fx.supersampling else 1)
+    levels = r.max_depth if fx.reflection else 1
+    per_level = RECORD_BYTES_PER_LEVEL + RECORD_BYTES_PER_LIGHT * len(scene.whitted_lights)
+    return rays * (levels * per_level + REPLAY_BYTES_PER_RAY)
+
+
+def check_record_memory(scene, fx, device: str):
+    """Refuse, in one line naming the budget and the settings that reduce it, a grad=True frame whose
+    record would not fit in the memory this process can still take (before the frame allocates anything)."""
+    need = record_bytes(scene, fx)
+    available, what = available_memory(device)
+    if available is not None and need > available:
+        raise ArgumentError("render", "grad", f"the gradient's record of this frame needs about {human(need)} "
+                            f"(per camera ray and ray level), more than the {human(available)} {what}: lower "
+                            f"render.spp, render.max_depth or camera.width and camera.height")
+
+
 @dataclass
 class FirstHits:
-    """What a grad=True frame recorded: per pixel and ray level (``levels``: the camera ray, then the mirror
-    rays) the hit's face (-1: none, -2: no ray at that level), barycentrics and ray direction, and per
-    light whether the hit saw it."""
+    """What a grad=True frame recorded: per camera ray (``samples`` per pixel, ray pixel * samples +
+    sample, the tracer's strata) and ray level (``levels``: the camera ray, then the mirror rays) the
+    hit's face (-1: none, -2: no ray at that level), barycentrics and ray direction, and per light
+    whether the hit saw it."""
 
     face: wp.array
     bary: wp.array
@@ -66,30 +104,39 @@ class FirstHits:
     lights: int
     levels: int
     smooth: bool
+    samples: int = 1
+    light_model: bool = False  # shading's general light model (spot, directional, falloff), as the frame's
+    texture: bool = False  # textured colours, as the frame's
 
 
 def record_first_hits(scene, geom, data, fx, device: str, threads: int = 1, bands: int = 1, pool=None) -> FirstHits:
     """Run the record kernel for a frame of ``scene`` on ``geom`` and its tables ``data``, in ``bands`` bands
-    of pixels on ``threads`` threads (launch_bands; ``pool`` the Renderer's)."""
+    of camera rays on ``threads`` threads (launch_bands; ``pool`` the Renderer's): render.spp of them per
+    pixel, where the trace kernel puts them (its k x k strata)."""
     cam = scene.camera
-    n, L = cam.width * cam.height, len(scene.whitted_lights)
+    k = math.isqrt(scene.render.spp) if fx.supersampling else 1
+    n, L = cam.width * cam.height * k * k, len(scene.whitted_lights)
     D = scene.render.max_depth if fx.reflection else 1
     face = wp.empty(n * D, dtype=int, device=device)
     bary = wp.zeros(n * D, dtype=wp.vec2, device=device)
     dirs = wp.zeros(n * D, dtype=wp.vec3, device=device)
     visible = wp.zeros(max(n * D * L, 1), dtype=int, device=device)
     c = camera_data(camera_basis(cam), geom.eye_offset(cam.eye))
-    kernel = make_grad_record_kernel(L, D, fx.smooth, fx.shadows, fx.culling)
-    launch_bands(kernel, lambda first: [data, c, D, first, face, bary, dirs, visible], n, threads, bands, device,
+    kernel = make_grad_record_kernel(L, D, fx.smooth, fx.shadows, fx.culling, fx.light_model)
+    launch_bands(kernel, lambda first: [data, c, D, k, first, face, bary, dirs, visible], n, threads, bands, device,
                  pool=pool)
-    return FirstHits(face, bary, dirs, visible, cam.width, cam.height, L, D, fx.smooth)
+    return FirstHits(face, bary, dirs, visible, cam.width, cam.height, L, D, fx.smooth, k * k, fx.light_model,
+                     fx.texture)
 
 
 def parameter_names(scene) -> list[str]:
     """The r.params names backward() can differentiate with respect to: the flat objects' vertices too
     (a smooth object's vertex normals would move with them, which is not differentiated yet)."""
     names = [f"materials.{m}.{k}" for m in scene.materials for k in MATERIAL_KEYS]
-    names += [f"lights.{i}.{k}" for i, light in enumerate(scene.lights) if not light.area for k in LIGHT_KEYS]
+    names += [f"materials.{name}.{k}" for name, m in scene.materials.items() for k in TEXTURE_KEYS
+              if getattr(m, k) is not None and getattr(m, k).image is not None]
+    names += [f"lights.{i}.{k}" for i, light in enumerate(scene.lights) if not light.area for k in LIGHT_KEYS
+              if getattr(light, k) is not None]  # as r.params has them: no position for a directional light
     names += [f"objects.{name}.vertices" for name, i in object_names(scene).items() if not scene.objects[i].smooth]
     return names
 
@@ -98,6 +145,122 @@ def _vertices_refusal(hits: "FirstHits") -> str | None:
     """Why backward() cannot give this frame's vertex gradients yet (None: it can)."""
     return ("vertices are differentiated through camera rays alone for now (a mirror ray's origin and direction "
             "move with them too)" if hits.levels > 1 else None)
+
+
+@dataclass
+class ReplayLaunch:
+    """The differentiable replay of a recorded frame, ready to launch: kernels/grad.py's shade kernel
+    over ``dim`` camera rays with ``inputs``, writing each ray's colour to ``rays``; ``arrays`` the
+    inputs it differentiates, by key: ka, kd, ks, shininess, reflectivity per material slot, color,
+    position and direction per Whitted light, and with vertices the geometry's points."""
+
+    kernel: object
+    dim: int
+    inputs: list
+    rays: wp.array
+    arrays: dict
+    images: dict  # TextureTable.images: where each textured colour's texels lie in arrays["texels"]
+
+
+def replay(scene, geom, hits: FirstHits, device: str, vertices: bool = False) -> ReplayLaunch:
+    """replay_launch's kernel launched, on the current wp.Tape if there is one: its ``rays`` hold each
+    camera ray's colour (one per pixel and sample)."""
+    r = replay_launch(scene, geom, hits, device, vertices)
+    wp.launch(r.kernel, dim=r.dim, inputs=r.inputs, outputs=[r.rays], device=device)
+    return r
+
+
+def replay_launch(scene, geom, hits: FirstHits, device: str, vertices: bool = False) -> ReplayLaunch:
+    """The replay of ``hits`` (a frame of ``scene`` on ``geom``) with its differentiable arrays made from
+    the scene's values; with ``vertices``, the points too (the hits recomputed on the moved faces)."""
+    mats = geom.slot_materials(scene)
+    vec = lambda rows: wp.array(np.asarray(rows, np.float32).reshape(-1, 3), dtype=wp.vec3, device=device,  # noqa: E731
+                                requires_grad=True)
+    ka, kd, ks, kr = (vec([getattr(m, k) for m in mats] or [[0, 0, 0]]) for k in ("ka", "kd", "ks", "reflectivity"))
+    shininess = wp.array(np.asarray([m.shininess for m in mats] or [0.0], np.float32), dtype=float, device=device,
+                         requires_grad=True)
+    lights = scene.whitted_lights
+    light_pos = vec(geom.light_positions(scene) if lights else [[0, 0, 0]])
+    light_color = vec([l.color for l in lights] or [[0, 0, 0]])
+    shapes = [light_shape(l) for l in lights] or [LightShape()]
+    ints = lambda values: wp.array(np.asarray(values, np.int32), dtype=int, device=device)  # noqa: E731
+    inverse_square, kind = ints([x.inverse_square for x in shapes]), ints([x.kind for x in shapes])
+    axis = vec([list(x.direction) for x in shapes])  # unit, as Light keeps it: backward() projects its adjoint
+    cone = wp.array(np.asarray([[x.cos_cutoff, x.cos_beam, x.cutoff, x.inv_ramp] for x in shapes], np.float32),
+                    dtype=wp.vec4, device=device)
+    n = hits.width * hits.height * hits.samples
+    rays = wp.zeros(n, dtype=wp.vec3, device=device, requires_grad=True)
+    points = wp.array(geom.points_np, dtype=wp.vec3, device=device, requires_grad=True) if vertices else geom.points
+    kernel = make_grad_shade_kernel(hits.lights, hits.levels, hits.smooth, vertices, hits.light_model, hits.texture)
+    eye = wp.vec3(*geom.eye_offset(scene.camera.eye))
+    table = texture_table(mats, device)
+    uvs = geom.uv_array() if hits.texture else wp.zeros(1, dtype=wp.vec2, device=device)
+    inputs = [eye, points, geom.indices, geom.normals, geom.tri_material, geom.tri_smooth, ka, kd, ks, shininess, kr,
+              light_pos, light_color, inverse_square, kind, axis, cone, uvs, *table.arrays,
+              wp.vec3(*scene.render.ambient), wp.vec3(*scene.render.background), hits.face, hits.bary, hits.dirs,
+              hits.visible]
+    arrays = {"ka": ka, "kd": kd, "ks": ks, "shininess": shininess, "reflectivity": kr, "color": light_color,
+              "position": light_pos, "direction": axis, "texels": table.arrays[0]}
+    if vertices:
+        arrays["points"] = points
+    return ReplayLaunch(kernel, n, inputs, rays, arrays, table.images)
+
+
+@dataclass
+class TextureTable:
+    """The colours' textures as the replay reads them: ``arrays`` the shade kernel's texels (every image
+    texture's, one copy per material slot and colour, so that each has its own adjoint; differentiable),
+    per row 3 m + (0, 1, 2) for slot m's ka, kd, ks: (kind, offset, width, height), the wrap per axis, the
+    uv map's two rows, the checker's two colours; ``images`` {(slot, key): (offset, height, width)}."""
+
+    arrays: list
+    images: dict
+
+
+WRAPS = {"repeat": TEXTURE_WRAP, "clamp": TEXTURE_CLAMP, "mirror": TEXTURE_MIRROR}
+
+
+def texture_table(mats, device: str) -> TextureTable:
+    """The TextureTable of the material slots ``mats`` (geom.slot_materials)."""
+    texels, shape, wrap, u_map, v_map, c0, c1, images = [np.ones((1, 3), np.float32)], [], [], [], [], [], [], {}
+    offset = 1  # texel 0: a stand-in, so that the array is never empty
+    for slot, m in enumerate(mats):
+        for key in ("ka", "kd", "ks"):
+            t = getattr(m, f"{key}_texture")
+            row = (TEXTURE_NONE, 0, 1, 1)
+            a = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0) if t is None else t.uv_transform
+            colours = ((1.0, 1.0, 1.0),) * 2
+            modes = (TEXTURE_WRAP, TEXTURE_WRAP)
+            if t is not None and t.checker is not None:
+                row, colours = (TEXTURE_CHECKER, 0, 1, 1), t.checker
+            elif t is not None:
+                h, w = t.image.shape[:2]
+                row, modes = (TEXTURE_IMAGE, offset, w, h), (WRAPS[t.wrap[0]], WRAPS[t.wrap[1]])
+                texels.append(np.asarray(t.image, np.float32)[..., :3].reshape(-1, 3))
+                images[(slot, key)] = (offset, h, w)
+                offset += h * w
+            shape.append(row)
+            wrap.append(modes)
+            u_map.append(a[:3])
+            v_map.append(a[3:])
+            c0.append(colours[0])
+            c1.append(colours[1])
+    vec = lambda rows, grad=False: wp.array(np.asarray(rows if len(rows) else [[1.0, 1.0, 1.0]], np.float32)  # noqa: E731
+                                            .reshape(-1, 3), dtype=wp.vec3, device=device, requires_grad=grad)
+    arrays = [vec(np.concatenate(texels), True),
+              wp.array(np.asarray(shape or [(TEXTURE_NONE, 0, 1, 1)], np.int32), dtype=wp.vec4i, device=device),
+              wp.array(np.asarray(wrap or [(0, 0)], np.int32), dtype=wp.vec2i, device=device),
+              vec(u_map), vec(v_map), vec(c0), vec(c1)]
+    return TextureTable(arrays, images)
+
+
+def replay_image(scene, geom, hits: FirstHits, device: str) -> np.ndarray:
+    """The image the replay makes of a recorded frame, (height, width, 3): the forward's, to float32
+    rounding, where the replay models what the forward traced (what the tests check)."""
+    rays = replay(scene, geom, hits, device).rays
+    image = wp.empty(hits.width * hits.height, dtype=wp.vec3, device=device)
+    wp.launch(sample_mean, dim=hits.width * hits.height, inputs=[rays, hits.samples], outputs=[image], device=device)
+    return image.numpy().reshape(hits.height, hits.width, 3)
 
 
 def backward(scene, geom, hits: FirstHits, d_image, wrt, device: str) -> dict:
@@ -110,7 +273,8 @@ def backward(scene, geom, hits: FirstHits, d_image, wrt, device: str) -> dict:
     for name in wrt:
         if name not in known:
             why = ("not a parameter backward() differentiates yet (materials.<name>.ka | kd | ks | shininess | "
-                   "reflectivity, lights.<i>.color | position, a flat object's objects.<name>.vertices)")
+                   "reflectivity | ka_texture | kd_texture | ks_texture, lights.<i>.color | position | direction, a "
+                   "flat object's objects.<name>.vertices)")
             raise ArgumentError("backward", str(name), why)
         if name.startswith("objects.") and _vertices_refusal(hits):
             raise ArgumentError("backward", str(name), _vertices_refusal(hits))
@@ -118,37 +282,24 @@ def backward(scene, geom, hits: FirstHits, d_image, wrt, device: str) -> dict:
     if d.shape != (hits.height, hits.width, 3) or not np.all(np.isfinite(d)):
         raise ArgumentError("backward", "d_image", f"expected finite values of shape {(hits.height, hits.width, 3)}, "
                                                    f"got {d.shape}")
-    mats = geom.slot_materials(scene)
-    vec = lambda rows: wp.array(np.asarray(rows, np.float32).reshape(-1, 3), dtype=wp.vec3, device=device,  # noqa: E731
-                                requires_grad=True)
-    ka, kd, ks, kr = (vec([getattr(m, k) for m in mats] or [[0, 0, 0]]) for k in ("ka", "kd", "ks", "reflectivity"))
-    shininess = wp.array(np.asarray([m.shininess for m in mats] or [0.0], np.float32), dtype=float, device=device,
-                         requires_grad=True)
-    lights = scene.whitted_lights
-    light_pos = vec(geom.light_positions(scene) if lights else [[0, 0, 0]])
-    light_color = vec([l.color for l in lights] or [[0, 0, 0]])
-    inverse_square = wp.array(np.asarray([l.falloff == "inverse_square" for l in lights] or [0], np.int32),
-                              dtype=int, device=device)
-    image = wp.zeros(hits.width * hits.height, dtype=wp.vec3, device=device, requires_grad=True)
     moving = any(name.startswith("objects.") for name in wrt)
-    points = wp.array(geom.points_np, dtype=wp.vec3, device=device, requires_grad=True) if moving else geom.points
-    kernel = make_grad_shade_kernel(hits.lights, hits.levels, hits.smooth, moving)
-    eye = wp.vec3(*geom.eye_offset(scene.camera.eye))
     tape = wp.Tape()
     with tape:
-        wp.launch(kernel, dim=hits.width * hits.height,
-                  inputs=[eye, points, geom.indices, geom.normals, geom.tri_material, geom.tri_smooth, ka, kd, ks,
-                          shininess, kr, light_pos, light_color, inverse_square, wp.vec3(*scene.render.ambient),
-                          wp.vec3(*scene.render.background), hits.face, hits.bary, hits.dirs, hits.visible],
-                  outputs=[image], device=device)
-    tape.backward(grads={image: wp.array(d.reshape(-1, 3), dtype=wp.vec3, device=device)})
+        launched = replay(scene, geom, hits, device, moving)
+    rays, arrays = launched.rays, launched.arrays
+    # The image is the mean of each pixel's rays (sample_mean): its adjoint, d_image / samples to each ray.
+    d_rays = np.repeat(d.reshape(-1, 3), hits.samples, axis=0) / np.float32(hits.samples)
+    tape.backward(grads={rays: wp.array(d_rays, dtype=wp.vec3, device=device)})
     slot = {name: i for i, name in enumerate(geom.material_names)}
     whitted = [i for i, light in enumerate(scene.lights) if not light.area]
-    arrays = {"ka": ka, "kd": kd, "ks": ks, "shininess": shininess, "reflectivity": kr, "color": light_color,
-              "position": light_pos}
-    grads = {k: a.grad.numpy() for k, a in arrays.items()}
+    grads = {k: a.grad.numpy() for k, a in arrays.items() if k != "points"}
+
+    def texels(slot: int, key: str) -> np.ndarray:  # a texture's adjoint, (H, W, 3) with row 0 at the top
+        offset, h, w = launched.images[(slot, key)]
+        return grads["texels"][offset:offset + h * w].reshape(h, w, 3)[::-1].astype(np.float64)
+
     if moving:
-        point_grads = points.grad.numpy().astype(np.float64)
+        point_grads = arrays["points"].grad.numpy().astype(np.float64)
         starts = np.cumsum([0] + [len(o.vertices) for o in scene.objects])
     out = {}
     for name in wrt:
@@ -158,12 +309,21 @@ def backward(scene, geom, hits: FirstHits, d_image, wrt, device: str) -> dict:
             out[name] = point_grads[starts[i]:starts[i + 1]]
         elif section == "materials":
             if owner not in slot:  # a material no object uses
-                out[name] = np.zeros(() if key == "shininess" else (3,))
+                texture = getattr(scene.materials[owner], key, None) if key in TEXTURE_KEYS else None
+                out[name] = np.zeros(() if key == "shininess" else texture.image.shape if texture else (3,))
+                continue
+            if key in TEXTURE_KEYS:
+                out[name] = texels(slot[owner], key[:2])
+                if key == "kd_texture" and scene.materials[owner].ka_texture_follows_kd:  # as ka follows kd
+                    out[name] = out[name] + texels(slot[owner], "ka")
                 continue
             out[name] = grads[key][slot[owner]].astype(np.float64)
             if key == "kd" and scene.materials[owner].ka_follows_kd:  # ka is kd there (r.params keeps it so)
                 out[name] = out[name] + grads["ka"][slot[owner]]
         else:
             out[name] = grads[key][whitted.index(int(owner))].astype(np.float64)
+            if key == "direction":  # Light keeps d / |d| of the d it is given, |d| = 1: (I - d d^T) adjoint
+                unit = np.asarray(scene.lights[int(owner)].direction, np.float64)
+                out[name] = out[name] - unit * (unit @ out[name])
     tape.zero()
     return out

@@ -21,7 +21,7 @@ from ..scene import EffectSet, camera_basis, drawn_objects, validate_camera, val
 from ..timing import timed
 from .aovs import finish_aovs
 from .caches import SHADOW_GRIDS_KEPT, FrameCaches
-from .grad import backward as grad_backward, record_first_hits, refusal as grad_refusal
+from .grad import backward as grad_backward, check_record_memory, record_first_hits, refusal as grad_refusal
 from .launch import band_pool, bands_of, launch_bands, launch_plan
 from .memory import check_frame_memory, frame_estimate, frame_memory
 from .mirrors import MirrorFrame, empty_mirrors, mirror_frame
@@ -216,6 +216,8 @@ class Renderer:
             why = grad_refusal(scene, plan.fx) if grad else None
             if why is not None:
                 raise ArgumentError("render", "grad", why)
+            if grad:
+                check_record_memory(scene, plan.fx, o.device)
             pool = self._bands_pool(plan.threads)
             estimate = frame_estimate(scene, plan.grid.per_pixel, plan.raster)
             check_frame_memory(scene, _without_geometry(estimate, self._given), o.device)  # before any buffer
@@ -251,7 +253,9 @@ class Renderer:
 
     def backward(self, d_image, wrt=None) -> dict:
         """d(sum(d_image * image)) / d(param) at the last frame, rendered with grad=True, for each name in
-        ``wrt`` (r.params names: materials.<name>.ka | kd | ks | shininess, lights.<i>.color | position;
+        ``wrt`` (r.params names: materials.<name>.ka | kd | ks | shininess | reflectivity | ka_texture |
+        kd_texture | ks_texture (image textures' texels), lights.<i>.color |
+        position | direction, a flat object's objects.<name>.vertices;
         all of them by default): a dict of float64 NumPy arrays shaped as the parameters; kd's carries ka's
         where ka follows kd (as r.params keeps it following). ``d_image``: the derivative of a loss with
         respect to the image, (height, width, 3), a NumPy or Warp array."""

@@ -1,12 +1,13 @@
 """Gradients of an image through its camera rays' first hits (image/grad.py): a record kernel and a
 differentiable shading kernel.
 
-The record kernel finds each pixel's first hit as the tracer does (the camera ray through the pixel's
-centre, the BVH's closest hit, single-sided back faces passed through) and which Whitted lights it sees
-(the tracer's own spawn_ray and any-hit query): what the gradient holds fixed. The shading kernel
-recomputes the local Phong model at those hits from arrays a wp.Tape differentiates (the material
-colours and exponents per slot, the lights' positions and colours): C = C_amb ka + sum_l vis_l C_l w_l
-(kd n.L + ks max(0, r.v)^n), w_l = 1 / r^2 for inverse_square. Its lights loop is unrolled
+The record kernel finds each camera ray's hits as the tracer does (the rays through the centres of the
+pixel's strata, the BVH's closest hit, single-sided back faces passed through, the mirror rays) and which
+Whitted lights each hit sees (the tracer's own spawn_ray, light model and any-hit query): what the
+gradient holds fixed. The shading kernel recomputes the local Phong model at those hits from arrays a
+wp.Tape differentiates (the material colours and exponents per slot, their textures' texels, the lights'
+positions, colours and directions): C = C_amb ka + sum_l vis_l C_l w_l (kd n.L + ks max(0, r.v)^n), w_l a spot's cone times
+1 / r^2 for inverse_square (light_factor, shading.light_weight's arithmetic). Its lights loop is unrolled
 (wp.static): Warp does not replay a dynamic loop backwards, and a loop longer than max_unroll becomes one.
 """
 
@@ -15,81 +16,217 @@ from __future__ import annotations
 import functools
 
 from .._warp import wp
-from ..geometry import SceneData
-from .camera import CameraData, camera_ray
+from ..geometry import LIGHT_DIRECTIONAL, LIGHT_SPOT, SceneData
+from .camera import CameraData, camera_ray, sample_offset
 from .interaction import make_surface, reflect, spawn_ray
-from .shading import phong_specular
+from .shading import FAR, light_weight, phong_specular
 from .shadow import make_occluded
 from .trace import culled, past
 
 MAX_GRAD_LIGHTS = 16  # Warp's max_unroll: a longer static loop would silently turn dynamic
 
 
+@wp.func
+def spot_cone(cone: wp.vec4, cos_theta: float) -> float:
+    """shading.spot_profile with its cone as numbers, differentiable in cos_theta: cone = (cos cutoff,
+    cos beam, cutoff, 1 / (cutoff - beam)), LightShape's; 1 within the beam, 0 beyond the cutoff, linear
+    in the angle between."""
+    if cos_theta <= cone[0]:
+        return 0.0
+    if cos_theta >= cone[1]:
+        return 1.0
+    return (cone[2] - wp.acos(cos_theta)) * cone[3]
+
+
+@wp.func
+def light_factor(kind: int, cone: wp.vec4, inverse_square: int, axis: wp.vec3, to_light: wp.vec3,
+                 L: wp.vec3) -> float:
+    """shading.light_weight over arrays a tape differentiates (the light's axis among them): a spot's
+    profile at the angle between -L and its axis, over r^2 for inverse_square; the same arithmetic."""
+    w = 1.0
+    if kind == wp.static(LIGHT_SPOT):
+        w = spot_cone(cone, -wp.dot(L, axis))
+    if inverse_square != 0:
+        w = w / wp.dot(to_light, to_light)
+    return w
+
+
+TEXTURE_WRAP, TEXTURE_CLAMP, TEXTURE_MIRROR = 0, 1, 2  # Warp's TextureAddressMode (WRAP, CLAMP, MIRROR)
+TEXTURE_NONE, TEXTURE_IMAGE, TEXTURE_CHECKER = 0, 1, -1  # a colour's texture in the replay's table
+
+
+@wp.func
+def texture_coord(c: float, mode: int) -> float:
+    """Warp's CPU sampler's reduction of a normalised coordinate (cpu_texture_normalized_coord, Warp 1.19
+    native/texture.h): fmodf by the period (1; 2 mirrored), made positive; clamped coordinates as given."""
+    if mode == wp.static(TEXTURE_WRAP) or mode == wp.static(TEXTURE_MIRROR):
+        period = 1.0
+        if mode == wp.static(TEXTURE_MIRROR):
+            period = 2.0
+        c = wp.mod(c, period)
+        if c < 0.0:
+            c = c + period
+    return c
+
+
+@wp.func
+def texel_index(i: int, size: int, mode: int) -> int:
+    """Warp's CPU sampler's texel index for an axis of ``size`` texels (cpu_apply_address_mode_index):
+    repeated, clamped, or mirrored with period 2 size."""
+    if mode == wp.static(TEXTURE_CLAMP):
+        return wp.clamp(i, 0, size - 1)
+    if mode == wp.static(TEXTURE_MIRROR):
+        m = i % (2 * size)
+        if m < 0:
+            m = m + 2 * size
+        if m >= size:
+            m = 2 * size - m - 1
+        return m
+    m = i % size
+    if m < 0:
+        m = m + size
+    return m
+
+
+@wp.func
+def bilinear(texels: wp.array(dtype=wp.vec3), offset: int, width: int, height: int, wrap_u: int, wrap_v: int,
+             q: wp.vec2) -> wp.vec3:
+    """The bilinear texel at normalised coordinates q of a width x height RGB image stored row by row
+    (row 0 at v = 0) from ``offset`` in ``texels``: Warp's CPU wp.texture_sample of a LINEAR Texture2D
+    (cpu_sample_2d_channel_at_level), its arithmetic in the same order, differentiable in the texels and
+    in q (wp.texture_sample gives texels no adjoint)."""
+    tx = texture_coord(q[0], wrap_u) * float(width) - 0.5
+    ty = texture_coord(q[1], wrap_v) * float(height) - 0.5
+    if wrap_u == wp.static(TEXTURE_CLAMP):
+        tx = wp.max(0.0, wp.min(tx, float(width - 1)))
+    if wrap_v == wp.static(TEXTURE_CLAMP):
+        ty = wp.max(0.0, wp.min(ty, float(height - 1)))
+    x0 = int(wp.floor(tx))
+    y0 = int(wp.floor(ty))
+    fx = tx - float(x0)
+    fy = ty - float(y0)
+    xa = texel_index(x0, width, wrap_u)
+    xb = texel_index(x0 + 1, width, wrap_u)
+    ya = texel_index(y0, height, wrap_v)
+    yb = texel_index(y0 + 1, height, wrap_v)
+    v00 = texels[offset + ya * width + xa]
+    v10 = texels[offset + ya * width + xb]
+    v01 = texels[offset + yb * width + xa]
+    v11 = texels[offset + yb * width + xb]
+    v0 = v00 * (1.0 - fx) + v10 * fx
+    v1 = v01 * (1.0 - fx) + v11 * fx
+    return v0 * (1.0 - fy) + v1 * fy
+
+
+@wp.func
+def texture_factor(texels: wp.array(dtype=wp.vec3), shape: wp.vec4i, wrap: wp.vec2i, u_map: wp.vec3, v_map: wp.vec3,
+                   c0: wp.vec3, c1: wp.vec3, uv: wp.vec3) -> wp.vec3:
+    """texture.texel over the replay's table: what a colour is multiplied by at surface coordinates
+    uv (as (u, v, 1)): 1 untextured (shape[0] = TEXTURE_NONE), the checker's c0 or c1, or the image's
+    bilinear texel (shape = (TEXTURE_IMAGE, offset, width, height), wrap per axis)."""
+    if shape[0] == wp.static(TEXTURE_NONE):
+        return wp.vec3(1.0)
+    q = wp.vec2(wp.dot(u_map, uv), wp.dot(v_map, uv))
+    if shape[0] == wp.static(TEXTURE_CHECKER):
+        half = (wp.floor(q[0]) + wp.floor(q[1])) * 0.5
+        if half == wp.floor(half):
+            return c0
+        return c1
+    return bilinear(texels, shape[1], shape[2], shape[3], wrap[0], wrap[1], q)
+
+
 @functools.cache
-def make_grad_record_kernel(L: int, D: int, smooth: bool, shadows: bool, cull: bool):
-    """record(s, c, max_depth, first, face, bary, dirs, visible): per pixel (from ``first``) (row-major, row 0 the top) and ray level
+def make_grad_record_kernel(L: int, D: int, smooth: bool, shadows: bool, cull: bool, light_model: bool = False):
+    """record(s, c, max_depth, k, first, face, bary, dirs, visible): per camera ray (from ``first``: ray
+    pixel * k^2 + sample, pixels row-major, row 0 the top; sample j k + i the tracer's stratum (i, j),
+    camera.sample_offset, the pixel's centre where k = 1) and ray level
     (D at most: the camera ray, then the mirror rays the tracer spawns while k_r > 0 and max_depth allows),
     the face of the level's hit (-1: it met nothing, -2: no ray at that level), its barycentrics (u on the
     face's first vertex, v on its second), the ray's direction, and per light whether the hit sees it (1
-    where n.L > 0 and no shadow ray is blocked): the tracer's own surface, spawn_ray and any-hit query."""
+    where n.L > 0 and no shadow ray is blocked): the tracer's own surface, spawn_ray and any-hit query.
+    With ``light_model`` (spot and directional lights, falloff), shading's general light model: a spot
+    outside its cone is not seen, a directional light lies along -direction, its shadow ray unbounded."""
     surface = make_surface(smooth)
     occluded = make_occluded(False)
 
     @wp.kernel(module="unique", enable_backward=False)
-    def record(s: SceneData, c: CameraData, max_depth: int, first: int, face: wp.array(dtype=int),
+    def record(s: SceneData, c: CameraData, max_depth: int, k: int, first: int, face: wp.array(dtype=int),
                bary: wp.array(dtype=wp.vec2), dirs: wp.array(dtype=wp.vec3), visible: wp.array(dtype=int)):
-        pixel = first + wp.tid()
+        ray = first + wp.tid()
+        pixel = ray / (k * k)
         x = pixel % c.width
         row = pixel / c.width
+        offset = sample_offset(ray % (k * k), k)  # the trace kernel's: (0.5, 0.5) exactly where k = 1
         o = c.eye
-        d = camera_ray(c, x, row, 0.5, 0.5)
+        d = camera_ray(c, x, row, offset[0], offset[1])
         alive = True
         for level in range(wp.static(D)):
-            k = pixel * wp.static(D) + level
-            face[k] = -2
+            j = ray * wp.static(D) + level
+            face[j] = -2
             if alive:
-                dirs[k] = d
+                dirs[j] = d
                 q = wp.mesh_query_ray(s.mesh, o, d, 1.0e30)
                 if wp.static(cull):
                     while q.result and culled(s, q.face, d):
                         q = wp.mesh_query_ray(s.mesh, past(s, q.face, q.u, q.v, d), d, 1.0e30)
-                face[k] = -1
+                face[j] = -1
                 alive = False
                 if q.result:
-                    face[k] = q.face
-                    bary[k] = wp.vec2(q.u, q.v)
+                    face[j] = q.face
+                    bary[j] = wp.vec2(q.u, q.v)
                     hit = surface(s, q.face, q.u, q.v, q.normal, d)
                     for l in range(wp.static(L)):
-                        to_light = s.light_pos[l] - hit.p
-                        L_dir = wp.normalize(to_light)
+                        lit = True
+                        directional = False
+                        if wp.static(light_model):  # shading's: its test, then its shadow ray
+                            shape = s.light_shape[l]
+                            directional = shape.kind == wp.static(LIGHT_DIRECTIONAL)
+                            to_light = -shape.direction
+                            if not directional:
+                                to_light = s.light_pos[l] - hit.p
+                            L_dir = wp.normalize(to_light)
+                            lit = light_weight(shape, to_light, L_dir) > 0.0
+                        else:
+                            to_light = s.light_pos[l] - hit.p
+                            L_dir = wp.normalize(to_light)
                         seen = int(0)
-                        if wp.dot(hit.n, L_dir) > 0.0:
+                        if lit and wp.dot(hit.n, L_dir) > 0.0:
                             seen = 1
                             if wp.static(shadows):
                                 so = spawn_ray(hit, L_dir).o
                                 to_light_o = s.light_pos[l] - so
                                 dist = wp.length(to_light_o)
-                                if occluded(s, l, so, to_light_o / dist, dist):
+                                sd = to_light_o / dist
+                                if directional:  # its position is NaN: the ray above is replaced
+                                    sd = L_dir
+                                    dist = FAR
+                                if occluded(s, l, so, sd, dist):
                                     seen = 0
-                        visible[k * wp.static(L) + l] = seen
+                        visible[j * wp.static(L) + l] = seen
                     if level + 1 < max_depth and wp.max(s.kr[hit.material]) > 0.0:
-                        ray = spawn_ray(hit, wp.normalize(reflect(d, hit.n)))
-                        o = ray.o
-                        d = ray.d
+                        spawned = spawn_ray(hit, wp.normalize(reflect(d, hit.n)))
+                        o = spawned.o
+                        d = spawned.d
                         alive = True
 
     return record
 
 
 @functools.cache
-def make_grad_shade_kernel(L: int, D: int, smooth: bool, vertices: bool = False):
-    """shade(...): each pixel's colour from the recorded hit and visibility and the differentiable
+def make_grad_shade_kernel(L: int, D: int, smooth: bool, vertices: bool = False, light_model: bool = False,
+                           texture: bool = False):
+    """shade(...): each camera ray's colour (one per pixel and sample, as recorded; sample_mean makes
+    them the image) from the recorded hit and visibility and the differentiable
     material and light arrays, over the recorded ray levels (D at most), each weighted by the product of
     the k_r of the mirrors before it; the background where a ray met nothing. With ``vertices`` (camera
     rays alone, D = 1), the
     hit's barycentrics are those of the camera ray (from ``eye``) and the recorded face recomputed from
     ``points`` by a differentiable Moller-Trumbore test, so that the hit point moves with the vertices
-    (Warp's mesh query gives the points no adjoint); without, the recorded ones."""
+    (Warp's mesh query gives the points no adjoint); without, the recorded ones. With ``light_model``,
+    shading's general light model (light_factor): a directional light's L is -its axis, a spot's C_l is
+    weighted by its cone, an inverse_square light's by 1 / r^2; without, the seed's point lights. With
+    ``texture``, ka, kd and ks times their textures at the hit's interpolated uv (texture_factor: the
+    table's row 3 m + 0, 1, 2 for material slot m), the images' texels differentiable."""
 
     @wp.kernel(module="unique")
     def shade(eye: wp.vec3, points: wp.array(dtype=wp.vec3), indices: wp.array(dtype=int), normals: wp.array(dtype=wp.vec3),
@@ -97,13 +234,17 @@ def make_grad_shade_kernel(L: int, D: int, smooth: bool, vertices: bool = False)
               ka: wp.array(dtype=wp.vec3), kd: wp.array(dtype=wp.vec3), ks: wp.array(dtype=wp.vec3),
               shininess: wp.array(dtype=float), kr: wp.array(dtype=wp.vec3), light_pos: wp.array(dtype=wp.vec3),
               light_color: wp.array(dtype=wp.vec3), inverse_square: wp.array(dtype=int),
+              light_kind: wp.array(dtype=int), light_axis: wp.array(dtype=wp.vec3), light_cone: wp.array(dtype=wp.vec4),
+              uvs: wp.array(dtype=wp.vec2), texels: wp.array(dtype=wp.vec3), tex_shape: wp.array(dtype=wp.vec4i),
+              tex_wrap: wp.array(dtype=wp.vec2i), tex_u: wp.array(dtype=wp.vec3), tex_v: wp.array(dtype=wp.vec3),
+              tex_c0: wp.array(dtype=wp.vec3), tex_c1: wp.array(dtype=wp.vec3),
               ambient: wp.vec3, background: wp.vec3, face: wp.array(dtype=int), bary: wp.array(dtype=wp.vec2),
               dirs: wp.array(dtype=wp.vec3), visible: wp.array(dtype=int), image: wp.array(dtype=wp.vec3)):
-        pixel = wp.tid()
+        ray = wp.tid()
         color = wp.vec3(0.0)
         weight = wp.vec3(1.0)
         for level in range(wp.static(D)):
-            k = pixel * wp.static(D) + level
+            k = ray * wp.static(D) + level
             f = face[k]
             if f == -1:
                 color = color + wp.cw_mul(weight, background)
@@ -140,19 +281,51 @@ def make_grad_shade_kernel(L: int, D: int, smooth: bool, vertices: bool = False)
                         if wp.length(ns) > 0.0:
                             n = wp.normalize(ns) * side
                 m = tri_material[f]
-                local = wp.cw_mul(ambient, ka[m])
+                ka_m = ka[m]
+                kd_m = kd[m]
+                ks_m = ks[m]
+                if wp.static(texture):  # shading.make_coefficients: the colour times its texture at uv
+                    t = uvs[i0] * u + uvs[i1] * v + uvs[i2] * w
+                    uv = wp.vec3(t[0], t[1], 1.0)
+                    j = 3 * m
+                    ka_m = wp.cw_mul(ka_m, texture_factor(texels, tex_shape[j], tex_wrap[j], tex_u[j], tex_v[j],
+                                                          tex_c0[j], tex_c1[j], uv))
+                    kd_m = wp.cw_mul(kd_m, texture_factor(texels, tex_shape[j + 1], tex_wrap[j + 1], tex_u[j + 1],
+                                                          tex_v[j + 1], tex_c0[j + 1], tex_c1[j + 1], uv))
+                    ks_m = wp.cw_mul(ks_m, texture_factor(texels, tex_shape[j + 2], tex_wrap[j + 2], tex_u[j + 2],
+                                                          tex_v[j + 2], tex_c0[j + 2], tex_c1[j + 2], uv))
+                local = wp.cw_mul(ambient, ka_m)
                 for l in range(wp.static(L)):
                     if visible[k * wp.static(L) + l] != 0:
-                        to_light = light_pos[l] - p
-                        L_dir = wp.normalize(to_light)
-                        n_dot_l = wp.dot(n, L_dir)
                         C_l = light_color[l]
-                        if inverse_square[l] != 0:
-                            C_l = C_l / wp.dot(to_light, to_light)
-                        lit = kd[m] * n_dot_l + phong_specular(ks[m], shininess[m], n, L_dir, -d, n_dot_l)
+                        if wp.static(light_model):
+                            to_light = -light_axis[l]
+                            if light_kind[l] != wp.static(LIGHT_DIRECTIONAL):
+                                to_light = light_pos[l] - p
+                            L_dir = wp.normalize(to_light)
+                            C_l = C_l * light_factor(light_kind[l], light_cone[l], inverse_square[l], light_axis[l],
+                                                     to_light, L_dir)
+                        else:  # the seed's point lights: no falloff
+                            to_light = light_pos[l] - p
+                            L_dir = wp.normalize(to_light)
+                        n_dot_l = wp.dot(n, L_dir)
+                        lit = kd_m * n_dot_l + phong_specular(ks_m, shininess[m], n, L_dir, -d, n_dot_l)
                         local = local + wp.cw_mul(C_l, lit)
                 color = color + wp.cw_mul(weight, local)
                 weight = wp.cw_mul(weight, kr[m])
-        image[pixel] = color
+        image[ray] = color
 
     return shade
+
+
+@wp.kernel(enable_backward=False)
+def sample_mean(rays: wp.array(dtype=wp.vec3), samples: int, image: wp.array(dtype=wp.vec3)):
+    """Each pixel's colour from its ``samples`` camera rays' (in sample order) as the trace kernel makes it,
+    their sum divided by their number, so the replayed image is the traced one to float32 rounding. Its
+    adjoint, linear, is d_image / samples to each ray (image/grad.py gives it to the tape); this kernel
+    has none, its loop being dynamic."""
+    pixel = wp.tid()
+    total = wp.vec3(0.0)
+    for sample in range(samples):
+        total = total + rays[pixel * samples + sample]
+    image[pixel] = total / float(samples)
