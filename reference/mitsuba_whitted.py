@@ -158,8 +158,8 @@ def _register_integrator(mi, dr):
                 # The emitter's sampled point: for a directional light, beyond the scene's bounding sphere.
                 term, lit = self.phong(scene, si, ds.d, ds.p, active, kd, ks, shininess, n, v)
                 color += dr.select(lit, light_color * term, 0.0)
-            for emitter, shape in zip(t.area, t.area_shapes):
-                color += self.area_light(scene, si, emitter, shape, kd, ks, shininess, n, v, active)
+            for emitter, shape, uv in zip(t.area, t.area_shapes, t.area_uv):
+                color += self.area_light(scene, si, emitter, shape, uv, kd, ks, shininess, n, v, active)
             return color
 
         def phong(self, scene, si, L, target, lit, kd, ks, shininess, n, v):
@@ -188,9 +188,10 @@ def _register_integrator(mi, dr):
             emitter = si.emitter(scene, active) if active else None
             return emitter.eval(si, active) if emitter is not None else mi.Color3f(0.0)
 
-        def area_light(self, scene, si, emitter, shape, kd, ks, shininess, n, v, active):
-            """One area light at si: warprt's fixed sample points (the k x k cell centres of the unit square)
-            handed to Mitsuba's own emitter.sample_direction, which places each on the shape as its
+        def area_light(self, scene, si, emitter, shape, uv, kd, ks, shininess, n, v, active):
+            """One area light at si: warprt's fixed sample points ``uv`` of the unit square (the k x k cell
+            centres for a shape, the Fibonacci lattice for a mesh: sample_coordinates) handed to Mitsuba's
+            own emitter.sample_direction, which places each on the shape as its
             sample_position does and weighs it L_e |cos'| A / r^2 (0 from behind: one-sided); each point,
             weight / k^2, lights the Phong terms as a point light would, through one shadow ray."""
             t = self.tables
@@ -198,7 +199,7 @@ def _register_integrator(mi, dr):
             sphere = shape.shape_type() == mi.ShapeType.Sphere
             if sphere:  # Mitsuba's sphere samples directions by its cone: its sample_position is warprt's rule
                 radiance, area = mi.Color3f(mi.traverse(emitter)["radiance.value"]), shape.surface_area()
-            for a, b in t.area_uv:
+            for a, b in uv:
                 if sphere:
                     ps = shape.sample_position(si.time, mi.Point2f(a, b), active)
                     to_p = ps.p - si.p
@@ -359,7 +360,10 @@ class _Tables:
         self.area_shapes = [shape for shape, _ in area]  # kept alive: an emitter points to its shape
         self.area = [emitter for _, emitter in area]
         k = math.isqrt(scene.render.light_samples) if self.area else 0
-        self.area_uv = [((i + 0.5) / k, (j + 0.5) / k) for j in range(k) for i in range(k)]
+        # Per area light, warprt's own points of the unit square (scene.area_lights' order, as ``area``).
+        from warprt.scene import sample_coordinates
+
+        self.area_uv = [list(zip(*(c.tolist() for c in sample_coordinates(light, k)))) for light in scene.area_lights]
         self.area_share = 1.0 / (k * k) if self.area else 0.0
         self.attributes = attributes  # whether the shapes carry Attributes BSDFs (textures, vertex colours)
         # Whether textured materials take their texture from the shape's own Mitsuba BSDF (a scene file's).

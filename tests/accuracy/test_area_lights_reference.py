@@ -64,8 +64,9 @@ def room_reference():
 
 
 def test_mitsubas_emitters_place_warprts_sample_points():
-    """The reference's premise: Mitsuba's sample_direction at warprt's cell centres lands on the points
-    warprt's kernels use (float32 apart), for a rectangle, a disk and an object light."""
+    """The reference's premise: Mitsuba's sample_direction at warprt's points of the unit square (cell
+    centres for a shape, the Fibonacci lattice for a mesh) lands on the points warprt's kernels use (float32
+    apart), for a rectangle, a disk and an object light."""
     mitsuba_variant()
     import mitsuba as mi
 
@@ -75,10 +76,10 @@ def test_mitsubas_emitters_place_warprts_sample_points():
     tables = MitsubaScene(scene).integrator.tables
     it = mi.Interaction3f()
     it.p, it.t, it.time = mi.Point3f(0.1, 0.2, 0.3), mi.Float(0.0), mi.Float(0.0)
-    for light, emitter in zip(scene.area_lights, tables.area):
+    for light, emitter, uv in zip(scene.area_lights, tables.area, tables.area_uv):
         points, _, _ = emitter_samples(scene, light, 4)
         placed = []
-        for a, b in tables.area_uv:
+        for a, b in uv:
             ds, _ = emitter.sample_direction(it, mi.Point2f(a, b))
             placed.append(np.array(ds.p, np.float64).ravel())
         assert np.abs(np.array(placed) - points).max() < 1e-5, light

@@ -120,6 +120,21 @@ def test_an_object_emits_as_an_area_light_over_its_triangles():
     assert floor_point([light], samples=256, objects=[lamp]) == pytest.approx(expected, rel=0.01)
 
 
+
+def test_a_fine_mesh_lamp_gets_its_light_from_all_of_its_surface():
+    """An emitting icosphere of 1,280 triangles (radius 0.5, centre 2 above the point): pi L_e R^2 / d^2,
+    the sphere's closed form, within 1% at 1,024 and 4,096 points (measured -0.26%, -0.36%: the facets lie
+    inside the sphere). The Fibonacci lattice gives every point its own place along the mesh's area; a
+    k x k grid sampled k triangles, each along a line (measured -96% at 1,024). 16 points are a coarse
+    quadrature of it (the control: more than 10% off)."""
+    bulb = {"shape": "sphere", "name": "bulb", "subdivisions": 3, "smooth": False, "translate": [0.0, 2.0, 0.0],
+            "scale": [0.5] * 3, "material": "plate"}
+    light = {"type": "area", "radiance": [L_E] * 3, "object": "bulb"}
+    expected = KD * math.pi * L_E * 0.25 / 4.0
+    for samples in (1024, 4096):
+        assert floor_point([light], samples=samples, objects=[bulb]) == pytest.approx(expected, rel=0.01)
+    assert abs(floor_point([light], samples=16, objects=[bulb]) / expected - 1.0) > 0.1
+
 @pytest.mark.parametrize("algorithm", ["raytrace", "zbuffer"])
 def test_an_area_lights_own_surface_shows_its_radiance_from_the_front_only(algorithm):
     """The tracer's camera rays and the Z-buffer's visible samples alike."""

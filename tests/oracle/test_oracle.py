@@ -122,3 +122,14 @@ def test_whitted_traces_the_local_model_and_the_mirror_bounce():
     trace = Whitted(scene, sw).pixel(10, 20)
     np.testing.assert_allclose(trace.color, [0.1 + 0.5, 0.2 + 0.5, 0.3 + 0.3])
     assert trace.margin > 0.01  # a pixel far from every edge and tie
+
+
+def test_cylinder_quadrature_meets_the_infinite_cylinders_closed_form():
+    """The CylinderLight oracle is a quadrature: a cylinder 1000 times longer than its height is the
+    infinite one, E = pi L r / h (Howell's F = r / h), to 1e-6; a short one gets less."""
+    import math
+
+    from oracle.area import cylinder_below_irradiance
+
+    assert cylinder_below_irradiance(2.0, 0.25, 1500.0, 1.5) == pytest.approx(math.pi * 2.0 * 0.25 / 1.5, rel=1e-6)
+    assert cylinder_below_irradiance(2.0, 0.25, 1.0, 1.5) < 0.5 * math.pi * 2.0 * 0.25 / 1.5

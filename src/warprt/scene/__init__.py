@@ -11,7 +11,7 @@ alone (the camera basis, vertex normals, the effect set).
 from ..memo import ObjectCache
 from . import shapes
 from .area import (EMITTER_MATERIAL, EMITTER_MATERIAL_NAME, drawn_objects, emitter_area, emitter_of_triangles,
-                   emitter_samples, shape_frame)
+                   emitter_samples, sample_coordinates, shape_frame)
 from .camera import CameraBasis, camera_basis, pixel_ray_directions
 from .dielectric import eye_medium, open_edges, signed_volume, winding_number
 from .dielectric_formats import DEFAULT_IOR, dielectric_from_gltf, dielectric_from_mtl, dielectric_from_usd
@@ -28,7 +28,7 @@ from .toml_fields import TableReader, did_you_mean, read_toml
 from .validate import MAX_REACH, CheckedContent, check_setting, validate_camera, validate_scene, validate_view
 
 __all__ = ["EMITTER_MATERIAL", "EMITTER_MATERIAL_NAME", "drawn_objects", "emitter_area", "emitter_of_triangles",
-           "emitter_samples", "shape_frame", "Camera", "camera_basis", "CameraBasis", "CheckedContent", "check_setting", "DEFAULT_IOR", "DEFAULT_MATERIAL",
+           "emitter_samples", "sample_coordinates", "shape_frame", "Camera", "camera_basis", "CameraBasis", "CheckedContent", "check_setting", "DEFAULT_IOR", "DEFAULT_MATERIAL",
            "did_you_mean", "dielectric_from_gltf", "dielectric_from_mtl", "dielectric_from_usd", "EFFECTS", "EffectSet",
            "eye_medium", "input_kind", "Light", "load_dict", "load_mitsuba_file", "load_scene", "Material", "MAX_REACH", "ObjectCache", "open_edges",
            "pixel_ray_directions", "mitsuba_camera", "read_mesh_file", "read_toml", "read_mitsuba_xml", "reads_mitsuba_light", "reads_mitsuba_shape", "RenderSettings", "resolve_effects", "rotation", "Scene",

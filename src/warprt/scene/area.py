@@ -1,11 +1,15 @@
 """Area lights as geometry: the surface a ``type = "area"`` light emits from (its own rectangle or disk,
 drawn as triangles, or the triangles of the objects it names) and its fixed stratified sample points.
 
-The points are a pure function of the light and ``light_samples`` = k*k: the centres of a k x k grid of
-cells on the unit square, mapped as Mitsuba's shapes map a sample in their ``sample_position``: a
-rectangle's (2a - 1, 2b - 1) on its half-edges, a disk's concentric map (Shirley and Chiu), a mesh's
-triangle chosen by area from a and the rest of a with b on that triangle (Mitsuba's
-``square_to_uniform_triangle``). Each map preserves area, so each point stands for A / N of the surface.
+The points are a pure function of the light and ``light_samples`` = N = k*k: N points (a, b) of the unit
+square (sample_coordinates), mapped as Mitsuba's shapes map a sample in their ``sample_position``: a
+rectangle's (2a - 1, 2b - 1) on its half-edges, a disk's concentric map (Shirley and Chiu), a sphere's
+(z = 1 - 2b, phi = 2 pi a), a mesh's triangle chosen by area from b and the rest of b with a on that triangle
+(Mitsuba's ``square_to_uniform_triangle``). Each map preserves area, so each point stands for A / N of the
+surface. A shape light takes the centres of a k x k grid of cells; a mesh the Fibonacci lattice
+((n + 1/2) / phi mod 1, (n + 1/2) / N): with a grid's k rows of b, only k of a mesh's triangles were sampled,
+each along one line, which lit a floor under a 1,280-triangle sphere lamp at 17% of its closed form at 16
+points and 48% at 4,096 (the lattice: within 0.4% from 1,024 points).
 """
 
 from __future__ import annotations
@@ -119,6 +123,22 @@ def emitter_of_triangles(scene) -> np.ndarray:
     return np.concatenate(out) if out else np.zeros(0, np.int32)
 
 
+GOLDEN = (math.sqrt(5.0) - 1.0) / 2.0  # 1 / phi
+
+
+def fibonacci_lattice(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """(a, b): n points of the unit square, a_i = (i + 1/2) / phi mod 1, b_i = (i + 1/2) / n, i < n: every
+    point its own b (its own place along a mesh's area), and a spread by the golden ratio."""
+    i = np.arange(n) + 0.5
+    return np.mod(i * GOLDEN, 1.0), i / n
+
+
+def sample_coordinates(light, k: int) -> tuple[np.ndarray, np.ndarray]:
+    """(a, b): the k*k points of the unit square an area light's samples are mapped from: the cell centres of
+    a k x k grid for a shape light, the Fibonacci lattice for an object light (a mesh)."""
+    return cell_centres(k) if light.shape is not None else fibonacci_lattice(k * k)
+
+
 def cell_centres(k: int) -> tuple[np.ndarray, np.ndarray]:
     """(a, b): the centres of a k x k grid of cells on the unit square, row by row."""
     c = (np.arange(k) + 0.5) / k
@@ -141,7 +161,7 @@ def concentric_disk(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 def emitter_samples(scene, light, k: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The k*k sample points of an area light in world space (float64): (points, unit normals, the area
     each stands for), the normals on the emitting side."""
-    a, b = cell_centres(k)
+    a, b = sample_coordinates(light, k)
     count = k * k
     if light.shape == "rectangle":
         c, u, v = rectangle_axes(light)

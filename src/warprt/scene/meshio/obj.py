@@ -28,7 +28,7 @@ _OBJ_QUIET = {"o", "g", "vp", "l", "p", "cstype", "deg", "bmat", "step", "curv",
               "hole", "scrv", "sp", "end", "con", "mg", "bevel", "c_interp", "d_interp", "lod", "maplib", "usemap",
               "shadow_obj", "trace_obj", "ctech", "stech", "call", "csh"}
 # MTL statements for what Phong has no term for (refraction, PBR, bump and displacement): ignored
-# quietly; transparency and emission are warned about when a material has them.
+# quietly; transparency is warned about when a material has it. Ke is the emission (an area light).
 _MTL_QUIET = {"pr", "pm", "ps", "pc", "pcr", "aniso", "anisor", "sharpness", "map_ns", "map_bump", "bump",
               "disp", "decal", "refl", "norm", "map_pr", "map_pm", "map_ps", "map_refl", "map_aat"}
 _MAP_OPTIONS = {"-blendu": 1, "-blendv": 1, "-bm": 1, "-boost": 1, "-cc": 1, "-clamp": 1, "-imfchan": 1,
@@ -380,11 +380,15 @@ def _phong(src: str, e: dict) -> Material:
     glass = dielectric_from_mtl(e, src, e["name"])
     if not glass and (e.get("d", 1.0) < 1.0 or e.get("tr", 0.0) > 0.0 or e.get("ignored_map_d")):
         warn(src, where, "transparency (d, Tr, map_d) is not rendered; the material is opaque")
-    if max(e.get("ke", (0.0, 0.0, 0.0))) > 0.0 or e.get("ignored_map_ke"):
-        warn(src, where, "emission (Ke, map_Ke) is not rendered")
+    # Ke: the radiance the material emits (its objects become area lights); Blender writes Ke 0 0 0 for
+    # every material, which emits nothing.
+    ke = e.get("ke", (0.0, 0.0, 0.0))
+    emission = tuple(ke) if max(ke) > 0.0 else None
+    if e.get("ignored_map_ke"):
+        warn(src, where, "an emission map (map_Ke) is not read" + ("; Ke is emitted everywhere" if emission else ""))
     # No Ka: ka is kd with kd's map (Material's own default).
     return replace(Material(kd=kd, ka=ka, ks=ks, shininess=max(ns, 0.0), reflectivity=kr, kd_texture=textures.get("kd"),
-                            ka_texture=textures.get("ka"), ks_texture=textures.get("ks")), **glass)
+                            ka_texture=textures.get("ka"), ks_texture=textures.get("ks"), emission=emission), **glass)
 
 
 def _rgb(src: str, name: str, key: str, rest: str) -> tuple:

@@ -5,8 +5,10 @@ What is read: points, faceVertexCounts/Indices, holeIndices (polygons fanned as 
 orientation, the prim's world transform; the st primvar a bound UsdUVTexture reads (through its
 UsdPrimvarReader), normals (primvars:normals before the normals attribute) and displayColor, each of
 any interpolation, indexed or not; diffuseColor (a value, or a UsdUVTexture with its scale and
-bias), per prim and per GeomSubset; metersPerUnit and upAxis where the stage authors them; UsdGeomCamera
-prims as cameras and UsdLux sphere, disk and distant lights (ShapingAPI cones as spots) as lights.
+bias), and emissiveColor (a value: the material's emission, an area light over its objects), per prim
+and per GeomSubset; metersPerUnit and upAxis where the stage authors them; UsdGeomCamera prims as cameras;
+UsdLux rect, disk and sphere lights as area lights (points where they have no size), distant lights,
+ShapingAPI cones as spots, and cylinder lights as emitting tubes (a part with its own emissive material).
 """
 
 from __future__ import annotations
@@ -23,11 +25,13 @@ from ...errors import SceneError, one_line
 from ..dielectric_formats import dielectric_from_usd
 from ..camera import FileCamera, look_from_matrix
 from ..model import Light, Material
+from ..shapes import cylinder
 from ..texture import Texture, image_texture
 from .usdcrate import MAGIC as CRATE_MAGIC, check_crate
 from . import MeshFile, MeshPart, dedupe, fan_corners, unique_name, unit_rows, weld_corners
 
 _USD_GREY = (0.18, 0.18, 0.18)  # UsdPreviewSurface's diffuseColor when not authored
+CYLINDER_LIGHT_SECTORS = 128  # a CylinderLight's tube: its area 1 - 1e-4 of the true cylinder's
 
 
 def read_usd(path: Path) -> MeshFile:
@@ -149,6 +153,10 @@ class _Stage:
                 continue
             if is_camera:
                 cameras.append(self._camera(prim, [c.name for c in cameras]))
+            elif prim.IsA(UsdLux.CylinderLight):  # an emitting surface: a part of its own
+                part = self._cylinder_light(prim)
+                if part is not None:
+                    parts.append(part)
             else:
                 light = self._light(prim)
                 if light is not None:
@@ -222,6 +230,45 @@ class _Stage:
         softness = min(max(float(shaping.GetShapingConeSoftnessAttr().Get(t) or 0.0), 0.0), 1.0)
         return Light(position=position, color=c_l, type="spot", direction=direction, cutoff_angle=float(angle),
                      beam_width=float(angle) * (1.0 - softness), falloff="inverse_square", name=name)
+
+    def _cylinder_light(self, prim) -> MeshPart | None:
+        """A CylinderLight (UsdLux: length along its x, radius, emitting outwards from its side, not its
+        caps) as a tube of CYLINDER_LIGHT_SECTORS quads placed by the prim's transform, with a material of
+        its own that emits C_l (over the tube's area with normalize) and reflects nothing: an emissive
+        object, an area light over its triangles."""
+        from pxr import UsdLux
+
+        where, t = str(prim.GetPath()), self.time
+        light = UsdLux.CylinderLight(prim)
+        length, radius = float(light.GetLengthAttr().Get(t)), float(light.GetRadiusAttr().Get(t))
+        if not (length > 0.0 and radius > 0.0):
+            warn(self.src, where, f"a CylinderLight of length {length:g} and radius {radius:g} emits from no surface: skipped")
+            return None
+        if light.GetTreatAsLineAttr().Get(t):
+            warn(self.src, where, f"treatAsLine is not read: the light is a cylinder of radius {radius:g}")
+        if prim.HasAPI(UsdLux.ShapingAPI):
+            warn(self.src, where, "shaping (a cone) is not read for an area light: it emits over its hemisphere")
+        api = UsdLux.LightAPI(prim)
+        c_l = np.asarray(api.GetColorAttr().Get(t), np.float64) * float(api.GetIntensityAttr().Get(t)) \
+            * 2.0 ** float(api.GetExposureAttr().Get(t))
+        if api.GetEnableColorTemperatureAttr().Get(t):
+            warn(self.src, where, "colour temperature is not read; the light's colour is used")
+        v, f = cylinder(radius, length, CYLINDER_LIGHT_SECTORS)
+        n = CYLINDER_LIGHT_SECTORS
+        v, f = v[:2 * n], f[:2 * n]  # the side; the caps (and their centres) do not emit
+        v = v[:, [1, 0, 2]] * [1.0, -1.0, 1.0]  # along x: a rotation about z (y to x, x to -y), winding kept
+        to_world = np.asarray(self.xforms.GetLocalToWorldTransform(prim), np.float64)
+        vertices = (v @ to_world[:3, :3] + to_world[3, :3]) * self.meters
+        area = 0.5 * float(np.linalg.norm(np.cross(vertices[f[:, 1]] - vertices[f[:, 0]],
+                                                   vertices[f[:, 2]] - vertices[f[:, 0]]), axis=1).sum())
+        radiance = c_l / (area if api.GetNormalizeAttr().Get(t) else 1.0)
+        if not np.any(radiance > 0.0):
+            warn(self.src, where, "a black CylinderLight emits nothing: skipped")
+            return None
+        emitter = Material(kd=(0.0, 0.0, 0.0), ka=(0.0, 0.0, 0.0), ks=(0.0, 0.0, 0.0),
+                           emission=tuple(float(x) for x in radiance))
+        slot = self._material(f"{where} (light)", f"{prim.GetName()} (light)", lambda: emitter)
+        return MeshPart(where, vertices, f, np.full(len(f), slot, np.int64))
 
     def _area_light(self, prim, m: np.ndarray, c_l: tuple, name: str) -> Light:
         """A RectLight, DiskLight or SphereLight as an area light: its extent placed by the prim's transform
@@ -421,16 +468,30 @@ class _Stage:
 
     def _phong(self, mat) -> tuple[Material, str | None]:
         """UsdPreviewSurface's diffuseColor as kd (= ka), a value or a UsdUVTexture; an opacity below 1
-        makes a dielectric (dielectric_from_usd); and the primvar the texture reads its st from."""
+        makes a dielectric (dielectric_from_usd); a non-zero emissiveColor value is the material's
+        emission (its objects become area lights); and the primvar the texture reads its st from."""
+        material, uv_name = self._surface(mat)
+        shader = mat.ComputeSurfaceSource()[0]
+        if shader and shader.GetIdAttr().Get() == "UsdPreviewSurface" and shader.GetInput("emissiveColor"):
+            source = _source(shader.GetInput("emissiveColor"))[0]
+            if source is not None:
+                warn(self.src, str(mat.GetPath()), f"emissiveColor from a {source.GetIdAttr().Get()} shader is not read")
+            else:
+                value = _value(shader, "emissiveColor")
+                emission = tuple(max(0.0, float(x)) for x in value) if value is not None else (0.0, 0.0, 0.0)
+                if max(emission) > 0.0:
+                    material = replace(material, emission=emission)
+        return material, uv_name
+
+    def _surface(self, mat) -> tuple[Material, str | None]:
         where = str(mat.GetPath())
         shader = mat.ComputeSurfaceSource()[0]
         if not shader or shader.GetIdAttr().Get() != "UsdPreviewSurface":
             return Material(kd=_USD_GREY, ka=_USD_GREY, ks=(0.0, 0.0, 0.0)), None
         glass = dielectric_from_usd(shader)
-        for inp, what, idle in (("opacity", "transparency (opacity)", 1.0), ("emissiveColor", "emission", (0, 0, 0))):
-            value = _value(shader, inp)
-            if value is not None and (np.asarray(value, np.float64) != np.asarray(idle)).any() and not (glass and inp == "opacity"):
-                warn(self.src, where, f"{what} is not rendered")
+        value = _value(shader, "opacity")
+        if value is not None and float(value) != 1.0 and not glass:
+            warn(self.src, where, "transparency (opacity) is not rendered")
         inp = shader.GetInput("diffuseColor")
         source, output, last = _source(inp) if inp else (None, None, None)
         grey = replace(Material(kd=_USD_GREY, ka=_USD_GREY, ks=(0.0, 0.0, 0.0)), **glass)
