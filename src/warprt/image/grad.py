@@ -96,9 +96,10 @@ def check_record_memory(scene, fx, device: str):
     need = record_bytes(scene, fx)
     available, what = available_memory(device)
     if available is not None and need > available:
+        samples = ", render.light_samples" if fx.area_lights else ""  # a bit per area-light sample and level
         raise ArgumentError("render", "grad", f"the gradient's record of this frame needs about {human(need)} "
                             f"(per camera ray and ray level), more than the {human(available)} {what}: lower "
-                            f"render.spp, render.max_depth, render.light_samples or camera.width and camera.height")
+                            f"render.spp, render.max_depth{samples} or camera.width and camera.height")
 
 
 @dataclass

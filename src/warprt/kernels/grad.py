@@ -228,14 +228,14 @@ def make_grad_record_kernel(L: int, D: int, smooth: bool, shadows: bool, cull: b
                                 n_dot_l = wp.dot(hit.n, L_q)
                                 cos_q = -wp.dot(a.normals[sq], L_q)
                                 if n_dot_l > 0.0 and cos_q > 0.0:
-                                    lit_q = True
+                                    lit_q = int(1)  # not a constant: Warp's dynamic loop may not mutate one
                                     if wp.static(shadows):
                                         qo = spawn_ray(hit, L_q).o
                                         to_q_o = a.points[sq] - qo
                                         dist_q = wp.length(to_q_o)
-                                        lit_q = not occluded(s, -1, qo, to_q_o / dist_q,
-                                                             dist_q * wp.static(1.0 - SHADOW_EPSILON))
-                                    if lit_q:
+                                        if occluded(s, -1, qo, to_q_o / dist_q, dist_q * wp.static(1.0 - SHADOW_EPSILON)):
+                                            lit_q = 0
+                                    if lit_q != 0:
                                         word = j * words + sq / 32
                                         area_bits[word] = area_bits[word] | (1 << (sq % 32))
                     if level + 1 < max_depth and wp.max(s.kr[hit.material]) > 0.0:
