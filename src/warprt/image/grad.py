@@ -9,11 +9,13 @@ fixed, as a visibility-fixed derivative is (an edge or a shadow's edge moving ac
 derivative here); the local Phong terms are exact functions of the material colours and exponents, of
 the lights' colours, positions and directions (point, spot and directional lights, shading's light
 model: a spot's cone, 1 / r^2 falloff), of image textures' texels (the forward's bilinear wp.Texture2D
-lookup written over a wp.array: kernels.bilinear), and of a flat object's vertices (the hit recomputed on
-the moved face). The image is the mean of each pixel's rays, as the trace kernel makes it. Covered for
-now: any render.spp, camera and mirror rays (no glass), image and checker textures, no vertex colours, no
-area lights; any other scene is refused in one line naming what is not yet differentiated, so a gradient is
-never silently partial.
+lookup written over a wp.array: kernels.bilinear), of a flat object's vertices (the hit recomputed on
+the moved face), and of the area lights' radiance (an area light's, an emitting material's emission): their
+sample points' terms at each hit (the record's bit per point seen; kernels.area_replay, one thread per level
+and point) and the emitter's front met by a ray, the points themselves held fixed. The image is the mean of
+each pixel's rays, as the trace kernel makes it. Covered for now: any render.spp and light_samples, camera
+and mirror rays (no glass), image and checker textures, area lights, no vertex colours; any other scene is
+refused in one line naming what is not yet differentiated, so a gradient is never silently partial.
 """
 from __future__ import annotations
 

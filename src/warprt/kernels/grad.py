@@ -9,6 +9,9 @@ wp.Tape differentiates (the material colours and exponents per slot, their textu
 positions, colours and directions): C = C_amb ka + sum_l vis_l C_l w_l (kd n.L + ks max(0, r.v)^n), w_l a spot's cone times
 1 / r^2 for inverse_square (light_factor, shading.light_weight's arithmetic). Its lights loop is unrolled
 (wp.static): Warp does not replay a dynamic loop backwards, and a loop longer than max_unroll becomes one.
+Area lights' sample points, up to 4096 a light, are no loop: area_replay runs one thread per ray level and
+point and adds the point's term (area_sample_term, shading.area_light's) with wp.atomic_add, differentiable;
+make_area_combine then sums the levels with the emitted radiance, as the tracer does.
 """
 
 from __future__ import annotations
