@@ -170,6 +170,32 @@ def test_visibility_ignored_does_not():
         assert relative(wrong[name], component_differences(s, name, w, 1e-2)) > 20 * REL, name
 
 
+@pytest.mark.parametrize("dark, name", [({"lights.0.radiance": [0.0] * 3}, "lights.0.radiance"),
+                                        ({"lights.0.color": [0.0] * 3, "lights.1.color": [0.0] * 3}, "lights.0.color")])
+def test_a_dark_light_has_the_shadowed_gradient(dark, name):
+    """With every light dark the forward traces no shadow ray (its image is the same without), but the
+    derivative there is the shadowed image's: the record traces them. An area light, and two point lights
+    (test_first_hit_gradients' scene). The image is linear in the light, so a one-sided difference from 0
+    is exact to float32. (Before, the shadows were left out: 0.045 off for the area light.)"""
+    from .test_first_hit_gradients import scene as point_lit
+
+    s = soft() if name.endswith("radiance") else point_lit()
+    w = weights_for(s)
+    r = warprt.Renderer(s)
+    r.params.update(dark)
+    r.render(grad=True)
+    g = r.backward(w, wrt=[name])[name]
+
+    def loss(value) -> float:
+        r.params[name] = value
+        return float((w.astype(np.float64) * r.render().image).sum())
+
+    zero = loss([0.0, 0.0, 0.0])
+    fd = np.asarray([loss(list(e)) - zero for e in np.eye(3)])
+    r.close()
+    assert relative(g, fd) <= REL, (g, fd)
+
+
 # --- Controls by a changed replay: the same record and launches with one kernel swapped ----------------------
 
 @wp.kernel

@@ -147,7 +147,11 @@ def record_first_hits(scene, geom, data, fx, device: str, threads: int = 1, band
     emit = wp.full(max(n * D, 1) if words else 1, -1, dtype=int, device=device)
     area_bits = wp.zeros(max(n * D * words, 1), dtype=int, device=device)
     c = camera_data(camera_basis(cam), geom.eye_offset(cam.eye))
-    kernel = make_grad_record_kernel(L, D, fx.smooth, fx.shadows, fx.culling, fx.light_model, bool(words))
+    # Shadows the scene asks for but its values leave out (every light dark, or no kd and ks anywhere): the
+    # forward traces none, its image the same without, but the derivative there (a light of radiance or
+    # colour 0, where inverse rendering may start) is the shadowed one's.
+    shadows = fx.shadows or (scene.render.shadows and not scene_effects(scene).shadows)
+    kernel = make_grad_record_kernel(L, D, fx.smooth, shadows, fx.culling, fx.light_model, bool(words))
     launch_bands(kernel, lambda first: [data, c, D, k, first, face, bary, dirs, visible, emit, area_bits, words], n,
                  threads, bands, device, pool=pool)
     return FirstHits(face, bary, dirs, visible, cam.width, cam.height, L, D, fx.smooth, k * k, fx.light_model,
