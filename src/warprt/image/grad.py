@@ -9,11 +9,13 @@ fixed, as a visibility-fixed derivative is (an edge or a shadow's edge moving ac
 derivative here); the local Phong terms are exact functions of the material colours and exponents, of
 the lights' colours, positions and directions (point, spot and directional lights, shading's light
 model: a spot's cone, 1 / r^2 falloff), of image textures' texels (the forward's bilinear wp.Texture2D
-lookup written over a wp.array: kernels.bilinear), and of a flat object's vertices (the hit recomputed on
-the moved face). The image is the mean of each pixel's rays, as the trace kernel makes it. Covered for
-now: any render.spp, camera and mirror rays (no glass), image and checker textures, no vertex colours, no
-area lights; any other scene is refused in one line naming what is not yet differentiated, so a gradient is
-never silently partial.
+lookup written over a wp.array: kernels.bilinear), of a flat object's vertices (the hit recomputed on
+the moved face), and of the area lights' radiance (an area light's, an emitting material's emission): their
+sample points' terms at each hit (the record's bit per point seen; kernels.area_replay, one thread per level
+and point) and the emitter's front met by a ray, the points themselves held fixed. The image is the mean of
+each pixel's rays, as the trace kernel makes it. Covered for now: any render.spp and light_samples, camera
+and mirror rays (no glass), image and checker textures, area lights, no vertex colours; any other scene is
+refused in one line naming what is not yet differentiated, so a gradient is never silently partial.
 """
 from __future__ import annotations
 
@@ -26,7 +28,8 @@ from .._warp import wp
 from ..errors import ArgumentError
 from ..kernels.camera import camera_data
 from ..kernels.grad import (MAX_GRAD_LIGHTS, TEXTURE_CHECKER, TEXTURE_CLAMP, TEXTURE_IMAGE, TEXTURE_MIRROR, TEXTURE_NONE,
-                            TEXTURE_WRAP, make_grad_record_kernel, make_grad_shade_kernel, sample_mean)
+                            TEXTURE_WRAP, area_replay, make_area_combine, make_grad_record_kernel, make_grad_shade_kernel,
+                            sample_mean)
 from ..geometry import LightShape, light_shape
 from ..scene import camera_basis, scene_effects
 from .launch import launch_bands
@@ -55,16 +58,22 @@ def refusal(scene, fx) -> str | None:
         return f"at most {MAX_GRAD_DEPTH} ray levels (render.max_depth) are differentiated (Warp's unrolled loop)"
     if fx.vertex_color:
         return "vertex colours are not differentiated yet"
-    if fx.area_lights:
-        return "area lights are not differentiated yet"
     if len(scene.whitted_lights) > MAX_GRAD_LIGHTS:
         return f"at most {MAX_GRAD_LIGHTS} lights are differentiated (Warp's unrolled loop)"
     return None
 
 
 # Bytes per camera ray and level of the record (face, barycentrics, direction: 4 + 8 + 12, then 4 a light),
-# and per camera ray of the replay (its colour and adjoint, the adjoint handed to the tape: 3 x 12).
+# and per camera ray of the replay (its colour and adjoint, the adjoint handed to the tape: 3 x 12). With area
+# lights, per camera ray and level: the emitter met (4) and a bit per sample point (in 4-byte words), and the
+# replay's state (hit point, normal, kd, ks, weight, local colour, each with its adjoint: 2 x 6 x 12).
 RECORD_BYTES_PER_LEVEL, RECORD_BYTES_PER_LIGHT, REPLAY_BYTES_PER_RAY = 24, 4, 36
+AREA_RECORD_BYTES_PER_LEVEL, AREA_REPLAY_BYTES_PER_LEVEL = 4, 144
+
+
+def area_samples(scene) -> int:
+    """The area lights' sample points in all (render.light_samples each): the record's bits per ray level."""
+    return len(scene.area_lights) * scene.render.light_samples
 
 
 def record_bytes(scene, fx) -> int:
@@ -74,7 +83,13 @@ def record_bytes(scene, fx) -> int:
     rays = cam.width * cam.height * (r.spp if fx.supersampling else 1)
     levels = r.max_depth if fx.reflection else 1
     per_level = RECORD_BYTES_PER_LEVEL + RECORD_BYTES_PER_LIGHT * len(scene.whitted_lights)
+    if fx.area_lights:
+        per_level += AREA_RECORD_BYTES_PER_LEVEL + 4 * _words(area_samples(scene)) + AREA_REPLAY_BYTES_PER_LEVEL
     return rays * (levels * per_level + REPLAY_BYTES_PER_RAY)
+
+
+def _words(samples: int) -> int:
+    return max(1, -(-samples // 32))
 
 
 def check_record_memory(scene, fx, device: str):
@@ -83,9 +98,10 @@ def check_record_memory(scene, fx, device: str):
     need = record_bytes(scene, fx)
     available, what = available_memory(device)
     if available is not None and need > available:
+        samples = ", render.light_samples" if fx.area_lights else ""  # a bit per area-light sample and level
         raise ArgumentError("render", "grad", f"the gradient's record of this frame needs about {human(need)} "
                             f"(per camera ray and ray level), more than the {human(available)} {what}: lower "
-                            f"render.spp, render.max_depth or camera.width and camera.height")
+                            f"render.spp, render.max_depth{samples} or camera.width and camera.height")
 
 
 @dataclass
@@ -93,7 +109,9 @@ class FirstHits:
     """What a grad=True frame recorded: per camera ray (``samples`` per pixel, ray pixel * samples +
     sample, the tracer's strata) and ray level (``levels``: the camera ray, then the mirror rays) the
     hit's face (-1: none, -2: no ray at that level), barycentrics and ray direction, and per light
-    whether the hit saw it."""
+    whether the hit saw it; with area lights (``words`` > 0), the area light whose emitting side the ray met
+    (``emit``, -1: none) and a bit per area-light sample point the hit sees (``area_bits``, ``words`` int32s
+    a level)."""
 
     face: wp.array
     bary: wp.array
@@ -107,6 +125,10 @@ class FirstHits:
     samples: int = 1
     light_model: bool = False  # shading's general light model (spot, directional, falloff), as the frame's
     texture: bool = False  # textured colours, as the frame's
+    emit: wp.array | None = None
+    area_bits: wp.array | None = None
+    words: int = 0  # 0: no area lights
+    area: object = None  # the frame's AreaLights table (its sample points, normals and areas), as recorded
 
 
 def record_first_hits(scene, geom, data, fx, device: str, threads: int = 1, bands: int = 1, pool=None) -> FirstHits:
@@ -121,24 +143,62 @@ def record_first_hits(scene, geom, data, fx, device: str, threads: int = 1, band
     bary = wp.zeros(n * D, dtype=wp.vec2, device=device)
     dirs = wp.zeros(n * D, dtype=wp.vec3, device=device)
     visible = wp.zeros(max(n * D * L, 1), dtype=int, device=device)
+    words = _words(area_samples(scene)) if fx.area_lights else 0
+    emit = wp.full(max(n * D, 1) if words else 1, -1, dtype=int, device=device)
+    area_bits = wp.zeros(max(n * D * words, 1), dtype=int, device=device)
     c = camera_data(camera_basis(cam), geom.eye_offset(cam.eye))
-    kernel = make_grad_record_kernel(L, D, fx.smooth, fx.shadows, fx.culling, fx.light_model)
-    launch_bands(kernel, lambda first: [data, c, D, k, first, face, bary, dirs, visible], n, threads, bands, device,
-                 pool=pool)
+    # Shadows the scene asks for but its values leave out (every light dark, or no kd and ks anywhere): the
+    # forward traces none, its image the same without, but the derivative there (a light of radiance or
+    # colour 0, where inverse rendering may start) is the shadowed one's.
+    shadows = fx.shadows or (scene.render.shadows and not scene_effects(scene).shadows)
+    kernel = make_grad_record_kernel(L, D, fx.smooth, shadows, fx.culling, fx.light_model, bool(words))
+    launch_bands(kernel, lambda first: [data, c, D, k, first, face, bary, dirs, visible, emit, area_bits, words], n,
+                 threads, bands, device, pool=pool)
     return FirstHits(face, bary, dirs, visible, cam.width, cam.height, L, D, fx.smooth, k * k, fx.light_model,
-                     fx.texture)
+                     fx.texture, emit, area_bits, words, data.area if words else None)
 
 
 def parameter_names(scene) -> list[str]:
     """The r.params names backward() can differentiate with respect to: the flat objects' vertices too
-    (a smooth object's vertex normals would move with them, which is not differentiated yet)."""
+    (a smooth object's vertex normals would move with them, which is not differentiated yet), but not an
+    area light's own object's (its sample points are held fixed); an area light's radiance and an emitting
+    material's emission."""
     names = [f"materials.{m}.{k}" for m in scene.materials for k in MATERIAL_KEYS]
     names += [f"materials.{name}.{k}" for name, m in scene.materials.items() for k in TEXTURE_KEYS
               if getattr(m, k) is not None and getattr(m, k).image is not None]
+    names += [f"materials.{name}.emission" for name, m in scene.materials.items() if _emits(m)]
     names += [f"lights.{i}.{k}" for i, light in enumerate(scene.lights) if not light.area for k in LIGHT_KEYS
               if getattr(light, k) is not None]  # as r.params has them: no position for a directional light
-    names += [f"objects.{name}.vertices" for name, i in object_names(scene).items() if not scene.objects[i].smooth]
+    names += [f"lights.{i}.radiance" for i, light in enumerate(scene.lights) if light.area]
+    emitters = _emitter_objects(scene)
+    names += [f"objects.{name}.vertices" for name, i in object_names(scene).items()
+              if not scene.objects[i].smooth and scene.objects[i].name not in emitters]
     return names
+
+
+def _emits(material) -> bool:
+    """Whether a material's emission makes its objects area lights (Scene.emissive_lights' rule)."""
+    return material.emission is not None and max(material.emission) > 0.0
+
+
+def _emitter_objects(scene) -> set:
+    """The names of the objects that are area lights (a light's ``object``, an emitting material's)."""
+    return {light.object for light in scene.area_lights if light.object is not None}
+
+
+def area_sources(scene) -> list[str]:
+    """Per area light (scene.area_lights' order, the kernels' table's), the r.params name its radiance is:
+    an area light's lights.<i>.radiance, an emitting material's materials.<name>.emission (one light per
+    object name of that material, Scene.emissive_lights)."""
+    out = [f"lights.{i}.radiance" for i, light in enumerate(scene.lights) if light.area]
+    named = set()
+    for o in scene.objects:  # Scene.emissive_lights' loop, to name each light's material
+        m = scene.materials.get(o.material)
+        if m is not None and _emits(m) and o.name not in named:
+            named.add(o.name)
+            out.append(f"materials.{o.material}.emission")
+    assert len(out) == len(scene.area_lights)
+    return out
 
 
 def _vertices_refusal(hits: "FirstHits") -> str | None:
@@ -147,12 +207,29 @@ def _vertices_refusal(hits: "FirstHits") -> str | None:
             "move with them too)" if hits.levels > 1 else None)
 
 
+def _name_refusal(scene, name: str) -> str | None:
+    """Why backward() cannot differentiate r.params' ``name`` in this scene (None: it can or it is unknown)."""
+    section, owner, key = (name.split(".") + ["", "", ""])[:3]
+    if section == "objects" and owner in object_names(scene) and \
+            scene.objects[object_names(scene)[owner]].name in _emitter_objects(scene):
+        return ("the object is an area light: its sample points (the light's position and shape) are held fixed, "
+                "not differentiated yet")
+    if section == "materials" and key == "emission" and owner in scene.materials and \
+            scene.materials[owner].emission is not None and not _emits(scene.materials[owner]):
+        return ("an emission of 0 makes no area light (no sample points to differentiate): give it a positive "
+                "value")
+    return None
+
+
 @dataclass
 class ReplayLaunch:
     """The differentiable replay of a recorded frame, ready to launch: kernels/grad.py's shade kernel
     over ``dim`` camera rays with ``inputs``, writing each ray's colour to ``rays``; ``arrays`` the
     inputs it differentiates, by key: ka, kd, ks, shininess, reflectivity per material slot, color,
-    position and direction per Whitted light, and with vertices the geometry's points."""
+    position and direction per Whitted light, radiance per area light, and with vertices the geometry's
+    points. With area lights, the shade kernel writes each level's state (its ``rays`` a stand-in) and
+    ``then`` holds the launches after it, (kernel, dim, inputs, outputs): the area lights' samples
+    (kernels.area_replay) and the levels' sum into ``rays`` (make_area_combine)."""
 
     kernel: object
     dim: int
@@ -160,13 +237,17 @@ class ReplayLaunch:
     rays: wp.array
     arrays: dict
     images: dict  # TextureTable.images: where each textured colour's texels lie in arrays["texels"]
+    then: list = None
+    shaded: wp.array = None  # the shade kernel's output: ``rays`` without area lights
 
 
 def replay(scene, geom, hits: FirstHits, device: str, vertices: bool = False) -> ReplayLaunch:
-    """replay_launch's kernel launched, on the current wp.Tape if there is one: its ``rays`` hold each
+    """replay_launch's kernels launched, on the current wp.Tape if there is one: its ``rays`` hold each
     camera ray's colour (one per pixel and sample)."""
     r = replay_launch(scene, geom, hits, device, vertices)
-    wp.launch(r.kernel, dim=r.dim, inputs=r.inputs, outputs=[r.rays], device=device)
+    wp.launch(r.kernel, dim=r.dim, inputs=r.inputs, outputs=[r.shaded], device=device)
+    for kernel, dim, inputs, outputs in r.then or ():
+        wp.launch(kernel, dim=dim, inputs=inputs, outputs=outputs, device=device)
     return r
 
 
@@ -191,19 +272,38 @@ def replay_launch(scene, geom, hits: FirstHits, device: str, vertices: bool = Fa
     n = hits.width * hits.height * hits.samples
     rays = wp.zeros(n, dtype=wp.vec3, device=device, requires_grad=True)
     points = wp.array(geom.points_np, dtype=wp.vec3, device=device, requires_grad=True) if vertices else geom.points
-    kernel = make_grad_shade_kernel(hits.lights, hits.levels, hits.smooth, vertices, hits.light_model, hits.texture)
+    area = hits.words > 0
+    kernel = make_grad_shade_kernel(hits.lights, hits.levels, hits.smooth, vertices, hits.light_model, hits.texture,
+                                    area)
     eye = wp.vec3(*geom.eye_offset(scene.camera.eye))
     table = texture_table(mats, device)
     uvs = geom.uv_array() if hits.texture else wp.zeros(1, dtype=wp.vec2, device=device)
+    background = wp.vec3(*scene.render.background)
+    levels = n * hits.levels if area else 1  # the area lights' per-level state (stand-ins without)
+    state = [wp.zeros(levels, dtype=wp.vec3, device=device, requires_grad=True) for _ in range(6)]
+    shaded = wp.zeros(1, dtype=wp.vec3, device=device, requires_grad=True) if area else rays
     inputs = [eye, points, geom.indices, geom.normals, geom.tri_material, geom.tri_smooth, ka, kd, ks, shininess, kr,
               light_pos, light_color, inverse_square, kind, axis, cone, uvs, *table.arrays,
-              wp.vec3(*scene.render.ambient), wp.vec3(*scene.render.background), hits.face, hits.bary, hits.dirs,
-              hits.visible]
+              wp.vec3(*scene.render.ambient), background, hits.face, hits.bary, hits.dirs, hits.visible, *state]
     arrays = {"ka": ka, "kd": kd, "ks": ks, "shininess": shininess, "reflectivity": kr, "color": light_color,
               "position": light_pos, "direction": axis, "texels": table.arrays[0]}
+    then = []
+    if area:
+        a = hits.area  # the forward's own sample points, normals and areas
+        first = a.first.numpy()
+        sample_light = wp.array(np.repeat(np.arange(len(first) - 1), np.diff(first)).astype(np.int32), dtype=int,
+                                device=device)
+        radiance = vec([l.radiance for l in scene.area_lights])
+        arrays["radiance"] = radiance
+        hit_p, hit_n, hit_kd, hit_ks, level_weight, acc = state
+        then.append((area_replay, (levels, int(first[-1])),
+                     [hits.words, hits.face, hits.dirs, hits.area_bits, geom.tri_material, shininess, hit_p, hit_n,
+                      hit_kd, hit_ks, a.points, a.normals, a.dA, sample_light, radiance], [acc]))
+        then.append((make_area_combine(hits.levels), n, [hits.face, hits.emit, radiance, background, level_weight,
+                                                         acc], [rays]))
     if vertices:
         arrays["points"] = points
-    return ReplayLaunch(kernel, n, inputs, rays, arrays, table.images)
+    return ReplayLaunch(kernel, n, inputs, rays, arrays, table.images, then, shaded)
 
 
 @dataclass
@@ -272,9 +372,10 @@ def backward(scene, geom, hits: FirstHits, d_image, wrt, device: str) -> dict:
     wrt = list(wrt)
     for name in wrt:
         if name not in known:
-            why = ("not a parameter backward() differentiates yet (materials.<name>.ka | kd | ks | shininess | "
-                   "reflectivity | ka_texture | kd_texture | ks_texture, lights.<i>.color | position | direction, a "
-                   "flat object's objects.<name>.vertices)")
+            why = _name_refusal(scene, str(name)) or (
+                "not a parameter backward() differentiates yet (materials.<name>.ka | kd | ks | shininess | "
+                "reflectivity | ka_texture | kd_texture | ks_texture | emission, lights.<i>.color | position | "
+                "direction | radiance (an area light's), a flat object's objects.<name>.vertices)")
             raise ArgumentError("backward", str(name), why)
         if name.startswith("objects.") and _vertices_refusal(hits):
             raise ArgumentError("backward", str(name), _vertices_refusal(hits))
@@ -307,6 +408,9 @@ def backward(scene, geom, hits: FirstHits, d_image, wrt, device: str) -> dict:
         if section == "objects":  # the points are the objects' vertices in order, less the frame origin
             i = object_names(scene)[owner]
             out[name] = point_grads[starts[i]:starts[i + 1]]
+        elif key in ("radiance", "emission"):  # the area lights whose radiance it is
+            rows = [j for j, source in enumerate(area_sources(scene)) if source == name]
+            out[name] = grads["radiance"][rows].astype(np.float64).sum(0) if rows else np.zeros(3)
         elif section == "materials":
             if owner not in slot:  # a material no object uses
                 texture = getattr(scene.materials[owner], key, None) if key in TEXTURE_KEYS else None

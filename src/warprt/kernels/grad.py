@@ -9,6 +9,9 @@ wp.Tape differentiates (the material colours and exponents per slot, their textu
 positions, colours and directions): C = C_amb ka + sum_l vis_l C_l w_l (kd n.L + ks max(0, r.v)^n), w_l a spot's cone times
 1 / r^2 for inverse_square (light_factor, shading.light_weight's arithmetic). Its lights loop is unrolled
 (wp.static): Warp does not replay a dynamic loop backwards, and a loop longer than max_unroll becomes one.
+Area lights' sample points, up to 4096 a light, are no loop: area_replay runs one thread per ray level and
+point and adds the point's term (area_sample_term, shading.area_light's) with wp.atomic_add, differentiable;
+make_area_combine then sums the levels with the emitted radiance, as the tracer does.
 """
 
 from __future__ import annotations
@@ -19,9 +22,10 @@ from .._warp import wp
 from ..geometry import LIGHT_DIRECTIONAL, LIGHT_SPOT, SceneData
 from .camera import CameraData, camera_ray, sample_offset
 from .interaction import make_surface, reflect, spawn_ray
-from .shading import FAR, light_weight, phong_specular
+from .shading import FAR, SHADOW_EPSILON, light_weight, phong_diffuse, phong_specular
 from .shadow import make_occluded
 from .trace import culled, past
+from .triangle import triangle, unit_normal
 
 MAX_GRAD_LIGHTS = 16  # Warp's max_unroll: a longer static loop would silently turn dynamic
 
@@ -136,7 +140,8 @@ def texture_factor(texels: wp.array(dtype=wp.vec3), shape: wp.vec4i, wrap: wp.ve
 
 
 @functools.cache
-def make_grad_record_kernel(L: int, D: int, smooth: bool, shadows: bool, cull: bool, light_model: bool = False):
+def make_grad_record_kernel(L: int, D: int, smooth: bool, shadows: bool, cull: bool, light_model: bool = False,
+                            area: bool = False):
     """record(s, c, max_depth, k, first, face, bary, dirs, visible): per camera ray (from ``first``: ray
     pixel * k^2 + sample, pixels row-major, row 0 the top; sample j k + i the tracer's stratum (i, j),
     camera.sample_offset, the pixel's centre where k = 1) and ray level
@@ -145,13 +150,19 @@ def make_grad_record_kernel(L: int, D: int, smooth: bool, shadows: bool, cull: b
     face's first vertex, v on its second), the ray's direction, and per light whether the hit sees it (1
     where n.L > 0 and no shadow ray is blocked): the tracer's own surface, spawn_ray and any-hit query.
     With ``light_model`` (spot and directional lights, falloff), shading's general light model: a spot
-    outside its cone is not seen, a directional light lies along -direction, its shadow ray unbounded."""
+    outside its cone is not seen, a directional light lies along -direction, its shadow ray unbounded.
+    With ``area``, also per ray level the area light whose emitting side the ray meets (emit, -1: none;
+    shading.emitted's test) and, as ``words`` int32 bit masks, which area-light sample points the hit sees
+    (bit q of word q / 32: r^2 > 0, n.L > 0, the emitter's cosine > 0 and the shadow ray, stopping
+    SHADOW_EPSILON short of the point, unblocked): shading's area_light, its arithmetic and its any-hit
+    query."""
     surface = make_surface(smooth)
     occluded = make_occluded(False)
 
     @wp.kernel(module="unique", enable_backward=False)
     def record(s: SceneData, c: CameraData, max_depth: int, k: int, first: int, face: wp.array(dtype=int),
-               bary: wp.array(dtype=wp.vec2), dirs: wp.array(dtype=wp.vec3), visible: wp.array(dtype=int)):
+               bary: wp.array(dtype=wp.vec2), dirs: wp.array(dtype=wp.vec3), visible: wp.array(dtype=int),
+               emit: wp.array(dtype=int), area_bits: wp.array(dtype=int), words: int):
         ray = first + wp.tid()
         pixel = ray / (k * k)
         x = pixel % c.width
@@ -203,6 +214,33 @@ def make_grad_record_kernel(L: int, D: int, smooth: bool, shadows: bool, cull: b
                                 if occluded(s, l, so, sd, dist):
                                     seen = 0
                         visible[j * wp.static(L) + l] = seen
+                    if wp.static(area):
+                        # shading.emitted: the emitter's side its winding's normal points to
+                        e = s.area.tri_emitter[q.face]
+                        emit[j] = -1
+                        if e >= 0:
+                            t0, t1, t2 = triangle(s, q.face)
+                            if wp.dot(d, unit_normal(t0, t1, t2)) < 0.0:
+                                emit[j] = e
+                        a = s.area
+                        for sq in range(a.first[a.num]):  # shading.area_light's samples, lights in order
+                            to_q = a.points[sq] - hit.p
+                            r2 = wp.dot(to_q, to_q)
+                            if r2 > 0.0:
+                                L_q = to_q / wp.sqrt(r2)
+                                n_dot_l = wp.dot(hit.n, L_q)
+                                cos_q = -wp.dot(a.normals[sq], L_q)
+                                if n_dot_l > 0.0 and cos_q > 0.0:
+                                    lit_q = int(1)  # not a constant: Warp's dynamic loop may not mutate one
+                                    if wp.static(shadows):
+                                        qo = spawn_ray(hit, L_q).o
+                                        to_q_o = a.points[sq] - qo
+                                        dist_q = wp.length(to_q_o)
+                                        if occluded(s, -1, qo, to_q_o / dist_q, dist_q * wp.static(1.0 - SHADOW_EPSILON)):
+                                            lit_q = 0
+                                    if lit_q != 0:
+                                        word = j * words + sq / 32
+                                        area_bits[word] = area_bits[word] | (1 << (sq % 32))
                     if level + 1 < max_depth and wp.max(s.kr[hit.material]) > 0.0:
                         spawned = spawn_ray(hit, wp.normalize(reflect(d, hit.n)))
                         o = spawned.o
@@ -214,7 +252,7 @@ def make_grad_record_kernel(L: int, D: int, smooth: bool, shadows: bool, cull: b
 
 @functools.cache
 def make_grad_shade_kernel(L: int, D: int, smooth: bool, vertices: bool = False, light_model: bool = False,
-                           texture: bool = False):
+                           texture: bool = False, area: bool = False):
     """shade(...): each camera ray's colour (one per pixel and sample, as recorded; sample_mean makes
     them the image) from the recorded hit and visibility and the differentiable
     material and light arrays, over the recorded ray levels (D at most), each weighted by the product of
@@ -226,7 +264,10 @@ def make_grad_shade_kernel(L: int, D: int, smooth: bool, vertices: bool = False,
     shading's general light model (light_factor): a directional light's L is -its axis, a spot's C_l is
     weighted by its cone, an inverse_square light's by 1 / r^2; without, the seed's point lights. With
     ``texture``, ka, kd and ks times their textures at the hit's interpolated uv (texture_factor: the
-    table's row 3 m + 0, 1, 2 for material slot m), the images' texels differentiable."""
+    table's row 3 m + 0, 1, 2 for material slot m), the images' texels differentiable. With ``area``, the
+    kernel writes no colour: per ray level it leaves what the area lights' replay needs (make_area_replay:
+    the hit point, normal, kd and ks at the hit, the level's weight, and in ``acc`` the ambient and Whitted
+    lights' local colour, to which the area lights' samples are added), and area_combine makes the colour."""
 
     @wp.kernel(module="unique")
     def shade(eye: wp.vec3, points: wp.array(dtype=wp.vec3), indices: wp.array(dtype=int), normals: wp.array(dtype=wp.vec3),
@@ -239,13 +280,17 @@ def make_grad_shade_kernel(L: int, D: int, smooth: bool, vertices: bool = False,
               tex_wrap: wp.array(dtype=wp.vec2i), tex_u: wp.array(dtype=wp.vec3), tex_v: wp.array(dtype=wp.vec3),
               tex_c0: wp.array(dtype=wp.vec3), tex_c1: wp.array(dtype=wp.vec3),
               ambient: wp.vec3, background: wp.vec3, face: wp.array(dtype=int), bary: wp.array(dtype=wp.vec2),
-              dirs: wp.array(dtype=wp.vec3), visible: wp.array(dtype=int), image: wp.array(dtype=wp.vec3)):
+              dirs: wp.array(dtype=wp.vec3), visible: wp.array(dtype=int), hit_p: wp.array(dtype=wp.vec3),
+              hit_n: wp.array(dtype=wp.vec3), hit_kd: wp.array(dtype=wp.vec3), hit_ks: wp.array(dtype=wp.vec3),
+              level_weight: wp.array(dtype=wp.vec3), acc: wp.array(dtype=wp.vec3), image: wp.array(dtype=wp.vec3)):
         ray = wp.tid()
         color = wp.vec3(0.0)
         weight = wp.vec3(1.0)
         for level in range(wp.static(D)):
             k = ray * wp.static(D) + level
             f = face[k]
+            if wp.static(area):
+                level_weight[k] = weight  # the product of the k_r before this level
             if f == -1:
                 color = color + wp.cw_mul(weight, background)
             if f >= 0:
@@ -311,11 +356,83 @@ def make_grad_shade_kernel(L: int, D: int, smooth: bool, vertices: bool = False,
                         n_dot_l = wp.dot(n, L_dir)
                         lit = kd_m * n_dot_l + phong_specular(ks_m, shininess[m], n, L_dir, -d, n_dot_l)
                         local = local + wp.cw_mul(C_l, lit)
-                color = color + wp.cw_mul(weight, local)
+                if wp.static(area):
+                    hit_p[k] = p
+                    hit_n[k] = n
+                    hit_kd[k] = kd_m
+                    hit_ks[k] = ks_m
+                    acc[k] = local
+                else:
+                    color = color + wp.cw_mul(weight, local)
                 weight = wp.cw_mul(weight, kr[m])
-        image[ray] = color
+        if wp.static(not area):
+            image[ray] = color
 
     return shade
+
+
+@wp.func
+def area_sample_term(p: wp.vec3, n: wp.vec3, v: wp.vec3, kd: wp.vec3, ks: wp.vec3, shininess: float,
+                     point: wp.vec3, normal: wp.vec3, dA: float, L_e: wp.vec3) -> wp.vec3:
+    """One area-light sample's light at a hit it lights (shading.area_light's term, in its order): the
+    point ``point`` of the emitter (its normal ``normal``, standing for ``dA``) as a point light of
+    intensity L_e cos_q dA with inverse-square falloff, L_e (kd max(0, n.L) + ks max(0, r.v)^n)
+    cos_q dA / r^2; differentiable in the hit, its colours and exponent, and L_e."""
+    to_q = point - p
+    r2 = wp.dot(to_q, to_q)
+    L = to_q / wp.sqrt(r2)
+    n_dot_l = wp.dot(n, L)
+    cos_q = -wp.dot(normal, L)
+    lit = phong_diffuse(kd, n_dot_l) + phong_specular(ks, shininess, n, L, v, n_dot_l)
+    return wp.cw_mul(L_e, lit) * (cos_q * dA / r2)
+
+
+@wp.kernel(module="unique")
+def area_replay(words: int, face: wp.array(dtype=int), dirs: wp.array(dtype=wp.vec3), area_bits: wp.array(dtype=int),
+                tri_material: wp.array(dtype=int), shininess: wp.array(dtype=float), hit_p: wp.array(dtype=wp.vec3),
+                hit_n: wp.array(dtype=wp.vec3), hit_kd: wp.array(dtype=wp.vec3), hit_ks: wp.array(dtype=wp.vec3),
+                points: wp.array(dtype=wp.vec3), normals: wp.array(dtype=wp.vec3), dA: wp.array(dtype=float),
+                sample_light: wp.array(dtype=int), radiance: wp.array(dtype=wp.vec3), acc: wp.array(dtype=wp.vec3)):
+    """The area lights at each recorded hit, one thread per ray level k and sample point q (launched over
+    (rays x levels, samples)): where the record saw q, area_sample_term added to acc[k] (the level's
+    local colour, make_grad_shade_kernel's) by wp.atomic_add, differentiable, rather than by a loop over
+    the samples, which Warp would not replay backwards (a dynamic one) or could not unroll (over 16).
+    On the CPU the threads run in order, so the samples are added as shading.area_light adds them."""
+    k, q = wp.tid()
+    f = face[k]
+    if f >= 0:
+        if (area_bits[k * words + q / 32] >> (q % 32)) & 1 != 0:
+            term = area_sample_term(hit_p[k], hit_n[k], -dirs[k], hit_kd[k], hit_ks[k], shininess[tri_material[f]],
+                                    points[q], normals[q], dA[q], radiance[sample_light[q]])
+            wp.atomic_add(acc, k, term)
+
+
+@functools.cache
+def make_area_combine(D: int):
+    """combine(face, emit, radiance, background, level_weight, acc, image): each camera ray's colour from
+    its levels as the tracer sums them, the level's weight times, in turn, the background where it met
+    nothing, else the radiance of the area light whose emitting side it met (the recorded emit) and its
+    local colour with the area lights (acc); the levels unrolled (wp.static)."""
+
+    @wp.kernel(module="unique")
+    def combine(face: wp.array(dtype=int), emit: wp.array(dtype=int), radiance: wp.array(dtype=wp.vec3),
+                background: wp.vec3, level_weight: wp.array(dtype=wp.vec3), acc: wp.array(dtype=wp.vec3),
+                image: wp.array(dtype=wp.vec3)):
+        ray = wp.tid()
+        color = wp.vec3(0.0)
+        for level in range(wp.static(D)):
+            k = ray * wp.static(D) + level
+            f = face[k]
+            if f == -1:
+                color = color + wp.cw_mul(level_weight[k], background)
+            if f >= 0:
+                e = emit[k]
+                if e >= 0:
+                    color = color + wp.cw_mul(level_weight[k], radiance[e])
+                color = color + wp.cw_mul(level_weight[k], acc[k])
+        image[ray] = color
+
+    return combine
 
 
 @wp.kernel(enable_backward=False)
