@@ -196,6 +196,35 @@ def test_a_dark_light_has_the_shadowed_gradient(dark, name):
     assert relative(g, fd) <= REL, (g, fd)
 
 
+def test_a_dark_light_with_shadows_switched_off_has_the_unshadowed_gradient():
+    """The other side of the test above: shadows switched off by the caller (disable=) stay off in the
+    record of a dark scene, where the scene's values alone would not have them traced: the gradient at
+    radiance 0 is the unshadowed image's (a one-sided difference from 0 with shadows off), not the
+    shadowed one's (the control, measured 0.045 apart)."""
+    s = soft()
+    w = weights_for(s)
+    name = next(n for n in warprt.Renderer(s).params if n.endswith("radiance"))
+
+    def gradient_and_fd(**options):
+        r = warprt.Renderer(s, **options)
+        r.params[name] = [0.0, 0.0, 0.0]
+        r.render(grad=True)
+        g = r.backward(w, wrt=[name])[name]
+
+        def loss(value) -> float:
+            r.params[name] = value
+            return float((w.astype(np.float64) * r.render().image).sum())
+
+        fd = np.asarray([loss(list(e)) for e in np.eye(3)]) - loss([0.0, 0.0, 0.0])
+        r.close()
+        return g, fd
+
+    g_off, fd_off = gradient_and_fd(disable=["shadows"])
+    _, fd_on = gradient_and_fd()
+    assert relative(g_off, fd_off) <= REL, (g_off, fd_off)
+    assert relative(g_off, fd_on) > 10 * REL
+
+
 # --- Controls by a changed replay: the same record and launches with one kernel swapped ----------------------
 
 @wp.kernel

@@ -131,10 +131,12 @@ class FirstHits:
     area: object = None  # the frame's AreaLights table (its sample points, normals and areas), as recorded
 
 
-def record_first_hits(scene, geom, data, fx, device: str, threads: int = 1, bands: int = 1, pool=None) -> FirstHits:
+def record_first_hits(scene, geom, data, fx, device: str, threads: int = 1, bands: int = 1, pool=None,
+                      switched=None) -> FirstHits:
     """Run the record kernel for a frame of ``scene`` on ``geom`` and its tables ``data``, in ``bands`` bands
     of camera rays on ``threads`` threads (launch_bands; ``pool`` the Renderer's): render.spp of them per
-    pixel, where the trace kernel puts them (its k x k strata)."""
+    pixel, where the trace kernel puts them (its k x k strata). ``switched``: the effects the caller's
+    options leave on (effects.switched_on; None: every one)."""
     cam = scene.camera
     k = math.isqrt(scene.render.spp) if fx.supersampling else 1
     n, L = cam.width * cam.height * k * k, len(scene.whitted_lights)
@@ -150,7 +152,9 @@ def record_first_hits(scene, geom, data, fx, device: str, threads: int = 1, band
     # Shadows the scene asks for but its values leave out (every light dark, or no kd and ks anywhere): the
     # forward traces none, its image the same without, but the derivative there (a light of radiance or
     # colour 0, where inverse rendering may start) is the shadowed one's.
-    shadows = fx.shadows or (scene.render.shadows and not scene_effects(scene).shadows)
+    # Shadows switched off (render.effects, effects=, disable=) stay off.
+    wanted = switched is None or "shadows" in switched
+    shadows = fx.shadows or (scene.render.shadows and wanted and not scene_effects(scene).shadows)
     kernel = make_grad_record_kernel(L, D, fx.smooth, shadows, fx.culling, fx.light_model, bool(words))
     launch_bands(kernel, lambda first: [data, c, D, k, first, face, bary, dirs, visible, emit, area_bits, words], n,
                  threads, bands, device, pool=pool)

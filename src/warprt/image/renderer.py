@@ -17,7 +17,8 @@ from ..kernels import (aov_buffers, aov_bytes, aov_sums, camera_data, empty_aov_
                        make_trace_kernel, raster_kernel, total_kernel)
 from ..errors import ArgumentError
 from ..options import RenderOptions
-from ..scene import EffectSet, camera_basis, drawn_objects, validate_camera, validate_scene, validate_view, zbuffer_effects
+from ..scene import (EffectSet, camera_basis, drawn_objects, switched_on, validate_camera, validate_scene, validate_view,
+                     zbuffer_effects)
 from ..timing import timed
 from .aovs import finish_aovs
 from .caches import SHADOW_GRIDS_KEPT, FrameCaches
@@ -245,8 +246,9 @@ class Renderer:
             result = _finish(scene, o, plan, geom, frame)
             if grad:
                 with timed(times, "grad_record"):
+                    switched = switched_on(scene, o.effects, o.disable)
                     self._first_hits = (scene, geom, record_first_hits(scene, geom, data, plan.fx, o.device,
-                                                                       plan.threads, plan.bands, pool))
+                                                                       plan.threads, plan.bands, pool, switched))
         stats = _frame_stats(scene, o, plan, shortcuts, variant, geom, geometry_info, grid, mirrors, zb, frame, times)
         stats.memory["estimate"] = estimate
         return RenderResult(result[0], stats, result[1])

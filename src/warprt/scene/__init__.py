@@ -15,7 +15,7 @@ from .area import (EMITTER_MATERIAL, EMITTER_MATERIAL_NAME, drawn_objects, emitt
 from .camera import CameraBasis, camera_basis, pixel_ray_directions
 from .dielectric import eye_medium, open_edges, signed_volume, winding_number
 from .dielectric_formats import DEFAULT_IOR, dielectric_from_gltf, dielectric_from_mtl, dielectric_from_usd
-from .effects import EFFECTS, EffectSet, resolve_effects, scene_effects, zbuffer_effects
+from .effects import EFFECTS, EffectSet, resolve_effects, scene_effects, switched_on, zbuffer_effects
 from .load import input_kind, load_dict, load_scene, sets_in_place, with_overrides
 from .meshio import read_mesh_file
 from .mitsuba_xml import load_mitsuba_file, mitsuba_camera, read_mitsuba_xml, reads_mitsuba_light, reads_mitsuba_shape
@@ -32,6 +32,6 @@ __all__ = ["EMITTER_MATERIAL", "EMITTER_MATERIAL_NAME", "drawn_objects", "emitte
            "did_you_mean", "dielectric_from_gltf", "dielectric_from_mtl", "dielectric_from_usd", "EFFECTS", "EffectSet",
            "eye_medium", "input_kind", "Light", "load_dict", "load_mitsuba_file", "load_scene", "Material", "MAX_REACH", "ObjectCache", "open_edges",
            "pixel_ray_directions", "mitsuba_camera", "read_mesh_file", "read_toml", "read_mitsuba_xml", "reads_mitsuba_light", "reads_mitsuba_shape", "RenderSettings", "resolve_effects", "rotation", "Scene",
-           "scene_effects", "scene_from_dict", "SceneObject", "sets_in_place", "shapes", "signed_volume",
+           "scene_effects", "scene_from_dict", "switched_on", "SceneObject", "sets_in_place", "shapes", "signed_volume",
            "srgb_to_linear", "TableReader", "Texture", "validate_camera", "validate_scene", "validate_view", "vertex_normals", "winding_number",
            "with_overrides", "zbuffer_effects"]

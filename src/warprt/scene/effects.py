@@ -100,15 +100,21 @@ def parse_effects(names, source: str = "render", field: str = "render.effects") 
     return out
 
 
-def resolve_effects(scene, allow=None, disable=()) -> EffectSet:
-    """The scene's effects, restricted to ``allow`` (if given) and minus ``disable``."""
-    fx = scene_effects(scene)
+def switched_on(scene, allow=None, disable=()) -> set[str]:
+    """The effects neither the scene's render.effects nor ``allow`` (if given) and ``disable`` switch off,
+    whether or not the scene's values call for them."""
     keep = set(EFFECTS)
     if scene.render.effects is not None:
         keep &= parse_effects(scene.render.effects, scene.source)
     if allow is not None:
         keep &= parse_effects(allow, None, "effects")
-    keep -= parse_effects(disable, None, "disable")
+    return keep - parse_effects(disable, None, "disable")
+
+
+def resolve_effects(scene, allow=None, disable=()) -> EffectSet:
+    """The scene's effects, restricted to ``allow`` (if given) and minus ``disable``."""
+    fx = scene_effects(scene)
+    keep = switched_on(scene, allow, disable)
     on = {n: getattr(fx, n) and n in keep for n in EFFECTS}
     on["shadows"] = on["shadows"] and (on["diffuse"] or on["specular"])  # shadows only dim those terms
     return EffectSet(**on, light_model=fx.light_model, culling=fx.culling, area_lights=fx.area_lights)
