@@ -37,7 +37,7 @@ import warp
 
 import warprt
 from benchmarks.output import link, save
-from benchmarks.timing import SCENES, cpu_name, ms, once, timed_result
+from benchmarks.timing import SCENES, cpu_name, ms, once
 from reference.compare import metrics
 from reference.mitsuba_direct import SAMPLERS, DirectRenderer
 from reference.mitsuba_whitted import Switches, mitsuba_scene, mitsuba_variant
@@ -106,12 +106,13 @@ def measure(scene, geometry, p: dict, ref: np.ndarray, repeat: int) -> tuple[dic
     s = scene.with_camera(width=w, height=h).with_render(spp=p["spp"], max_depth=p["depth"], shadows=True)
     if p.get("light_samples"):
         s = s.with_render(light_samples=p["light_samples"])
-    kw = {"disable": [] if p["shadows"] else ["shadows"]}
-    result, t = timed_result(s, geometry, 1, warmup_size=(8, 6), **kw)
-    if repeat > 1:
-        # Warmed up at full size this time: the frame above may have compiled a kernel the small warm-up did
-        # not need (at 8 x 6 the tracer finds every first hit; at full size the Z-buffer may).
-        result, t = timed_result(s, geometry, repeat if t < CHEAP else 1, **kw)
+    # Warmed up at full size (a small warm-up may not compile the kernels the frame takes: at 8 x 6 the
+    # tracer finds every first hit, at full size the Z-buffer may); the warm-up's time says whether the frame
+    # is cheap enough to be timed as the median of ``repeat``.
+    with warprt.Renderer(s, geometry=geometry, disable=[] if p["shadows"] else ["shadows"]) as renderer:
+        warm_up = once(renderer.render)[1]
+        timed = [once(renderer.render) for _ in range(repeat if warm_up < CHEAP else 1)]
+    result, t = timed[-1][0], float(np.median([seconds for _, seconds in timed]))
     image = result.image
     if p["scale"] > 1:
         image, t_up = once(lambda: upscale_bilinear(result.image, W, H))
