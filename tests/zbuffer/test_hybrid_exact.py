@@ -140,3 +140,35 @@ def test_a_triangle_seen_edge_on_leaves_its_samples_to_the_tracer():
     assert column[10:15].all()
     assert np.array_equal(warprt.render(scene, primary_query="zbuffer", geometry=geometry).image,
                           warprt.render(scene, primary_query="raytrace", geometry=geometry).image)
+
+
+# The hard cases (clipping at the eye, a nonsquare view, nothing) and two scenes (the dense spheres' sub-pixel
+# triangles take 12 s: per pixel, every triangle of a tile is clipped again, which is what a GPU's threads are for).
+PER_PIXEL_CASES = ["default-near4", "tilted-nonsquare", "eye-plane", "empty", "scenes/cornell.toml", "scenes/whitted.toml"]
+
+
+@pytest.mark.parametrize("name", PER_PIXEL_CASES)
+def test_a_thread_per_pixel_rasterizes_what_a_thread_per_tile_does(name):
+    """The GPU's rasterizer (ZBuffer(per_pixel=True): a thread per pixel over its tile's list, the default
+    on CUDA) makes each sample's depth tests in the order the CPU's thread per tile makes them: the same
+    faces, depths, barycentrics and uncertainty, bit for bit, here on the CPU. At 4 spp too, and through
+    a tile mask (the virtual cameras' scissor)."""
+    scene = case_scene(name)
+    geometry = Geometry(scene)
+    fx = zbuffer_effects(scene)
+
+    def fragments(per_pixel, scene=scene, **kw):
+        zb = ZBuffer(scene, geometry, zbuffer_effects(scene), per_pixel=per_pixel)
+        zb.rasterize(2, 8, **kw)
+        f = zb.fragments
+        return [a.numpy() for a in (f.face, f.inv_depth, f.uv, f.rival_inv_depth)]
+
+    for case in ({}, {"scene": scene.with_render(spp=4)}):
+        tile, pixel = fragments(False, **case), fragments(True, **case)
+        assert all(np.array_equal(a, b) for a, b in zip(tile, pixel))
+    assert (tile[0] >= 0).any() or not geometry.triangle_count
+    zb = ZBuffer(scene, geometry, fx)
+    tiles_x, tiles_y = -(-scene.camera.width // zb.tile), -(-scene.camera.height // zb.tile)
+    mask = (np.arange(tiles_x * tiles_y) % 3 == 0).astype(np.int32)
+    tile, pixel = fragments(False, tiles=mask), fragments(True, tiles=mask)
+    assert all(np.array_equal(a, b) for a, b in zip(tile, pixel))

@@ -11,7 +11,7 @@ from .._warp import wp
 from ..geometry import Geometry
 from ..options import RASTER_TILE
 from ..kernels import (CLIP_SCALE, MARGIN_PX, Fragments, count_kernel, fill_kernel, project_kernel,
-                       raster_camera, raster_kernel, uncertain_np)
+                       raster_camera, raster_kernel, raster_pixel_kernel, uncertain_np)
 from ..scene import EffectSet, camera_basis
 from .caches import EYE_TESTS_KEPT
 from .launch import launch_bands
@@ -85,11 +85,15 @@ class ZBuffer:
     """Owns the per-sample buffers of one scene's rasterization (self.fragments)."""
 
     def __init__(self, scene, geometry: Geometry, fx: EffectSet, device: str = "cpu", tile: int = RASTER_TILE,
-                 track_uncertain: bool = True, margin: float = MARGIN_PX, fragments: Fragments | None = None):
+                 track_uncertain: bool = True, margin: float = MARGIN_PX, fragments: Fragments | None = None,
+                 per_pixel: bool | None = None):
         """``fragments``: buffers of this size to draw into instead of new ones, every sample cleared
-        (the virtual cameras pass one from chain to chain, cleared as they gather it)."""
+        (the virtual cameras pass one from chain to chain, cleared as they gather it). ``per_pixel``: depth-
+        test with a thread per pixel (raster_pixel_kernel, the same Fragments) rather than per tile; None:
+        on a GPU (its many threads), not on the CPU (where a tile's thread clips each triangle once)."""
         cam = scene.camera
         self.geometry, self.device, self.tile = geometry, device, int(tile)
+        self.per_pixel = wp.get_device(device).is_cuda if per_pixel is None else bool(per_pixel)
         self.track_uncertain = track_uncertain
         self.basis = camera_basis(cam)
         self.eye = geometry.eye_offset(cam.eye)  # the tracer's camera ray origin
@@ -156,8 +160,9 @@ class ZBuffer:
 
         with timed(self.times, "raster"):
             samples, frags = self.samples, self.fragments
-            launch_bands(raster_kernel, lambda first: [data, c, starts, faces, tiles_x, tile, k, samples, first, frags],
-                         tiles_x * tiles_y, threads, max(bands, 4 * threads), dev, pool=pool)
+            kernel, count = (raster_pixel_kernel, c.width * c.height) if self.per_pixel else (raster_kernel, n_tiles)
+            launch_bands(kernel, lambda first: [data, c, starts, faces, tiles_x, tile, k, samples, first, frags],
+                         count, threads, max(bands, 4 * threads), dev, pool=pool)
 
     def uncertain(self) -> np.ndarray:
         """Where the rasterizer's visible triangle may not be the tracer's, (height, width, samples):

@@ -21,7 +21,7 @@ from .grad import (MAX_GRAD_LIGHTS, TEXTURE_CLAMP, TEXTURE_MIRROR, TEXTURE_WRAP,
 from .hybrid import MARGIN_PX, uncertain, uncertain_np
 from .interaction import OFFSET_SCALE, make_surface, offset_ray_origin, reflect
 from .mirror import MARGIN_PX as MIRROR_MARGIN_PX, MAX_BOUNCES, Mirrors, gather_kernel, mirror_chain, mirror_hit, probe_kernel, total_kernel
-from .raster import Fragments, count_kernel, fill_kernel, project_kernel, raster_kernel
+from .raster import Fragments, count_kernel, fill_kernel, project_kernel, raster_kernel, raster_pixel_kernel
 from .shading import phong_diffuse, phong_specular
 from .shadow import grid_occluded
 from .trace import MAX_TREE_DEPTH, make_trace_kernel, stack_size, tile_order_pixel
@@ -36,5 +36,5 @@ __all__ = ["CLIP_SCALE", "CameraData", "Fragments", "MARGIN_PX", "MAX_GRAD_LIGHT
            "beer", "beer_forever", "count_kernel", "empty_aov_buffers", "fill_kernel", "fresnel_dielectric", "gather_kernel", "grid_occluded",
            "init_warp", "light_factor", "make_shade_kernel", "make_surface", "make_trace_kernel", "mirror_chain", "mirror_hit",
            "offset_ray_origin", "phong_diffuse", "phong_specular", "probe_kernel", "project_kernel", "total_kernel", "query_normal",
-           "raster_camera", "raster_kernel", "reflect", "refract", "sample_mean", "sample_offset", "spot_cone", "stack_size", "texture_factor", "tile_order_pixel",
+           "raster_camera", "raster_kernel", "raster_pixel_kernel", "reflect", "refract", "sample_mean", "sample_offset", "spot_cone", "stack_size", "texture_factor", "tile_order_pixel",
            "triangle", "uncertain", "uncertain_np", "unit_normal", "woop_hit", "wp"]

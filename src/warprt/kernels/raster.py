@@ -1,7 +1,8 @@
 """The Z-buffer's depth test, in Warp kernels: per triangle, the pixels whose samples its clipped
 projection may cover (project_kernel); binning into tiles (count_kernel, fill_kernel); per tile, one
 thread owning the tile's samples and depth-testing every triangle binned to it (raster_kernel), so no
-two threads write one sample on any device. The result is a Fragments per sample.
+two threads write one sample on any device; on a GPU, one thread per pixel over its tile's list
+(raster_pixel_kernel: the same tests per sample, far more threads). The result is a Fragments per sample.
 """
 
 from __future__ import annotations
@@ -222,6 +223,30 @@ def raster_kernel(s: SceneData, c: RasterCamera, tile_start: wp.array(dtype=wp.i
             e = project(c, poly.v3)
             raster_triangle(a, d, e, f, x_lo, x_hi, y_lo, y_hi, c, k, samples, out)
 
+
+@wp.kernel(enable_backward=False)
+def raster_pixel_kernel(s: SceneData, c: RasterCamera, tile_start: wp.array(dtype=wp.int32),
+                        tile_faces: wp.array(dtype=wp.int32), tiles_x: int, tile: int, k: int, samples: int,
+                        first: int, out: Fragments):
+    """One thread per pixel (row-major from the bottom, y up), for a GPU's many threads: every triangle
+    binned to the pixel's tile, in the list's order, depth-tested at the pixel's samples alone. Each
+    sample sees the very tests raster_kernel makes there, in the same order: the same Fragments, bit for
+    bit (tests/zbuffer), with the clipping and projection done per pixel instead of per tile."""
+    pixel = first + wp.tid()
+    x = pixel % c.width
+    y = pixel / c.width
+    t = (y / tile) * tiles_x + x / tile
+    for j in range(tile_start[t], tile_start[t + 1]):
+        f = tile_faces[j]
+        p0, p1, p2 = triangle(s, f)
+        poly = clip_triangle(c, p0, p1, p2)
+        a = project(c, poly.v0)
+        b = project(c, poly.v1)
+        d = project(c, poly.v2)
+        raster_triangle(a, b, d, f, x, x, y, y, c, k, samples, out)
+        if poly.n == 4:
+            e = project(c, poly.v3)
+            raster_triangle(a, d, e, f, x, x, y, y, c, k, samples, out)
 
 
 @wp.func
