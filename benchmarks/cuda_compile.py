@@ -47,6 +47,9 @@ RUNS = (
     ("vertex colours, AOVs", "vertex_colors", {}, dict(TRACED, aovs=AOVS)),
     ("area lights (Mitsuba's Cornell box)", "cornell_box.xml", {}, TRACED),
     ("gradients: record and differentiable shading", "seed", {"render.max_depth": 1}, dict(TRACED, grad=True)),
+    ("gradients: textures, spp 4", "textured", {"render.spp": 4}, dict(TRACED, grad=True)),
+    ("gradients: light model, mirrors", "sun", {}, dict(TRACED, grad=True)),
+    ("gradients: area lights", "cornell_box.xml", {}, dict(TRACED, grad=True)),
 )
 
 

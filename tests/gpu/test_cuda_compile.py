@@ -14,7 +14,7 @@ from marks import slow
 ROOT = Path(__file__).resolve().parents[2]
 
 
-@slow  # seven tiny renders, then the modules they load x two architectures through NVRTC (35 s on 2 shared cores)
+@slow  # a dozen tiny renders, then the modules they load x two architectures through NVRTC (35 s on 2 shared cores)
 def test_every_module_of_every_path_compiles_for_cuda():
     """In a fresh process, as CI's own command would run it: this test's worker has loaded every kernel
     variant the suite rendered before it (hundreds), and the check is of the paths' modules."""
