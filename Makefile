@@ -42,9 +42,10 @@ figures: install-extras
 benchmark: install-extras llvm
 	$(PYTHON) -m benchmarks
 
-# The day a GPU is lent: every hash-list image rendered on cuda and held to the CPU's (docs/gpu.md), results in
-# benchmarks/results/device.md; without CUDA it says so and succeeds. No install step: a lent machine may be offline.
+# The day a GPU is lent: every hash-list image rendered on cuda and held to the CPU's (docs/gpu.md), gradients
+# compared, warm 1024x768 frames timed (against Mitsuba cuda_ad_rgb where installed), results in
+# benchmarks/results/device.md and a REPORT.md section; without CUDA it says so and succeeds. No install step: a lent machine may be offline.
 # DEVICE=cpu: the same script on the CPU, two small scenes (CI's smoke run, so that it does not rot).
 DEVICE ?= cuda
 device-check:
-	$(PYTHON) -m benchmarks.device_check --device $(DEVICE) $(if $(filter cpu,$(DEVICE)),--quick,--out benchmarks/results/device.md)
+	$(PYTHON) -m benchmarks.device_check --device $(DEVICE) $(if $(filter cpu,$(DEVICE)),--quick,--out benchmarks/results/device.md --report benchmarks/REPORT.md)
