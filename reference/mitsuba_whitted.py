@@ -363,7 +363,8 @@ class _Tables:
         # Per area light, warprt's own points of the unit square (scene.area_lights' order, as ``area``).
         from warprt.scene import sample_coordinates
 
-        self.area_uv = [list(zip(*(c.tolist() for c in sample_coordinates(light, k)))) for light in scene.area_lights]
+        self.area_uv = ([list(zip(*(c.tolist() for c in sample_coordinates(light, k)))) for light in scene.area_lights]
+                        if self.area else [])
         self.area_share = 1.0 / (k * k) if self.area else 0.0
         self.attributes = attributes  # whether the shapes carry Attributes BSDFs (textures, vertex colours)
         # Whether textured materials take their texture from the shape's own Mitsuba BSDF (a scene file's).

@@ -276,14 +276,14 @@ def test_gltf_nodes_reusing_a_mesh_are_placed_copies():
 def test_warnings_are_one_line_each_and_silenced_by_q(tmp_path):
     (tmp_path / "w.obj").write_text("mtllib w.mtl\nmtllib gone.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\n"
                                     "usemtl glass\nf 1 2 3\nusemtl nowhere\nf 1 3 2\nfoo 1 2\n")
-    (tmp_path / "w.mtl").write_text("newmtl glass\nKd 0.5 0.5 0.5\nd 0.3\nKe 1 0 0\nmap_Kd missing.png\nzz 3\n")
+    (tmp_path / "w.mtl").write_text("newmtl glass\nKd 0.5 0.5 0.5\nd 0.3\nmap_Ke glow.png\nmap_Kd missing.png\nzz 3\n")
     r = run("render", "w.obj", "-o", "w.png", cwd=tmp_path)
     assert r.returncode == 0, r.stderr
     warnings = [l for l in r.stderr.splitlines() if l.startswith("warprt: warning: ")]
     expected = ["w.obj: line 2: mtllib gone.mtl: file not found", "w.obj: usemtl: no material named 'nowhere'",
                 "w.obj: statements not read: foo", "w.mtl: statements not read: zz",
                 "w.mtl: newmtl glass: map_Kd: missing.png: texture file not found",
-                "w.mtl: newmtl glass: transparency", "w.mtl: newmtl glass: emission"]
+                "w.mtl: newmtl glass: transparency", "w.mtl: newmtl glass: an emission map (map_Ke) is not read"]
     for text in expected:
         assert sum(text in w for w in warnings) == 1, (text, warnings)
     assert len(warnings) == len(expected)
