@@ -47,8 +47,11 @@ RUNS = (
     ("vertex colours, AOVs", "vertex_colors", {}, dict(TRACED, aovs=AOVS)),
     ("area lights (Mitsuba's Cornell box)", "cornell_box.xml", {}, TRACED),
     ("gradients: record and differentiable shading", "seed", {"render.max_depth": 1}, dict(TRACED, grad=True)),
-    ("gradients: textures, spp 4", "textured", {"render.spp": 4}, dict(TRACED, grad=True)),
-    ("gradients: light model, mirrors", "sun", {}, dict(TRACED, grad=True)),
+    # Every gradient switch on at once (the record and replay variants of the others are the seed run's):
+    # spp 4, an image texture, the light model (a sun), mirror levels.
+    ("gradients: spp 4, texture, light model, mirrors", "sun",
+     {"render.spp": 4, "materials.ground.kd_texture": {"image": "textures/globe.png", "scale": [2, 1]}},
+     dict(TRACED, grad=True)),
     ("gradients: area lights", "cornell_box.xml", {}, dict(TRACED, grad=True)),
 )
 
