@@ -3,7 +3,8 @@ differentiable shading kernel.
 
 The record kernel finds each camera ray's hits as the tracer does (the rays through the centres of the
 pixel's strata, the BVH's closest hit, single-sided back faces passed through, the mirror rays) and which
-Whitted lights each hit sees (the tracer's own spawn_ray, light model and any-hit query): what the
+Whitted lights and area-light sample points each hit sees (shading's make_light_test and
+make_area_sample_test, the very functions the forward's shading calls): what the
 gradient holds fixed. The shading kernel recomputes the local Phong model at those hits from arrays a
 wp.Tape differentiates (the material colours and exponents per slot, their textures' texels, the lights'
 positions, colours and directions): C = C_amb ka + sum_l vis_l C_l w_l (kd n.L + ks max(0, r.v)^n), w_l a spot's cone times
@@ -22,8 +23,7 @@ from .._warp import wp
 from ..geometry import LIGHT_DIRECTIONAL, LIGHT_SPOT, SceneData
 from .camera import CameraData, camera_ray, sample_offset
 from .interaction import make_surface, reflect, spawn_ray
-from .shading import FAR, SHADOW_EPSILON, light_weight, phong_diffuse, phong_specular
-from .shadow import make_occluded
+from .shading import make_area_sample_test, make_light_test, phong_diffuse, phong_specular
 from .trace import culled, past
 from .triangle import triangle, unit_normal
 
@@ -148,16 +148,18 @@ def make_grad_record_kernel(L: int, D: int, smooth: bool, shadows: bool, cull: b
     (D at most: the camera ray, then the mirror rays the tracer spawns while k_r > 0 and max_depth allows),
     the face of the level's hit (-1: it met nothing, -2: no ray at that level), its barycentrics (u on the
     face's first vertex, v on its second), the ray's direction, and per light whether the hit sees it (1
-    where n.L > 0 and no shadow ray is blocked): the tracer's own surface, spawn_ray and any-hit query.
+    where n.L > 0 and no shadow ray is blocked): the tracer's own surface, and the forward's own test
+    (shading.make_light_test, called here as the forward's shade calls it, so the two cannot disagree).
     With ``light_model`` (spot and directional lights, falloff), shading's general light model: a spot
     outside its cone is not seen, a directional light lies along -direction, its shadow ray unbounded.
     With ``area``, also per ray level the area light whose emitting side the ray meets (emit, -1: none;
     shading.emitted's test) and, as ``words`` int32 bit masks, which area-light sample points the hit sees
     (bit q of word q / 32: r^2 > 0, n.L > 0, the emitter's cosine > 0 and the shadow ray, stopping
-    SHADOW_EPSILON short of the point, unblocked): shading's area_light, its arithmetic and its any-hit
-    query."""
+    SHADOW_EPSILON short of the point, unblocked): shading.make_area_sample_test, the forward area_light's
+    own test."""
     surface = make_surface(smooth)
-    occluded = make_occluded(False)
+    light_test = make_light_test(light_model, shadows)
+    area_sample_test = make_area_sample_test(shadows)
 
     @wp.kernel(module="unique", enable_backward=False)
     def record(s: SceneData, c: CameraData, max_depth: int, k: int, first: int, face: wp.array(dtype=int),
@@ -186,34 +188,8 @@ def make_grad_record_kernel(L: int, D: int, smooth: bool, shadows: bool, cull: b
                     face[j] = q.face
                     bary[j] = wp.vec2(q.u, q.v)
                     hit = surface(s, q.face, q.u, q.v, q.normal, d)
-                    for l in range(wp.static(L)):
-                        lit = True
-                        directional = False
-                        if wp.static(light_model):  # shading's: its test, then its shadow ray
-                            shape = s.light_shape[l]
-                            directional = shape.kind == wp.static(LIGHT_DIRECTIONAL)
-                            to_light = -shape.direction
-                            if not directional:
-                                to_light = s.light_pos[l] - hit.p
-                            L_dir = wp.normalize(to_light)
-                            lit = light_weight(shape, to_light, L_dir) > 0.0
-                        else:
-                            to_light = s.light_pos[l] - hit.p
-                            L_dir = wp.normalize(to_light)
-                        seen = int(0)
-                        if lit and wp.dot(hit.n, L_dir) > 0.0:
-                            seen = 1
-                            if wp.static(shadows):
-                                so = spawn_ray(hit, L_dir).o
-                                to_light_o = s.light_pos[l] - so
-                                dist = wp.length(to_light_o)
-                                sd = to_light_o / dist
-                                if directional:  # its position is NaN: the ray above is replaced
-                                    sd = L_dir
-                                    dist = FAR
-                                if occluded(s, l, so, sd, dist):
-                                    seen = 0
-                        visible[j * wp.static(L) + l] = seen
+                    for l in range(wp.static(L)):  # shading's own test: its light model and shadow ray
+                        visible[j * wp.static(L) + l] = light_test(s, hit, l).lit
                     if wp.static(area):
                         # shading.emitted: the emitter's side its winding's normal points to
                         e = s.area.tri_emitter[q.face]
@@ -223,24 +199,10 @@ def make_grad_record_kernel(L: int, D: int, smooth: bool, shadows: bool, cull: b
                             if wp.dot(d, unit_normal(t0, t1, t2)) < 0.0:
                                 emit[j] = e
                         a = s.area
-                        for sq in range(a.first[a.num]):  # shading.area_light's samples, lights in order
-                            to_q = a.points[sq] - hit.p
-                            r2 = wp.dot(to_q, to_q)
-                            if r2 > 0.0:
-                                L_q = to_q / wp.sqrt(r2)
-                                n_dot_l = wp.dot(hit.n, L_q)
-                                cos_q = -wp.dot(a.normals[sq], L_q)
-                                if n_dot_l > 0.0 and cos_q > 0.0:
-                                    lit_q = int(1)  # not a constant: Warp's dynamic loop may not mutate one
-                                    if wp.static(shadows):
-                                        qo = spawn_ray(hit, L_q).o
-                                        to_q_o = a.points[sq] - qo
-                                        dist_q = wp.length(to_q_o)
-                                        if occluded(s, -1, qo, to_q_o / dist_q, dist_q * wp.static(1.0 - SHADOW_EPSILON)):
-                                            lit_q = 0
-                                    if lit_q != 0:
-                                        word = j * words + sq / 32
-                                        area_bits[word] = area_bits[word] | (1 << (sq % 32))
+                        for sq in range(a.first[a.num]):  # shading.area_light's samples and test, lights in order
+                            if area_sample_test(s, hit, sq).lit != 0:
+                                word = j * words + sq / 32
+                                area_bits[word] = area_bits[word] | (1 << (sq % 32))
                     if level + 1 < max_depth and wp.max(s.kr[hit.material]) > 0.0:
                         spawned = spawn_ray(hit, wp.normalize(reflect(d, hit.n)))
                         o = spawned.o
