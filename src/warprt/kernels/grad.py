@@ -139,6 +139,41 @@ def texture_factor(texels: wp.array(dtype=wp.vec3), shape: wp.vec4i, wrap: wp.ve
     return bilinear(texels, shape[1], shape[2], shape[3], wrap[0], wrap[1], q)
 
 
+@wp.func
+def camera_direction(eye: wp.vec3, center: wp.vec3, up: wp.vec3, fovy: float, near: float, aspect: float,
+                     px: float, py: float) -> wp.vec3:
+    """The unit direction of the camera ray through the point (px, py) of the image plane (0 to 1 from its
+    lower-left corner: ((x + sx) / width, (y + sy) / height)), as a differentiable function of the camera:
+    scene.camera_basis's basis (z_e = (eye - center) / |eye - center|, x_e = (up x z_e) / |up x z_e|,
+    y_e = z_e x x_e, h = 2 near tan(fovy / 2), fovy in degrees, w = h aspect) and camera.camera_ray's
+    d = -near z_e + h (py - 1/2) y_e + w (px - 1/2) x_e, normalised; float32, where the forward builds the
+    basis in float64 on the host."""
+    z_e = wp.normalize(eye - center)
+    x_e = wp.normalize(wp.cross(up, z_e))
+    y_e = wp.cross(z_e, x_e)
+    h = 2.0 * near * wp.tan(wp.radians(fovy) * 0.5)
+    w = h * aspect
+    d = (-near) * z_e + h * (py - 0.5) * y_e + w * (px - 0.5) * x_e
+    return wp.normalize(d)
+
+
+@wp.kernel(module="unique")
+def camera_rays(camera: wp.array(dtype=wp.vec3), fovy: wp.array(dtype=float), near: float, width: int, height: int,
+                k: int, dirs: wp.array(dtype=wp.vec3)):
+    """Each camera ray's direction (ray pixel * k^2 + sample, as the record numbers them: the pixel's
+    stratum centre, camera.sample_offset) from the camera (``camera``: eye and center relative to the frame
+    origin, up; ``fovy`` in degrees), differentiable in both: camera_direction at the point the trace kernel
+    aims the ray at."""
+    ray = wp.tid()
+    pixel = ray / (k * k)
+    x = pixel % width
+    row = pixel / width
+    offset = sample_offset(ray % (k * k), k)
+    y = float(height - 1 - row)
+    dirs[ray] = camera_direction(camera[0], camera[1], camera[2], fovy[0], near, float(width) / float(height),
+                                 (float(x) + offset[0]) / float(width), (y + offset[1]) / float(height))
+
+
 @functools.cache
 def make_grad_record_kernel(L: int, D: int, smooth: bool, shadows: bool, cull: bool, light_model: bool = False,
                             area: bool = False):
@@ -213,16 +248,17 @@ def make_grad_record_kernel(L: int, D: int, smooth: bool, shadows: bool, cull: b
 
 
 @functools.cache
-def make_grad_shade_kernel(L: int, D: int, smooth: bool, vertices: bool = False, light_model: bool = False,
+def make_grad_shade_kernel(L: int, D: int, smooth: bool, moving: bool = False, light_model: bool = False,
                            texture: bool = False, area: bool = False):
     """shade(...): each camera ray's colour (one per pixel and sample, as recorded; sample_mean makes
     them the image) from the recorded hit and visibility and the differentiable
     material and light arrays, over the recorded ray levels (D at most), each weighted by the product of
-    the k_r of the mirrors before it; the background where a ray met nothing. With ``vertices`` (camera
+    the k_r of the mirrors before it; the background where a ray met nothing. With ``moving`` (camera
     rays alone, D = 1), the
-    hit's barycentrics are those of the camera ray (from ``eye``) and the recorded face recomputed from
-    ``points`` by a differentiable Moller-Trumbore test, so that the hit point moves with the vertices
-    (Warp's mesh query gives the points no adjoint); without, the recorded ones. With ``light_model``,
+    hit's barycentrics are those of the camera ray (from ``eye[0]`` along ``dirs``, each differentiable: the
+    camera's, camera_rays) on the recorded face recomputed from ``points`` by a differentiable
+    Moller-Trumbore test, so that the hit point moves with the vertices and the camera (Warp's mesh query
+    gives the points no adjoint); without, the recorded ones. With ``light_model``,
     shading's general light model (light_factor): a directional light's L is -its axis, a spot's C_l is
     weighted by its cone, an inverse_square light's by 1 / r^2; without, the seed's point lights. With
     ``texture``, ka, kd and ks times their textures at the hit's interpolated uv (texture_factor: the
@@ -232,7 +268,7 @@ def make_grad_shade_kernel(L: int, D: int, smooth: bool, vertices: bool = False,
     lights' local colour, to which the area lights' samples are added), and area_combine makes the colour."""
 
     @wp.kernel(module="unique")
-    def shade(eye: wp.vec3, points: wp.array(dtype=wp.vec3), indices: wp.array(dtype=int), normals: wp.array(dtype=wp.vec3),
+    def shade(eye: wp.array(dtype=wp.vec3), points: wp.array(dtype=wp.vec3), indices: wp.array(dtype=int), normals: wp.array(dtype=wp.vec3),
               tri_material: wp.array(dtype=int), tri_smooth: wp.array(dtype=int),
               ka: wp.array(dtype=wp.vec3), kd: wp.array(dtype=wp.vec3), ks: wp.array(dtype=wp.vec3),
               shininess: wp.array(dtype=float), kr: wp.array(dtype=wp.vec3), light_pos: wp.array(dtype=wp.vec3),
@@ -265,12 +301,12 @@ def make_grad_shade_kernel(L: int, D: int, smooth: bool, vertices: bool = False,
                 p2 = points[i2]
                 u = bary[k][0]
                 v = bary[k][1]
-                if wp.static(vertices):
+                if wp.static(moving):
                     e1 = p1 - p0
                     e2 = p2 - p0
                     pv = wp.cross(d, e2)
                     inv = 1.0 / wp.dot(e1, pv)
-                    tv = eye - p0
+                    tv = eye[0] - p0
                     b1 = wp.dot(tv, pv) * inv
                     b2 = wp.dot(d, wp.cross(tv, e1)) * inv
                     u = 1.0 - b1 - b2  # Warp's convention: u weighs the face's first vertex, v its second
