@@ -11,8 +11,8 @@ the lights' colours, positions and directions (point, spot and directional light
 model: a spot's cone, 1 / r^2 falloff), of image textures' texels (the forward's bilinear wp.Texture2D
 lookup written over a wp.array: kernels.bilinear), of a flat object's vertices (the hit recomputed on
 the moved face), of the camera's eye, center, up and fovy (the camera rays made again in Warp,
-kernels.camera_rays, and the hit recomputed on the recorded face from the moved ray; camera rays only, as
-for the vertices), and of the area lights' radiance (an area light's, an emitting material's emission): their
+kernels.camera_rays, and the hit recomputed on the recorded face from the moved ray, through the mirror
+rays too), and of the area lights' radiance (an area light's, an emitting material's emission): their
 sample points' terms at each hit (the record's bit per point seen; kernels.area_replay, one thread per level
 and point) and the emitter's front met by a ray, the points themselves held fixed. The image is the mean of
 each pixel's rays, as the trace kernel makes it. Covered for now: any render.spp and light_samples, camera
@@ -211,13 +211,13 @@ def area_sources(scene) -> list[str]:
 
 
 def _vertices_refusal(hits: "FirstHits", name: str = "objects.") -> str | None:
-    """Why backward() cannot give this frame's vertex (or, for a camera.* ``name``, camera) gradients yet
-    (None: it can)."""
+    """Why backward() cannot give this frame's vertex gradients yet (None: it can; always for the camera,
+    a camera.* ``name``, whose moving rays the replay follows through the mirrors). The replay would move a
+    vertex's mirror rays too, but that is not tested yet."""
     if hits.levels == 1:
         return None
-    if name.startswith("camera."):
-        return ("the camera is differentiated through camera rays alone for now (with mirrors, the mirror rays' "
-                "origins and directions move with it too): render with render.max_depth 1 or no reflectivity")
+    if name.startswith("camera."):  # the camera's rays, mirror rays included, move in the replay
+        return None
     return ("vertices are differentiated through camera rays alone for now (a mirror ray's origin and direction "
             "move with them too)")
 
@@ -278,7 +278,7 @@ def replay_launch(scene, geom, hits: FirstHits, device: str, vertices: bool = Fa
                   camera: bool = False) -> ReplayLaunch:
     """The replay of ``hits`` (a frame of ``scene`` on ``geom``) with its differentiable arrays made from
     the scene's values; with ``vertices``, the points too (the hits recomputed on the moved faces); with
-    ``camera`` (camera rays alone), the camera too: its eye, center and up (``arrays["camera"]``, the eye and
+    ``camera``, the camera too: its eye, center and up (``arrays["camera"]``, the eye and
     center relative to the frame origin) and fovy, the camera rays' directions made from them (camera_rays,
     in ``before``) and the hits recomputed from the moved rays on the recorded faces."""
     mats = geom.slot_materials(scene)
@@ -307,9 +307,12 @@ def replay_launch(scene, geom, hits: FirstHits, device: str, vertices: bool = Fa
     fovy = wp.array([cam.fovy], dtype=float, device=device, requires_grad=True)
     dirs, before = hits.dirs, []
     if camera:  # the camera rays made again, differentiable in the camera, the recorded directions unused
-        dirs = wp.zeros(n, dtype=wp.vec3, device=device, requires_grad=True)
+        dirs = wp.zeros(n * hits.levels, dtype=wp.vec3, device=device, requires_grad=True)
         before.append((camera_rays, n, [eye, fovy, float(cam.near), hits.width, hits.height,
-                                        math.isqrt(hits.samples)], [dirs]))
+                                        math.isqrt(hits.samples), hits.levels], [dirs]))
+    # each level's direction, as the moving replay makes it (vertices, camera): what the area lights' replay reads
+    ray_dirs = wp.zeros(n * hits.levels if vertices or camera else 1, dtype=wp.vec3, device=device,
+                        requires_grad=True)
     table = texture_table(mats, device)
     uvs = geom.uv_array() if hits.texture else wp.zeros(1, dtype=wp.vec2, device=device)
     background = wp.vec3(*scene.render.background)
@@ -318,7 +321,7 @@ def replay_launch(scene, geom, hits: FirstHits, device: str, vertices: bool = Fa
     shaded = wp.zeros(1, dtype=wp.vec3, device=device, requires_grad=True) if area else rays
     inputs = [eye, points, geom.indices, geom.normals, geom.tri_material, geom.tri_smooth, ka, kd, ks, shininess, kr,
               light_pos, light_color, inverse_square, kind, axis, cone, uvs, *table.arrays,
-              wp.vec3(*scene.render.ambient), background, hits.face, hits.bary, dirs, hits.visible, *state]
+              wp.vec3(*scene.render.ambient), background, hits.face, hits.bary, dirs, hits.visible, *state, ray_dirs]
     arrays = {"ka": ka, "kd": kd, "ks": ks, "shininess": shininess, "reflectivity": kr, "color": light_color,
               "position": light_pos, "direction": axis, "texels": table.arrays[0]}
     then = []
@@ -331,7 +334,7 @@ def replay_launch(scene, geom, hits: FirstHits, device: str, vertices: bool = Fa
         arrays["radiance"] = radiance
         hit_p, hit_n, hit_kd, hit_ks, level_weight, acc = state
         then.append((area_replay, (levels, int(first[-1])),
-                     [hits.words, hits.face, dirs, hits.area_bits, geom.tri_material, shininess, hit_p, hit_n,
+                     [hits.words, hits.face, ray_dirs if vertices or camera else dirs, hits.area_bits, geom.tri_material, shininess, hit_p, hit_n,
                       hit_kd, hit_ks, a.points, a.normals, a.dA, sample_light, radiance], [acc]))
         then.append((make_area_combine(hits.levels), n, [hits.face, hits.emit, radiance, background, level_weight,
                                                          acc], [rays]))

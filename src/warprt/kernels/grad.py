@@ -22,7 +22,7 @@ import functools
 from .._warp import wp
 from ..geometry import LIGHT_DIRECTIONAL, LIGHT_SPOT, SceneData
 from .camera import CameraData, camera_ray, sample_offset
-from .interaction import make_surface, reflect, spawn_ray
+from .interaction import hit_point_error, make_surface, offset_ray_origin, reflect, spawn_ray
 from .shading import make_area_sample_test, make_light_test, phong_diffuse, phong_specular
 from .trace import culled, past
 from .triangle import triangle, unit_normal
@@ -159,9 +159,9 @@ def camera_direction(eye: wp.vec3, center: wp.vec3, up: wp.vec3, fovy: float, ne
 
 @wp.kernel(module="unique")
 def camera_rays(camera: wp.array(dtype=wp.vec3), fovy: wp.array(dtype=float), near: float, width: int, height: int,
-                k: int, dirs: wp.array(dtype=wp.vec3)):
+                k: int, levels: int, dirs: wp.array(dtype=wp.vec3)):
     """Each camera ray's direction (ray pixel * k^2 + sample, as the record numbers them: the pixel's
-    stratum centre, camera.sample_offset) from the camera (``camera``: eye and center relative to the frame
+    stratum centre, camera.sample_offset; written at ray * levels, the record's first level of the ray) from the camera (``camera``: eye and center relative to the frame
     origin, up; ``fovy`` in degrees), differentiable in both: camera_direction at the point the trace kernel
     aims the ray at."""
     ray = wp.tid()
@@ -170,8 +170,9 @@ def camera_rays(camera: wp.array(dtype=wp.vec3), fovy: wp.array(dtype=float), ne
     row = pixel / width
     offset = sample_offset(ray % (k * k), k)
     y = float(height - 1 - row)
-    dirs[ray] = camera_direction(camera[0], camera[1], camera[2], fovy[0], near, float(width) / float(height),
-                                 (float(x) + offset[0]) / float(width), (y + offset[1]) / float(height))
+    dirs[ray * levels] = camera_direction(camera[0], camera[1], camera[2], fovy[0], near,
+                                          float(width) / float(height), (float(x) + offset[0]) / float(width),
+                                          (y + offset[1]) / float(height))
 
 
 @functools.cache
@@ -253,12 +254,14 @@ def make_grad_shade_kernel(L: int, D: int, smooth: bool, moving: bool = False, l
     """shade(...): each camera ray's colour (one per pixel and sample, as recorded; sample_mean makes
     them the image) from the recorded hit and visibility and the differentiable
     material and light arrays, over the recorded ray levels (D at most), each weighted by the product of
-    the k_r of the mirrors before it; the background where a ray met nothing. With ``moving`` (camera
-    rays alone, D = 1), the
-    hit's barycentrics are those of the camera ray (from ``eye[0]`` along ``dirs``, each differentiable: the
-    camera's, camera_rays) on the recorded face recomputed from ``points`` by a differentiable
+    the k_r of the mirrors before it; the background where a ray met nothing. With ``moving``, the
+    hit's barycentrics are those of the moving ray (at the first level from ``eye[0]`` along ``dirs`` at
+    ray * D, each differentiable: the camera's, camera_rays; then the mirror ray from the level's hit point
+    along its direction reflected about the hit's normal, offset off the surface as the tracer's spawn_ray
+    does) on the recorded face recomputed from ``points`` by a differentiable
     Moller-Trumbore test, so that the hit point moves with the vertices and the camera (Warp's mesh query
-    gives the points no adjoint); without, the recorded ones. With ``light_model``,
+    gives the points no adjoint), each level's direction written to ``ray_dirs`` (the area lights' replay
+    reads it); without, the recorded ones. With ``light_model``,
     shading's general light model (light_factor): a directional light's L is -its axis, a spot's C_l is
     weighted by its cone, an inverse_square light's by 1 / r^2; without, the seed's point lights. With
     ``texture``, ka, kd and ks times their textures at the hit's interpolated uv (texture_factor: the
@@ -280,10 +283,14 @@ def make_grad_shade_kernel(L: int, D: int, smooth: bool, moving: bool = False, l
               ambient: wp.vec3, background: wp.vec3, face: wp.array(dtype=int), bary: wp.array(dtype=wp.vec2),
               dirs: wp.array(dtype=wp.vec3), visible: wp.array(dtype=int), hit_p: wp.array(dtype=wp.vec3),
               hit_n: wp.array(dtype=wp.vec3), hit_kd: wp.array(dtype=wp.vec3), hit_ks: wp.array(dtype=wp.vec3),
-              level_weight: wp.array(dtype=wp.vec3), acc: wp.array(dtype=wp.vec3), image: wp.array(dtype=wp.vec3)):
+              level_weight: wp.array(dtype=wp.vec3), acc: wp.array(dtype=wp.vec3), ray_dirs: wp.array(dtype=wp.vec3),
+              image: wp.array(dtype=wp.vec3)):
         ray = wp.tid()
         color = wp.vec3(0.0)
         weight = wp.vec3(1.0)
+        if wp.static(moving):  # the moving ray: from the eye along the camera ray, then the mirror rays
+            o = eye[0]
+            d_next = dirs[ray * wp.static(D)]
         for level in range(wp.static(D)):
             k = ray * wp.static(D) + level
             f = face[k]
@@ -293,6 +300,8 @@ def make_grad_shade_kernel(L: int, D: int, smooth: bool, moving: bool = False, l
                 color = color + wp.cw_mul(weight, background)
             if f >= 0:
                 d = dirs[k]
+                if wp.static(moving):
+                    d = d_next
                 i0 = indices[3 * f]
                 i1 = indices[3 * f + 1]
                 i2 = indices[3 * f + 2]
@@ -306,7 +315,7 @@ def make_grad_shade_kernel(L: int, D: int, smooth: bool, moving: bool = False, l
                     e2 = p2 - p0
                     pv = wp.cross(d, e2)
                     inv = 1.0 / wp.dot(e1, pv)
-                    tv = eye[0] - p0
+                    tv = o - p0
                     b1 = wp.dot(tv, pv) * inv
                     b2 = wp.dot(d, wp.cross(tv, e1)) * inv
                     u = 1.0 - b1 - b2  # Warp's convention: u weighs the face's first vertex, v its second
@@ -363,6 +372,10 @@ def make_grad_shade_kernel(L: int, D: int, smooth: bool, moving: bool = False, l
                 else:
                     color = color + wp.cw_mul(weight, local)
                 weight = wp.cw_mul(weight, kr[m])
+                if wp.static(moving):  # the mirror ray the tracer spawns here: spawn_ray's, off the surface
+                    ray_dirs[k] = d
+                    d_next = wp.normalize(reflect(d, n))
+                    o = offset_ray_origin(p, hit_point_error(p0, p1, p2, u, v, w), ng * side, d_next)
         if wp.static(not area):
             image[ray] = color
 
