@@ -10,7 +10,9 @@ derivative here); the local Phong terms are exact functions of the material colo
 the lights' colours, positions and directions (point, spot and directional lights, shading's light
 model: a spot's cone, 1 / r^2 falloff), of image textures' texels (the forward's bilinear wp.Texture2D
 lookup written over a wp.array: kernels.bilinear), of a flat object's vertices (the hit recomputed on
-the moved face), and of the area lights' radiance (an area light's, an emitting material's emission): their
+the moved face), of the camera's eye, center, up and fovy (the camera rays made again in Warp,
+kernels.camera_rays, and the hit recomputed on the recorded face from the moved ray, through the mirror
+rays too), and of the area lights' radiance (an area light's, an emitting material's emission): their
 sample points' terms at each hit (the record's bit per point seen; kernels.area_replay, one thread per level
 and point) and the emitter's front met by a ray, the points themselves held fixed. The image is the mean of
 each pixel's rays, as the trace kernel makes it. Covered for now: any render.spp and light_samples, camera
@@ -28,8 +30,8 @@ from .._warp import wp
 from ..errors import ArgumentError
 from ..kernels.camera import camera_data
 from ..kernels.grad import (MAX_GRAD_LIGHTS, TEXTURE_CHECKER, TEXTURE_CLAMP, TEXTURE_IMAGE, TEXTURE_MIRROR, TEXTURE_NONE,
-                            TEXTURE_WRAP, area_replay, make_area_combine, make_grad_record_kernel, make_grad_shade_kernel,
-                            sample_mean)
+                            TEXTURE_WRAP, area_replay, camera_rays, make_area_combine, make_grad_record_kernel,
+                            make_grad_shade_kernel, sample_mean)
 from ..geometry import LightShape, light_shape
 from ..scene import camera_basis, scene_effects
 from .launch import launch_bands
@@ -41,6 +43,7 @@ MATERIAL_KEYS = ("ka", "kd", "ks", "shininess", "reflectivity")
 TEXTURE_KEYS = ("ka_texture", "kd_texture", "ks_texture")  # an image texture's texels, as r.params has them
 MAX_GRAD_DEPTH = 16  # ray levels, unrolled as the lights are
 LIGHT_KEYS = ("color", "position", "direction")
+CAMERA_KEYS = ("eye", "center", "up", "fovy")
 
 
 def refusal(scene, fx) -> str | None:
@@ -64,10 +67,11 @@ def refusal(scene, fx) -> str | None:
 
 
 # Bytes per camera ray and level of the record (face, barycentrics, direction: 4 + 8 + 12, then 4 a light),
-# and per camera ray of the replay (its colour and adjoint, the adjoint handed to the tape: 3 x 12). With area
+# and per camera ray of the replay (its colour and adjoint, the adjoint handed to the tape, and for camera
+# gradients its direction made again and that one's adjoint: 5 x 12). With area
 # lights, per camera ray and level: the emitter met (4) and a bit per sample point (in 4-byte words), and the
 # replay's state (hit point, normal, kd, ks, weight, local colour, each with its adjoint: 2 x 6 x 12).
-RECORD_BYTES_PER_LEVEL, RECORD_BYTES_PER_LIGHT, REPLAY_BYTES_PER_RAY = 24, 4, 36
+RECORD_BYTES_PER_LEVEL, RECORD_BYTES_PER_LIGHT, REPLAY_BYTES_PER_RAY = 24, 4, 60
 AREA_RECORD_BYTES_PER_LEVEL, AREA_REPLAY_BYTES_PER_LEVEL = 4, 144
 
 
@@ -166,7 +170,7 @@ def parameter_names(scene) -> list[str]:
     """The r.params names backward() can differentiate with respect to: the flat objects' vertices too
     (a smooth object's vertex normals would move with them, which is not differentiated yet), but not an
     area light's own object's (its sample points are held fixed); an area light's radiance and an emitting
-    material's emission."""
+    material's emission; the camera's eye, center, up and fovy."""
     names = [f"materials.{m}.{k}" for m in scene.materials for k in MATERIAL_KEYS]
     names += [f"materials.{name}.{k}" for name, m in scene.materials.items() for k in TEXTURE_KEYS
               if getattr(m, k) is not None and getattr(m, k).image is not None]
@@ -177,6 +181,7 @@ def parameter_names(scene) -> list[str]:
     emitters = _emitter_objects(scene)
     names += [f"objects.{name}.vertices" for name, i in object_names(scene).items()
               if not scene.objects[i].smooth and scene.objects[i].name not in emitters]
+    names += [f"camera.{k}" for k in CAMERA_KEYS]
     return names
 
 
@@ -205,10 +210,21 @@ def area_sources(scene) -> list[str]:
     return out
 
 
-def _vertices_refusal(hits: "FirstHits") -> str | None:
-    """Why backward() cannot give this frame's vertex gradients yet (None: it can)."""
+def _vertices_refusal(hits: "FirstHits", name: str = "objects.") -> str | None:
+    """Why backward() cannot give this frame's vertex gradients yet (None: it can; always for the camera,
+    a camera.* ``name``, whose moving rays the replay follows through the mirrors). The replay would move a
+    vertex's mirror rays too, but that is not tested yet."""
+    if hits.levels == 1:
+        return None
+    if name.startswith("camera."):  # the camera's rays, mirror rays included, move in the replay
+        return None
     return ("vertices are differentiated through camera rays alone for now (a mirror ray's origin and direction "
-            "move with them too)" if hits.levels > 1 else None)
+            "move with them too)")
+
+
+def _moves(name: str) -> bool:
+    """Whether the parameter moves the camera rays' hits (the hits recomputed: vertices, the camera)."""
+    return name.startswith("objects.") or name.startswith("camera.")
 
 
 def _name_refusal(scene, name: str) -> str | None:
@@ -243,21 +259,28 @@ class ReplayLaunch:
     images: dict  # TextureTable.images: where each textured colour's texels lie in arrays["texels"]
     then: list = None
     shaded: wp.array = None  # the shade kernel's output: ``rays`` without area lights
+    before: list = None  # launches before the shade kernel's (with the camera: camera_rays)
 
 
-def replay(scene, geom, hits: FirstHits, device: str, vertices: bool = False) -> ReplayLaunch:
+def replay(scene, geom, hits: FirstHits, device: str, vertices: bool = False, camera: bool = False) -> ReplayLaunch:
     """replay_launch's kernels launched, on the current wp.Tape if there is one: its ``rays`` hold each
     camera ray's colour (one per pixel and sample)."""
-    r = replay_launch(scene, geom, hits, device, vertices)
+    r = replay_launch(scene, geom, hits, device, vertices, camera)
+    for kernel, dim, inputs, outputs in r.before or ():
+        wp.launch(kernel, dim=dim, inputs=inputs, outputs=outputs, device=device)
     wp.launch(r.kernel, dim=r.dim, inputs=r.inputs, outputs=[r.shaded], device=device)
     for kernel, dim, inputs, outputs in r.then or ():
         wp.launch(kernel, dim=dim, inputs=inputs, outputs=outputs, device=device)
     return r
 
 
-def replay_launch(scene, geom, hits: FirstHits, device: str, vertices: bool = False) -> ReplayLaunch:
+def replay_launch(scene, geom, hits: FirstHits, device: str, vertices: bool = False,
+                  camera: bool = False) -> ReplayLaunch:
     """The replay of ``hits`` (a frame of ``scene`` on ``geom``) with its differentiable arrays made from
-    the scene's values; with ``vertices``, the points too (the hits recomputed on the moved faces)."""
+    the scene's values; with ``vertices``, the points too (the hits recomputed on the moved faces); with
+    ``camera``, the camera too: its eye, center and up (``arrays["camera"]``, the eye and
+    center relative to the frame origin) and fovy, the camera rays' directions made from them (camera_rays,
+    in ``before``) and the hits recomputed from the moved rays on the recorded faces."""
     mats = geom.slot_materials(scene)
     vec = lambda rows: wp.array(np.asarray(rows, np.float32).reshape(-1, 3), dtype=wp.vec3, device=device,  # noqa: E731
                                 requires_grad=True)
@@ -277,9 +300,19 @@ def replay_launch(scene, geom, hits: FirstHits, device: str, vertices: bool = Fa
     rays = wp.zeros(n, dtype=wp.vec3, device=device, requires_grad=True)
     points = wp.array(geom.points_np, dtype=wp.vec3, device=device, requires_grad=True) if vertices else geom.points
     area = hits.words > 0
-    kernel = make_grad_shade_kernel(hits.lights, hits.levels, hits.smooth, vertices, hits.light_model, hits.texture,
-                                    area)
-    eye = wp.vec3(*geom.eye_offset(scene.camera.eye))
+    kernel = make_grad_shade_kernel(hits.lights, hits.levels, hits.smooth, vertices or camera, hits.light_model,
+                                    hits.texture, area)
+    cam = scene.camera
+    eye = vec([geom.eye_offset(cam.eye), geom.eye_offset(cam.center), cam.up])  # eye[0]: the rays' origin
+    fovy = wp.array([cam.fovy], dtype=float, device=device, requires_grad=True)
+    dirs, before = hits.dirs, []
+    if camera:  # the camera rays made again, differentiable in the camera, the recorded directions unused
+        dirs = wp.zeros(n * hits.levels, dtype=wp.vec3, device=device, requires_grad=True)
+        before.append((camera_rays, n, [eye, fovy, float(cam.near), hits.width, hits.height,
+                                        math.isqrt(hits.samples), hits.levels], [dirs]))
+    # each level's direction, as the moving replay makes it (vertices, camera): what the area lights' replay reads
+    ray_dirs = wp.zeros(n * hits.levels if vertices or camera else 1, dtype=wp.vec3, device=device,
+                        requires_grad=True)
     table = texture_table(mats, device)
     uvs = geom.uv_array() if hits.texture else wp.zeros(1, dtype=wp.vec2, device=device)
     background = wp.vec3(*scene.render.background)
@@ -288,7 +321,7 @@ def replay_launch(scene, geom, hits: FirstHits, device: str, vertices: bool = Fa
     shaded = wp.zeros(1, dtype=wp.vec3, device=device, requires_grad=True) if area else rays
     inputs = [eye, points, geom.indices, geom.normals, geom.tri_material, geom.tri_smooth, ka, kd, ks, shininess, kr,
               light_pos, light_color, inverse_square, kind, axis, cone, uvs, *table.arrays,
-              wp.vec3(*scene.render.ambient), background, hits.face, hits.bary, hits.dirs, hits.visible, *state]
+              wp.vec3(*scene.render.ambient), background, hits.face, hits.bary, dirs, hits.visible, *state, ray_dirs]
     arrays = {"ka": ka, "kd": kd, "ks": ks, "shininess": shininess, "reflectivity": kr, "color": light_color,
               "position": light_pos, "direction": axis, "texels": table.arrays[0]}
     then = []
@@ -301,13 +334,15 @@ def replay_launch(scene, geom, hits: FirstHits, device: str, vertices: bool = Fa
         arrays["radiance"] = radiance
         hit_p, hit_n, hit_kd, hit_ks, level_weight, acc = state
         then.append((area_replay, (levels, int(first[-1])),
-                     [hits.words, hits.face, hits.dirs, hits.area_bits, geom.tri_material, shininess, hit_p, hit_n,
+                     [hits.words, hits.face, ray_dirs if vertices or camera else dirs, hits.area_bits, geom.tri_material, shininess, hit_p, hit_n,
                       hit_kd, hit_ks, a.points, a.normals, a.dA, sample_light, radiance], [acc]))
         then.append((make_area_combine(hits.levels), n, [hits.face, hits.emit, radiance, background, level_weight,
                                                          acc], [rays]))
     if vertices:
         arrays["points"] = points
-    return ReplayLaunch(kernel, n, inputs, rays, arrays, table.images, then, shaded)
+    if camera:
+        arrays["camera"], arrays["fovy"] = eye, fovy
+    return ReplayLaunch(kernel, n, inputs, rays, arrays, table.images, then, shaded, before)
 
 
 @dataclass
@@ -358,10 +393,11 @@ def texture_table(mats, device: str) -> TextureTable:
     return TextureTable(arrays, images)
 
 
-def replay_image(scene, geom, hits: FirstHits, device: str) -> np.ndarray:
+def replay_image(scene, geom, hits: FirstHits, device: str, camera: bool = False) -> np.ndarray:
     """The image the replay makes of a recorded frame, (height, width, 3): the forward's, to float32
-    rounding, where the replay models what the forward traced (what the tests check)."""
-    rays = replay(scene, geom, hits, device).rays
+    rounding, where the replay models what the forward traced (what the tests check); with ``camera``, the
+    replay camera gradients run (the rays made again from the camera, the hits re-intersected)."""
+    rays = replay(scene, geom, hits, device, camera=camera).rays
     image = wp.empty(hits.width * hits.height, dtype=wp.vec3, device=device)
     wp.launch(sample_mean, dim=hits.width * hits.height, inputs=[rays, hits.samples], outputs=[image], device=device)
     return image.numpy().reshape(hits.height, hits.width, 3)
@@ -372,25 +408,27 @@ def backward(scene, geom, hits: FirstHits, d_image, wrt, device: str) -> dict:
     as the parameter: (3,) for colours and positions, () for an exponent."""
     known = parameter_names(scene)
     if wrt is None:  # everything this frame can be differentiated in
-        wrt = [n for n in known if not (n.startswith("objects.") and _vertices_refusal(hits))]
+        wrt = [n for n in known if not (_moves(n) and _vertices_refusal(hits, n))]
     wrt = list(wrt)
     for name in wrt:
         if name not in known:
             why = _name_refusal(scene, str(name)) or (
                 "not a parameter backward() differentiates yet (materials.<name>.ka | kd | ks | shininess | "
                 "reflectivity | ka_texture | kd_texture | ks_texture | emission, lights.<i>.color | position | "
-                "direction | radiance (an area light's), a flat object's objects.<name>.vertices)")
+                "direction | radiance (an area light's), a flat object's objects.<name>.vertices, "
+                "camera.eye | center | up | fovy)")
             raise ArgumentError("backward", str(name), why)
-        if name.startswith("objects.") and _vertices_refusal(hits):
-            raise ArgumentError("backward", str(name), _vertices_refusal(hits))
+        if _moves(name) and _vertices_refusal(hits, name):
+            raise ArgumentError("backward", str(name), _vertices_refusal(hits, name))
     d = np.asarray(d_image.numpy() if isinstance(d_image, wp.array) else d_image, np.float32)
     if d.shape != (hits.height, hits.width, 3) or not np.all(np.isfinite(d)):
         raise ArgumentError("backward", "d_image", f"expected finite values of shape {(hits.height, hits.width, 3)}, "
                                                    f"got {d.shape}")
     moving = any(name.startswith("objects.") for name in wrt)
+    camera = any(name.startswith("camera.") for name in wrt)
     tape = wp.Tape()
     with tape:
-        launched = replay(scene, geom, hits, device, moving)
+        launched = replay(scene, geom, hits, device, moving, camera)
     rays, arrays = launched.rays, launched.arrays
     # The image is the mean of each pixel's rays (sample_mean): its adjoint, d_image / samples to each ray.
     d_rays = np.repeat(d.reshape(-1, 3), hits.samples, axis=0) / np.float32(hits.samples)
@@ -398,6 +436,7 @@ def backward(scene, geom, hits: FirstHits, d_image, wrt, device: str) -> dict:
     slot = {name: i for i, name in enumerate(geom.material_names)}
     whitted = [i for i, light in enumerate(scene.lights) if not light.area]
     grads = {k: a.grad.numpy() for k, a in arrays.items() if k != "points"}
+    camera_rows = {key: i for i, key in enumerate(CAMERA_KEYS[:3])}
 
     def texels(slot: int, key: str) -> np.ndarray:  # a texture's adjoint, (H, W, 3) with row 0 at the top
         offset, h, w = launched.images[(slot, key)]
@@ -408,10 +447,12 @@ def backward(scene, geom, hits: FirstHits, d_image, wrt, device: str) -> dict:
         starts = np.cumsum([0] + [len(o.vertices) for o in scene.objects])
     out = {}
     for name in wrt:
-        section, owner, key = name.split(".")
+        section, owner, key = (name.split(".") + [""])[:3]  # camera.<key>: two parts
         if section == "objects":  # the points are the objects' vertices in order, less the frame origin
             i = object_names(scene)[owner]
             out[name] = point_grads[starts[i]:starts[i + 1]]
+        elif section == "camera":  # eye and center less the frame origin (a shift: the same derivative), up
+            out[name] = (grads["fovy"][0] if owner == "fovy" else grads["camera"][camera_rows[owner]]).astype(np.float64)
         elif key in ("radiance", "emission"):  # the area lights whose radiance it is
             rows = [j for j, source in enumerate(area_sources(scene)) if source == name]
             out[name] = grads["radiance"][rows].astype(np.float64).sum(0) if rows else np.zeros(3)

@@ -3,7 +3,8 @@ differentiable shading kernel.
 
 The record kernel finds each camera ray's hits as the tracer does (the rays through the centres of the
 pixel's strata, the BVH's closest hit, single-sided back faces passed through, the mirror rays) and which
-Whitted lights each hit sees (the tracer's own spawn_ray, light model and any-hit query): what the
+Whitted lights and area-light sample points each hit sees (shading's make_light_test and
+make_area_sample_test, the very functions the forward's shading calls): what the
 gradient holds fixed. The shading kernel recomputes the local Phong model at those hits from arrays a
 wp.Tape differentiates (the material colours and exponents per slot, their textures' texels, the lights'
 positions, colours and directions): C = C_amb ka + sum_l vis_l C_l w_l (kd n.L + ks max(0, r.v)^n), w_l a spot's cone times
@@ -21,9 +22,8 @@ import functools
 from .._warp import wp
 from ..geometry import LIGHT_DIRECTIONAL, LIGHT_SPOT, SceneData
 from .camera import CameraData, camera_ray, sample_offset
-from .interaction import make_surface, reflect, spawn_ray
-from .shading import FAR, SHADOW_EPSILON, light_weight, phong_diffuse, phong_specular
-from .shadow import make_occluded
+from .interaction import hit_point_error, make_surface, offset_ray_origin, reflect, spawn_ray
+from .shading import make_area_sample_test, make_light_test, phong_diffuse, phong_specular
 from .trace import culled, past
 from .triangle import triangle, unit_normal
 
@@ -139,6 +139,42 @@ def texture_factor(texels: wp.array(dtype=wp.vec3), shape: wp.vec4i, wrap: wp.ve
     return bilinear(texels, shape[1], shape[2], shape[3], wrap[0], wrap[1], q)
 
 
+@wp.func
+def camera_direction(eye: wp.vec3, center: wp.vec3, up: wp.vec3, fovy: float, near: float, aspect: float,
+                     px: float, py: float) -> wp.vec3:
+    """The unit direction of the camera ray through the point (px, py) of the image plane (0 to 1 from its
+    lower-left corner: ((x + sx) / width, (y + sy) / height)), as a differentiable function of the camera:
+    scene.camera_basis's basis (z_e = (eye - center) / |eye - center|, x_e = (up x z_e) / |up x z_e|,
+    y_e = z_e x x_e, h = 2 near tan(fovy / 2), fovy in degrees, w = h aspect) and camera.camera_ray's
+    d = -near z_e + h (py - 1/2) y_e + w (px - 1/2) x_e, normalised; float32, where the forward builds the
+    basis in float64 on the host."""
+    z_e = wp.normalize(eye - center)
+    x_e = wp.normalize(wp.cross(up, z_e))
+    y_e = wp.cross(z_e, x_e)
+    h = 2.0 * near * wp.tan(wp.radians(fovy) * 0.5)
+    w = h * aspect
+    d = (-near) * z_e + h * (py - 0.5) * y_e + w * (px - 0.5) * x_e
+    return wp.normalize(d)
+
+
+@wp.kernel(module="unique")
+def camera_rays(camera: wp.array(dtype=wp.vec3), fovy: wp.array(dtype=float), near: float, width: int, height: int,
+                k: int, levels: int, dirs: wp.array(dtype=wp.vec3)):
+    """Each camera ray's direction (ray pixel * k^2 + sample, as the record numbers them: the pixel's
+    stratum centre, camera.sample_offset; written at ray * levels, the record's first level of the ray) from the camera (``camera``: eye and center relative to the frame
+    origin, up; ``fovy`` in degrees), differentiable in both: camera_direction at the point the trace kernel
+    aims the ray at."""
+    ray = wp.tid()
+    pixel = ray / (k * k)
+    x = pixel % width
+    row = pixel / width
+    offset = sample_offset(ray % (k * k), k)
+    y = float(height - 1 - row)
+    dirs[ray * levels] = camera_direction(camera[0], camera[1], camera[2], fovy[0], near,
+                                          float(width) / float(height), (float(x) + offset[0]) / float(width),
+                                          (y + offset[1]) / float(height))
+
+
 @functools.cache
 def make_grad_record_kernel(L: int, D: int, smooth: bool, shadows: bool, cull: bool, light_model: bool = False,
                             area: bool = False):
@@ -148,16 +184,18 @@ def make_grad_record_kernel(L: int, D: int, smooth: bool, shadows: bool, cull: b
     (D at most: the camera ray, then the mirror rays the tracer spawns while k_r > 0 and max_depth allows),
     the face of the level's hit (-1: it met nothing, -2: no ray at that level), its barycentrics (u on the
     face's first vertex, v on its second), the ray's direction, and per light whether the hit sees it (1
-    where n.L > 0 and no shadow ray is blocked): the tracer's own surface, spawn_ray and any-hit query.
+    where n.L > 0 and no shadow ray is blocked): the tracer's own surface, and the forward's own test
+    (shading.make_light_test, called here as the forward's shade calls it, so the two cannot disagree).
     With ``light_model`` (spot and directional lights, falloff), shading's general light model: a spot
     outside its cone is not seen, a directional light lies along -direction, its shadow ray unbounded.
     With ``area``, also per ray level the area light whose emitting side the ray meets (emit, -1: none;
     shading.emitted's test) and, as ``words`` int32 bit masks, which area-light sample points the hit sees
     (bit q of word q / 32: r^2 > 0, n.L > 0, the emitter's cosine > 0 and the shadow ray, stopping
-    SHADOW_EPSILON short of the point, unblocked): shading's area_light, its arithmetic and its any-hit
-    query."""
+    SHADOW_EPSILON short of the point, unblocked): shading.make_area_sample_test, the forward area_light's
+    own test."""
     surface = make_surface(smooth)
-    occluded = make_occluded(False)
+    light_test = make_light_test(light_model, shadows)
+    area_sample_test = make_area_sample_test(shadows)
 
     @wp.kernel(module="unique", enable_backward=False)
     def record(s: SceneData, c: CameraData, max_depth: int, k: int, first: int, face: wp.array(dtype=int),
@@ -186,34 +224,8 @@ def make_grad_record_kernel(L: int, D: int, smooth: bool, shadows: bool, cull: b
                     face[j] = q.face
                     bary[j] = wp.vec2(q.u, q.v)
                     hit = surface(s, q.face, q.u, q.v, q.normal, d)
-                    for l in range(wp.static(L)):
-                        lit = True
-                        directional = False
-                        if wp.static(light_model):  # shading's: its test, then its shadow ray
-                            shape = s.light_shape[l]
-                            directional = shape.kind == wp.static(LIGHT_DIRECTIONAL)
-                            to_light = -shape.direction
-                            if not directional:
-                                to_light = s.light_pos[l] - hit.p
-                            L_dir = wp.normalize(to_light)
-                            lit = light_weight(shape, to_light, L_dir) > 0.0
-                        else:
-                            to_light = s.light_pos[l] - hit.p
-                            L_dir = wp.normalize(to_light)
-                        seen = int(0)
-                        if lit and wp.dot(hit.n, L_dir) > 0.0:
-                            seen = 1
-                            if wp.static(shadows):
-                                so = spawn_ray(hit, L_dir).o
-                                to_light_o = s.light_pos[l] - so
-                                dist = wp.length(to_light_o)
-                                sd = to_light_o / dist
-                                if directional:  # its position is NaN: the ray above is replaced
-                                    sd = L_dir
-                                    dist = FAR
-                                if occluded(s, l, so, sd, dist):
-                                    seen = 0
-                        visible[j * wp.static(L) + l] = seen
+                    for l in range(wp.static(L)):  # shading's own test: its light model and shadow ray
+                        visible[j * wp.static(L) + l] = light_test(s, hit, l).lit
                     if wp.static(area):
                         # shading.emitted: the emitter's side its winding's normal points to
                         e = s.area.tri_emitter[q.face]
@@ -223,24 +235,10 @@ def make_grad_record_kernel(L: int, D: int, smooth: bool, shadows: bool, cull: b
                             if wp.dot(d, unit_normal(t0, t1, t2)) < 0.0:
                                 emit[j] = e
                         a = s.area
-                        for sq in range(a.first[a.num]):  # shading.area_light's samples, lights in order
-                            to_q = a.points[sq] - hit.p
-                            r2 = wp.dot(to_q, to_q)
-                            if r2 > 0.0:
-                                L_q = to_q / wp.sqrt(r2)
-                                n_dot_l = wp.dot(hit.n, L_q)
-                                cos_q = -wp.dot(a.normals[sq], L_q)
-                                if n_dot_l > 0.0 and cos_q > 0.0:
-                                    lit_q = int(1)  # not a constant: Warp's dynamic loop may not mutate one
-                                    if wp.static(shadows):
-                                        qo = spawn_ray(hit, L_q).o
-                                        to_q_o = a.points[sq] - qo
-                                        dist_q = wp.length(to_q_o)
-                                        if occluded(s, -1, qo, to_q_o / dist_q, dist_q * wp.static(1.0 - SHADOW_EPSILON)):
-                                            lit_q = 0
-                                    if lit_q != 0:
-                                        word = j * words + sq / 32
-                                        area_bits[word] = area_bits[word] | (1 << (sq % 32))
+                        for sq in range(a.first[a.num]):  # shading.area_light's samples and test, lights in order
+                            if area_sample_test(s, hit, sq).lit != 0:
+                                word = j * words + sq / 32
+                                area_bits[word] = area_bits[word] | (1 << (sq % 32))
                     if level + 1 < max_depth and wp.max(s.kr[hit.material]) > 0.0:
                         spawned = spawn_ray(hit, wp.normalize(reflect(d, hit.n)))
                         o = spawned.o
@@ -251,16 +249,19 @@ def make_grad_record_kernel(L: int, D: int, smooth: bool, shadows: bool, cull: b
 
 
 @functools.cache
-def make_grad_shade_kernel(L: int, D: int, smooth: bool, vertices: bool = False, light_model: bool = False,
+def make_grad_shade_kernel(L: int, D: int, smooth: bool, moving: bool = False, light_model: bool = False,
                            texture: bool = False, area: bool = False):
     """shade(...): each camera ray's colour (one per pixel and sample, as recorded; sample_mean makes
     them the image) from the recorded hit and visibility and the differentiable
     material and light arrays, over the recorded ray levels (D at most), each weighted by the product of
-    the k_r of the mirrors before it; the background where a ray met nothing. With ``vertices`` (camera
-    rays alone, D = 1), the
-    hit's barycentrics are those of the camera ray (from ``eye``) and the recorded face recomputed from
-    ``points`` by a differentiable Moller-Trumbore test, so that the hit point moves with the vertices
-    (Warp's mesh query gives the points no adjoint); without, the recorded ones. With ``light_model``,
+    the k_r of the mirrors before it; the background where a ray met nothing. With ``moving``, the
+    hit's barycentrics are those of the moving ray (at the first level from ``eye[0]`` along ``dirs`` at
+    ray * D, each differentiable: the camera's, camera_rays; then the mirror ray from the level's hit point
+    along its direction reflected about the hit's normal, offset off the surface as the tracer's spawn_ray
+    does) on the recorded face recomputed from ``points`` by a differentiable
+    Moller-Trumbore test, so that the hit point moves with the vertices and the camera (Warp's mesh query
+    gives the points no adjoint), each level's direction written to ``ray_dirs`` (the area lights' replay
+    reads it); without, the recorded ones. With ``light_model``,
     shading's general light model (light_factor): a directional light's L is -its axis, a spot's C_l is
     weighted by its cone, an inverse_square light's by 1 / r^2; without, the seed's point lights. With
     ``texture``, ka, kd and ks times their textures at the hit's interpolated uv (texture_factor: the
@@ -270,7 +271,7 @@ def make_grad_shade_kernel(L: int, D: int, smooth: bool, vertices: bool = False,
     lights' local colour, to which the area lights' samples are added), and area_combine makes the colour."""
 
     @wp.kernel(module="unique")
-    def shade(eye: wp.vec3, points: wp.array(dtype=wp.vec3), indices: wp.array(dtype=int), normals: wp.array(dtype=wp.vec3),
+    def shade(eye: wp.array(dtype=wp.vec3), points: wp.array(dtype=wp.vec3), indices: wp.array(dtype=int), normals: wp.array(dtype=wp.vec3),
               tri_material: wp.array(dtype=int), tri_smooth: wp.array(dtype=int),
               ka: wp.array(dtype=wp.vec3), kd: wp.array(dtype=wp.vec3), ks: wp.array(dtype=wp.vec3),
               shininess: wp.array(dtype=float), kr: wp.array(dtype=wp.vec3), light_pos: wp.array(dtype=wp.vec3),
@@ -282,10 +283,14 @@ def make_grad_shade_kernel(L: int, D: int, smooth: bool, vertices: bool = False,
               ambient: wp.vec3, background: wp.vec3, face: wp.array(dtype=int), bary: wp.array(dtype=wp.vec2),
               dirs: wp.array(dtype=wp.vec3), visible: wp.array(dtype=int), hit_p: wp.array(dtype=wp.vec3),
               hit_n: wp.array(dtype=wp.vec3), hit_kd: wp.array(dtype=wp.vec3), hit_ks: wp.array(dtype=wp.vec3),
-              level_weight: wp.array(dtype=wp.vec3), acc: wp.array(dtype=wp.vec3), image: wp.array(dtype=wp.vec3)):
+              level_weight: wp.array(dtype=wp.vec3), acc: wp.array(dtype=wp.vec3), ray_dirs: wp.array(dtype=wp.vec3),
+              image: wp.array(dtype=wp.vec3)):
         ray = wp.tid()
         color = wp.vec3(0.0)
         weight = wp.vec3(1.0)
+        if wp.static(moving):  # the moving ray: from the eye along the camera ray, then the mirror rays
+            o = eye[0]
+            d_next = dirs[ray * wp.static(D)]
         for level in range(wp.static(D)):
             k = ray * wp.static(D) + level
             f = face[k]
@@ -295,6 +300,8 @@ def make_grad_shade_kernel(L: int, D: int, smooth: bool, vertices: bool = False,
                 color = color + wp.cw_mul(weight, background)
             if f >= 0:
                 d = dirs[k]
+                if wp.static(moving):
+                    d = d_next
                 i0 = indices[3 * f]
                 i1 = indices[3 * f + 1]
                 i2 = indices[3 * f + 2]
@@ -303,12 +310,12 @@ def make_grad_shade_kernel(L: int, D: int, smooth: bool, vertices: bool = False,
                 p2 = points[i2]
                 u = bary[k][0]
                 v = bary[k][1]
-                if wp.static(vertices):
+                if wp.static(moving):
                     e1 = p1 - p0
                     e2 = p2 - p0
                     pv = wp.cross(d, e2)
                     inv = 1.0 / wp.dot(e1, pv)
-                    tv = eye - p0
+                    tv = o - p0
                     b1 = wp.dot(tv, pv) * inv
                     b2 = wp.dot(d, wp.cross(tv, e1)) * inv
                     u = 1.0 - b1 - b2  # Warp's convention: u weighs the face's first vertex, v its second
@@ -365,6 +372,10 @@ def make_grad_shade_kernel(L: int, D: int, smooth: bool, vertices: bool = False,
                 else:
                     color = color + wp.cw_mul(weight, local)
                 weight = wp.cw_mul(weight, kr[m])
+                if wp.static(moving):  # the mirror ray the tracer spawns here: spawn_ray's, off the surface
+                    ray_dirs[k] = d
+                    d_next = wp.normalize(reflect(d, n))
+                    o = offset_ray_origin(p, hit_point_error(p0, p1, p2, u, v, w), ng * side, d_next)
         if wp.static(not area):
             image[ray] = color
 

@@ -131,42 +131,149 @@ def make_shade(fx, shadow_grid: bool = False):
                        fx.shadows and shadow_grid, fx.light_model, fx.area_lights)
 
 
+@wp.struct
+class LightTest:
+    """What one Whitted light gives a hit (make_light_test): the unit direction L to it, n.L, its colour
+    times its weight (a spot's cone, 1 / r^2 falloff), whether a shadow ray was traced (1: the light
+    faces the point) and whether the light is seen (lit: in its cone, n.L > 0 and no shadow ray blocked)."""
+
+    L: wp.vec3
+    n_dot_l: float
+    C: wp.vec3
+    shadow_ray: int
+    lit: int
+
+
+@functools.cache
+def make_light_test(LIGHT_MODEL: bool, SHADOWS: bool, GRID: bool = False):
+    """light_test(s, hit, l): whether light l lights the hit, and with what (LightTest): the one test the
+    forward's shade and the gradient's record (kernels/grad.py) both make, so that they cannot disagree.
+    With LIGHT_MODEL, the general light model: a directional light lies along -direction (its shadow ray
+    unbounded), a spot outside its cone gives nothing (and no shadow ray); without, the seed's point lights.
+    The shadow ray (SHADOWS) leaves spawn_ray's origin for the light, answered by the BVH or the grid (GRID)."""
+    occluded = make_occluded(GRID)
+
+    @wp.func
+    def light_test(s: SceneData, hit: Surface, l: int) -> LightTest:
+        out = LightTest()
+        out.shadow_ray = 0
+        out.lit = 0
+        C_l = s.light_color[l]
+        p = hit.p
+        if wp.static(LIGHT_MODEL):
+            shape = s.light_shape[l]
+            directional = shape.kind == LIGHT_DIRECTIONAL
+            to_light = -shape.direction
+            if not directional:
+                to_light = s.light_pos[l] - p
+            L = wp.normalize(to_light)
+            weight = light_weight(shape, to_light, L)
+            if weight <= 0.0:  # outside a spot's cone: no light, so no shadow ray
+                return out
+            C_l = C_l * weight
+        else:
+            to_light = s.light_pos[l] - p
+            L = wp.normalize(to_light)
+        n_dot_l = wp.dot(hit.n, L)
+        out.L = L
+        out.n_dot_l = n_dot_l
+        out.C = C_l
+        if n_dot_l > 0.0:
+            visible = True
+            if wp.static(SHADOWS):
+                o = spawn_ray(hit, L).o  # towards the light, from its origin
+                to_light_o = s.light_pos[l] - o
+                dist = wp.length(to_light_o)
+                d = to_light_o / dist
+                if wp.static(LIGHT_MODEL):
+                    if directional:  # its position is NaN: the ray above is replaced
+                        d = L
+                        dist = FAR
+                out.shadow_ray = 1
+                visible = not occluded(s, l, o, d, dist)
+            if visible:
+                out.lit = 1
+        return out
+
+    return light_test
+
+
+@wp.struct
+class AreaTest:
+    """What one area-light sample point gives a hit (make_area_sample_test): the unit direction L to it,
+    r^2, n.L, the emitter's cosine cos_q there, whether a shadow ray was traced (1: the point and the hit
+    face each other) and whether the point is seen (lit: r^2 > 0, n.L > 0, cos_q > 0, shadow ray unblocked)."""
+
+    L: wp.vec3
+    r2: float
+    n_dot_l: float
+    cos_q: float
+    shadow_ray: int
+    lit: int
+
+
+@functools.cache
+def make_area_sample_test(SHADOWS: bool):
+    """area_sample_test(s, hit, q): whether the area lights' sample point q lights the hit (AreaTest), the
+    one test the forward's area_light and the gradient's record both make. The shadow ray (SHADOWS, the
+    BVH's any-hit query) stops SHADOW_EPSILON of the way short of the point."""
+    occluded = make_occluded(False)
+
+    @wp.func
+    def area_sample_test(s: SceneData, hit: Surface, q: int) -> AreaTest:
+        a = s.area
+        out = AreaTest()
+        out.shadow_ray = 0
+        out.lit = 0
+        to_q = a.points[q] - hit.p
+        r2 = wp.dot(to_q, to_q)
+        out.r2 = r2
+        if not (r2 > 0.0):
+            return out
+        L = to_q / wp.sqrt(r2)
+        n_dot_l = wp.dot(hit.n, L)
+        cos_q = -wp.dot(a.normals[q], L)
+        out.L = L
+        out.n_dot_l = n_dot_l
+        out.cos_q = cos_q
+        if n_dot_l > 0.0 and cos_q > 0.0:
+            visible = True
+            if wp.static(SHADOWS):
+                o = spawn_ray(hit, L).o
+                to_q_o = a.points[q] - o
+                dist = wp.length(to_q_o)
+                out.shadow_ray = 1
+                visible = not occluded(s, -1, o, to_q_o / dist, dist * wp.static(1.0 - SHADOW_EPSILON))
+            if visible:
+                out.lit = 1
+        return out
+
+    return area_sample_test
+
+
 @functools.cache
 def make_area_light(DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool):
     """area_light(s, hit, k, v, out): ``out`` plus the light of every area light at the hit, over its
-    sample points, one shadow ray (the BVH's any-hit query) each where the point faces both ways."""
-    occluded = make_occluded(False)
+    sample points, one shadow ray (the BVH's any-hit query) each where the point faces both ways
+    (make_area_sample_test)."""
+    area_sample_test = make_area_sample_test(SHADOWS)
 
     @wp.func
     def area_light(s: SceneData, hit: Surface, k: Coefficients, v: wp.vec3, out: ShadeResult) -> ShadeResult:
         a = s.area
-        p = hit.p
         n = hit.n
         for j in range(a.num):
             L_e = a.radiance[j]
             for q in range(a.first[j], a.first[j + 1]):
-                to_q = a.points[q] - p
-                r2 = wp.dot(to_q, to_q)
-                if not (r2 > 0.0):
-                    continue
-                L = to_q / wp.sqrt(r2)
-                n_dot_l = wp.dot(n, L)
-                cos_q = -wp.dot(a.normals[q], L)
-                if n_dot_l > 0.0 and cos_q > 0.0:
-                    visible = True
-                    if wp.static(SHADOWS):
-                        o = spawn_ray(hit, L).o
-                        to_q_o = a.points[q] - o
-                        dist = wp.length(to_q_o)
-                        out.shadow_rays += 1
-                        visible = not occluded(s, -1, o, to_q_o / dist, dist * wp.static(1.0 - SHADOW_EPSILON))
-                    if visible:
-                        lit = wp.vec3(0.0)
-                        if wp.static(DIFFUSE):
-                            lit = lit + phong_diffuse(k.kd, n_dot_l)
-                        if wp.static(SPECULAR):
-                            lit = lit + phong_specular(k.ks, s.shininess[hit.material], n, L, v, n_dot_l)
-                        out.color = out.color + wp.cw_mul(L_e, lit) * (cos_q * a.dA[q] / r2)
+                t = area_sample_test(s, hit, q)
+                out.shadow_rays += t.shadow_ray
+                if t.lit != 0:
+                    lit = wp.vec3(0.0)
+                    if wp.static(DIFFUSE):
+                        lit = lit + phong_diffuse(k.kd, t.n_dot_l)
+                    if wp.static(SPECULAR):
+                        lit = lit + phong_specular(k.ks, s.shininess[hit.material], n, t.L, v, t.n_dot_l)
+                    out.color = out.color + wp.cw_mul(L_e, lit) * (t.cos_q * a.dA[q] / t.r2)
         return out
 
     return area_light
@@ -178,7 +285,7 @@ def _make_shade(AMBIENT: bool, DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool, TEX
     coefficients = make_coefficients(TEXTURE, VERTEX_COLOR)
 
     # Disabled terms are absent from the generated code (wp.static).
-    occluded = make_occluded(GRID)
+    light_test = make_light_test(LIGHT_MODEL, SHADOWS, GRID)
     area_light = make_area_light(DIFFUSE, SPECULAR, SHADOWS)
 
     @wp.func
@@ -188,48 +295,20 @@ def _make_shade(AMBIENT: bool, DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool, TEX
         out.shadow_rays = 0
         k = coefficients(s, hit)
         m = hit.material
-        p = hit.p
         n = hit.n
         if wp.static(AMBIENT):
             out.color = wp.cw_mul(s.ambient, k.ka)
         if wp.static(DIFFUSE or SPECULAR):
             for l in range(s.num_lights):
-                C_l = s.light_color[l]
-                if wp.static(LIGHT_MODEL):
-                    shape = s.light_shape[l]
-                    directional = shape.kind == LIGHT_DIRECTIONAL
-                    to_light = -shape.direction
-                    if not directional:
-                        to_light = s.light_pos[l] - p
-                    L = wp.normalize(to_light)
-                    weight = light_weight(shape, to_light, L)
-                    if weight <= 0.0:  # outside a spot's cone: no light, so no shadow ray
-                        continue
-                    C_l = C_l * weight
-                else:
-                    to_light = s.light_pos[l] - p
-                    L = wp.normalize(to_light)
-                n_dot_l = wp.dot(n, L)
-                if n_dot_l > 0.0:
-                    visible = True
-                    if wp.static(SHADOWS):
-                        o = spawn_ray(hit, L).o  # towards the light, from its origin
-                        to_light_o = s.light_pos[l] - o
-                        dist = wp.length(to_light_o)
-                        d = to_light_o / dist
-                        if wp.static(LIGHT_MODEL):
-                            if directional:  # its position is NaN: the ray above is replaced
-                                d = L
-                                dist = FAR
-                        out.shadow_rays += 1
-                        visible = not occluded(s, l, o, d, dist)
-                    if visible:
-                        lit = wp.vec3(0.0)
-                        if wp.static(DIFFUSE):
-                            lit = lit + phong_diffuse(k.kd, n_dot_l)
-                        if wp.static(SPECULAR):
-                            lit = lit + phong_specular(k.ks, s.shininess[m], n, L, v, n_dot_l)
-                        out.color = out.color + wp.cw_mul(C_l, lit)
+                t = light_test(s, hit, l)
+                out.shadow_rays += t.shadow_ray
+                if t.lit != 0:
+                    lit = wp.vec3(0.0)
+                    if wp.static(DIFFUSE):
+                        lit = lit + phong_diffuse(k.kd, t.n_dot_l)
+                    if wp.static(SPECULAR):
+                        lit = lit + phong_specular(k.ks, s.shininess[m], n, t.L, v, t.n_dot_l)
+                    out.color = out.color + wp.cw_mul(t.C, lit)
         if wp.static(AREA and (DIFFUSE or SPECULAR)):
             out = area_light(s, hit, k, v, out)
         return out
