@@ -126,8 +126,8 @@ def _generated_source(fx, aovs=()) -> str:
 # A line of each effect's Python source, as Warp's code generator quotes it in the C++ it compiles.
 MARKERS = {
     "ambient": "out.color = wp.cw_mul(s.ambient, k.ka)",
-    "diffuse": "phong_diffuse(k.kd, t.n_dot_l)",
-    "specular": "phong_specular(k.ks, s.shininess[m], n, t.L, v, t.n_dot_l)",
+    "diffuse": "phong_diffuse(k.kd, n_dot_l)",
+    "specular": "phong_specular(k.ks, shininess, n, L, v, n_dot_l)",
     "shadows": "wp::mesh_query_ray_anyhit(",
     "reflection": "kr = s.kr[hit.material]",
     "supersampling": "sx = (float(sample % k) + 0.5) / float(k)",

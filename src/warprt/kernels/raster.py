@@ -199,17 +199,11 @@ def project_kernel(s: SceneData, c: RasterCamera, k: int, first: int, bounds: wp
     bounds[f] = out
 
 
-@wp.kernel(enable_backward=False)
-def raster_kernel(s: SceneData, c: RasterCamera, tile_start: wp.array(dtype=wp.int32),
-                  tile_faces: wp.array(dtype=wp.int32), tiles_x: int, tile: int, k: int, samples: int, first: int,
-                  out: Fragments):
-    """One thread per tile: every triangle binned to it clipped, projected and depth-tested at the
-    tile's samples. Only this thread writes the tile's samples."""
-    t = first + wp.tid()
-    x_lo = (t % tiles_x) * tile
-    y_lo = (t / tiles_x) * tile
-    x_hi = wp.min(x_lo + tile, c.width) - 1
-    y_hi = wp.min(y_lo + tile, c.height) - 1
+@wp.func
+def raster_list(s: SceneData, c: RasterCamera, tile_start: wp.array(dtype=wp.int32), tile_faces: wp.array(dtype=wp.int32),
+                t: int, x_lo: int, x_hi: int, y_lo: int, y_hi: int, k: int, samples: int, out: Fragments):
+    """Every triangle binned to tile t, in the list's order, clipped, projected and depth-tested at the
+    samples of the pixel rectangle [x_lo, x_hi] x [y_lo, y_hi] (the tile's, or one pixel of it)."""
     for j in range(tile_start[t], tile_start[t + 1]):
         f = tile_faces[j]
         p0, p1, p2 = triangle(s, f)
@@ -225,6 +219,20 @@ def raster_kernel(s: SceneData, c: RasterCamera, tile_start: wp.array(dtype=wp.i
 
 
 @wp.kernel(enable_backward=False)
+def raster_kernel(s: SceneData, c: RasterCamera, tile_start: wp.array(dtype=wp.int32),
+                  tile_faces: wp.array(dtype=wp.int32), tiles_x: int, tile: int, k: int, samples: int, first: int,
+                  out: Fragments):
+    """One thread per tile: every triangle binned to it clipped, projected and depth-tested at the
+    tile's samples. Only this thread writes the tile's samples."""
+    t = first + wp.tid()
+    x_lo = (t % tiles_x) * tile
+    y_lo = (t / tiles_x) * tile
+    x_hi = wp.min(x_lo + tile, c.width) - 1
+    y_hi = wp.min(y_lo + tile, c.height) - 1
+    raster_list(s, c, tile_start, tile_faces, t, x_lo, x_hi, y_lo, y_hi, k, samples, out)
+
+
+@wp.kernel(enable_backward=False)
 def raster_pixel_kernel(s: SceneData, c: RasterCamera, tile_start: wp.array(dtype=wp.int32),
                         tile_faces: wp.array(dtype=wp.int32), tiles_x: int, tile: int, k: int, samples: int,
                         first: int, out: Fragments):
@@ -236,17 +244,7 @@ def raster_pixel_kernel(s: SceneData, c: RasterCamera, tile_start: wp.array(dtyp
     x = pixel % c.width
     y = pixel / c.width
     t = (y / tile) * tiles_x + x / tile
-    for j in range(tile_start[t], tile_start[t + 1]):
-        f = tile_faces[j]
-        p0, p1, p2 = triangle(s, f)
-        poly = clip_triangle(c, p0, p1, p2)
-        a = project(c, poly.v0)
-        b = project(c, poly.v1)
-        d = project(c, poly.v2)
-        raster_triangle(a, b, d, f, x, x, y, y, c, k, samples, out)
-        if poly.n == 4:
-            e = project(c, poly.v3)
-            raster_triangle(a, d, e, f, x, x, y, y, c, k, samples, out)
+    raster_list(s, c, tile_start, tile_faces, t, x, x, y, y, k, samples, out)
 
 
 @wp.func

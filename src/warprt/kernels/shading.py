@@ -252,11 +252,29 @@ def make_area_sample_test(SHADOWS: bool):
 
 
 @functools.cache
+def make_phong_lit(DIFFUSE: bool, SPECULAR: bool):
+    """phong_lit(k, shininess, n, L, v, n_dot_l): the Phong terms one light's direction L lights, per unit
+    of its colour: kd n.L + ks max(0, r.v)^n, each only where its switch is on (point and area lights alike)."""
+
+    @wp.func
+    def phong_lit(k: Coefficients, shininess: float, n: wp.vec3, L: wp.vec3, v: wp.vec3, n_dot_l: float) -> wp.vec3:
+        lit = wp.vec3(0.0)
+        if wp.static(DIFFUSE):
+            lit = lit + phong_diffuse(k.kd, n_dot_l)
+        if wp.static(SPECULAR):
+            lit = lit + phong_specular(k.ks, shininess, n, L, v, n_dot_l)
+        return lit
+
+    return phong_lit
+
+
+@functools.cache
 def make_area_light(DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool):
     """area_light(s, hit, k, v, out): ``out`` plus the light of every area light at the hit, over its
     sample points, one shadow ray (the BVH's any-hit query) each where the point faces both ways
     (make_area_sample_test)."""
     area_sample_test = make_area_sample_test(SHADOWS)
+    phong_lit = make_phong_lit(DIFFUSE, SPECULAR)
 
     @wp.func
     def area_light(s: SceneData, hit: Surface, k: Coefficients, v: wp.vec3, out: ShadeResult) -> ShadeResult:
@@ -268,11 +286,7 @@ def make_area_light(DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool):
                 t = area_sample_test(s, hit, q)
                 out.shadow_rays += t.shadow_ray
                 if t.lit != 0:
-                    lit = wp.vec3(0.0)
-                    if wp.static(DIFFUSE):
-                        lit = lit + phong_diffuse(k.kd, t.n_dot_l)
-                    if wp.static(SPECULAR):
-                        lit = lit + phong_specular(k.ks, s.shininess[hit.material], n, t.L, v, t.n_dot_l)
+                    lit = phong_lit(k, s.shininess[hit.material], n, t.L, v, t.n_dot_l)
                     out.color = out.color + wp.cw_mul(L_e, lit) * (t.cos_q * a.dA[q] / t.r2)
         return out
 
@@ -286,6 +300,7 @@ def _make_shade(AMBIENT: bool, DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool, TEX
 
     # Disabled terms are absent from the generated code (wp.static).
     light_test = make_light_test(LIGHT_MODEL, SHADOWS, GRID)
+    phong_lit = make_phong_lit(DIFFUSE, SPECULAR)
     area_light = make_area_light(DIFFUSE, SPECULAR, SHADOWS)
 
     @wp.func
@@ -303,12 +318,7 @@ def _make_shade(AMBIENT: bool, DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool, TEX
                 t = light_test(s, hit, l)
                 out.shadow_rays += t.shadow_ray
                 if t.lit != 0:
-                    lit = wp.vec3(0.0)
-                    if wp.static(DIFFUSE):
-                        lit = lit + phong_diffuse(k.kd, t.n_dot_l)
-                    if wp.static(SPECULAR):
-                        lit = lit + phong_specular(k.ks, s.shininess[m], n, t.L, v, t.n_dot_l)
-                    out.color = out.color + wp.cw_mul(t.C, lit)
+                    out.color = out.color + wp.cw_mul(t.C, phong_lit(k, s.shininess[m], n, t.L, v, t.n_dot_l))
         if wp.static(AREA and (DIFFUSE or SPECULAR)):
             out = area_light(s, hit, k, v, out)
         return out
