@@ -147,6 +147,17 @@ def test_vertex_gradients_equal_mitsubas_ad(weights):
     assert np.abs(detached - ours).max() > 0.1 * np.abs(ours).max()
 
 
+def where_images_agree(r, mitsuba, weights) -> np.ndarray:
+    """``r``'s frame recorded for its gradient (render(grad=True)) against Mitsuba's image of the same model
+    (``mitsuba(weights)``'s first value): ``weights`` with the pixels where the two images part (a ray on the
+    other side of an edge, float32 apart) set to 0, so that both losses leave them out; 90% must agree."""
+    image = r.render(grad=True).image
+    m_image, _ = mitsuba(weights)
+    same = (np.abs(image - m_image).max(-1) < 1e-5)[..., None]
+    assert same.mean() > 0.9
+    return (weights * same).astype(np.float32)
+
+
 def test_gradients_through_mirrors_equal_mitsubas_ad(weights):
     """Three ray levels over the mirroring floor: the reference's own levels (its sample(), unrolled),
     Mitsuba's spawn_ray of the reflected direction, each level weighted by the k_r before it. The two
@@ -154,11 +165,7 @@ def test_gradients_through_mirrors_equal_mitsubas_ad(weights):
     meets another surface or shadow (images apart by up to 5e-4); the loss leaves those pixels out (their
     weight 0) on both sides, and the gradients of the rest agree to 1e-4."""
     r = warprt.Renderer(mirror_scene())
-    image = r.render(grad=True).image
-    m_image, _ = mitsuba_gradients(mirror_scene(), weights)
-    same = (np.abs(image - m_image).max(-1) < 1e-5)[..., None]
-    assert same.mean() > 0.9
-    masked = (weights * same).astype(np.float32)
+    masked = where_images_agree(r, lambda w: mitsuba_gradients(mirror_scene(), w), weights)
     grads = r.backward(masked, wrt=list(MIRROR_PARAMETERS))
     _, m_grads = mitsuba_gradients(mirror_scene(), masked)
     names = [n for n in MIRROR_PARAMETERS if n in m_grads]
@@ -176,11 +183,7 @@ def test_gradients_under_spot_and_directional_lights_equal_mitsubas_ad():
     s = lit()
     w = np.random.default_rng(5).random((s.camera.height, s.camera.width, 3)).astype(np.float32)
     r = warprt.Renderer(s)
-    image = r.render(grad=True).image
-    m_image, _ = mitsuba_gradients(s, w)
-    same = (np.abs(image - m_image).max(-1) < 1e-5)[..., None]
-    assert same.mean() > 0.9
-    masked = (w * same).astype(np.float32)
+    masked = where_images_agree(r, lambda weights: mitsuba_gradients(s, weights), w)
     names = ["materials.floor.kd", "materials.floor.ks", "materials.floor.reflectivity", "materials.ball.kd",
              "materials.ball.shininess", "lights.0.color", "lights.1.color"]
     grads = r.backward(masked, wrt=names)
@@ -240,11 +243,7 @@ def test_area_light_gradients_equal_mitsubas_ad():
     s = cornell(4)
     w = np.random.default_rng(5).random((s.camera.height, s.camera.width, 3)).astype(np.float32)
     r = warprt.Renderer(s)
-    image = r.render(grad=True).image
-    m_image, _ = mitsuba_area_gradients(s, w)
-    same = (np.abs(image - m_image).max(-1) < 1e-5)[..., None]
-    assert same.mean() > 0.9
-    masked = (w * same).astype(np.float32)
+    masked = where_images_agree(r, lambda weights: mitsuba_area_gradients(s, weights), w)
     names = ["lights.0.radiance", "materials.white.kd", "materials.red.kd", "materials.green.kd"]
     grads = r.backward(masked, wrt=names)
     _, theirs = mitsuba_area_gradients(s, masked)
@@ -312,11 +311,7 @@ def test_camera_gradients_equal_mitsubas_ad():
     s = camera_scene(mirror=True)
     w = np.random.default_rng(5).random((s.camera.height, s.camera.width, 3)).astype(np.float32)
     r = warprt.Renderer(s)
-    image = r.render(grad=True).image
-    m_image, _ = mitsuba_camera_gradients(s, w)
-    same = (np.abs(image - m_image).max(-1) < 1e-5)[..., None]
-    assert same.mean() > 0.9
-    masked = (w * same).astype(np.float32)
+    masked = where_images_agree(r, lambda weights: mitsuba_camera_gradients(s, weights), w)
     grads = r.backward(masked, wrt=list(CAMERA))
     _, theirs = mitsuba_camera_gradients(s, masked)
     close = lambda a, b, rel: np.allclose(a, b, rtol=rel, atol=rel * np.abs(b).max())  # noqa: E731
