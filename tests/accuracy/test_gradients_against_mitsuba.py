@@ -15,6 +15,7 @@ import pytest
 
 import warprt
 from reference import mitsuba_variant
+from reference.mitsuba_ad import ad_gradients, backpropagated
 from reference.mitsuba_whitted import Switches, mitsuba_scene
 from warprt.scene import resolve_effects
 
@@ -23,65 +24,12 @@ from grad.test_first_hit_gradients import HEIGHT, MIRROR_PARAMETERS, PARAMETERS,
 pytestmark = pytest.mark.accuracy
 
 REL = 1e-4
-COLOURS = ("ka", "kd", "ks", "shininess", "kr")  # the reference's tables; kr is r.params' reflectivity
-
-
-def backpropagated(ms, s, weights, detach: bool = False):
-    """Mitsuba's image of ``s`` (its MitsubaScene ``ms``) at the pixel centres, the reference's sample() with
-    its levels (integ.level) unrolled in Python, straight-line code with no symbolic loop for reverse mode
-    to replay; dr.backward of sum(weights * image) done. Returns the image (a Color3f per pixel)."""
-    import drjit as dr
-    import mitsuba as mi
-
-    integ = ms.integrator
-    width, height = s.camera.width, s.camera.height
-    idx = dr.arange(mi.UInt32, height * width)
-    pos = mi.Point2f((mi.Float(idx % width) + 0.5) / width, (mi.Float(idx // width) + 0.5) / height)
-    ray, _ = ms.sensor(s.camera, 1).sample_ray(0.0, 0.5, pos, mi.Point2f(0.5, 0.5))
-    color, weight, active = mi.Color3f(0.0), mi.Color3f(1.0), mi.Bool(True)
-    for depth in range(integ.max_depth()):
-        ray, color, weight, active = integ.level(ms.mi_scene, ray, depth, color, weight, active, detach)
-    w = weights.reshape(-1, 3)
-    dr.backward(dr.sum(color.x * mi.Float(w[:, 0]) + color.y * mi.Float(w[:, 1]) + color.z * mi.Float(w[:, 2])))
-    return color
 
 
 def mitsuba_gradients(s, weights, shadows: bool = True) -> tuple[np.ndarray, dict]:
     """Mitsuba's image and its AD gradients of sum(weights * image) by r.params name (materials' colours
-    and exponents, summed over their objects' table rows; lights' colours)."""
-    mitsuba_variant()
-    import drjit as dr
-    import mitsuba as mi
-
-    ms = mitsuba_scene(s)
-    integ = ms.integrator
-    integ.switches = Switches(**{**Switches.for_effects(resolve_effects(s), s.render).__dict__, "shadows": shadows})
-    t = integ.tables
-    dr.enable_grad(t.ka, t.kd, t.ks, t.shininess, t.kr)
-    # mitsuba_scene keeps a converted scene for the next calls on the same Scene: start from no gradient
-    for table in (t.ka, t.kd, t.ks, t.shininess, t.kr):
-        dr.clear_grad(table)
-    emitters = [mi.traverse(e) for e, _ in t.lights]
-    # C_l: a point or spot emitter's intensity, a directional one's irradiance
-    keys = ["irradiance.value" if "irradiance.value" in p.keys() else "intensity.value" for p in emitters]
-    for p, key in zip(emitters, keys):
-        dr.enable_grad(p[key])
-        dr.clear_grad(p[key])
-        p.update()
-    color = backpropagated(ms, s, weights)
-    image = np.stack([np.array(c) for c in (color.x, color.y, color.z)], -1).reshape(s.camera.height, s.camera.width, 3)
-    table = {k: np.array(dr.grad(getattr(t, k)), np.float64).reshape(len(np.array(t.shininess)), -1) for k in COLOURS}
-    out = {}
-    for name, m in s.materials.items():
-        rows = [t.row_of_object[i] for i, o in enumerate(s.objects) if o.material == name]
-        for k in COLOURS:
-            g = table[k][rows].sum(0)
-            if k == "kd" and m.ka_follows_kd:  # warprt's kd carries ka with it (r.params keeps ka following kd)
-                g = g + table["ka"][rows].sum(0)
-            out[f"materials.{name}.{'reflectivity' if k == 'kr' else k}"] = g[0] if k == "shininess" else g
-    for i, (p, key) in enumerate(zip(emitters, keys)):
-        out[f"lights.{i}.color"] = np.array(dr.grad(p[key]), np.float64).ravel()
-    return image, out
+    and exponents, summed over their objects' table rows; lights' colours): reference.mitsuba_ad's."""
+    return ad_gradients(s, weights, shadows)
 
 
 @pytest.fixture(scope="module")
@@ -194,41 +142,12 @@ def test_gradients_under_spot_and_directional_lights_equal_mitsubas_ad():
 
 
 def mitsuba_area_gradients(s, weights, shadows: bool = True) -> tuple[np.ndarray, dict]:
-    """Mitsuba's image and AD gradients of sum(weights * image) for a scene of one area light: the reference's
-    area_light() at warprt's sample points through Mitsuba's own emitters, and its emitted() where a ray meets
-    the emitter, with dr.enable_grad on every area emitter's radiance (the scene's, which emitted() evaluates,
-    and for an object light the sampler mesh's, which area_light() samples: both are the light's radiance,
-    their gradients summed) and on the material tables."""
-    mitsuba_variant()
-    import drjit as dr
-    import mitsuba as mi
-
+    """Mitsuba's image and AD gradients of sum(weights * image) for a scene of one area light
+    (reference.mitsuba_ad's: the reference's area_light() at warprt's sample points through Mitsuba's own
+    emitters, and its emitted() where a ray meets the emitter), its radiance's as ``area.radiance``."""
     assert len(s.area_lights) == 1
-    ms = mitsuba_scene(s)
-    integ = ms.integrator
-    integ.switches = Switches(**{**Switches.for_effects(resolve_effects(s), s.render).__dict__, "shadows": shadows})
-    t = integ.tables
-    for table in (t.ka, t.kd, t.ks, t.shininess, t.kr):
-        dr.enable_grad(table)
-        dr.clear_grad(table)
-    emitters = []
-    for e in list(ms.mi_scene.emitters()) + list(t.area):  # a shape light's sampler is the scene's emitter: once
-        if not any(e is x for x in emitters):
-            emitters.append(e)
-    params = [p for p in (mi.traverse(e) for e in emitters) if "radiance.value" in p.keys()]
-    for p in params:
-        dr.enable_grad(p["radiance.value"])
-        dr.clear_grad(p["radiance.value"])
-        p.update()
-    color = backpropagated(ms, s, weights)
-    image = np.stack([np.array(c) for c in (color.x, color.y, color.z)], -1).reshape(s.camera.height, s.camera.width, 3)
-    table = {k: np.array(dr.grad(getattr(t, k)), np.float64).reshape(len(np.array(t.shininess)), -1) for k in COLOURS}
-    out = {}
-    for name, m in s.materials.items():
-        rows = [t.row_of_object[i] for i, o in enumerate(s.objects) if o.material == name]
-        g = table["kd"][rows].sum(0) + (table["ka"][rows].sum(0) if m.ka_follows_kd else 0.0)
-        out[f"materials.{name}.kd"] = g
-    out["area.radiance"] = sum(np.array(dr.grad(p["radiance.value"]), np.float64).ravel() for p in params)
+    image, out = ad_gradients(s, weights, shadows)
+    out["area.radiance"] = out.pop("area.0.radiance")
     return image, out
 
 
