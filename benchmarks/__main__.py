@@ -40,7 +40,7 @@ def machine() -> str:
 
 def targets(h2h: dict, cast: dict, floor: dict | None = None, orbit: dict | None = None,
             many: dict | None = None, cold: dict | None = None, mirrors: dict | None = None,
-            kernel_floor: dict | None = None) -> str:
+            kernel_floor: dict | None = None, gradient: dict | None = None) -> str:
     """The performance targets, each measured against Mitsuba or against warprt itself in this run (many
     frames: against a loop, Ray against local): met or not, with the gap."""
     rows_h = h2h["rows"]
@@ -107,13 +107,19 @@ def targets(h2h: dict, cast: dict, floor: dict | None = None, orbit: dict | None
         from . import batch
 
         rows += batch.targets(many, met)
+    if gradient is not None:
+        from . import gradient_cost
+
+        rows += gradient_cost.target_rows(gradient)
     lines = ["## Targets", "", "Measured in this run; why the unmet ones are not met is in the last section "
              "(\"What was tried\").", "", "| target | measured | |", "|---|---|---|"]
     lines += [f"| {a} | {b} | {c} |" for a, b, c in rows]
     return "\n".join(lines) + "\n"
 
 
-SECTIONS = ("accuracy_cost", "growth")  # the sections --only runs again: a module with run(quick) and report(data)
+# The sections --only runs again: a module with run(quick) and report(data), and with target_rows(data), its
+# rows of the Targets table.
+SECTIONS = ("accuracy_cost", "growth", "gradient_cost")
 
 
 def commit() -> str:
@@ -138,6 +144,35 @@ def replace_section(report: str, section: str, name: str, note: str, tag: str | 
     return "\n".join(lines) + "\n"
 
 
+def replace_target_rows(report: str, rows) -> str:
+    """``report`` with the Targets table's rows for ``rows`` ((target, measured, verdict)) replaced where a row
+    starts with the same target up to its first comma or colon, else added at the table's end."""
+    lines = report.splitlines()
+    start = lines.index("## Targets")
+    end = max(i for i, line in enumerate(lines[:next((j for j in range(start + 1, len(lines))
+                                                      if lines[j].startswith("## ")), len(lines))]) if line.startswith("| "))
+    for a, b, c in rows:
+        key = "| " + a.split(":")[0].split(",")[0]
+        row = f"| {a} | {b} | {c} |"
+        at = next((i for i in range(start, end + 1) if lines[i].startswith(key)), None)
+        if at is None:
+            end += 1
+            lines.insert(end, row)
+        else:
+            lines[at] = row
+    return "\n".join(lines) + "\n"
+
+
+def add_section(report: str, section: str, name: str, note: str) -> str:
+    """``report`` with ``section`` added before its "What was tried" part (the end if it has none), and
+    ``note`` in the header (replace_section's)."""
+    at = report.find("\n## What was tried")
+    at = len(report) if at < 0 else at + 1
+    report = report[:at] + section.rstrip("\n") + "\n\n" + report[at:]
+    heading = section.splitlines()[0]
+    return replace_section(report, section, name, note) if heading in report else report
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--quick", action="store_true", help="small sizes and one repeat: a smoke run, not a report")
@@ -160,7 +195,11 @@ def main():
                 f"{commit() or 'unknown'} in {(time.time() - started) / 60:.1f} minutes"
                 + (" (--quick: not for quoting)" if args.quick else "") + ".")
         out = Path(args.output)
-        out.write_text(replace_section(out.read_text(), section, args.only, note))
+        text = out.read_text()
+        if hasattr(module, "target_rows"):
+            text = replace_target_rows(text, module.target_rows(data))
+        out.write_text(replace_section(text, section, args.only, note) if section.splitlines()[0] in text.splitlines()
+                       else add_section(text, section, args.only, note))
         print(f"replaced '{title}' in {out}", file=sys.stderr)
         return
 
@@ -206,9 +245,9 @@ def main():
     (RESULTS / "mirrors.json").write_text(json.dumps(mirrors, indent=1))
     sections.append(mirrors_bench.report(mirrors))
 
-    from . import accuracy_cost, growth
+    from . import accuracy_cost, gradient_cost, growth
 
-    for name, module in (("growth", growth), ("accuracy_cost", accuracy_cost)):
+    for name, module in (("growth", growth), ("accuracy_cost", accuracy_cost), ("gradient_cost", gradient_cost)):
         print(f"{name} ...", file=sys.stderr, flush=True)
         data = module.run(quick=q)
         (RESULTS / f"{name}.json").write_text(json.dumps(data, indent=1, default=str))
@@ -230,7 +269,8 @@ def main():
     many = batch.run(quick=q, log=lambda line: print(line, file=sys.stderr, flush=True))
     (RESULTS / "batch.json").write_text(json.dumps(many, indent=1))
     sections.append(batch.report(many))
-    sections.insert(0, targets(h2h, cast, floor, orbit, many, cold, mirrors, kernel_floor=kfloor))
+    gradient = json.loads((RESULTS / "gradient_cost.json").read_text())
+    sections.insert(0, targets(h2h, cast, floor, orbit, many, cold, mirrors, kernel_floor=kfloor, gradient=gradient))
 
     attempts = (ROOT / "ATTEMPTS.md").read_text() if (ROOT / "ATTEMPTS.md").exists() else ""
     head = commit()
