@@ -253,20 +253,26 @@ class Renderer:
         stats.memory["estimate"] = estimate
         return RenderResult(result[0], stats, result[1])
 
-    def backward(self, d_image, wrt=None) -> dict:
+    def backward(self, d_image, wrt=None, *, arrays: bool = False) -> dict:
         """d(sum(d_image * image)) / d(param) at the last frame, rendered with grad=True, for each name in
         ``wrt`` (r.params names: materials.<name>.ka | kd | ks | shininess | reflectivity | ka_texture |
         kd_texture | ks_texture (image textures' texels), lights.<i>.color |
         position | direction, a flat object's objects.<name>.vertices, camera.eye | center | up | fovy;
         all of them by default): a dict of float64 NumPy arrays shaped as the parameters; kd's carries ka's
         where ka follows kd (as r.params keeps it following). ``d_image``: the derivative of a loss with
-        respect to the image, (height, width, 3), a NumPy or Warp array."""
+        respect to the image, (height, width, 3), a NumPy or Warp array. With ``arrays``, each gradient a
+        float32 wp.array on the renderer's device (a () parameter's of shape (1,)), to hand to a wp.Tape's
+        backward(grads={...}) in the Warp program that made the parameter (docs/gradients.md)."""
         if self._first_hits is None:
             raise ArgumentError("backward", "render", "no frame was rendered with grad=True since the last change")
         scene, geom, hits = self._first_hits
         if scene is not self._scene:
             raise ArgumentError("backward", "render", "the scene changed since render(grad=True): render it again")
-        return grad_backward(scene, geom, hits, d_image, wrt, self.options.device)
+        out = grad_backward(scene, geom, hits, d_image, wrt, self.options.device)
+        if arrays:  # computed on the device, read back per parameter (its slices and the texture's flip)
+            out = {name: wp.array(np.asarray(g, np.float32).reshape(np.shape(g) or (1,)), dtype=float,
+                                  device=self.options.device) for name, g in out.items()}
+        return out
 
     # ---- Phases -------------------------------------------------------------------------------------
 
