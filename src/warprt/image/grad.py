@@ -210,23 +210,6 @@ def area_sources(scene) -> list[str]:
     return out
 
 
-def _vertices_refusal(hits: "FirstHits", name: str = "objects.") -> str | None:
-    """Why backward() cannot give this frame's vertex gradients yet (None: it can; always for the camera,
-    a camera.* ``name``, whose moving rays the replay follows through the mirrors). The replay would move a
-    vertex's mirror rays too, but that is not tested yet."""
-    if hits.levels == 1:
-        return None
-    if name.startswith("camera."):  # the camera's rays, mirror rays included, move in the replay
-        return None
-    return ("vertices are differentiated through camera rays alone for now (a mirror ray's origin and direction "
-            "move with them too)")
-
-
-def _moves(name: str) -> bool:
-    """Whether the parameter moves the camera rays' hits (the hits recomputed: vertices, the camera)."""
-    return name.startswith("objects.") or name.startswith("camera.")
-
-
 def _name_refusal(scene, name: str) -> str | None:
     """Why backward() cannot differentiate r.params' ``name`` in this scene (None: it can or it is unknown)."""
     section, owner, key = (name.split(".") + ["", "", ""])[:3]
@@ -408,7 +391,7 @@ def backward(scene, geom, hits: FirstHits, d_image, wrt, device: str) -> dict:
     as the parameter: (3,) for colours and positions, () for an exponent."""
     known = parameter_names(scene)
     if wrt is None:  # everything this frame can be differentiated in
-        wrt = [n for n in known if not (_moves(n) and _vertices_refusal(hits, n))]
+        wrt = known
     wrt = list(wrt)
     for name in wrt:
         if name not in known:
@@ -418,8 +401,6 @@ def backward(scene, geom, hits: FirstHits, d_image, wrt, device: str) -> dict:
                 "direction | radiance (an area light's), a flat object's objects.<name>.vertices, "
                 "camera.eye | center | up | fovy)")
             raise ArgumentError("backward", str(name), why)
-        if _moves(name) and _vertices_refusal(hits, name):
-            raise ArgumentError("backward", str(name), _vertices_refusal(hits, name))
     d = np.asarray(d_image.numpy() if isinstance(d_image, wp.array) else d_image, np.float32)
     if d.shape != (hits.height, hits.width, 3) or not np.all(np.isfinite(d)):
         raise ArgumentError("backward", "d_image", f"expected finite values of shape {(hits.height, hits.width, 3)}, "
