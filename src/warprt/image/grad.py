@@ -9,8 +9,11 @@ fixed, as a visibility-fixed derivative is (an edge or a shadow's edge moving ac
 derivative here); the local Phong terms are exact functions of the material colours and exponents, of
 the lights' colours, positions and directions (point, spot and directional lights, shading's light
 model: a spot's cone, 1 / r^2 falloff), of image textures' texels (the forward's bilinear wp.Texture2D
-lookup written over a wp.array: kernels.bilinear), of a flat object's vertices (the hit recomputed on
-the moved face), of the camera's eye, center, up and fovy (the camera rays made again in Warp,
+lookup written over a wp.array: kernels.bilinear), of the objects' vertices (the hit recomputed on the
+moved face, through the mirror rays too, each leaving the moved hit along the direction reflected about the
+moved normal; a smooth object's vertex normals made again from the moving points as the forward's Geometry
+makes them, angle-weighted, kernels.vertex_normal_sums and smooth_vertex_normals, where the scene does not
+give them: moving_normals), of the camera's eye, center, up and fovy (the camera rays made again in Warp,
 kernels.camera_rays, and the hit recomputed on the recorded face from the moved ray, through the mirror
 rays too), and of the area lights' radiance (an area light's, an emitting material's emission): their
 sample points' terms at each hit (the record's bit per point seen; kernels.area_replay, one thread per level
@@ -31,9 +34,9 @@ from ..errors import ArgumentError
 from ..kernels.camera import camera_data
 from ..kernels.grad import (MAX_GRAD_LIGHTS, TEXTURE_CHECKER, TEXTURE_CLAMP, TEXTURE_IMAGE, TEXTURE_MIRROR, TEXTURE_NONE,
                             TEXTURE_WRAP, area_replay, camera_rays, make_area_combine, make_grad_record_kernel,
-                            make_grad_shade_kernel, sample_mean)
+                            make_grad_shade_kernel, sample_mean, smooth_vertex_normals, vertex_normal_sums)
 from ..geometry import LightShape, light_shape
-from ..scene import camera_basis, scene_effects
+from ..scene import camera_basis, drawn_objects, position_ids, scene_effects
 from .launch import launch_bands
 from .memory import available_memory, human
 from .params import object_names
@@ -167,9 +170,9 @@ def record_first_hits(scene, geom, data, fx, device: str, threads: int = 1, band
 
 
 def parameter_names(scene) -> list[str]:
-    """The r.params names backward() can differentiate with respect to: the flat objects' vertices too
-    (a smooth object's vertex normals would move with them, which is not differentiated yet), but not an
-    area light's own object's (its sample points are held fixed); an area light's radiance and an emitting
+    """The r.params names backward() can differentiate with respect to: the objects' vertices too (a smooth
+    object's computed vertex normals moving with them), but not an area light's own object's (its sample
+    points are held fixed); an area light's radiance and an emitting
     material's emission; the camera's eye, center, up and fovy."""
     names = [f"materials.{m}.{k}" for m in scene.materials for k in MATERIAL_KEYS]
     names += [f"materials.{name}.{k}" for name, m in scene.materials.items() for k in TEXTURE_KEYS
@@ -180,7 +183,7 @@ def parameter_names(scene) -> list[str]:
     names += [f"lights.{i}.radiance" for i, light in enumerate(scene.lights) if light.area]
     emitters = _emitter_objects(scene)
     names += [f"objects.{name}.vertices" for name, i in object_names(scene).items()
-              if not scene.objects[i].smooth and scene.objects[i].name not in emitters]
+              if scene.objects[i].name not in emitters]
     names += [f"camera.{k}" for k in CAMERA_KEYS]
     return names
 
@@ -302,7 +305,11 @@ def replay_launch(scene, geom, hits: FirstHits, device: str, vertices: bool = Fa
     levels = n * hits.levels if area else 1  # the area lights' per-level state (stand-ins without)
     state = [wp.zeros(levels, dtype=wp.vec3, device=device, requires_grad=True) for _ in range(6)]
     shaded = wp.zeros(1, dtype=wp.vec3, device=device, requires_grad=True) if area else rays
-    inputs = [eye, points, geom.indices, geom.normals, geom.tri_material, geom.tri_smooth, ka, kd, ks, shininess, kr,
+    normals = geom.normals
+    if vertices and hits.smooth:  # a smooth object's vertex normals, computed from the moving points
+        normals, launches = moving_normals(scene, geom, points, device)
+        before += launches
+    inputs = [eye, points, geom.indices, normals, geom.tri_material, geom.tri_smooth, ka, kd, ks, shininess, kr,
               light_pos, light_color, inverse_square, kind, axis, cone, uvs, *table.arrays,
               wp.vec3(*scene.render.ambient), background, hits.face, hits.bary, dirs, hits.visible, *state, ray_dirs]
     arrays = {"ka": ka, "kd": kd, "ks": ks, "shininess": shininess, "reflectivity": kr, "color": light_color,
@@ -326,6 +333,36 @@ def replay_launch(scene, geom, hits: FirstHits, device: str, vertices: bool = Fa
     if camera:
         arrays["camera"], arrays["fovy"] = eye, fovy
     return ReplayLaunch(kernel, n, inputs, rays, arrays, table.images, then, shaded, before)
+
+
+def moving_normals(scene, geom, points, device: str) -> tuple:
+    """(normals, launches): the vertex normals the forward's Geometry makes from the objects' vertices
+    (Geometry._placed: normals.vertex_normals, angle-weighted and shared by the vertices at one position,
+    where a smooth object has no normals of its own; the given ones, a file's or a crease's, kept as they
+    are when the vertices move), differentiable in ``points`` through the launches (vertex_normal_sums, then
+    smooth_vertex_normals) that make them. Which vertices share a position is held as it is: a direction
+    that parts two vertices at one position (a seam's) moves the forward's normals by a jump, not a slope."""
+    objects = drawn_objects(scene)
+    position, faces, base, face_base, unique = [], [], 0, 0, 0
+    for obj in objects:
+        count = len(obj.vertices)
+        if obj.smooth and getattr(obj, "normals", None) is None:
+            ids = position_ids(obj.vertices)
+            position.append(ids + unique)
+            unique += int(ids.max()) + 1 if count else 0
+            faces.append(np.arange(face_base, face_base + len(obj.faces)))
+        else:
+            position.append(np.full(count, -1))
+        base += count
+        face_base += len(obj.faces)
+    if not faces:
+        return geom.normals, []
+    position = wp.array(np.concatenate(position).astype(np.int32), dtype=int, device=device)
+    faces = wp.array(np.concatenate(faces).astype(np.int32), dtype=int, device=device)
+    sums = wp.zeros(unique, dtype=wp.vec3, device=device, requires_grad=True)
+    normals = wp.zeros(base, dtype=wp.vec3, device=device, requires_grad=True)
+    return normals, [(vertex_normal_sums, len(faces), [points, geom.indices, faces, position], [sums]),
+                     (smooth_vertex_normals, base, [sums, position, geom.normals], [normals])]
 
 
 @dataclass
@@ -398,7 +435,7 @@ def backward(scene, geom, hits: FirstHits, d_image, wrt, device: str) -> dict:
             why = _name_refusal(scene, str(name)) or (
                 "not a parameter backward() differentiates yet (materials.<name>.ka | kd | ks | shininess | "
                 "reflectivity | ka_texture | kd_texture | ks_texture | emission, lights.<i>.color | position | "
-                "direction | radiance (an area light's), a flat object's objects.<name>.vertices, "
+                "direction | radiance (an area light's), objects.<name>.vertices, "
                 "camera.eye | center | up | fovy)")
             raise ArgumentError("backward", str(name), why)
     d = np.asarray(d_image.numpy() if isinstance(d_image, wp.array) else d_image, np.float32)
