@@ -49,8 +49,9 @@ LIGHT_KEYS = ("color", "position", "direction")
 CAMERA_KEYS = ("eye", "center", "up", "fovy")
 
 
-def refusal(scene, fx) -> str | None:
-    """Why render(grad=True) cannot differentiate this scene yet (None: it can)."""
+def refusal(scene, fx, mirrored=()) -> str | None:
+    """Why render(grad=True) cannot differentiate this scene yet (None: it can); ``mirrored``: the
+    materials whose mirror rays are recorded whatever their reflectivity (mirrored_materials)."""
     # The replay shades every Phong term. One the scene's values leave out (every ks 0) is right to shade:
     # its derivative is not 0. One switched off (render.effects, effects=, disable=) would give another
     # image's gradient.
@@ -60,7 +61,7 @@ def refusal(scene, fx) -> str | None:
         return f"the gradient's replay shades every Phong term: {', '.join(off)} switched off is not differentiated yet"
     if fx.refraction:
         return "glass (the ray tree) is not differentiated yet; mirrors and camera rays are"
-    if fx.reflection and scene.render.max_depth > MAX_GRAD_DEPTH:
+    if (fx.reflection or mirrored) and scene.render.max_depth > MAX_GRAD_DEPTH:
         return f"at most {MAX_GRAD_DEPTH} ray levels (render.max_depth) are differentiated (Warp's unrolled loop)"
     if fx.vertex_color:
         return "vertex colours are not differentiated yet"
@@ -83,26 +84,54 @@ def area_samples(scene) -> int:
     return len(scene.area_lights) * scene.render.light_samples
 
 
-def record_bytes(scene, fx) -> int:
+def record_bytes(scene, fx, mirrored=()) -> int:
     """What render(grad=True) and backward() hold for a frame's record and replay, in bytes: per camera
     ray (width x height x spp) and ray level."""
     cam, r = scene.camera, scene.render
     rays = cam.width * cam.height * (r.spp if fx.supersampling else 1)
-    levels = r.max_depth if fx.reflection else 1
+    levels = ray_levels(scene, fx, mirrored)
     per_level = RECORD_BYTES_PER_LEVEL + RECORD_BYTES_PER_LIGHT * len(scene.whitted_lights)
     if fx.area_lights:
         per_level += AREA_RECORD_BYTES_PER_LEVEL + 4 * _words(area_samples(scene)) + AREA_REPLAY_BYTES_PER_LEVEL
     return rays * (levels * per_level + REPLAY_BYTES_PER_RAY)
 
 
+def ray_levels(scene, fx, mirrored=()) -> int:
+    """The ray levels a grad frame records: render.max_depth where the tracer spawns mirror rays (some
+    k_r > 0) or the caller named a reflectivity to differentiate (``mirrored``), else the camera ray's."""
+    return scene.render.max_depth if fx.reflection or mirrored else 1
+
+
+def named_parameters(scene, names) -> list[str]:
+    """render(grad=[names])'s names, checked: each one backward() can differentiate in this scene (else
+    one ArgumentError naming it)."""
+    known = set(parameter_names(scene))
+    for name in names:
+        if name not in known:
+            raise ArgumentError("render", "grad", f"{name!r}: " + (_name_refusal(scene, str(name)) or
+                                "not a parameter backward() differentiates (Renderer.backward lists them)"))
+    return list(names)
+
+
+def mirrored_materials(scene, named, switched=None) -> tuple:
+    """The materials whose mirror rays a grad frame records whatever their reflectivity: those whose
+    ``materials.<name>.reflectivity`` the caller names (render(grad=[names])), so that a reflectivity of 0,
+    which switches the mirror rays off, still gets its derivative (the colour the mirror would show); none
+    where the frame cannot reflect (render.max_depth 1, or reflection switched off: ``switched``, the
+    effects the caller's options leave on), its image then truly independent of the reflectivity."""
+    if scene.render.max_depth <= 1 or (switched is not None and "reflection" not in switched):
+        return ()
+    return tuple(m for m in scene.materials if f"materials.{m}.reflectivity" in named)
+
+
 def _words(samples: int) -> int:
     return max(1, -(-samples // 32))
 
 
-def check_record_memory(scene, fx, device: str):
+def check_record_memory(scene, fx, device: str, mirrored=()):
     """Refuse, in one line naming the budget and the settings that reduce it, a grad=True frame whose
     record would not fit in the memory this process can still take (before the frame allocates anything)."""
-    need = record_bytes(scene, fx)
+    need = record_bytes(scene, fx, mirrored)
     available, what = available_memory(device)
     if available is not None and need > available:
         samples = ", render.light_samples" if fx.area_lights else ""  # a bit per area-light sample and level
@@ -136,18 +165,23 @@ class FirstHits:
     area_bits: wp.array | None = None
     words: int = 0  # 0: no area lights
     area: object = None  # the frame's AreaLights table (its sample points, normals and areas), as recorded
+    mirrored: tuple = ()  # the materials whose mirror rays were recorded whatever their k_r (mirrored_materials)
+    reflects: bool = False  # whether the frame could reflect (render.max_depth > 1, reflection not switched off)
 
 
 def record_first_hits(scene, geom, data, fx, device: str, threads: int = 1, bands: int = 1, pool=None,
-                      switched=None) -> FirstHits:
+                      switched=None, mirrored=()) -> FirstHits:
     """Run the record kernel for a frame of ``scene`` on ``geom`` and its tables ``data``, in ``bands`` bands
     of camera rays on ``threads`` threads (launch_bands; ``pool`` the Renderer's): render.spp of them per
     pixel, where the trace kernel puts them (its k x k strata). ``switched``: the effects the caller's
-    options leave on (effects.switched_on; None: every one)."""
+    options leave on (effects.switched_on; None: every one). ``mirrored``: the materials whose mirror rays
+    are recorded whatever their k_r (mirrored_materials), over render.max_depth levels."""
     cam = scene.camera
     k = math.isqrt(scene.render.spp) if fx.supersampling else 1
     n, L = cam.width * cam.height * k * k, len(scene.whitted_lights)
-    D = scene.render.max_depth if fx.reflection else 1
+    D = ray_levels(scene, fx, mirrored)
+    reflect = wp.array(np.asarray([int(m in mirrored) for m in geom.material_names] or [0], np.int32), dtype=int,
+                       device=device)
     face = wp.empty(n * D, dtype=int, device=device)
     bary = wp.zeros(n * D, dtype=wp.vec2, device=device)
     dirs = wp.zeros(n * D, dtype=wp.vec3, device=device)
@@ -163,10 +197,11 @@ def record_first_hits(scene, geom, data, fx, device: str, threads: int = 1, band
     wanted = switched is None or "shadows" in switched
     shadows = fx.shadows or (scene.render.shadows and wanted and not scene_effects(scene).shadows)
     kernel = make_grad_record_kernel(L, D, fx.smooth, shadows, fx.culling, fx.light_model, bool(words))
-    launch_bands(kernel, lambda first: [data, c, D, k, first, face, bary, dirs, visible, emit, area_bits, words], n,
-                 threads, bands, device, pool=pool)
+    launch_bands(kernel, lambda first: [data, c, D, k, first, face, bary, dirs, visible, emit, area_bits, words,
+                                        reflect], n, threads, bands, device, pool=pool)
+    reflects = scene.render.max_depth > 1 and (switched is None or "reflection" in switched)
     return FirstHits(face, bary, dirs, visible, cam.width, cam.height, L, D, fx.smooth, k * k, fx.light_model,
-                     fx.texture, emit, area_bits, words, data.area if words else None)
+                     fx.texture, emit, area_bits, words, data.area if words else None, tuple(mirrored), reflects)
 
 
 def parameter_names(scene) -> list[str]:
@@ -225,6 +260,16 @@ def _name_refusal(scene, name: str) -> str | None:
         return ("an emission of 0 makes no area light (no sample points to differentiate): give it a positive "
                 "value")
     return None
+
+
+def _unrecorded(scene, geom, hits: FirstHits, name: str) -> bool:
+    """Whether ``name`` is a reflectivity of 0 (every component) of a material the frame's objects use, whose
+    mirror rays the frame did not record though it could reflect: its derivative, the mirrored colour, is
+    not in the record (render(grad=[name]) records it)."""
+    section, owner, key = (name.split(".") + ["", "", ""])[:3]
+    if section != "materials" or key != "reflectivity" or owner not in geom.material_names:
+        return False
+    return hits.reflects and owner not in hits.mirrored and max(scene.materials[owner].reflectivity) <= 0.0
 
 
 @dataclass
@@ -428,7 +473,7 @@ def backward(scene, geom, hits: FirstHits, d_image, wrt, device: str) -> dict:
     as the parameter: (3,) for colours and positions, () for an exponent."""
     known = parameter_names(scene)
     if wrt is None:  # everything this frame can be differentiated in
-        wrt = known
+        wrt = [n for n in known if not _unrecorded(scene, geom, hits, n)]
     wrt = list(wrt)
     for name in wrt:
         if name not in known:
@@ -438,6 +483,10 @@ def backward(scene, geom, hits: FirstHits, d_image, wrt, device: str) -> dict:
                 "direction | radiance (an area light's), objects.<name>.vertices, "
                 "camera.eye | center | up | fovy)")
             raise ArgumentError("backward", str(name), why)
+        if _unrecorded(scene, geom, hits, name):
+            raise ArgumentError("backward", str(name), f"a reflectivity of 0 switches the mirror rays off, and this "
+                                f"frame did not record them: render with grad=[{name!r}] (its mirror rays recorded "
+                                f"for its derivative)")
     d = np.asarray(d_image.numpy() if isinstance(d_image, wp.array) else d_image, np.float32)
     if d.shape != (hits.height, hits.width, 3) or not np.all(np.isfinite(d)):
         raise ArgumentError("backward", "d_image", f"expected finite values of shape {(hits.height, hits.width, 3)}, "

@@ -181,7 +181,8 @@ def make_grad_record_kernel(L: int, D: int, smooth: bool, shadows: bool, cull: b
     """record(s, c, max_depth, k, first, face, bary, dirs, visible): per camera ray (from ``first``: ray
     pixel * k^2 + sample, pixels row-major, row 0 the top; sample j k + i the tracer's stratum (i, j),
     camera.sample_offset, the pixel's centre where k = 1) and ray level
-    (D at most: the camera ray, then the mirror rays the tracer spawns while k_r > 0 and max_depth allows),
+    (D at most: the camera ray, then the mirror rays the tracer spawns while k_r > 0 and max_depth allows, and
+    also from the material slots ``mirrored`` flags whatever their k_r, for the derivative of a k_r of 0),
     the face of the level's hit (-1: it met nothing, -2: no ray at that level), its barycentrics (u on the
     face's first vertex, v on its second), the ray's direction, and per light whether the hit sees it (1
     where n.L > 0 and no shadow ray is blocked): the tracer's own surface, and the forward's own test
@@ -200,7 +201,7 @@ def make_grad_record_kernel(L: int, D: int, smooth: bool, shadows: bool, cull: b
     @wp.kernel(module="unique", enable_backward=False)
     def record(s: SceneData, c: CameraData, max_depth: int, k: int, first: int, face: wp.array(dtype=int),
                bary: wp.array(dtype=wp.vec2), dirs: wp.array(dtype=wp.vec3), visible: wp.array(dtype=int),
-               emit: wp.array(dtype=int), area_bits: wp.array(dtype=int), words: int):
+               emit: wp.array(dtype=int), area_bits: wp.array(dtype=int), words: int, mirrored: wp.array(dtype=int)):
         ray = first + wp.tid()
         pixel = ray / (k * k)
         x = pixel % c.width
@@ -239,7 +240,7 @@ def make_grad_record_kernel(L: int, D: int, smooth: bool, shadows: bool, cull: b
                             if area_sample_test(s, hit, sq).lit != 0:
                                 word = j * words + sq / 32
                                 area_bits[word] = area_bits[word] | (1 << (sq % 32))
-                    if level + 1 < max_depth and wp.max(s.kr[hit.material]) > 0.0:
+                    if level + 1 < max_depth and (wp.max(s.kr[hit.material]) > 0.0 or mirrored[hit.material] != 0):
                         spawned = spawn_ray(hit, wp.normalize(reflect(d, hit.n)))
                         o = spawned.o
                         d = spawned.d
