@@ -18,7 +18,11 @@ kernels.camera_rays, and the hit recomputed on the recorded face from the moved 
 rays too), and of the area lights' radiance (an area light's, an emitting material's emission): their
 sample points' terms at each hit (the record's bit per point seen; kernels.area_replay, one thread per level
 and point) and the emitter's front met by a ray, the points themselves held fixed. The image is the mean of
-each pixel's rays, as the trace kernel makes it. Covered for now: any render.spp and light_samples, camera
+each pixel's rays, as the trace kernel makes it. A parameter whose value switches its effect off keeps
+its true derivative: a ks of 0 (the replay shades every Phong term), a light of colour 0 (its shadow rays
+traced for the record), and a reflectivity of 0 where the caller names it, render(grad=[names]) recording
+that material's mirror rays whatever its k_r (mirrored_materials; backward() refuses an unrecorded one in one
+line rather than give it 0). Covered for now: any render.spp and light_samples, camera
 and mirror rays (no glass), image and checker textures, area lights, no vertex colours; any other scene is
 refused in one line naming what is not yet differentiated, so a gradient is never silently partial.
 """

@@ -269,9 +269,11 @@ class Renderer:
         ``wrt`` (r.params names: materials.<name>.ka | kd | ks | shininess | reflectivity | ka_texture |
         kd_texture | ks_texture (image textures' texels), lights.<i>.color |
         position | direction, objects.<name>.vertices, camera.eye | center | up | fovy;
-        all of them by default): a dict of float64 NumPy arrays shaped as the parameters; kd's carries ka's
-        where ka follows kd (as r.params keeps it following). ``d_image``: the derivative of a loss with
-        respect to the image, (height, width, 3), a NumPy or Warp array."""
+        all of them by default, less a reflectivity of 0 the frame did not record): a dict of float64 NumPy
+        arrays shaped as the parameters; kd's carries ka's where ka follows kd (as r.params keeps it following).
+        A reflectivity of 0 named here is refused unless the frame was rendered with grad=[that name] (its
+        mirror rays recorded). ``d_image``: the derivative of a loss with respect to the image,
+        (height, width, 3), a NumPy or Warp array."""
         if self._first_hits is None:
             raise ArgumentError("backward", "render", "no frame was rendered with grad=True since the last change")
         scene, geom, hits = self._first_hits
