@@ -214,11 +214,10 @@ def test_camera_rays_pass_warps_gradcheck():
                                    eps=1e-3, atol=2e-3, rtol=2e-3, show_summary=False, raise_exception=False)
 
 
-def test_camera_gradients_with_mirrors_are_given_and_vertices_with_mirrors_still_refused(weights):
-    """The camera's rays move through the mirror levels in the replay; a vertex's do not yet (refused)."""
+def test_camera_gradients_with_mirrors_are_given_with_the_vertices(weights):
+    """The camera's rays move through the mirror levels in the replay, and so do a vertex's (checked in
+    test_vertex_gradients.py): both are given by default."""
     s = scene(mirror=True)
     r = warprt.Renderer(s)
     r.render(grad=True)
-    assert set(CAMERA) <= set(r.backward(weights))  # by default: everything it can give
-    with pytest.raises(warprt.SceneError, match="vertices.*camera rays alone"):
-        r.backward(weights, wrt=[f"objects.{s.objects[0].name}.vertices", "camera.eye"])
+    assert set(CAMERA) | {f"objects.{s.objects[0].name}.vertices"} <= set(r.backward(weights))

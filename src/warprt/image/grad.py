@@ -9,13 +9,20 @@ fixed, as a visibility-fixed derivative is (an edge or a shadow's edge moving ac
 derivative here); the local Phong terms are exact functions of the material colours and exponents, of
 the lights' colours, positions and directions (point, spot and directional lights, shading's light
 model: a spot's cone, 1 / r^2 falloff), of image textures' texels (the forward's bilinear wp.Texture2D
-lookup written over a wp.array: kernels.bilinear), of a flat object's vertices (the hit recomputed on
-the moved face), of the camera's eye, center, up and fovy (the camera rays made again in Warp,
+lookup written over a wp.array: kernels.bilinear), of the objects' vertices (the hit recomputed on the
+moved face, through the mirror rays too, each leaving the moved hit along the direction reflected about the
+moved normal; a smooth object's vertex normals made again from the moving points as the forward's Geometry
+makes them, angle-weighted, kernels.vertex_normal_sums and smooth_vertex_normals, where the scene does not
+give them: moving_normals), of the camera's eye, center, up and fovy (the camera rays made again in Warp,
 kernels.camera_rays, and the hit recomputed on the recorded face from the moved ray, through the mirror
 rays too), and of the area lights' radiance (an area light's, an emitting material's emission): their
 sample points' terms at each hit (the record's bit per point seen; kernels.area_replay, one thread per level
 and point) and the emitter's front met by a ray, the points themselves held fixed. The image is the mean of
-each pixel's rays, as the trace kernel makes it. Covered for now: any render.spp and light_samples, camera
+each pixel's rays, as the trace kernel makes it. A parameter whose value switches its effect off keeps
+its true derivative: a ks of 0 (the replay shades every Phong term), a light of colour 0 (its shadow rays
+traced for the record), and a reflectivity of 0 where the caller names it, render(grad=[names]) recording
+that material's mirror rays whatever its k_r (mirrored_materials; backward() refuses an unrecorded one in one
+line rather than give it 0). Covered for now: any render.spp and light_samples, camera
 and mirror rays (no glass), image and checker textures, area lights, no vertex colours; any other scene is
 refused in one line naming what is not yet differentiated, so a gradient is never silently partial.
 """
@@ -31,9 +38,9 @@ from ..errors import ArgumentError
 from ..kernels.camera import camera_data
 from ..kernels.grad import (MAX_GRAD_LIGHTS, TEXTURE_CHECKER, TEXTURE_CLAMP, TEXTURE_IMAGE, TEXTURE_MIRROR, TEXTURE_NONE,
                             TEXTURE_WRAP, area_replay, camera_rays, make_area_combine, make_grad_record_kernel,
-                            make_grad_shade_kernel, sample_mean)
+                            make_grad_shade_kernel, sample_mean, smooth_vertex_normals, vertex_normal_sums)
 from ..geometry import LightShape, light_shape
-from ..scene import camera_basis, scene_effects
+from ..scene import camera_basis, drawn_objects, position_ids, scene_effects
 from .launch import launch_bands
 from .memory import available_memory, human
 from .params import object_names
@@ -46,8 +53,9 @@ LIGHT_KEYS = ("color", "position", "direction")
 CAMERA_KEYS = ("eye", "center", "up", "fovy")
 
 
-def refusal(scene, fx) -> str | None:
-    """Why render(grad=True) cannot differentiate this scene yet (None: it can)."""
+def refusal(scene, fx, mirrored=()) -> str | None:
+    """Why render(grad=True) cannot differentiate this scene yet (None: it can); ``mirrored``: the
+    materials whose mirror rays are recorded whatever their reflectivity (mirrored_materials)."""
     # The replay shades every Phong term. One the scene's values leave out (every ks 0) is right to shade:
     # its derivative is not 0. One switched off (render.effects, effects=, disable=) would give another
     # image's gradient.
@@ -57,7 +65,7 @@ def refusal(scene, fx) -> str | None:
         return f"the gradient's replay shades every Phong term: {', '.join(off)} switched off is not differentiated yet"
     if fx.refraction:
         return "glass (the ray tree) is not differentiated yet; mirrors and camera rays are"
-    if fx.reflection and scene.render.max_depth > MAX_GRAD_DEPTH:
+    if (fx.reflection or mirrored) and scene.render.max_depth > MAX_GRAD_DEPTH:
         return f"at most {MAX_GRAD_DEPTH} ray levels (render.max_depth) are differentiated (Warp's unrolled loop)"
     if fx.vertex_color:
         return "vertex colours are not differentiated yet"
@@ -80,26 +88,54 @@ def area_samples(scene) -> int:
     return len(scene.area_lights) * scene.render.light_samples
 
 
-def record_bytes(scene, fx) -> int:
+def record_bytes(scene, fx, mirrored=()) -> int:
     """What render(grad=True) and backward() hold for a frame's record and replay, in bytes: per camera
     ray (width x height x spp) and ray level."""
     cam, r = scene.camera, scene.render
     rays = cam.width * cam.height * (r.spp if fx.supersampling else 1)
-    levels = r.max_depth if fx.reflection else 1
+    levels = ray_levels(scene, fx, mirrored)
     per_level = RECORD_BYTES_PER_LEVEL + RECORD_BYTES_PER_LIGHT * len(scene.whitted_lights)
     if fx.area_lights:
         per_level += AREA_RECORD_BYTES_PER_LEVEL + 4 * _words(area_samples(scene)) + AREA_REPLAY_BYTES_PER_LEVEL
     return rays * (levels * per_level + REPLAY_BYTES_PER_RAY)
 
 
+def ray_levels(scene, fx, mirrored=()) -> int:
+    """The ray levels a grad frame records: render.max_depth where the tracer spawns mirror rays (some
+    k_r > 0) or the caller named a reflectivity to differentiate (``mirrored``), else the camera ray's."""
+    return scene.render.max_depth if fx.reflection or mirrored else 1
+
+
+def named_parameters(scene, names) -> list[str]:
+    """render(grad=[names])'s names, checked: each one backward() can differentiate in this scene (else
+    one ArgumentError naming it)."""
+    known = set(parameter_names(scene))
+    for name in names:
+        if name not in known:
+            raise ArgumentError("render", "grad", f"{name!r}: " + (_name_refusal(scene, str(name)) or
+                                "not a parameter backward() differentiates (Renderer.backward lists them)"))
+    return list(names)
+
+
+def mirrored_materials(scene, named, switched=None) -> tuple:
+    """The materials whose mirror rays a grad frame records whatever their reflectivity: those whose
+    ``materials.<name>.reflectivity`` the caller names (render(grad=[names])), so that a reflectivity of 0,
+    which switches the mirror rays off, still gets its derivative (the colour the mirror would show); none
+    where the frame cannot reflect (render.max_depth 1, or reflection switched off: ``switched``, the
+    effects the caller's options leave on), its image then truly independent of the reflectivity."""
+    if scene.render.max_depth <= 1 or (switched is not None and "reflection" not in switched):
+        return ()
+    return tuple(m for m in scene.materials if f"materials.{m}.reflectivity" in named)
+
+
 def _words(samples: int) -> int:
     return max(1, -(-samples // 32))
 
 
-def check_record_memory(scene, fx, device: str):
+def check_record_memory(scene, fx, device: str, mirrored=()):
     """Refuse, in one line naming the budget and the settings that reduce it, a grad=True frame whose
     record would not fit in the memory this process can still take (before the frame allocates anything)."""
-    need = record_bytes(scene, fx)
+    need = record_bytes(scene, fx, mirrored)
     available, what = available_memory(device)
     if available is not None and need > available:
         samples = ", render.light_samples" if fx.area_lights else ""  # a bit per area-light sample and level
@@ -133,18 +169,23 @@ class FirstHits:
     area_bits: wp.array | None = None
     words: int = 0  # 0: no area lights
     area: object = None  # the frame's AreaLights table (its sample points, normals and areas), as recorded
+    mirrored: tuple = ()  # the materials whose mirror rays were recorded whatever their k_r (mirrored_materials)
+    reflects: bool = False  # whether the frame could reflect (render.max_depth > 1, reflection not switched off)
 
 
 def record_first_hits(scene, geom, data, fx, device: str, threads: int = 1, bands: int = 1, pool=None,
-                      switched=None) -> FirstHits:
+                      switched=None, mirrored=()) -> FirstHits:
     """Run the record kernel for a frame of ``scene`` on ``geom`` and its tables ``data``, in ``bands`` bands
     of camera rays on ``threads`` threads (launch_bands; ``pool`` the Renderer's): render.spp of them per
     pixel, where the trace kernel puts them (its k x k strata). ``switched``: the effects the caller's
-    options leave on (effects.switched_on; None: every one)."""
+    options leave on (effects.switched_on; None: every one). ``mirrored``: the materials whose mirror rays
+    are recorded whatever their k_r (mirrored_materials), over render.max_depth levels."""
     cam = scene.camera
     k = math.isqrt(scene.render.spp) if fx.supersampling else 1
     n, L = cam.width * cam.height * k * k, len(scene.whitted_lights)
-    D = scene.render.max_depth if fx.reflection else 1
+    D = ray_levels(scene, fx, mirrored)
+    reflect = wp.array(np.asarray([int(m in mirrored) for m in geom.material_names] or [0], np.int32), dtype=int,
+                       device=device)
     face = wp.empty(n * D, dtype=int, device=device)
     bary = wp.zeros(n * D, dtype=wp.vec2, device=device)
     dirs = wp.zeros(n * D, dtype=wp.vec3, device=device)
@@ -160,16 +201,17 @@ def record_first_hits(scene, geom, data, fx, device: str, threads: int = 1, band
     wanted = switched is None or "shadows" in switched
     shadows = fx.shadows or (scene.render.shadows and wanted and not scene_effects(scene).shadows)
     kernel = make_grad_record_kernel(L, D, fx.smooth, shadows, fx.culling, fx.light_model, bool(words))
-    launch_bands(kernel, lambda first: [data, c, D, k, first, face, bary, dirs, visible, emit, area_bits, words], n,
-                 threads, bands, device, pool=pool)
+    launch_bands(kernel, lambda first: [data, c, D, k, first, face, bary, dirs, visible, emit, area_bits, words,
+                                        reflect], n, threads, bands, device, pool=pool)
+    reflects = scene.render.max_depth > 1 and (switched is None or "reflection" in switched)
     return FirstHits(face, bary, dirs, visible, cam.width, cam.height, L, D, fx.smooth, k * k, fx.light_model,
-                     fx.texture, emit, area_bits, words, data.area if words else None)
+                     fx.texture, emit, area_bits, words, data.area if words else None, tuple(mirrored), reflects)
 
 
 def parameter_names(scene) -> list[str]:
-    """The r.params names backward() can differentiate with respect to: the flat objects' vertices too
-    (a smooth object's vertex normals would move with them, which is not differentiated yet), but not an
-    area light's own object's (its sample points are held fixed); an area light's radiance and an emitting
+    """The r.params names backward() can differentiate with respect to: the objects' vertices too (a smooth
+    object's computed vertex normals moving with them), but not an area light's own object's (its sample
+    points are held fixed); an area light's radiance and an emitting
     material's emission; the camera's eye, center, up and fovy."""
     names = [f"materials.{m}.{k}" for m in scene.materials for k in MATERIAL_KEYS]
     names += [f"materials.{name}.{k}" for name, m in scene.materials.items() for k in TEXTURE_KEYS
@@ -180,7 +222,7 @@ def parameter_names(scene) -> list[str]:
     names += [f"lights.{i}.radiance" for i, light in enumerate(scene.lights) if light.area]
     emitters = _emitter_objects(scene)
     names += [f"objects.{name}.vertices" for name, i in object_names(scene).items()
-              if not scene.objects[i].smooth and scene.objects[i].name not in emitters]
+              if scene.objects[i].name not in emitters]
     names += [f"camera.{k}" for k in CAMERA_KEYS]
     return names
 
@@ -210,23 +252,6 @@ def area_sources(scene) -> list[str]:
     return out
 
 
-def _vertices_refusal(hits: "FirstHits", name: str = "objects.") -> str | None:
-    """Why backward() cannot give this frame's vertex gradients yet (None: it can; always for the camera,
-    a camera.* ``name``, whose moving rays the replay follows through the mirrors). The replay would move a
-    vertex's mirror rays too, but that is not tested yet."""
-    if hits.levels == 1:
-        return None
-    if name.startswith("camera."):  # the camera's rays, mirror rays included, move in the replay
-        return None
-    return ("vertices are differentiated through camera rays alone for now (a mirror ray's origin and direction "
-            "move with them too)")
-
-
-def _moves(name: str) -> bool:
-    """Whether the parameter moves the camera rays' hits (the hits recomputed: vertices, the camera)."""
-    return name.startswith("objects.") or name.startswith("camera.")
-
-
 def _name_refusal(scene, name: str) -> str | None:
     """Why backward() cannot differentiate r.params' ``name`` in this scene (None: it can or it is unknown)."""
     section, owner, key = (name.split(".") + ["", "", ""])[:3]
@@ -239,6 +264,16 @@ def _name_refusal(scene, name: str) -> str | None:
         return ("an emission of 0 makes no area light (no sample points to differentiate): give it a positive "
                 "value")
     return None
+
+
+def _unrecorded(scene, geom, hits: FirstHits, name: str) -> bool:
+    """Whether ``name`` is a reflectivity of 0 (every component) of a material the frame's objects use, whose
+    mirror rays the frame did not record though it could reflect: its derivative, the mirrored colour, is
+    not in the record (render(grad=[name]) records it)."""
+    section, owner, key = (name.split(".") + ["", "", ""])[:3]
+    if section != "materials" or key != "reflectivity" or owner not in geom.material_names:
+        return False
+    return hits.reflects and owner not in hits.mirrored and max(scene.materials[owner].reflectivity) <= 0.0
 
 
 @dataclass
@@ -319,7 +354,11 @@ def replay_launch(scene, geom, hits: FirstHits, device: str, vertices: bool = Fa
     levels = n * hits.levels if area else 1  # the area lights' per-level state (stand-ins without)
     state = [wp.zeros(levels, dtype=wp.vec3, device=device, requires_grad=True) for _ in range(6)]
     shaded = wp.zeros(1, dtype=wp.vec3, device=device, requires_grad=True) if area else rays
-    inputs = [eye, points, geom.indices, geom.normals, geom.tri_material, geom.tri_smooth, ka, kd, ks, shininess, kr,
+    normals = geom.normals
+    if vertices and hits.smooth:  # a smooth object's vertex normals, computed from the moving points
+        normals, launches = moving_normals(scene, geom, points, device)
+        before += launches
+    inputs = [eye, points, geom.indices, normals, geom.tri_material, geom.tri_smooth, ka, kd, ks, shininess, kr,
               light_pos, light_color, inverse_square, kind, axis, cone, uvs, *table.arrays,
               wp.vec3(*scene.render.ambient), background, hits.face, hits.bary, dirs, hits.visible, *state, ray_dirs]
     arrays = {"ka": ka, "kd": kd, "ks": ks, "shininess": shininess, "reflectivity": kr, "color": light_color,
@@ -343,6 +382,36 @@ def replay_launch(scene, geom, hits: FirstHits, device: str, vertices: bool = Fa
     if camera:
         arrays["camera"], arrays["fovy"] = eye, fovy
     return ReplayLaunch(kernel, n, inputs, rays, arrays, table.images, then, shaded, before)
+
+
+def moving_normals(scene, geom, points, device: str) -> tuple:
+    """(normals, launches): the vertex normals the forward's Geometry makes from the objects' vertices
+    (Geometry._placed: normals.vertex_normals, angle-weighted and shared by the vertices at one position,
+    where a smooth object has no normals of its own; the given ones, a file's or a crease's, kept as they
+    are when the vertices move), differentiable in ``points`` through the launches (vertex_normal_sums, then
+    smooth_vertex_normals) that make them. Which vertices share a position is held as it is: a direction
+    that parts two vertices at one position (a seam's) moves the forward's normals by a jump, not a slope."""
+    objects = drawn_objects(scene)
+    position, faces, base, face_base, unique = [], [], 0, 0, 0
+    for obj in objects:
+        count = len(obj.vertices)
+        if obj.smooth and getattr(obj, "normals", None) is None:
+            ids = position_ids(obj.vertices)
+            position.append(ids + unique)
+            unique += int(ids.max()) + 1 if count else 0
+            faces.append(np.arange(face_base, face_base + len(obj.faces)))
+        else:
+            position.append(np.full(count, -1))
+        base += count
+        face_base += len(obj.faces)
+    if not faces:
+        return geom.normals, []
+    position = wp.array(np.concatenate(position).astype(np.int32), dtype=int, device=device)
+    faces = wp.array(np.concatenate(faces).astype(np.int32), dtype=int, device=device)
+    sums = wp.zeros(unique, dtype=wp.vec3, device=device, requires_grad=True)
+    normals = wp.zeros(base, dtype=wp.vec3, device=device, requires_grad=True)
+    return normals, [(vertex_normal_sums, len(faces), [points, geom.indices, faces, position], [sums]),
+                     (smooth_vertex_normals, base, [sums, position, geom.normals], [normals])]
 
 
 @dataclass
@@ -408,18 +477,20 @@ def backward(scene, geom, hits: FirstHits, d_image, wrt, device: str) -> dict:
     as the parameter: (3,) for colours and positions, () for an exponent."""
     known = parameter_names(scene)
     if wrt is None:  # everything this frame can be differentiated in
-        wrt = [n for n in known if not (_moves(n) and _vertices_refusal(hits, n))]
+        wrt = [n for n in known if not _unrecorded(scene, geom, hits, n)]
     wrt = list(wrt)
     for name in wrt:
         if name not in known:
             why = _name_refusal(scene, str(name)) or (
                 "not a parameter backward() differentiates yet (materials.<name>.ka | kd | ks | shininess | "
                 "reflectivity | ka_texture | kd_texture | ks_texture | emission, lights.<i>.color | position | "
-                "direction | radiance (an area light's), a flat object's objects.<name>.vertices, "
+                "direction | radiance (an area light's), objects.<name>.vertices, "
                 "camera.eye | center | up | fovy)")
             raise ArgumentError("backward", str(name), why)
-        if _moves(name) and _vertices_refusal(hits, name):
-            raise ArgumentError("backward", str(name), _vertices_refusal(hits, name))
+        if _unrecorded(scene, geom, hits, name):
+            raise ArgumentError("backward", str(name), f"a reflectivity of 0 switches the mirror rays off, and this "
+                                f"frame did not record them: render with grad=[{name!r}] (its mirror rays recorded "
+                                f"for its derivative)")
     d = np.asarray(d_image.numpy() if isinstance(d_image, wp.array) else d_image, np.float32)
     if d.shape != (hits.height, hits.width, 3) or not np.all(np.isfinite(d)):
         raise ArgumentError("backward", "d_image", f"expected finite values of shape {(hits.height, hits.width, 3)}, "

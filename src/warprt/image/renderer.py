@@ -22,7 +22,8 @@ from ..scene import (EffectSet, camera_basis, drawn_objects, switched_on, valida
 from ..timing import timed
 from .aovs import finish_aovs
 from .caches import SHADOW_GRIDS_KEPT, FrameCaches
-from .grad import backward as grad_backward, check_record_memory, record_first_hits, refusal as grad_refusal
+from .grad import (backward as grad_backward, check_record_memory, mirrored_materials, named_parameters,
+                   record_first_hits, refusal as grad_refusal)
 from .launch import band_pool, bands_of, launch_bands, launch_plan
 from .memory import check_frame_memory, frame_estimate, frame_memory
 from .mirrors import MirrorFrame, empty_mirrors, mirror_frame
@@ -201,11 +202,17 @@ class Renderer:
                 and all(a[0] == b[0] and a[1] is b[1] for a, b in zip(materials, content[1]))
                 and objects_match(objects, content[2]))
 
-    def render(self, *, progress=None, grad: bool = False) -> RenderResult:
+    def render(self, *, progress=None, grad: bool | list = False) -> RenderResult:
         """One frame of the scene, with the Whitted tracer (or, algorithm="zbuffer", by rasterization with
         the same local shading); ``progress``: a progress.Progress told of each band done. With ``grad``,
-        the same image, and what backward() needs is recorded (image/grad.py says what is differentiated)."""
+        the same image, and what backward() needs is recorded (image/grad.py says what is differentiated).
+        ``grad=[names]`` (r.params names) is grad=True with those parameters' effects recorded even where
+        their values switch them off: a named ``materials.<name>.reflectivity`` of 0 has its mirror rays
+        recorded (over render.max_depth levels), so that backward() gives its derivative, the mirrored
+        colour; backward() refuses a reflectivity of 0 the frame did not record so."""
         self._first_hits = None
+        named = list(grad) if isinstance(grad, (list, tuple)) else []
+        grad = bool(grad) or isinstance(grad, (list, tuple))
         if grad and self.options.algorithm == "zbuffer":
             raise ArgumentError("render", "grad", "gradients follow the ray tracer: use algorithm='raytrace'")
         if self.options.algorithm == "zbuffer":
@@ -214,11 +221,15 @@ class Renderer:
         scene, o, times = self._scene, self.options, {}
         with timed(times, "total"):
             plan = plan_frame(scene, o)
-            why = grad_refusal(scene, plan.fx) if grad else None
+            mirrored = ()
+            if grad:
+                switched = switched_on(scene, o.effects, o.disable)
+                mirrored = mirrored_materials(scene, named_parameters(scene, named), switched)
+            why = grad_refusal(scene, plan.fx, mirrored) if grad else None
             if why is not None:
                 raise ArgumentError("render", "grad", why)
             if grad:
-                check_record_memory(scene, plan.fx, o.device)
+                check_record_memory(scene, plan.fx, o.device, mirrored)
             pool = self._bands_pool(plan.threads)
             estimate = frame_estimate(scene, plan.grid.per_pixel, plan.raster)
             check_frame_memory(scene, _without_geometry(estimate, self._given), o.device)  # before any buffer
@@ -246,9 +257,9 @@ class Renderer:
             result = _finish(scene, o, plan, geom, frame)
             if grad:
                 with timed(times, "grad_record"):
-                    switched = switched_on(scene, o.effects, o.disable)
                     self._first_hits = (scene, geom, record_first_hits(scene, geom, data, plan.fx, o.device,
-                                                                       plan.threads, plan.bands, pool, switched))
+                                                                       plan.threads, plan.bands, pool, switched,
+                                                                       mirrored))
         stats = _frame_stats(scene, o, plan, shortcuts, variant, geom, geometry_info, grid, mirrors, zb, frame, times)
         stats.memory["estimate"] = estimate
         return RenderResult(result[0], stats, result[1])
@@ -257,12 +268,14 @@ class Renderer:
         """d(sum(d_image * image)) / d(param) at the last frame, rendered with grad=True, for each name in
         ``wrt`` (r.params names: materials.<name>.ka | kd | ks | shininess | reflectivity | ka_texture |
         kd_texture | ks_texture (image textures' texels), lights.<i>.color |
-        position | direction, a flat object's objects.<name>.vertices, camera.eye | center | up | fovy;
-        all of them by default): a dict of float64 NumPy arrays shaped as the parameters; kd's carries ka's
-        where ka follows kd (as r.params keeps it following). ``d_image``: the derivative of a loss with
-        respect to the image, (height, width, 3), a NumPy or Warp array. With ``arrays``, each gradient a
-        float32 wp.array on the renderer's device (a () parameter's of shape (1,)), to hand to a wp.Tape's
-        backward(grads={...}) in the Warp program that made the parameter (docs/gradients.md)."""
+        position | direction, objects.<name>.vertices, camera.eye | center | up | fovy;
+        all of them by default, less a reflectivity of 0 the frame did not record): a dict of float64 NumPy
+        arrays shaped as the parameters; kd's carries ka's where ka follows kd (as r.params keeps it following).
+        A reflectivity of 0 named here is refused unless the frame was rendered with grad=[that name] (its
+        mirror rays recorded). ``d_image``: the derivative of a loss with respect to the image,
+        (height, width, 3), a NumPy or Warp array. With ``arrays``, each gradient a float32 wp.array on the
+        renderer's device (a () parameter's of shape (1,)), to hand to a wp.Tape's backward(grads={...}) in
+        the Warp program that made the parameter (docs/gradients.md)."""
         if self._first_hits is None:
             raise ArgumentError("backward", "render", "no frame was rendered with grad=True since the last change")
         scene, geom, hits = self._first_hits

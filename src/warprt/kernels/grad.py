@@ -181,7 +181,8 @@ def make_grad_record_kernel(L: int, D: int, smooth: bool, shadows: bool, cull: b
     """record(s, c, max_depth, k, first, face, bary, dirs, visible): per camera ray (from ``first``: ray
     pixel * k^2 + sample, pixels row-major, row 0 the top; sample j k + i the tracer's stratum (i, j),
     camera.sample_offset, the pixel's centre where k = 1) and ray level
-    (D at most: the camera ray, then the mirror rays the tracer spawns while k_r > 0 and max_depth allows),
+    (D at most: the camera ray, then the mirror rays the tracer spawns while k_r > 0 and max_depth allows, and
+    also from the material slots ``mirrored`` flags whatever their k_r, for the derivative of a k_r of 0),
     the face of the level's hit (-1: it met nothing, -2: no ray at that level), its barycentrics (u on the
     face's first vertex, v on its second), the ray's direction, and per light whether the hit sees it (1
     where n.L > 0 and no shadow ray is blocked): the tracer's own surface, and the forward's own test
@@ -200,7 +201,7 @@ def make_grad_record_kernel(L: int, D: int, smooth: bool, shadows: bool, cull: b
     @wp.kernel(module="unique", enable_backward=False)
     def record(s: SceneData, c: CameraData, max_depth: int, k: int, first: int, face: wp.array(dtype=int),
                bary: wp.array(dtype=wp.vec2), dirs: wp.array(dtype=wp.vec3), visible: wp.array(dtype=int),
-               emit: wp.array(dtype=int), area_bits: wp.array(dtype=int), words: int):
+               emit: wp.array(dtype=int), area_bits: wp.array(dtype=int), words: int, mirrored: wp.array(dtype=int)):
         ray = first + wp.tid()
         pixel = ray / (k * k)
         x = pixel % c.width
@@ -239,7 +240,7 @@ def make_grad_record_kernel(L: int, D: int, smooth: bool, shadows: bool, cull: b
                             if area_sample_test(s, hit, sq).lit != 0:
                                 word = j * words + sq / 32
                                 area_bits[word] = area_bits[word] | (1 << (sq % 32))
-                    if level + 1 < max_depth and wp.max(s.kr[hit.material]) > 0.0:
+                    if level + 1 < max_depth and (wp.max(s.kr[hit.material]) > 0.0 or mirrored[hit.material] != 0):
                         spawned = spawn_ray(hit, wp.normalize(reflect(d, hit.n)))
                         o = spawned.o
                         d = spawned.d
@@ -457,3 +458,49 @@ def sample_mean(rays: wp.array(dtype=wp.vec3), samples: int, image: wp.array(dty
     for sample in range(samples):
         total = total + rays[pixel * samples + sample]
     image[pixel] = total / float(samples)
+
+
+@wp.func
+def corner_angle(a: wp.vec3, b: wp.vec3, c: wp.vec3) -> float:
+    """The angle at corner a of the triangle (a, b, c): atan2(|e1 x e2|, e1.e2), e1 = b - a, e2 = c - a, the
+    angle normals.face_normals_and_angles takes as arccos of the cosine (the same value, and a derivative
+    that stays finite where the cosine nears +-1)."""
+    e1 = b - a
+    e2 = c - a
+    return wp.atan2(wp.length(wp.cross(e1, e2)), wp.dot(e1, e2))
+
+
+@wp.kernel(module="unique")
+def vertex_normal_sums(points: wp.array(dtype=wp.vec3), indices: wp.array(dtype=int), faces: wp.array(dtype=int),
+                       position: wp.array(dtype=int), sums: wp.array(dtype=wp.vec3)):
+    """normals.vertex_normals' sums, differentiable in ``points``: per face ``faces[tid]`` (the smooth
+    objects' whose normals are computed from their triangles), its unit normal (zero where degenerate) times
+    each corner's angle (corner_angle) added by wp.atomic_add to the sum of the corner's position
+    (``position``: one id per distinct position of an object, normals.position_ids, so that vertices a seam
+    splits share one normal)."""
+    f = faces[wp.tid()]
+    i0 = indices[3 * f]
+    i1 = indices[3 * f + 1]
+    i2 = indices[3 * f + 2]
+    p0 = points[i0]
+    p1 = points[i1]
+    p2 = points[i2]
+    fn = wp.normalize(wp.cross(p1 - p0, p2 - p0))
+    wp.atomic_add(sums, position[i0], fn * corner_angle(p0, p1, p2))
+    wp.atomic_add(sums, position[i1], fn * corner_angle(p1, p2, p0))
+    wp.atomic_add(sums, position[i2], fn * corner_angle(p2, p0, p1))
+
+
+@wp.kernel(module="unique")
+def smooth_vertex_normals(sums: wp.array(dtype=wp.vec3), position: wp.array(dtype=int),
+                          given: wp.array(dtype=wp.vec3), normals: wp.array(dtype=wp.vec3)):
+    """Each vertex's normal as the forward's Geometry has it: where its object's normals are computed from
+    its triangles (``position`` >= 0), its position's sum (vertex_normal_sums) normalised, differentiable;
+    elsewhere (a file's or a crease's normals, which stay when the vertices move; a flat object's zeros) the
+    ``given`` one."""
+    v = wp.tid()
+    q = position[v]
+    if q >= 0:
+        normals[v] = wp.normalize(sums[q])
+    else:
+        normals[v] = given[v]

@@ -20,7 +20,7 @@ from .load import input_kind, load_dict, load_scene, sets_in_place, with_overrid
 from .meshio import read_mesh_file
 from .mitsuba_xml import load_mitsuba_file, mitsuba_camera, read_mitsuba_xml, reads_mitsuba_light, reads_mitsuba_shape
 from .model import DEFAULT_MATERIAL, Camera, Light, Material, RenderSettings, Scene, SceneObject
-from .normals import vertex_normals
+from .normals import position_ids, vertex_normals
 from .placement import rotation
 from .reader import scene_from_dict
 from .texture import Texture, srgb_to_linear
@@ -31,7 +31,7 @@ __all__ = ["EMITTER_MATERIAL", "EMITTER_MATERIAL_NAME", "drawn_objects", "emitte
            "emitter_samples", "sample_coordinates", "shape_frame", "Camera", "camera_basis", "CameraBasis", "CheckedContent", "check_setting", "DEFAULT_IOR", "DEFAULT_MATERIAL",
            "did_you_mean", "dielectric_from_gltf", "dielectric_from_mtl", "dielectric_from_usd", "EFFECTS", "EffectSet",
            "eye_medium", "input_kind", "Light", "load_dict", "load_mitsuba_file", "load_scene", "Material", "MAX_REACH", "ObjectCache", "open_edges",
-           "pixel_ray_directions", "mitsuba_camera", "read_mesh_file", "read_toml", "read_mitsuba_xml", "reads_mitsuba_light", "reads_mitsuba_shape", "RenderSettings", "resolve_effects", "rotation", "Scene",
+           "pixel_ray_directions", "position_ids", "mitsuba_camera", "read_mesh_file", "read_toml", "read_mitsuba_xml", "reads_mitsuba_light", "reads_mitsuba_shape", "RenderSettings", "resolve_effects", "rotation", "Scene",
            "scene_effects", "scene_from_dict", "switched_on", "SceneObject", "sets_in_place", "shapes", "signed_volume",
            "srgb_to_linear", "TableReader", "Texture", "validate_camera", "validate_scene", "validate_view", "vertex_normals", "winding_number",
            "with_overrides", "zbuffer_effects"]
