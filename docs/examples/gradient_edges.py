@@ -4,7 +4,7 @@
 
 A ball on a floor under a point light; the parameter is the light's x. Per pixel, the derivative of the
 pixel's brightness (R + G + B) from Renderer.backward (one call per pixel, d_image that pixel's weights)
-beside central differences of the forward render at a step of 0.02. They agree everywhere the step moves
+beside central differences of the forward render at a step of 0.1. They agree everywhere the step moves
 no edge; along the ball's shadow's edge the difference jumps (a pixel goes from lit to shadowed: a finite
 change over a small step), and the derivative, which holds each shadow ray's answer fixed, has no term
 there: the boundary term of a Reynolds-transport renderer (Mitsuba's direct_projective, for area lights).
@@ -19,10 +19,10 @@ import numpy as np
 import warprt
 
 NAME = "lights.0.position"
-STEP = 0.02
+STEP = 0.1
 
 
-def scene(width: int = 64, height: int = 48) -> warprt.Scene:
+def scene(width: int = 96, height: int = 72) -> warprt.Scene:
     return warprt.load_dict({
         "camera": {"eye": [0.0, 2.5, 5.0], "center": [0.0, 0.4, 0.0], "width": width, "height": height},
         "render": {"ambient": [0.2] * 3, "max_depth": 1},
@@ -34,7 +34,7 @@ def scene(width: int = 64, height: int = 48) -> warprt.Scene:
                      "material": "ball"}]})
 
 
-def derivative_images(width: int = 64, height: int = 48) -> dict:
+def derivative_images(width: int = 96, height: int = 72) -> dict:
     """The image, the derivative of each pixel's R + G + B with respect to the light's x (backward, per
     pixel), and the central difference of the same at STEP."""
     r = warprt.Renderer(scene(width, height))
