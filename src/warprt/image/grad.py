@@ -32,6 +32,7 @@ from ..kernels.camera import camera_data
 from ..kernels.grad import (MAX_GRAD_LIGHTS, TEXTURE_CHECKER, TEXTURE_CLAMP, TEXTURE_IMAGE, TEXTURE_MIRROR, TEXTURE_NONE,
                             TEXTURE_WRAP, area_replay, camera_rays, make_area_combine, make_grad_record_kernel,
                             make_grad_shade_kernel, sample_mean)
+from ..kernels.grad_tree import make_tree_record_kernel, make_tree_replay_kernel, tree_camera_rays
 from ..geometry import LightShape, light_shape
 from ..scene import camera_basis, scene_effects
 from .launch import launch_bands
@@ -40,6 +41,7 @@ from .params import object_names
 
 SOURCE = "Renderer.backward"
 MATERIAL_KEYS = ("ka", "kd", "ks", "shininess", "reflectivity")
+DIELECTRIC_KEYS = ("ior", "transmittance", "absorption")  # a dielectric's, through the ray tree (record_tree)
 TEXTURE_KEYS = ("ka_texture", "kd_texture", "ks_texture")  # an image texture's texels, as r.params has them
 MAX_GRAD_DEPTH = 16  # ray levels, unrolled as the lights are
 LIGHT_KEYS = ("color", "position", "direction")
@@ -55,9 +57,9 @@ def refusal(scene, fx) -> str | None:
     off = [name for name in ("ambient", "diffuse", "specular") if getattr(called, name) and not getattr(fx, name)]
     if off:
         return f"the gradient's replay shades every Phong term: {', '.join(off)} switched off is not differentiated yet"
-    if fx.refraction:
-        return "glass (the ray tree) is not differentiated yet; mirrors and camera rays are"
-    if fx.reflection and scene.render.max_depth > MAX_GRAD_DEPTH:
+    if fx.refraction and fx.area_lights:
+        return "area lights in a scene with glass (the ray tree) are not differentiated yet"
+    if fx.reflection and not fx.refraction and scene.render.max_depth > MAX_GRAD_DEPTH:
         return f"at most {MAX_GRAD_DEPTH} ray levels (render.max_depth) are differentiated (Warp's unrolled loop)"
     if fx.vertex_color:
         return "vertex colours are not differentiated yet"
@@ -141,6 +143,8 @@ def record_first_hits(scene, geom, data, fx, device: str, threads: int = 1, band
     of camera rays on ``threads`` threads (launch_bands; ``pool`` the Renderer's): render.spp of them per
     pixel, where the trace kernel puts them (its k x k strata). ``switched``: the effects the caller's
     options leave on (effects.switched_on; None: every one)."""
+    if fx.refraction:  # glass: the whole ray tree, level by level
+        return record_tree(scene, geom, data, fx, device, threads, bands, pool, switched)
     cam = scene.camera
     k = math.isqrt(scene.render.spp) if fx.supersampling else 1
     n, L = cam.width * cam.height * k * k, len(scene.whitted_lights)
@@ -172,6 +176,7 @@ def parameter_names(scene) -> list[str]:
     area light's own object's (its sample points are held fixed); an area light's radiance and an emitting
     material's emission; the camera's eye, center, up and fovy."""
     names = [f"materials.{m}.{k}" for m in scene.materials for k in MATERIAL_KEYS]
+    names += [f"materials.{name}.{k}" for name, m in scene.materials.items() if m.dielectric for k in DIELECTRIC_KEYS]
     names += [f"materials.{name}.{k}" for name, m in scene.materials.items() for k in TEXTURE_KEYS
               if getattr(m, k) is not None and getattr(m, k).image is not None]
     names += [f"materials.{name}.emission" for name, m in scene.materials.items() if _emits(m)]
@@ -265,10 +270,14 @@ class ReplayLaunch:
 def replay(scene, geom, hits: FirstHits, device: str, vertices: bool = False, camera: bool = False) -> ReplayLaunch:
     """replay_launch's kernels launched, on the current wp.Tape if there is one: its ``rays`` hold each
     camera ray's colour (one per pixel and sample)."""
-    r = replay_launch(scene, geom, hits, device, vertices, camera)
+    if isinstance(hits, TreeHits):
+        r = replay_tree_launch(scene, geom, hits, device, vertices, camera)
+    else:
+        r = replay_launch(scene, geom, hits, device, vertices, camera)
     for kernel, dim, inputs, outputs in r.before or ():
         wp.launch(kernel, dim=dim, inputs=inputs, outputs=outputs, device=device)
-    wp.launch(r.kernel, dim=r.dim, inputs=r.inputs, outputs=[r.shaded], device=device)
+    if r.kernel is not None:  # a tree's levels are all in ``then``
+        wp.launch(r.kernel, dim=r.dim, inputs=r.inputs, outputs=[r.shaded], device=device)
     for kernel, dim, inputs, outputs in r.then or ():
         wp.launch(kernel, dim=dim, inputs=inputs, outputs=outputs, device=device)
     return r
@@ -414,7 +423,8 @@ def backward(scene, geom, hits: FirstHits, d_image, wrt, device: str) -> dict:
         if name not in known:
             why = _name_refusal(scene, str(name)) or (
                 "not a parameter backward() differentiates yet (materials.<name>.ka | kd | ks | shininess | "
-                "reflectivity | ka_texture | kd_texture | ks_texture | emission, lights.<i>.color | position | "
+                "reflectivity | ka_texture | kd_texture | ks_texture | emission, a dielectric's ior | "
+                "transmittance | absorption, lights.<i>.color | position | "
                 "direction | radiance (an area light's), a flat object's objects.<name>.vertices, "
                 "camera.eye | center | up | fovy)")
             raise ArgumentError("backward", str(name), why)
@@ -459,7 +469,10 @@ def backward(scene, geom, hits: FirstHits, d_image, wrt, device: str) -> dict:
         elif section == "materials":
             if owner not in slot:  # a material no object uses
                 texture = getattr(scene.materials[owner], key, None) if key in TEXTURE_KEYS else None
-                out[name] = np.zeros(() if key == "shininess" else texture.image.shape if texture else (3,))
+                out[name] = np.zeros(() if key in ("shininess", "ior") else texture.image.shape if texture else (3,))
+                continue
+            if key in DIELECTRIC_KEYS and key not in grads:  # a frame without the tree (max_depth 1): no glass
+                out[name] = np.zeros(() if key == "ior" else (3,))
                 continue
             if key in TEXTURE_KEYS:
                 out[name] = texels(slot[owner], key[:2])
@@ -476,3 +489,186 @@ def backward(scene, geom, hits: FirstHits, d_image, wrt, device: str) -> dict:
                 out[name] = out[name] - unit * (unit @ out[name])
     tape.zero()
     return out
+
+
+# --- Glass: Whitted's full ray tree (kernels/grad_tree.py) --------------------------------------------------
+
+# Bytes per ray of the recorded tree (any level): the record's face, medium, camera ray, child kind and the
+# children's places (4 + 4 + 4 + 4 + 8), 4 a light; the replay's origin, direction, weight and segment start,
+# each with its adjoint (2 x 4 x 12); and while recording, the level's rays and children (9 x 12 + 12 + 8).
+TREE_BYTES_PER_RAY, TREE_RECORD_BYTES_PER_RAY = 24 + 96, 128
+
+
+@dataclass
+class TreeLevel:
+    """One level of a recorded ray tree: per ray of its list (``count``), the hit's face (-1: none), which
+    lights it sees (``lights`` ints a ray), its medium (-1: air), its camera ray, what it spawns
+    (grad_tree.CHILD_*) and its children's places in the next level's list (reflected, transmitted; -1:
+    none); the first level's directions too (the camera rays', as the forward traced them)."""
+
+    face: wp.array
+    visible: wp.array
+    medium: wp.array
+    ray_of: wp.array
+    kind: wp.array
+    child: wp.array
+    count: int
+    dirs: wp.array | None = None
+
+
+@dataclass
+class TreeHits:
+    """What a grad=True frame with glass recorded: the forward's ray tree per camera ray, level by level
+    (``tree``, TreeLevels: the camera rays, then each level's children in their parents' order), the
+    counterpart of FirstHits for replay() and backward(). ``absorption``: whether the replay applies
+    Beer's law (unless switched off, also where every absorption is 0: its derivative is not)."""
+
+    tree: list
+    width: int
+    height: int
+    lights: int
+    levels: int  # render.max_depth
+    smooth: bool
+    samples: int = 1
+    light_model: bool = False
+    texture: bool = False
+    absorption: bool = True
+    words: int = 0  # no area lights (refused with glass)
+
+    @property
+    def rays(self) -> int:
+        """The rays the tree holds, all levels."""
+        return sum(level.count for level in self.tree)
+
+
+def _tree_too_big(scene, need: int, device: str):
+    """The one error for a tree whose record would not fit, naming the settings that make it smaller."""
+    available, what = available_memory(device)
+    if available is not None and need > available:
+        raise ArgumentError("render", "grad", f"the gradient's record of this frame's ray tree (glass) needs about "
+                            f"{human(need)} or more, more than the {human(available)} {what}: lower render.max_depth "
+                            f"(each level may double the rays), render.spp or camera.width and camera.height")
+
+
+def record_tree(scene, geom, data, fx, device: str, threads: int = 1, bands: int = 1, pool=None,
+                switched=None) -> TreeHits:
+    """record_first_hits for a scene with glass: the forward's ray tree, one launch of grad_tree's record
+    kernel a level (in ``bands`` bands on ``threads`` threads), the children of each level compacted on the
+    host into the next level's list (the reflected before the transmitted, parents in order); the rays'
+    origins, directions, weights and media are the forward's to the bit (the same functions make them).
+    The memory the tree takes is checked as it grows (_tree_too_big)."""
+    cam, L, D = scene.camera, len(scene.whitted_lights), scene.render.max_depth
+    k = math.isqrt(scene.render.spp) if fx.supersampling else 1
+    n = cam.width * cam.height * k * k
+    wanted = switched is None or "shadows" in switched
+    shadows = fx.shadows or (scene.render.shadows and wanted and not scene_effects(scene).shadows)
+    absorb = fx.absorption or ((switched is None or "absorption" in switched) and not scene_effects(scene).absorption)
+    c = camera_data(camera_basis(cam), geom.eye_offset(cam.eye))
+    v3 = lambda m: wp.zeros(max(m, 1), dtype=wp.vec3, device=device)  # noqa: E731
+    i1 = lambda m: wp.zeros(max(m, 1), dtype=int, device=device)  # noqa: E731
+    orig, dirs, weight, start, medium = v3(n), v3(n), v3(n), v3(n), i1(n)
+    launch_bands(tree_camera_rays, lambda first: [data, c, k, first, orig, dirs, weight, start, medium], n, threads,
+                 bands, device, pool=pool)
+    kernel = make_tree_record_kernel(L, fx.smooth, shadows, fx.culling, fx.light_model, fx.reflection, fx.absorption)
+    ray_of, levels, held = np.arange(n, dtype=np.int32), [], 0
+    for level in range(D):
+        m = len(ray_of)
+        held += m
+        _tree_too_big(scene, held * (TREE_BYTES_PER_RAY + 4 * L) + m * TREE_RECORD_BYTES_PER_RAY, device)
+        face, kind, visible = i1(m), i1(m), wp.zeros(max(m * L, 1), dtype=int, device=device)
+        bary, has = wp.zeros(max(m, 1), dtype=wp.vec2, device=device), wp.zeros(max(m, 1), dtype=wp.vec2i, device=device)
+        hit_p, o_r, d_r, w_r, o_t, d_t, w_t = (v3(m) for _ in range(7))
+        med_r, med_t = i1(m), i1(m)
+        launch_bands(kernel, lambda first: [data, D, level, first, orig, dirs, weight, start, medium, face, bary,
+                                            visible, kind, has, hit_p, o_r, d_r, w_r, med_r, o_t, d_t, w_t, med_t],
+                     m, threads, bands, device, pool=pool)
+        h = has.numpy()[:m]
+        hr, ht = h[:, 0] != 0, h[:, 1] != 0
+        per = hr.astype(np.int32) + ht
+        base = np.cumsum(per, dtype=np.int64) - per
+        child = np.stack([np.where(hr, base, -1), np.where(ht, base + hr, -1)], 1).astype(np.int32)
+        levels.append(TreeLevel(face, visible, medium, wp.array(ray_of if m else np.zeros(1, np.int32), dtype=int,
+                                                               device=device),
+                                kind, wp.array(child if m else np.zeros((1, 2), np.int32), dtype=wp.vec2i,
+                                               device=device), m, dirs if level == 0 else None))
+        total = int(per.sum())
+        if total == 0 or level + 1 == D:
+            break
+
+        def gather(a_r, a_t, dtype):  # the next level's list: each child at its place
+            r, t = a_r.numpy()[:m], a_t.numpy()[:m]
+            out = np.empty((total,) + r.shape[1:], r.dtype)
+            out[child[hr, 0]] = r[hr]
+            out[child[ht, 1]] = t[ht]
+            return wp.array(out, dtype=dtype, device=device)
+
+        orig, dirs, weight = gather(o_r, o_t, wp.vec3), gather(d_r, d_t, wp.vec3), gather(w_r, w_t, wp.vec3)
+        start, medium = gather(hit_p, hit_p, wp.vec3), gather(med_r, med_t, int)
+        nxt = np.empty(total, np.int32)
+        nxt[child[hr, 0]] = ray_of[hr]
+        nxt[child[ht, 1]] = ray_of[ht]
+        ray_of = nxt
+    return TreeHits(levels, cam.width, cam.height, L, D, fx.smooth, k * k, fx.light_model, fx.texture, absorb)
+
+
+def replay_tree_launch(scene, geom, hits: TreeHits, device: str, vertices: bool = False,
+                       camera: bool = False) -> ReplayLaunch:
+    """replay_launch for a recorded tree: the same differentiable arrays (materials, lights, textures,
+    with ``vertices`` the points, with ``camera`` the camera and its rays made again in ``before``) and a
+    dielectric's ior, transmittance and absorption per material slot; ``then`` holds one launch of
+    grad_tree's replay kernel per recorded level, each reading the rays its parent level wrote into their
+    own arrays and adding its rays' colours to their camera rays' in ``rays``."""
+    mats = geom.slot_materials(scene)
+    vec = lambda rows: wp.array(np.asarray(rows, np.float32).reshape(-1, 3), dtype=wp.vec3, device=device,  # noqa: E731
+                                requires_grad=True)
+    scalars = lambda values: wp.array(np.asarray(values, np.float32), dtype=float, device=device,  # noqa: E731
+                                      requires_grad=True)
+    ka, kd, ks, kr = (vec([getattr(m, k) for m in mats] or [[0, 0, 0]]) for k in ("ka", "kd", "ks", "reflectivity"))
+    shininess = scalars([m.shininess for m in mats] or [0.0])
+    ior = scalars([m.ior or 0.0 for m in mats] or [0.0])
+    kt = vec([m.transmittance for m in mats] or [[1, 1, 1]])
+    sigma = vec([m.absorption for m in mats] or [[0, 0, 0]])
+    lights = scene.whitted_lights
+    light_pos = vec(geom.light_positions(scene) if lights else [[0, 0, 0]])
+    light_color = vec([l.color for l in lights] or [[0, 0, 0]])
+    shapes = [light_shape(l) for l in lights] or [LightShape()]
+    ints = lambda values: wp.array(np.asarray(values, np.int32), dtype=int, device=device)  # noqa: E731
+    inverse_square, kind = ints([x.inverse_square for x in shapes]), ints([x.kind for x in shapes])
+    axis = vec([list(x.direction) for x in shapes])
+    cone = wp.array(np.asarray([[x.cos_cutoff, x.cos_beam, x.cutoff, x.inv_ramp] for x in shapes], np.float32),
+                    dtype=wp.vec4, device=device)
+    n = hits.width * hits.height * hits.samples
+    rays = wp.zeros(n, dtype=wp.vec3, device=device, requires_grad=True)
+    points = wp.array(geom.points_np, dtype=wp.vec3, device=device, requires_grad=True) if vertices else geom.points
+    cam = scene.camera
+    eye = vec([geom.eye_offset(cam.eye), geom.eye_offset(cam.center), cam.up])
+    fovy = wp.array([cam.fovy], dtype=float, device=device, requires_grad=True)
+    dirs, before = hits.tree[0].dirs, []
+    if camera:
+        dirs = wp.zeros(n, dtype=wp.vec3, device=device, requires_grad=True)
+        before.append((camera_rays, n, [eye, fovy, float(cam.near), hits.width, hits.height,
+                                        math.isqrt(hits.samples), 1], [dirs]))
+    table = texture_table(mats, device)
+    uvs = geom.uv_array() if hits.texture else wp.zeros(1, dtype=wp.vec2, device=device)
+    common = [eye, points, geom.indices, geom.normals, geom.tri_material, geom.tri_smooth, ka, kd, ks, shininess, kr,
+              ior, kt, sigma, light_pos, light_color, inverse_square, kind, axis, cone, uvs, *table.arrays,
+              wp.vec3(*scene.render.ambient), wp.vec3(*scene.render.background)]
+    stand_in = wp.zeros(1, dtype=wp.vec3, device=device)
+    o, w, start, then = stand_in, stand_in, stand_in, []
+    for i, level in enumerate(hits.tree):
+        count = hits.tree[i + 1].count if i + 1 < len(hits.tree) else 0
+        o_n, d_n, w_n, s_n = (wp.zeros(max(count, 1), dtype=wp.vec3, device=device, requires_grad=True)
+                              for _ in range(4))
+        kernel = make_tree_replay_kernel(hits.lights, hits.smooth, hits.light_model, hits.texture, i == 0,
+                                         hits.absorption)
+        then.append((kernel, level.count, [*common, level.face, level.visible, level.medium, level.ray_of, level.kind,
+                                           level.child, o, dirs, w, start, rays, o_n, d_n, w_n, s_n], []))
+        o, dirs, w, start = o_n, d_n, w_n, s_n
+    arrays = {"ka": ka, "kd": kd, "ks": ks, "shininess": shininess, "reflectivity": kr, "color": light_color,
+              "position": light_pos, "direction": axis, "texels": table.arrays[0], "ior": ior, "transmittance": kt,
+              "absorption": sigma}
+    if vertices:
+        arrays["points"] = points
+    if camera:
+        arrays["camera"], arrays["fovy"] = eye, fovy
+    return ReplayLaunch(None, n, [], rays, arrays, table.images, then, rays, before)
