@@ -15,9 +15,20 @@ kernels.camera_rays, and the hit recomputed on the recorded face from the moved 
 rays too), and of the area lights' radiance (an area light's, an emitting material's emission): their
 sample points' terms at each hit (the record's bit per point seen; kernels.area_replay, one thread per level
 and point) and the emitter's front met by a ray, the points themselves held fixed. The image is the mean of
-each pixel's rays, as the trace kernel makes it. Covered for now: any render.spp and light_samples, camera
-and mirror rays (no glass), image and checker textures, area lights, no vertex colours; any other scene is
-refused in one line naming what is not yet differentiated, so a gradient is never silently partial.
+each pixel's rays, as the trace kernel makes it.
+
+With glass (fx.refraction), Whitted's full ray tree (record_tree, replay_tree_launch; kernels/grad_tree.py):
+the record follows the forward's tree level by level with the forward's own functions (each level's rays,
+hits, visibility and children, the children compacted on the host into the next level's list), and the
+replay is one differentiable launch per level, each level's rays in their own arrays (Warp replays neither
+the forward's dynamic loop nor its in-place ray stack backwards). It differentiates a dielectric's ior,
+transmittance and absorption through Fresnel, Snell and Beer, and everything above seen through the glass;
+held fixed besides the faces and visibility: the tree's structure (which children exist, total internal
+reflection) and each ray's medium. Its size is checked as it grows (_tree_too_big).
+
+Covered for now: any render.spp and light_samples, camera and mirror rays, glass (not with area lights),
+image and checker textures, area lights, no vertex colours; any other scene is refused in one line naming
+what is not yet differentiated, so a gradient is never silently partial.
 """
 from __future__ import annotations
 
@@ -87,7 +98,8 @@ def record_bytes(scene, fx) -> int:
     ray (width x height x spp) and ray level."""
     cam, r = scene.camera, scene.render
     rays = cam.width * cam.height * (r.spp if fx.supersampling else 1)
-    levels = r.max_depth if fx.reflection else 1
+    levels = r.max_depth if fx.reflection or fx.refraction else 1  # with glass, the least: a chain (record_tree
+    # checks the tree as it grows)
     per_level = RECORD_BYTES_PER_LEVEL + RECORD_BYTES_PER_LIGHT * len(scene.whitted_lights)
     if fx.area_lights:
         per_level += AREA_RECORD_BYTES_PER_LEVEL + 4 * _words(area_samples(scene)) + AREA_REPLAY_BYTES_PER_LEVEL
