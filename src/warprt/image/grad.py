@@ -26,8 +26,8 @@ transmittance and absorption through Fresnel, Snell and Beer, and everything abo
 held fixed besides the faces and visibility: the tree's structure (which children exist, total internal
 reflection) and each ray's medium. Its size is checked as it grows (_tree_too_big).
 
-Covered for now: any render.spp and light_samples, camera and mirror rays, glass (not with area lights),
-image and checker textures, area lights, no vertex colours; any other scene is refused in one line naming
+Covered for now: any render.spp and light_samples, camera and mirror rays, glass, image and checker
+textures, area lights, no vertex colours; any other scene is refused in one line naming
 what is not yet differentiated, so a gradient is never silently partial.
 """
 from __future__ import annotations
@@ -43,7 +43,7 @@ from ..kernels.camera import camera_data
 from ..kernels.grad import (MAX_GRAD_LIGHTS, TEXTURE_CHECKER, TEXTURE_CLAMP, TEXTURE_IMAGE, TEXTURE_MIRROR, TEXTURE_NONE,
                             TEXTURE_WRAP, area_replay, camera_rays, make_area_combine, make_grad_record_kernel,
                             make_grad_shade_kernel, sample_mean)
-from ..kernels.grad_tree import make_tree_record_kernel, make_tree_replay_kernel, tree_camera_rays
+from ..kernels.grad_tree import make_tree_record_kernel, make_tree_replay_kernel, tree_area_combine, tree_camera_rays
 from ..geometry import LightShape, light_shape
 from ..scene import camera_basis, scene_effects
 from .launch import launch_bands
@@ -68,8 +68,6 @@ def refusal(scene, fx) -> str | None:
     off = [name for name in ("ambient", "diffuse", "specular") if getattr(called, name) and not getattr(fx, name)]
     if off:
         return f"the gradient's replay shades every Phong term: {', '.join(off)} switched off is not differentiated yet"
-    if fx.refraction and fx.area_lights:
-        return "area lights in a scene with glass (the ray tree) are not differentiated yet"
     if fx.reflection and not fx.refraction and scene.render.max_depth > MAX_GRAD_DEPTH:
         return f"at most {MAX_GRAD_DEPTH} ray levels (render.max_depth) are differentiated (Warp's unrolled loop)"
     if fx.vertex_color:
@@ -508,7 +506,9 @@ def backward(scene, geom, hits: FirstHits, d_image, wrt, device: str) -> dict:
 # Bytes per ray of the recorded tree (any level): the record's face, medium, camera ray, child kind and the
 # children's places (4 + 4 + 4 + 4 + 8), 4 a light; the replay's origin, direction, weight and segment start,
 # each with its adjoint (2 x 4 x 12); and while recording, the level's rays and children (9 x 12 + 12 + 8).
-TREE_BYTES_PER_RAY, TREE_RECORD_BYTES_PER_RAY = 24 + 96, 128
+# With area lights, per ray: the emitter met (4) and a bit per sample point (in 4-byte words), and the
+# replay's state (hit point, normal, kd, ks, weight, local colour, direction, each with its adjoint: 2 x 7 x 12).
+TREE_BYTES_PER_RAY, TREE_RECORD_BYTES_PER_RAY, TREE_AREA_BYTES_PER_RAY = 24 + 96, 128, 4 + 168
 
 
 @dataclass
@@ -516,7 +516,9 @@ class TreeLevel:
     """One level of a recorded ray tree: per ray of its list (``count``), the hit's face (-1: none), which
     lights it sees (``lights`` ints a ray), its medium (-1: air), its camera ray, what it spawns
     (grad_tree.CHILD_*) and its children's places in the next level's list (reflected, transmitted; -1:
-    none); the first level's directions too (the camera rays', as the forward traced them)."""
+    none); the first level's directions too (the camera rays', as the forward traced them); with area
+    lights, the emitter each ray met (-1: none) and a bit per sample point its hit sees (TreeHits.words
+    int32s a ray)."""
 
     face: wp.array
     visible: wp.array
@@ -526,6 +528,8 @@ class TreeLevel:
     child: wp.array
     count: int
     dirs: wp.array | None = None
+    emit: wp.array | None = None
+    area_bits: wp.array | None = None
 
 
 @dataclass
@@ -545,7 +549,8 @@ class TreeHits:
     light_model: bool = False
     texture: bool = False
     absorption: bool = True
-    words: int = 0  # no area lights (refused with glass)
+    words: int = 0  # 0: no area lights
+    area: object = None  # the frame's AreaLights table, as recorded
 
     @property
     def rays(self) -> int:
@@ -557,9 +562,10 @@ def _tree_too_big(scene, need: int, device: str):
     """The one error for a tree whose record would not fit, naming the settings that make it smaller."""
     available, what = available_memory(device)
     if available is not None and need > available:
+        samples = ", render.light_samples" if scene.area_lights else ""
         raise ArgumentError("render", "grad", f"the gradient's record of this frame's ray tree (glass) needs about "
                             f"{human(need)} or more, more than the {human(available)} {what}: lower render.max_depth "
-                            f"(each level may double the rays), render.spp or camera.width and camera.height")
+                            f"(each level may double the rays), render.spp{samples} or camera.width and camera.height")
 
 
 def record_tree(scene, geom, data, fx, device: str, threads: int = 1, bands: int = 1, pool=None,
@@ -581,18 +587,24 @@ def record_tree(scene, geom, data, fx, device: str, threads: int = 1, bands: int
     orig, dirs, weight, start, medium = v3(n), v3(n), v3(n), v3(n), i1(n)
     launch_bands(tree_camera_rays, lambda first: [data, c, k, first, orig, dirs, weight, start, medium], n, threads,
                  bands, device, pool=pool)
-    kernel = make_tree_record_kernel(L, fx.smooth, shadows, fx.culling, fx.light_model, fx.reflection, fx.absorption)
+    words = _words(area_samples(scene)) if fx.area_lights else 0
+    kernel = make_tree_record_kernel(L, fx.smooth, shadows, fx.culling, fx.light_model, fx.reflection, fx.absorption,
+                                     bool(words))
+    per_ray = TREE_BYTES_PER_RAY + 4 * L + (TREE_AREA_BYTES_PER_RAY + 4 * words if words else 0)
     ray_of, levels, held = np.arange(n, dtype=np.int32), [], 0
     for level in range(D):
         m = len(ray_of)
         held += m
-        _tree_too_big(scene, held * (TREE_BYTES_PER_RAY + 4 * L) + m * TREE_RECORD_BYTES_PER_RAY, device)
+        _tree_too_big(scene, held * per_ray + m * TREE_RECORD_BYTES_PER_RAY, device)
         face, kind, visible = i1(m), i1(m), wp.zeros(max(m * L, 1), dtype=int, device=device)
         bary, has = wp.zeros(max(m, 1), dtype=wp.vec2, device=device), wp.zeros(max(m, 1), dtype=wp.vec2i, device=device)
         hit_p, o_r, d_r, w_r, o_t, d_t, w_t = (v3(m) for _ in range(7))
         med_r, med_t = i1(m), i1(m)
+        emit = wp.full(max(m, 1) if words else 1, -1, dtype=int, device=device)
+        area_bits = wp.zeros(max(m * words, 1), dtype=int, device=device)
         launch_bands(kernel, lambda first: [data, D, level, first, orig, dirs, weight, start, medium, face, bary,
-                                            visible, kind, has, hit_p, o_r, d_r, w_r, med_r, o_t, d_t, w_t, med_t],
+                                            visible, kind, has, hit_p, o_r, d_r, w_r, med_r, o_t, d_t, w_t, med_t,
+                                            emit, area_bits, words],
                      m, threads, bands, device, pool=pool)
         h = has.numpy()[:m]
         hr, ht = h[:, 0] != 0, h[:, 1] != 0
@@ -602,7 +614,7 @@ def record_tree(scene, geom, data, fx, device: str, threads: int = 1, bands: int
         levels.append(TreeLevel(face, visible, medium, wp.array(ray_of if m else np.zeros(1, np.int32), dtype=int,
                                                                device=device),
                                 kind, wp.array(child if m else np.zeros((1, 2), np.int32), dtype=wp.vec2i,
-                                               device=device), m, dirs if level == 0 else None))
+                                               device=device), m, dirs if level == 0 else None, emit, area_bits))
         total = int(per.sum())
         if total == 0 or level + 1 == D:
             break
@@ -620,7 +632,8 @@ def record_tree(scene, geom, data, fx, device: str, threads: int = 1, bands: int
         nxt[child[hr, 0]] = ray_of[hr]
         nxt[child[ht, 1]] = ray_of[ht]
         ray_of = nxt
-    return TreeHits(levels, cam.width, cam.height, L, D, fx.smooth, k * k, fx.light_model, fx.texture, absorb)
+    return TreeHits(levels, cam.width, cam.height, L, D, fx.smooth, k * k, fx.light_model, fx.texture, absorb, words,
+                    data.area if words else None)
 
 
 def replay_tree_launch(scene, geom, hits: TreeHits, device: str, vertices: bool = False,
@@ -667,18 +680,37 @@ def replay_tree_launch(scene, geom, hits: TreeHits, device: str, vertices: bool 
               wp.vec3(*scene.render.ambient), wp.vec3(*scene.render.background)]
     stand_in = wp.zeros(1, dtype=wp.vec3, device=device)
     o, w, start, then = stand_in, stand_in, stand_in, []
+    area = hits.words > 0
+    if area:
+        a = hits.area  # the forward's own sample points, normals and areas
+        first = a.first.numpy()
+        sample_light = wp.array(np.repeat(np.arange(len(first) - 1), np.diff(first)).astype(np.int32), dtype=int,
+                                device=device)
+        radiance = vec([l.radiance for l in scene.area_lights])
     for i, level in enumerate(hits.tree):
         count = hits.tree[i + 1].count if i + 1 < len(hits.tree) else 0
         o_n, d_n, w_n, s_n = (wp.zeros(max(count, 1), dtype=wp.vec3, device=device, requires_grad=True)
                               for _ in range(4))
+        # with area lights, the level's state for area_replay (stand-ins without)
+        state = [wp.zeros(level.count if area else 1, dtype=wp.vec3, device=device, requires_grad=True)
+                 for _ in range(7)]
         kernel = make_tree_replay_kernel(hits.lights, hits.smooth, hits.light_model, hits.texture, i == 0,
-                                         hits.absorption)
+                                         hits.absorption, area)
         then.append((kernel, level.count, [*common, level.face, level.visible, level.medium, level.ray_of, level.kind,
-                                           level.child, o, dirs, w, start, rays, o_n, d_n, w_n, s_n], []))
+                                           level.child, o, dirs, w, start, rays, o_n, d_n, w_n, s_n, *state], []))
+        if area:
+            hit_p, hit_n, hit_kd, hit_ks, level_weight, acc, ray_dirs = state
+            then.append((area_replay, (level.count, int(first[-1])),
+                         [hits.words, level.face, ray_dirs, level.area_bits, geom.tri_material, shininess, hit_p,
+                          hit_n, hit_kd, hit_ks, a.points, a.normals, a.dA, sample_light, radiance], [acc]))
+            then.append((tree_area_combine, level.count, [level.face, level.emit, radiance, level.ray_of,
+                                                          level_weight, acc], [rays]))
         o, dirs, w, start = o_n, d_n, w_n, s_n
     arrays = {"ka": ka, "kd": kd, "ks": ks, "shininess": shininess, "reflectivity": kr, "color": light_color,
               "position": light_pos, "direction": axis, "texels": table.arrays[0], "ior": ior, "transmittance": kt,
               "absorption": sigma}
+    if area:
+        arrays["radiance"] = radiance
     if vertices:
         arrays["points"] = points
     if camera:

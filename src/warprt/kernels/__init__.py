@@ -19,7 +19,7 @@ from .dielectric import beer, beer_forever, fresnel_dielectric, refract
 from .grad import (MAX_GRAD_LIGHTS, TEXTURE_CLAMP, TEXTURE_MIRROR, TEXTURE_WRAP, area_replay, area_sample_term, bilinear,
                    camera_direction, camera_rays, light_factor, make_area_combine, make_grad_record_kernel, make_grad_shade_kernel, sample_mean,
                    spot_cone, texture_factor)
-from .grad_tree import make_tree_record_kernel, make_tree_replay_kernel, tree_camera_rays
+from .grad_tree import make_tree_record_kernel, make_tree_replay_kernel, tree_area_combine, tree_camera_rays
 from .hybrid import MARGIN_PX, uncertain, uncertain_np
 from .interaction import OFFSET_SCALE, make_surface, offset_ray_origin, reflect
 from .mirror import MARGIN_PX as MIRROR_MARGIN_PX, MAX_BOUNCES, Mirrors, gather_kernel, mirror_chain, mirror_hit, probe_kernel, total_kernel
@@ -33,7 +33,7 @@ from .zbuffer_shade import make_shade_kernel
 # What image/ launches and reads, and what tests and benchmarks compose into kernels of their own.
 __all__ = ["CLIP_SCALE", "CameraData", "Fragments", "MARGIN_PX", "MAX_GRAD_LIGHTS", "TEXTURE_CLAMP", "TEXTURE_MIRROR", "TEXTURE_WRAP", "bilinear",
            "make_grad_record_kernel", "area_replay", "area_sample_term", "camera_direction", "camera_rays", "make_area_combine",
-           "make_grad_shade_kernel", "make_tree_record_kernel", "make_tree_replay_kernel", "tree_camera_rays", "MAX_BOUNCES", "MAX_TREE_DEPTH", "MIRROR_MARGIN_PX",
+           "make_grad_shade_kernel", "make_tree_record_kernel", "make_tree_replay_kernel", "tree_area_combine", "tree_camera_rays", "MAX_BOUNCES", "MAX_TREE_DEPTH", "MIRROR_MARGIN_PX",
            "Mirrors", "OFFSET_SCALE", "aov_buffers", "aov_bytes", "aov_sums", "camera_data", "camera_ray",
            "beer", "beer_forever", "count_kernel", "empty_aov_buffers", "fill_kernel", "fresnel_dielectric", "gather_kernel", "grid_occluded",
            "init_warp", "light_factor", "make_shade_kernel", "make_surface", "make_trace_kernel", "mirror_chain", "mirror_hit",

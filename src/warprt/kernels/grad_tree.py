@@ -28,8 +28,9 @@ from .camera import CameraData, camera_ray, sample_offset
 from .dielectric import beer, beer_forever, dielectric_children, fresnel_dielectric, refract
 from .grad import light_factor, texture_factor
 from .interaction import hit_point_error, make_surface, offset_ray_origin, reflect, spawn_ray
-from .shading import make_light_test, phong_specular
+from .shading import make_area_sample_test, make_light_test, phong_specular
 from .trace import absorbed, culled, past
+from .triangle import triangle, unit_normal
 
 CHILD_NONE, CHILD_MIRROR, CHILD_DIELECTRIC = 0, 1, 2  # what a recorded ray spawns
 
@@ -52,15 +53,18 @@ def tree_camera_rays(s: SceneData, c: CameraData, k: int, first: int, orig: wp.a
 
 @functools.cache
 def make_tree_record_kernel(L: int, smooth: bool, shadows: bool, cull: bool, light_model: bool, reflection: bool,
-                            absorption: bool):
+                            absorption: bool, area: bool = False):
     """record(s, max_depth, level, first, <the level's rays>, <what it records>, <its children>): per ray of
     a level's list (from ``first``), its nearest hit (face, -1 none; Warp's barycentrics), whether it sees
     each light (shading.make_light_test, the forward's own test) and what it spawns (kind: CHILD_NONE,
     CHILD_MIRROR while k_r > 0 and the level allows, else CHILD_DIELECTRIC where ior > 0, as the forward's
     path decides), with each child (has: reflected, transmitted) as the forward makes it: origin, direction,
-    weight and medium. ``reflection``, ``absorption``: the forward's effects of those names."""
+    weight and medium. ``reflection``, ``absorption``: the forward's effects of those names. With ``area``, also
+    the area light whose emitting side the ray meets (emit, -1: none) and which area-light sample points the
+    hit sees (``words`` int32 bit masks a ray), as make_grad_record_kernel records them."""
     surface = make_surface(smooth)
     light_test = make_light_test(light_model, shadows)
+    area_sample_test = make_area_sample_test(shadows)
 
     @wp.kernel(module="unique", enable_backward=False)
     def record(s: SceneData, max_depth: int, level: int, first: int, orig: wp.array(dtype=wp.vec3),
@@ -69,7 +73,8 @@ def make_tree_record_kernel(L: int, smooth: bool, shadows: bool, cull: bool, lig
                visible: wp.array(dtype=int), kind: wp.array(dtype=int), has: wp.array(dtype=wp.vec2i),
                hit_p: wp.array(dtype=wp.vec3), o_r: wp.array(dtype=wp.vec3), d_r: wp.array(dtype=wp.vec3),
                w_r: wp.array(dtype=wp.vec3), med_r: wp.array(dtype=int), o_t: wp.array(dtype=wp.vec3),
-               d_t: wp.array(dtype=wp.vec3), w_t: wp.array(dtype=wp.vec3), med_t: wp.array(dtype=int)):
+               d_t: wp.array(dtype=wp.vec3), w_t: wp.array(dtype=wp.vec3), med_t: wp.array(dtype=int),
+               emit: wp.array(dtype=int), area_bits: wp.array(dtype=int), words: int):
         i = first + wp.tid()
         d = dirs[i]
         q = wp.mesh_query_ray(s.mesh, orig[i], d, 1.0e30)
@@ -89,6 +94,18 @@ def make_tree_record_kernel(L: int, smooth: bool, shadows: bool, cull: bool, lig
                 w = absorbed(s, w, medium[i], start[i], hit)
             for l in range(wp.static(L)):
                 visible[i * wp.static(L) + l] = light_test(s, hit, l).lit
+            if wp.static(area):  # shading.emitted's side, shading.area_light's samples and test
+                e = s.area.tri_emitter[q.face]
+                emit[i] = -1
+                if e >= 0:
+                    t0, t1, t2 = triangle(s, q.face)
+                    if wp.dot(d, unit_normal(t0, t1, t2)) < 0.0:
+                        emit[i] = e
+                a = s.area
+                for sq in range(a.first[a.num]):
+                    if area_sample_test(s, hit, sq).lit != 0:
+                        word = i * words + sq / 32
+                        area_bits[word] = area_bits[word] | (1 << (sq % 32))
             children = level + 1
             mirrored = False
             if wp.static(reflection):
@@ -137,7 +154,8 @@ def dielectric_normal(d: wp.vec3, ng: wp.vec3, n: wp.vec3) -> wp.vec3:
 
 
 @functools.cache
-def make_tree_replay_kernel(L: int, smooth: bool, light_model: bool, texture: bool, first: bool, absorption: bool):
+def make_tree_replay_kernel(L: int, smooth: bool, light_model: bool, texture: bool, first: bool, absorption: bool,
+                            area: bool = False):
     """replay(...): one level of the recorded tree, differentiable. Per ray of the level's list: its ray
     (with ``first``, the camera ray from ``eye[0]`` along ``dirs``, weight 1; else the origin, direction,
     weight and segment start its parent's launch wrote), its hit recomputed on the recorded face from that
@@ -147,7 +165,10 @@ def make_tree_replay_kernel(L: int, smooth: bool, light_model: bool, texture: bo
     arithmetic) times its weight added to its camera ray's (wp.atomic_add), and its recorded children
     written at their places in the next level's arrays: a mirror's (k_r), a dielectric's reflected (weight
     F) and refracted ((1 - F) k_t) ray, Fresnel's F at the ior (fresnel_dielectric), the direction by Snell
-    (refract), origins offset as spawn_ray offsets them."""
+    (refract), origins offset as spawn_ray offsets them. With ``area``, a ray that hits adds no colour here:
+    it leaves what the area lights' replay needs (kernels.area_replay: the hit point, normal, kd and ks, its
+    direction, its weight, and in ``acc`` its local colour, to which the samples are added), and
+    tree_area_combine adds it to its camera ray's."""
 
     @wp.kernel(module="unique")
     def replay(eye: wp.array(dtype=wp.vec3), points: wp.array(dtype=wp.vec3), indices: wp.array(dtype=int),
@@ -164,7 +185,10 @@ def make_tree_replay_kernel(L: int, smooth: bool, light_model: bool, texture: bo
                ray_of: wp.array(dtype=int), kind: wp.array(dtype=int), child: wp.array(dtype=wp.vec2i),
                orig: wp.array(dtype=wp.vec3), dirs: wp.array(dtype=wp.vec3), weight: wp.array(dtype=wp.vec3),
                start: wp.array(dtype=wp.vec3), rays: wp.array(dtype=wp.vec3), o_next: wp.array(dtype=wp.vec3),
-               d_next: wp.array(dtype=wp.vec3), w_next: wp.array(dtype=wp.vec3), start_next: wp.array(dtype=wp.vec3)):
+               d_next: wp.array(dtype=wp.vec3), w_next: wp.array(dtype=wp.vec3), start_next: wp.array(dtype=wp.vec3),
+               hit_p: wp.array(dtype=wp.vec3), hit_n: wp.array(dtype=wp.vec3), hit_kd: wp.array(dtype=wp.vec3),
+               hit_ks: wp.array(dtype=wp.vec3), level_weight: wp.array(dtype=wp.vec3), acc: wp.array(dtype=wp.vec3),
+               ray_dirs: wp.array(dtype=wp.vec3)):
         i = wp.tid()
         f = face[i]
         d = dirs[i]
@@ -243,7 +267,16 @@ def make_tree_replay_kernel(L: int, smooth: bool, light_model: bool, texture: bo
                     n_dot_l = wp.dot(n, L_dir)
                     lit = kd_m * n_dot_l + phong_specular(ks_m, shininess[m], n, L_dir, -d, n_dot_l)
                     local = local + wp.cw_mul(C_l, lit)
-            wp.atomic_add(rays, ray_of[i], wp.cw_mul(w, local))
+            if wp.static(area):
+                hit_p[i] = p
+                hit_n[i] = n
+                hit_kd[i] = kd_m
+                hit_ks[i] = ks_m
+                level_weight[i] = w
+                acc[i] = local
+                ray_dirs[i] = d
+            else:
+                wp.atomic_add(rays, ray_of[i], wp.cw_mul(w, local))
             c = child[i]
             facing = ng * side
             err = hit_point_error(p0, p1, p2, u, v, bw)
@@ -278,3 +311,19 @@ def make_tree_replay_kernel(L: int, smooth: bool, light_model: bool, texture: bo
                     start_next[c[1]] = p
 
     return replay
+
+
+@wp.kernel(module="unique")
+def tree_area_combine(face: wp.array(dtype=int), emit: wp.array(dtype=int), radiance: wp.array(dtype=wp.vec3),
+                      ray_of: wp.array(dtype=int), level_weight: wp.array(dtype=wp.vec3), acc: wp.array(dtype=wp.vec3),
+                      rays: wp.array(dtype=wp.vec3)):
+    """With area lights, each hit of a tree level's colour added to its camera ray's: its weight times the
+    radiance of the area light whose emitting side it met (the recorded emit) and its local colour with the
+    area lights' samples (acc), as the tracer adds them (make_area_combine's, for a level's list)."""
+    i = wp.tid()
+    if face[i] >= 0:
+        c = acc[i]
+        e = emit[i]
+        if e >= 0:
+            c = radiance[e] + c
+        wp.atomic_add(rays, ray_of[i], wp.cw_mul(level_weight[i], c))
