@@ -597,7 +597,8 @@ def record_tree(scene, geom, data, fx, device: str, threads: int = 1, bands: int
         held += m
         _tree_too_big(scene, held * per_ray + m * TREE_RECORD_BYTES_PER_RAY, device)
         face, kind, visible = i1(m), i1(m), wp.zeros(max(m * L, 1), dtype=int, device=device)
-        bary, has = wp.zeros(max(m, 1), dtype=wp.vec2, device=device), wp.zeros(max(m, 1), dtype=wp.vec2i, device=device)
+        bary = wp.zeros(max(m, 1), dtype=wp.vec2, device=device)
+        has = wp.zeros(max(m, 1), dtype=wp.vec2i, device=device)
         hit_p, o_r, d_r, w_r, o_t, d_t, w_t = (v3(m) for _ in range(7))
         med_r, med_t = i1(m), i1(m)
         emit = wp.full(max(m, 1) if words else 1, -1, dtype=int, device=device)
