@@ -293,6 +293,40 @@ def test_a_replay_without_fresnels_or_beers_derivative_does_not(checks, weights,
     assert d.error(backward_masked(SCENES[scene_name](), weights, d)) > 0.1
 
 
+# --- A transmittance of 0: the refracted rays the forward leaves out ---------------------------------------
+
+def sheet(transmittance):
+    """An open glass sheet (one interface: the light through it is linear in its transmittance) in front of a
+    lit panel, the light between them."""
+    return warprt.load_dict({
+        "camera": {"eye": [0.3, 0.6, 5.0], "center": [0.0, 0.3, 0.0], "fovy": 40.0, "width": WIDTH, "height": HEIGHT},
+        "render": {"ambient": [0.1] * 3, "background": [0.05, 0.05, 0.08], "max_depth": 3},
+        "lights": [{"position": [0.5, 1.5, 0.0], "color": [0.9, 0.9, 0.8]}],
+        "materials": {"glass": {"ior": 1.5, "ka": [0, 0, 0], "kd": [0, 0, 0], "ks": [0.5] * 3, "shininess": 100.0,
+                                "transmittance": list(transmittance)},
+                      "panel": {"kd": [0.8, 0.5, 0.3], "ks": [0.3] * 3, "shininess": 20.0}},
+        "objects": [{"shape": "triangles", "name": "sheet", "vertices": [[-3, -2, 1], [3, -2, 1], [3, 3, 1], [-3, 3, 1]],
+                     "faces": [[0, 1, 2], [0, 2, 3]], "material": "glass"},
+                    {"shape": "box", "size": [6.0, 6.0, 0.2], "translate": [0.0, 0.5, -1.0], "material": "panel"}]})
+
+
+@pytest.mark.filterwarnings("ignore:.*not closed")
+def test_a_transmittance_of_0_gets_its_true_derivative(weights):
+    """At a transmittance of 0 the forward traces no refracted ray (it would carry nothing), but the
+    derivative in that transmittance is what such a ray would see: the record follows those rays (weight 0,
+    the image unchanged) and the gradient equals the one-sided differences towards positive values (the
+    image is linear in it here). The control: the forward's own tree, without those rays, would give 0."""
+    r = warprt.Renderer(sheet((0.0, 0.0, 0.0)))
+    image = r.render(grad=True).image
+    assert np.array_equal(image, warprt.render(sheet((0.0, 0.0, 0.0)))[0])
+    g = r.backward(weights, wrt=["materials.glass.transmittance"])["materials.glass.transmittance"]
+    u = np.random.default_rng(3).uniform(0.2, 1.0, 3)
+    h = 1e-2
+    fd = float(((warprt.render(sheet(h * u))[0].astype(np.float64) - image) * weights).sum()) / h
+    assert abs(float(g @ u) - fd) <= 1e-3 * abs(fd)
+    assert abs(fd) > 10.0  # the control: 0, the forward's own tree's answer, is far off (measured: 66.6)
+
+
 # --- What a tree costs, and what stays refused -----------------------------------------------------------
 
 def test_a_tree_too_big_for_memory_is_refused_in_one_line(monkeypatch):

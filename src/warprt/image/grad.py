@@ -505,10 +505,11 @@ def backward(scene, geom, hits: FirstHits, d_image, wrt, device: str) -> dict:
 
 # Bytes per ray of the recorded tree (any level): the record's face, medium, camera ray, child kind and the
 # children's places (4 + 4 + 4 + 4 + 8), 4 a light; the replay's origin, direction, weight and segment start,
-# each with its adjoint (2 x 4 x 12); and while recording, the level's rays and children (9 x 12 + 12 + 8).
+# each with its adjoint (2 x 4 x 12); and while recording, the level's rays and children and their reaches
+# (12 x 12 + 12 + 8).
 # With area lights, per ray: the emitter met (4) and a bit per sample point (in 4-byte words), and the
 # replay's state (hit point, normal, kd, ks, weight, local colour, direction, each with its adjoint: 2 x 7 x 12).
-TREE_BYTES_PER_RAY, TREE_RECORD_BYTES_PER_RAY, TREE_AREA_BYTES_PER_RAY = 24 + 96, 128, 4 + 168
+TREE_BYTES_PER_RAY, TREE_RECORD_BYTES_PER_RAY, TREE_AREA_BYTES_PER_RAY = 24 + 96, 164, 4 + 168
 
 
 @dataclass
@@ -573,7 +574,9 @@ def record_tree(scene, geom, data, fx, device: str, threads: int = 1, bands: int
     """record_first_hits for a scene with glass: the forward's ray tree, one launch of grad_tree's record
     kernel a level (in ``bands`` bands on ``threads`` threads), the children of each level compacted on the
     host into the next level's list (the reflected before the transmitted, parents in order); the rays'
-    origins, directions, weights and media are the forward's to the bit (the same functions make them).
+    origins, directions, weights and media are the forward's to the bit (the same functions make them). Where
+    a dielectric's transmittance is 0 the tree also holds the refracted rays the forward leaves out (weight
+    0: the image is the same), whose radiance is that transmittance's derivative.
     The memory the tree takes is checked as it grows (_tree_too_big)."""
     cam, L, D = scene.camera, len(scene.whitted_lights), scene.render.max_depth
     k = math.isqrt(scene.render.spp) if fx.supersampling else 1
@@ -587,6 +590,7 @@ def record_tree(scene, geom, data, fx, device: str, threads: int = 1, bands: int
     orig, dirs, weight, start, medium = v3(n), v3(n), v3(n), v3(n), i1(n)
     launch_bands(tree_camera_rays, lambda first: [data, c, k, first, orig, dirs, weight, start, medium], n, threads,
                  bands, device, pool=pool)
+    reach = wp.array(np.ones((max(n, 1), 3), np.float32), dtype=wp.vec3, device=device)  # the camera rays': 1
     words = _words(area_samples(scene)) if fx.area_lights else 0
     kernel = make_tree_record_kernel(L, fx.smooth, shadows, fx.culling, fx.light_model, fx.reflection, fx.absorption,
                                      bool(words))
@@ -599,13 +603,13 @@ def record_tree(scene, geom, data, fx, device: str, threads: int = 1, bands: int
         face, kind, visible = i1(m), i1(m), wp.zeros(max(m * L, 1), dtype=int, device=device)
         bary = wp.zeros(max(m, 1), dtype=wp.vec2, device=device)
         has = wp.zeros(max(m, 1), dtype=wp.vec2i, device=device)
-        hit_p, o_r, d_r, w_r, o_t, d_t, w_t = (v3(m) for _ in range(7))
+        hit_p, o_r, d_r, w_r, o_t, d_t, w_t, x_r, x_t = (v3(m) for _ in range(9))
         med_r, med_t = i1(m), i1(m)
         emit = wp.full(max(m, 1) if words else 1, -1, dtype=int, device=device)
         area_bits = wp.zeros(max(m * words, 1), dtype=int, device=device)
         launch_bands(kernel, lambda first: [data, D, level, first, orig, dirs, weight, start, medium, face, bary,
                                             visible, kind, has, hit_p, o_r, d_r, w_r, med_r, o_t, d_t, w_t, med_t,
-                                            emit, area_bits, words],
+                                            emit, area_bits, words, reach, x_r, x_t],
                      m, threads, bands, device, pool=pool)
         h = has.numpy()[:m]
         hr, ht = h[:, 0] != 0, h[:, 1] != 0
@@ -628,6 +632,7 @@ def record_tree(scene, geom, data, fx, device: str, threads: int = 1, bands: int
             return wp.array(out, dtype=dtype, device=device)
 
         orig, dirs, weight = gather(o_r, o_t, wp.vec3), gather(d_r, d_t, wp.vec3), gather(w_r, w_t, wp.vec3)
+        reach = gather(x_r, x_t, wp.vec3)
         start, medium = gather(hit_p, hit_p, wp.vec3), gather(med_r, med_t, int)
         nxt = np.empty(total, np.int32)
         nxt[child[hr, 0]] = ray_of[hr]

@@ -15,7 +15,9 @@ test, as make_grad_shade_kernel's moving hits), Beer's law over the segment in t
 Phong terms with the recorded visibility, and its children: a mirror's (k_r), or a dielectric's reflected
 (F) and refracted ((1 - F) k_t) ray through Fresnel (fresnel_dielectric), Snell (refract) and the spawn
 offset, as dielectric_children does it. Held fixed: each ray's face, each shadow ray's visibility, the
-tree's structure (which children exist, total internal reflection), each ray's medium.
+tree's structure (which children exist, total internal reflection), each ray's medium. The tree is the
+forward's, and where a transmittance of 0 keeps the forward from tracing a refracted ray (it would carry
+nothing), that ray too, with weight 0: its radiance is the derivative in that transmittance.
 """
 
 from __future__ import annotations
@@ -59,7 +61,9 @@ def make_tree_record_kernel(L: int, smooth: bool, shadows: bool, cull: bool, lig
     each light (shading.make_light_test, the forward's own test) and what it spawns (kind: CHILD_NONE,
     CHILD_MIRROR while k_r > 0 and the level allows, else CHILD_DIELECTRIC where ior > 0, as the forward's
     path decides), with each child (has: reflected, transmitted) as the forward makes it: origin, direction,
-    weight and medium. ``reflection``, ``absorption``: the forward's effects of those names. With ``area``, also
+    weight and medium; and the children a transmittance of 0 keeps the forward from tracing (its refracted
+    ray, weight 0, and what that one spawns: ``reach``, each ray's weight with such transmittances taken as
+    1, decides), so that the derivative in that transmittance is not lost. ``reflection``, ``absorption``: the forward's effects of those names. With ``area``, also
     the area light whose emitting side the ray meets (emit, -1: none) and which area-light sample points the
     hit sees (``words`` int32 bit masks a ray), as make_grad_record_kernel records them."""
     surface = make_surface(smooth)
@@ -74,7 +78,8 @@ def make_tree_record_kernel(L: int, smooth: bool, shadows: bool, cull: bool, lig
                hit_p: wp.array(dtype=wp.vec3), o_r: wp.array(dtype=wp.vec3), d_r: wp.array(dtype=wp.vec3),
                w_r: wp.array(dtype=wp.vec3), med_r: wp.array(dtype=int), o_t: wp.array(dtype=wp.vec3),
                d_t: wp.array(dtype=wp.vec3), w_t: wp.array(dtype=wp.vec3), med_t: wp.array(dtype=int),
-               emit: wp.array(dtype=int), area_bits: wp.array(dtype=int), words: int):
+               emit: wp.array(dtype=int), area_bits: wp.array(dtype=int), words: int, reach: wp.array(dtype=wp.vec3),
+               x_r: wp.array(dtype=wp.vec3), x_t: wp.array(dtype=wp.vec3)):
         i = first + wp.tid()
         d = dirs[i]
         q = wp.mesh_query_ray(s.mesh, orig[i], d, 1.0e30)
@@ -90,8 +95,10 @@ def make_tree_record_kernel(L: int, smooth: bool, shadows: bool, cull: bool, lig
             hit = surface(s, q.face, q.u, q.v, q.normal, d)
             hit_p[i] = hit.p
             w = weight[i]
+            x = reach[i]
             if wp.static(absorption):
                 w = absorbed(s, w, medium[i], start[i], hit)
+                x = absorbed(s, x, medium[i], start[i], hit)
             for l in range(wp.static(L)):
                 visible[i * wp.static(L) + l] = light_test(s, hit, l).lit
             if wp.static(area):  # shading.emitted's side, shading.area_light's samples and test
@@ -115,6 +122,7 @@ def make_tree_record_kernel(L: int, smooth: bool, shadows: bool, cull: bool, lig
                     o_r[i] = ray.o
                     d_r[i] = ray.d
                     w_r[i] = wp.cw_mul(w, kr)
+                    x_r[i] = wp.cw_mul(x, kr)
                     med_r[i] = medium[i]
                     kind[i] = wp.static(CHILD_MIRROR)
                     has[i] = wp.vec2i(1, 0)
@@ -122,20 +130,34 @@ def make_tree_record_kernel(L: int, smooth: bool, shadows: bool, cull: bool, lig
             eta = s.ior[hit.material]
             if not mirrored and eta > 0.0 and children < max_depth:
                 ch = dielectric_children(s, q.face, hit, d, w, eta)
-                if ch.has_r or ch.has_t:
+                # The reach: a transmittance of 0 (every channel) lets the forward's refracted ray carry
+                # nothing, so it is not traced, but the derivative in that transmittance is its radiance:
+                # the record follows it (and its own children) as if the transmittance were 1; its weight,
+                # the forward's, is 0, so the image is unchanged.
+                F = dielectric_children(s, q.face, hit, d, wp.vec3(1.0), eta).w_r[0]
+                kt = s.transmittance[hit.material]
+                if wp.max(kt) <= 0.0:
+                    kt = wp.vec3(1.0)
+                reach_r = x * F
+                reach_t = wp.cw_mul(x, kt) * (1.0 - F)
+                has_r = ch.has_r or wp.max(reach_r) > 0.0
+                has_t = ch.has_t or (F < 1.0 and wp.max(reach_t) > 0.0)
+                if has_r or has_t:
                     kind[i] = wp.static(CHILD_DIELECTRIC)
-                    has[i] = wp.vec2i(wp.where(ch.has_r, 1, 0), wp.where(ch.has_t, 1, 0))
-                    if ch.has_r:
+                    has[i] = wp.vec2i(wp.where(has_r, 1, 0), wp.where(has_t, 1, 0))
+                    if has_r:
                         ray = spawn_ray(hit, ch.d_r)
                         o_r[i] = ray.o
                         d_r[i] = ray.d
                         w_r[i] = ch.w_r
+                        x_r[i] = reach_r
                         med_r[i] = ch.medium_r
-                    if ch.has_t:
+                    if has_t:
                         ray = spawn_ray(hit, ch.d_t)
                         o_t[i] = ray.o
                         d_t[i] = ray.d
                         w_t[i] = ch.w_t
+                        x_t[i] = reach_t
                         med_t[i] = ch.medium_t
 
     return record
