@@ -601,13 +601,12 @@ def record_tree(scene, geom, data, fx, device: str, threads: int = 1, bands: int
         held += m
         _tree_too_big(scene, held * per_ray + m * TREE_RECORD_BYTES_PER_RAY, device)
         face, kind, visible = i1(m), i1(m), wp.zeros(max(m * L, 1), dtype=int, device=device)
-        bary = wp.zeros(max(m, 1), dtype=wp.vec2, device=device)
         has = wp.zeros(max(m, 1), dtype=wp.vec2i, device=device)
         hit_p, o_r, d_r, w_r, o_t, d_t, w_t, x_r, x_t = (v3(m) for _ in range(9))
         med_r, med_t = i1(m), i1(m)
         emit = wp.full(max(m, 1) if words else 1, -1, dtype=int, device=device)
         area_bits = wp.zeros(max(m * words, 1), dtype=int, device=device)
-        launch_bands(kernel, lambda first: [data, D, level, first, orig, dirs, weight, start, medium, face, bary,
+        launch_bands(kernel, lambda first: [data, D, level, first, orig, dirs, weight, start, medium, face,
                                             visible, kind, has, hit_p, o_r, d_r, w_r, med_r, o_t, d_t, w_t, med_t,
                                             emit, area_bits, words, reach, x_r, x_t],
                      m, threads, bands, device, pool=pool)

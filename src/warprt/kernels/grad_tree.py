@@ -57,8 +57,8 @@ def tree_camera_rays(s: SceneData, c: CameraData, k: int, first: int, orig: wp.a
 def make_tree_record_kernel(L: int, smooth: bool, shadows: bool, cull: bool, light_model: bool, reflection: bool,
                             absorption: bool, area: bool = False):
     """record(s, max_depth, level, first, <the level's rays>, <what it records>, <its children>): per ray of
-    a level's list (from ``first``), its nearest hit (face, -1 none; Warp's barycentrics), whether it sees
-    each light (shading.make_light_test, the forward's own test) and what it spawns (kind: CHILD_NONE,
+    a level's list (from ``first``), its nearest hit's face (-1: none), whether it sees each light
+    (shading.make_light_test, the forward's own test) and what it spawns (kind: CHILD_NONE,
     CHILD_MIRROR while k_r > 0 and the level allows, else CHILD_DIELECTRIC where ior > 0, as the forward's
     path decides), with each child (has: reflected, transmitted) as the forward makes it: origin, direction,
     weight and medium; and the children a transmittance of 0 keeps the forward from tracing (its refracted
@@ -73,8 +73,7 @@ def make_tree_record_kernel(L: int, smooth: bool, shadows: bool, cull: bool, lig
     @wp.kernel(module="unique", enable_backward=False)
     def record(s: SceneData, max_depth: int, level: int, first: int, orig: wp.array(dtype=wp.vec3),
                dirs: wp.array(dtype=wp.vec3), weight: wp.array(dtype=wp.vec3), start: wp.array(dtype=wp.vec3),
-               medium: wp.array(dtype=int), face: wp.array(dtype=int), bary: wp.array(dtype=wp.vec2),
-               visible: wp.array(dtype=int), kind: wp.array(dtype=int), has: wp.array(dtype=wp.vec2i),
+               medium: wp.array(dtype=int), face: wp.array(dtype=int), visible: wp.array(dtype=int), kind: wp.array(dtype=int), has: wp.array(dtype=wp.vec2i),
                hit_p: wp.array(dtype=wp.vec3), o_r: wp.array(dtype=wp.vec3), d_r: wp.array(dtype=wp.vec3),
                w_r: wp.array(dtype=wp.vec3), med_r: wp.array(dtype=int), o_t: wp.array(dtype=wp.vec3),
                d_t: wp.array(dtype=wp.vec3), w_t: wp.array(dtype=wp.vec3), med_t: wp.array(dtype=int),
@@ -90,8 +89,7 @@ def make_tree_record_kernel(L: int, smooth: bool, shadows: bool, cull: bool, lig
         kind[i] = wp.static(CHILD_NONE)
         has[i] = wp.vec2i(0, 0)
         if q.result:
-            face[i] = q.face
-            bary[i] = wp.vec2(q.u, q.v)
+            face[i] = q.face  # its barycentrics the replay finds again from its moving ray
             hit = surface(s, q.face, q.u, q.v, q.normal, d)
             hit_p[i] = hit.p
             w = weight[i]
