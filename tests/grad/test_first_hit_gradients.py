@@ -128,8 +128,9 @@ def test_a_gradient_of_another_image_is_refused_in_one_line(weights):
 
 
 @pytest.mark.parametrize("change, why", [
-    ({"render": {"max_depth": 3}, "materials": {"floor": {"ior": 1.5}}}, "glass"),
-])  # area lights are differentiated now (test_area_light_gradients.py)
+    ({"objects": [{"shape": "triangles", "vertices": [[-1, 0, -1], [1, 0, -1], [0, 0, 1]], "faces": [[0, 1, 2]],
+                   "colors": [[1, 0, 0], [0, 1, 0], [0, 0, 1]], "material": "floor"}]}, "vertex colours"),
+])  # area lights and glass are differentiated now (test_area_light_gradients.py, test_glass_gradients.py)
 def test_what_is_not_differentiated_yet_is_refused_in_one_line(change, why):
     doc = {"camera": {"width": 8, "height": 6}, "lights": [{"position": [0.0, 3.0, 0.0]}],
            "objects": [{"shape": "sphere", "material": "floor"}], "materials": {"floor": {"kd": [0.5] * 3}}}

@@ -8,7 +8,7 @@ image files (film.py) and the progress line (progress.py).
 from ..options import RenderOptions
 from .aovs import AOVS, check_aovs
 from .caches import FrameCaches, LightHistory
-from .grad import FirstHits, ReplayLaunch, record_first_hits, replay_image, replay_launch
+from .grad import FirstHits, ReplayLaunch, TreeHits, record_first_hits, replay_image, replay_launch
 from .film import aov_paths, partial_files, read_aovs, read_image, to_srgb8, write_image
 from .launch import bands_of, default_threads, launch_bands
 from .mirrors import MirrorFrame
@@ -18,7 +18,7 @@ from .renderer import Renderer, check_finite, render, render_zbuffer
 from .stats import RenderResult, RenderStats
 from .zbuffer import ZBuffer, eye_on_surface
 
-__all__ = ["AOVS", "FirstHits", "ReplayLaunch", "FrameCaches", "LightHistory", "MirrorFrame", "RenderOptions", "RenderResult", "RenderStats",
+__all__ = ["AOVS", "FirstHits", "ReplayLaunch", "TreeHits", "FrameCaches", "LightHistory", "MirrorFrame", "RenderOptions", "RenderResult", "RenderStats",
            "Renderer", "SceneParameters", "ZBuffer", "aov_paths", "bands_of", "check_aovs", "check_finite",
            "default_threads", "eye_on_surface", "launch_bands", "mirrors_from_rasters", "partial_files",
            "raster_is_cheaper", "read_aovs", "read_image", "record_first_hits", "render", "replay_image", "replay_launch", "render_zbuffer", "shadows_from_grid",

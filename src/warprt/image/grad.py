@@ -22,9 +22,19 @@ each pixel's rays, as the trace kernel makes it. A parameter whose value switche
 its true derivative: a ks of 0 (the replay shades every Phong term), a light of colour 0 (its shadow rays
 traced for the record), and a reflectivity of 0 where the caller names it, render(grad=[names]) recording
 that material's mirror rays whatever its k_r (mirrored_materials; backward() refuses an unrecorded one in one
-line rather than give it 0). Covered for now: any render.spp and light_samples, camera
-and mirror rays (no glass), image and checker textures, area lights, no vertex colours; any other scene is
-refused in one line naming what is not yet differentiated, so a gradient is never silently partial.
+line rather than give it 0). 
+With glass (fx.refraction), Whitted's full ray tree (record_tree, replay_tree_launch; kernels/grad_tree.py):
+the record follows the forward's tree level by level with the forward's own functions (each level's rays,
+hits, visibility and children, the children compacted on the host into the next level's list), and the
+replay is one differentiable launch per level, each level's rays in their own arrays (Warp replays neither
+the forward's dynamic loop nor its in-place ray stack backwards). It differentiates a dielectric's ior,
+transmittance and absorption through Fresnel, Snell and Beer, and everything above seen through the glass;
+held fixed besides the faces and visibility: the tree's structure (which children exist, total internal
+reflection) and each ray's medium. Its size is checked as it grows (_tree_too_big).
+
+Covered for now: any render.spp and light_samples, camera and mirror rays, glass, image and checker
+textures, area lights, no vertex colours; any other scene is refused in one line naming
+what is not yet differentiated, so a gradient is never silently partial.
 """
 from __future__ import annotations
 
@@ -39,6 +49,7 @@ from ..kernels.camera import camera_data
 from ..kernels.grad import (MAX_GRAD_LIGHTS, TEXTURE_CHECKER, TEXTURE_CLAMP, TEXTURE_IMAGE, TEXTURE_MIRROR, TEXTURE_NONE,
                             TEXTURE_WRAP, area_replay, camera_rays, make_area_combine, make_grad_record_kernel,
                             make_grad_shade_kernel, sample_mean, smooth_vertex_normals, vertex_normal_sums)
+from ..kernels.grad_tree import make_tree_record_kernel, make_tree_replay_kernel, tree_area_combine, tree_camera_rays
 from ..geometry import LightShape, light_shape
 from ..scene import camera_basis, drawn_objects, position_ids, scene_effects
 from .launch import launch_bands
@@ -47,6 +58,7 @@ from .params import object_names
 
 SOURCE = "Renderer.backward"
 MATERIAL_KEYS = ("ka", "kd", "ks", "shininess", "reflectivity")
+DIELECTRIC_KEYS = ("ior", "transmittance", "absorption")  # a dielectric's, through the ray tree (record_tree)
 TEXTURE_KEYS = ("ka_texture", "kd_texture", "ks_texture")  # an image texture's texels, as r.params has them
 MAX_GRAD_DEPTH = 16  # ray levels, unrolled as the lights are
 LIGHT_KEYS = ("color", "position", "direction")
@@ -63,9 +75,11 @@ def refusal(scene, fx, mirrored=()) -> str | None:
     off = [name for name in ("ambient", "diffuse", "specular") if getattr(called, name) and not getattr(fx, name)]
     if off:
         return f"the gradient's replay shades every Phong term: {', '.join(off)} switched off is not differentiated yet"
-    if fx.refraction:
-        return "glass (the ray tree) is not differentiated yet; mirrors and camera rays are"
-    if (fx.reflection or mirrored) and scene.render.max_depth > MAX_GRAD_DEPTH:
+    dark = [m for m in mirrored if max(scene.materials[m].reflectivity) <= 0.0 and not scene.materials[m].dielectric]
+    if fx.refraction and dark:
+        return ("a reflectivity of 0 in a scene with glass is not differentiated yet (the ray tree's record spawns "
+                "mirror rays where k_r > 0 only): " + ", ".join(f"materials.{m}.reflectivity" for m in dark))
+    if (fx.reflection or mirrored) and not fx.refraction and scene.render.max_depth > MAX_GRAD_DEPTH:
         return f"at most {MAX_GRAD_DEPTH} ray levels (render.max_depth) are differentiated (Warp's unrolled loop)"
     if fx.vertex_color:
         return "vertex colours are not differentiated yet"
@@ -93,7 +107,8 @@ def record_bytes(scene, fx, mirrored=()) -> int:
     ray (width x height x spp) and ray level."""
     cam, r = scene.camera, scene.render
     rays = cam.width * cam.height * (r.spp if fx.supersampling else 1)
-    levels = ray_levels(scene, fx, mirrored)
+    levels = ray_levels(scene, fx, mirrored)  # with glass, the least: a chain (record_tree checks the tree as
+    # it grows)
     per_level = RECORD_BYTES_PER_LEVEL + RECORD_BYTES_PER_LIGHT * len(scene.whitted_lights)
     if fx.area_lights:
         per_level += AREA_RECORD_BYTES_PER_LEVEL + 4 * _words(area_samples(scene)) + AREA_REPLAY_BYTES_PER_LEVEL
@@ -103,7 +118,7 @@ def record_bytes(scene, fx, mirrored=()) -> int:
 def ray_levels(scene, fx, mirrored=()) -> int:
     """The ray levels a grad frame records: render.max_depth where the tracer spawns mirror rays (some
     k_r > 0) or the caller named a reflectivity to differentiate (``mirrored``), else the camera ray's."""
-    return scene.render.max_depth if fx.reflection or mirrored else 1
+    return scene.render.max_depth if fx.reflection or fx.refraction or mirrored else 1
 
 
 def named_parameters(scene, names) -> list[str]:
@@ -180,6 +195,8 @@ def record_first_hits(scene, geom, data, fx, device: str, threads: int = 1, band
     pixel, where the trace kernel puts them (its k x k strata). ``switched``: the effects the caller's
     options leave on (effects.switched_on; None: every one). ``mirrored``: the materials whose mirror rays
     are recorded whatever their k_r (mirrored_materials), over render.max_depth levels."""
+    if fx.refraction:  # glass: the whole ray tree, level by level
+        return record_tree(scene, geom, data, fx, device, threads, bands, pool, switched)
     cam = scene.camera
     k = math.isqrt(scene.render.spp) if fx.supersampling else 1
     n, L = cam.width * cam.height * k * k, len(scene.whitted_lights)
@@ -214,6 +231,7 @@ def parameter_names(scene) -> list[str]:
     points are held fixed); an area light's radiance and an emitting
     material's emission; the camera's eye, center, up and fovy."""
     names = [f"materials.{m}.{k}" for m in scene.materials for k in MATERIAL_KEYS]
+    names += [f"materials.{name}.{k}" for name, m in scene.materials.items() if m.dielectric for k in DIELECTRIC_KEYS]
     names += [f"materials.{name}.{k}" for name, m in scene.materials.items() for k in TEXTURE_KEYS
               if getattr(m, k) is not None and getattr(m, k).image is not None]
     names += [f"materials.{name}.emission" for name, m in scene.materials.items() if _emits(m)]
@@ -273,7 +291,10 @@ def _unrecorded(scene, geom, hits: FirstHits, name: str) -> bool:
     section, owner, key = (name.split(".") + ["", "", ""])[:3]
     if section != "materials" or key != "reflectivity" or owner not in geom.material_names:
         return False
-    return hits.reflects and owner not in hits.mirrored and max(scene.materials[owner].reflectivity) <= 0.0
+    m = scene.materials[owner]
+    if isinstance(hits, TreeHits) and m.dielectric:  # a k_r > 0 makes glass a mirror: a jump, not a slope
+        return False
+    return hits.reflects and owner not in hits.mirrored and max(m.reflectivity) <= 0.0
 
 
 @dataclass
@@ -300,10 +321,14 @@ class ReplayLaunch:
 def replay(scene, geom, hits: FirstHits, device: str, vertices: bool = False, camera: bool = False) -> ReplayLaunch:
     """replay_launch's kernels launched, on the current wp.Tape if there is one: its ``rays`` hold each
     camera ray's colour (one per pixel and sample)."""
-    r = replay_launch(scene, geom, hits, device, vertices, camera)
+    if isinstance(hits, TreeHits):
+        r = replay_tree_launch(scene, geom, hits, device, vertices, camera)
+    else:
+        r = replay_launch(scene, geom, hits, device, vertices, camera)
     for kernel, dim, inputs, outputs in r.before or ():
         wp.launch(kernel, dim=dim, inputs=inputs, outputs=outputs, device=device)
-    wp.launch(r.kernel, dim=r.dim, inputs=r.inputs, outputs=[r.shaded], device=device)
+    if r.kernel is not None:  # a tree's levels are all in ``then``
+        wp.launch(r.kernel, dim=r.dim, inputs=r.inputs, outputs=[r.shaded], device=device)
     for kernel, dim, inputs, outputs in r.then or ():
         wp.launch(kernel, dim=dim, inputs=inputs, outputs=outputs, device=device)
     return r
@@ -483,10 +508,15 @@ def backward(scene, geom, hits: FirstHits, d_image, wrt, device: str) -> dict:
         if name not in known:
             why = _name_refusal(scene, str(name)) or (
                 "not a parameter backward() differentiates yet (materials.<name>.ka | kd | ks | shininess | "
-                "reflectivity | ka_texture | kd_texture | ks_texture | emission, lights.<i>.color | position | "
+                "reflectivity | ka_texture | kd_texture | ks_texture | emission, a dielectric's ior | "
+                "transmittance | absorption, lights.<i>.color | position | "
                 "direction | radiance (an area light's), objects.<name>.vertices, "
                 "camera.eye | center | up | fovy)")
             raise ArgumentError("backward", str(name), why)
+        if _unrecorded(scene, geom, hits, name) and isinstance(hits, TreeHits):
+            raise ArgumentError("backward", str(name), "a reflectivity of 0 switches the mirror rays off, and in a "
+                                "scene with glass the ray tree's record does not hold them yet: not differentiated "
+                                "at 0 (any k_r > 0 is)")
         if _unrecorded(scene, geom, hits, name):
             raise ArgumentError("backward", str(name), f"a reflectivity of 0 switches the mirror rays off, and this "
                                 f"frame did not record them: render with grad=[{name!r}] (its mirror rays recorded "
@@ -530,7 +560,10 @@ def backward(scene, geom, hits: FirstHits, d_image, wrt, device: str) -> dict:
         elif section == "materials":
             if owner not in slot:  # a material no object uses
                 texture = getattr(scene.materials[owner], key, None) if key in TEXTURE_KEYS else None
-                out[name] = np.zeros(() if key == "shininess" else texture.image.shape if texture else (3,))
+                out[name] = np.zeros(() if key in ("shininess", "ior") else texture.image.shape if texture else (3,))
+                continue
+            if key in DIELECTRIC_KEYS and key not in grads:  # a frame without the tree (max_depth 1): no glass
+                out[name] = np.zeros(() if key == "ior" else (3,))
                 continue
             if key in TEXTURE_KEYS:
                 out[name] = texels(slot[owner], key[:2])
@@ -547,3 +580,231 @@ def backward(scene, geom, hits: FirstHits, d_image, wrt, device: str) -> dict:
                 out[name] = out[name] - unit * (unit @ out[name])
     tape.zero()
     return out
+
+
+# --- Glass: Whitted's full ray tree (kernels/grad_tree.py) --------------------------------------------------
+
+# Bytes per ray of the recorded tree (any level): the record's face, medium, camera ray, child kind and the
+# children's places (4 + 4 + 4 + 4 + 8), 4 a light; the replay's origin, direction, weight and segment start,
+# each with its adjoint (2 x 4 x 12); and while recording, the level's rays and children and their reaches
+# (12 x 12 + 12 + 8).
+# With area lights, per ray: the emitter met (4) and a bit per sample point (in 4-byte words), and the
+# replay's state (hit point, normal, kd, ks, weight, local colour, direction, each with its adjoint: 2 x 7 x 12).
+TREE_BYTES_PER_RAY, TREE_RECORD_BYTES_PER_RAY, TREE_AREA_BYTES_PER_RAY = 24 + 96, 164, 4 + 168
+
+
+@dataclass
+class TreeLevel:
+    """One level of a recorded ray tree: per ray of its list (``count``), the hit's face (-1: none), which
+    lights it sees (``lights`` ints a ray), its medium (-1: air), its camera ray, what it spawns
+    (grad_tree.CHILD_*) and its children's places in the next level's list (reflected, transmitted; -1:
+    none); the first level's directions too (the camera rays', as the forward traced them); with area
+    lights, the emitter each ray met (-1: none) and a bit per sample point its hit sees (TreeHits.words
+    int32s a ray)."""
+
+    face: wp.array
+    visible: wp.array
+    medium: wp.array
+    ray_of: wp.array
+    kind: wp.array
+    child: wp.array
+    count: int
+    dirs: wp.array | None = None
+    emit: wp.array | None = None
+    area_bits: wp.array | None = None
+
+
+@dataclass
+class TreeHits:
+    """What a grad=True frame with glass recorded: the forward's ray tree per camera ray, level by level
+    (``tree``, TreeLevels: the camera rays, then each level's children in their parents' order), the
+    counterpart of FirstHits for replay() and backward(). ``absorption``: whether the replay applies
+    Beer's law (unless switched off, also where every absorption is 0: its derivative is not)."""
+
+    tree: list
+    width: int
+    height: int
+    lights: int
+    levels: int  # render.max_depth
+    smooth: bool
+    samples: int = 1
+    light_model: bool = False
+    texture: bool = False
+    absorption: bool = True
+    words: int = 0  # 0: no area lights
+    area: object = None  # the frame's AreaLights table, as recorded
+    mirrored: tuple = ()  # none: the tree spawns mirror rays where k_r > 0 only
+    reflects: bool = True  # its levels could hold mirror rays
+
+    @property
+    def rays(self) -> int:
+        """The rays the tree holds, all levels."""
+        return sum(level.count for level in self.tree)
+
+
+def _tree_too_big(scene, need: int, device: str):
+    """The one error for a tree whose record would not fit, naming the settings that make it smaller."""
+    available, what = available_memory(device)
+    if available is not None and need > available:
+        samples = ", render.light_samples" if scene.area_lights else ""
+        raise ArgumentError("render", "grad", f"the gradient's record of this frame's ray tree (glass) needs about "
+                            f"{human(need)} or more, more than the {human(available)} {what}: lower render.max_depth "
+                            f"(each level may double the rays), render.spp{samples} or camera.width and camera.height")
+
+
+def record_tree(scene, geom, data, fx, device: str, threads: int = 1, bands: int = 1, pool=None,
+                switched=None) -> TreeHits:
+    """record_first_hits for a scene with glass: the forward's ray tree, one launch of grad_tree's record
+    kernel a level (in ``bands`` bands on ``threads`` threads), the children of each level compacted on the
+    host into the next level's list (the reflected before the transmitted, parents in order); the rays'
+    origins, directions, weights and media are the forward's to the bit (the same functions make them). Where
+    a dielectric's transmittance is 0 the tree also holds the refracted rays the forward leaves out (weight
+    0: the image is the same), whose radiance is that transmittance's derivative.
+    The memory the tree takes is checked as it grows (_tree_too_big)."""
+    cam, L, D = scene.camera, len(scene.whitted_lights), scene.render.max_depth
+    k = math.isqrt(scene.render.spp) if fx.supersampling else 1
+    n = cam.width * cam.height * k * k
+    wanted = switched is None or "shadows" in switched
+    shadows = fx.shadows or (scene.render.shadows and wanted and not scene_effects(scene).shadows)
+    absorb = fx.absorption or ((switched is None or "absorption" in switched) and not scene_effects(scene).absorption)
+    c = camera_data(camera_basis(cam), geom.eye_offset(cam.eye))
+    v3 = lambda m: wp.zeros(max(m, 1), dtype=wp.vec3, device=device)  # noqa: E731
+    i1 = lambda m: wp.zeros(max(m, 1), dtype=int, device=device)  # noqa: E731
+    orig, dirs, weight, start, medium = v3(n), v3(n), v3(n), v3(n), i1(n)
+    launch_bands(tree_camera_rays, lambda first: [data, c, k, first, orig, dirs, weight, start, medium], n, threads,
+                 bands, device, pool=pool)
+    reach = wp.array(np.ones((max(n, 1), 3), np.float32), dtype=wp.vec3, device=device)  # the camera rays': 1
+    words = _words(area_samples(scene)) if fx.area_lights else 0
+    kernel = make_tree_record_kernel(L, fx.smooth, shadows, fx.culling, fx.light_model, fx.reflection, fx.absorption,
+                                     bool(words))
+    per_ray = TREE_BYTES_PER_RAY + 4 * L + (TREE_AREA_BYTES_PER_RAY + 4 * words if words else 0)
+    ray_of, levels, held = np.arange(n, dtype=np.int32), [], 0
+    for level in range(D):
+        m = len(ray_of)
+        held += m
+        _tree_too_big(scene, held * per_ray + m * TREE_RECORD_BYTES_PER_RAY, device)
+        face, kind, visible = i1(m), i1(m), wp.zeros(max(m * L, 1), dtype=int, device=device)
+        has = wp.zeros(max(m, 1), dtype=wp.vec2i, device=device)
+        hit_p, o_r, d_r, w_r, o_t, d_t, w_t, x_r, x_t = (v3(m) for _ in range(9))
+        med_r, med_t = i1(m), i1(m)
+        emit = wp.full(max(m, 1) if words else 1, -1, dtype=int, device=device)
+        area_bits = wp.zeros(max(m * words, 1), dtype=int, device=device)
+        launch_bands(kernel, lambda first: [data, D, level, first, orig, dirs, weight, start, medium, face,
+                                            visible, kind, has, hit_p, o_r, d_r, w_r, med_r, o_t, d_t, w_t, med_t,
+                                            emit, area_bits, words, reach, x_r, x_t],
+                     m, threads, bands, device, pool=pool)
+        h = has.numpy()[:m]
+        hr, ht = h[:, 0] != 0, h[:, 1] != 0
+        per = hr.astype(np.int32) + ht
+        base = np.cumsum(per, dtype=np.int64) - per
+        child = np.stack([np.where(hr, base, -1), np.where(ht, base + hr, -1)], 1).astype(np.int32)
+        levels.append(TreeLevel(face, visible, medium, wp.array(ray_of if m else np.zeros(1, np.int32), dtype=int,
+                                                               device=device),
+                                kind, wp.array(child if m else np.zeros((1, 2), np.int32), dtype=wp.vec2i,
+                                               device=device), m, dirs if level == 0 else None, emit, area_bits))
+        total = int(per.sum())
+        if total == 0 or level + 1 == D:
+            break
+
+        def gather(a_r, a_t, dtype):  # the next level's list: each child at its place
+            r, t = a_r.numpy()[:m], a_t.numpy()[:m]
+            out = np.empty((total,) + r.shape[1:], r.dtype)
+            out[child[hr, 0]] = r[hr]
+            out[child[ht, 1]] = t[ht]
+            return wp.array(out, dtype=dtype, device=device)
+
+        orig, dirs, weight = gather(o_r, o_t, wp.vec3), gather(d_r, d_t, wp.vec3), gather(w_r, w_t, wp.vec3)
+        reach = gather(x_r, x_t, wp.vec3)
+        start, medium = gather(hit_p, hit_p, wp.vec3), gather(med_r, med_t, int)
+        nxt = np.empty(total, np.int32)
+        nxt[child[hr, 0]] = ray_of[hr]
+        nxt[child[ht, 1]] = ray_of[ht]
+        ray_of = nxt
+    return TreeHits(levels, cam.width, cam.height, L, D, fx.smooth, k * k, fx.light_model, fx.texture, absorb, words,
+                    data.area if words else None)
+
+
+def replay_tree_launch(scene, geom, hits: TreeHits, device: str, vertices: bool = False,
+                       camera: bool = False) -> ReplayLaunch:
+    """replay_launch for a recorded tree: the same differentiable arrays (materials, lights, textures,
+    with ``vertices`` the points, with ``camera`` the camera and its rays made again in ``before``) and a
+    dielectric's ior, transmittance and absorption per material slot; ``then`` holds one launch of
+    grad_tree's replay kernel per recorded level, each reading the rays its parent level wrote into their
+    own arrays and adding its rays' colours to their camera rays' in ``rays``."""
+    mats = geom.slot_materials(scene)
+    vec = lambda rows: wp.array(np.asarray(rows, np.float32).reshape(-1, 3), dtype=wp.vec3, device=device,  # noqa: E731
+                                requires_grad=True)
+    scalars = lambda values: wp.array(np.asarray(values, np.float32), dtype=float, device=device,  # noqa: E731
+                                      requires_grad=True)
+    ka, kd, ks, kr = (vec([getattr(m, k) for m in mats] or [[0, 0, 0]]) for k in ("ka", "kd", "ks", "reflectivity"))
+    shininess = scalars([m.shininess for m in mats] or [0.0])
+    ior = scalars([m.ior or 0.0 for m in mats] or [0.0])
+    kt = vec([m.transmittance for m in mats] or [[1, 1, 1]])
+    sigma = vec([m.absorption for m in mats] or [[0, 0, 0]])
+    lights = scene.whitted_lights
+    light_pos = vec(geom.light_positions(scene) if lights else [[0, 0, 0]])
+    light_color = vec([l.color for l in lights] or [[0, 0, 0]])
+    shapes = [light_shape(l) for l in lights] or [LightShape()]
+    ints = lambda values: wp.array(np.asarray(values, np.int32), dtype=int, device=device)  # noqa: E731
+    inverse_square, kind = ints([x.inverse_square for x in shapes]), ints([x.kind for x in shapes])
+    axis = vec([list(x.direction) for x in shapes])
+    cone = wp.array(np.asarray([[x.cos_cutoff, x.cos_beam, x.cutoff, x.inv_ramp] for x in shapes], np.float32),
+                    dtype=wp.vec4, device=device)
+    n = hits.width * hits.height * hits.samples
+    rays = wp.zeros(n, dtype=wp.vec3, device=device, requires_grad=True)
+    points = wp.array(geom.points_np, dtype=wp.vec3, device=device, requires_grad=True) if vertices else geom.points
+    cam = scene.camera
+    eye = vec([geom.eye_offset(cam.eye), geom.eye_offset(cam.center), cam.up])
+    fovy = wp.array([cam.fovy], dtype=float, device=device, requires_grad=True)
+    dirs, before = hits.tree[0].dirs, []
+    if camera:
+        dirs = wp.zeros(n, dtype=wp.vec3, device=device, requires_grad=True)
+        before.append((camera_rays, n, [eye, fovy, float(cam.near), hits.width, hits.height,
+                                        math.isqrt(hits.samples), 1], [dirs]))
+    normals = geom.normals
+    if vertices and hits.smooth:  # a smooth object's vertex normals, computed from the moving points
+        normals, launches = moving_normals(scene, geom, points, device)
+        before += launches
+    table = texture_table(mats, device)
+    uvs = geom.uv_array() if hits.texture else wp.zeros(1, dtype=wp.vec2, device=device)
+    common = [eye, points, geom.indices, normals, geom.tri_material, geom.tri_smooth, ka, kd, ks, shininess, kr,
+              ior, kt, sigma, light_pos, light_color, inverse_square, kind, axis, cone, uvs, *table.arrays,
+              wp.vec3(*scene.render.ambient), wp.vec3(*scene.render.background)]
+    stand_in = wp.zeros(1, dtype=wp.vec3, device=device)
+    o, w, start, then = stand_in, stand_in, stand_in, []
+    area = hits.words > 0
+    if area:
+        a = hits.area  # the forward's own sample points, normals and areas
+        first = a.first.numpy()
+        sample_light = wp.array(np.repeat(np.arange(len(first) - 1), np.diff(first)).astype(np.int32), dtype=int,
+                                device=device)
+        radiance = vec([l.radiance for l in scene.area_lights])
+    for i, level in enumerate(hits.tree):
+        count = hits.tree[i + 1].count if i + 1 < len(hits.tree) else 0
+        o_n, d_n, w_n, s_n = (wp.zeros(max(count, 1), dtype=wp.vec3, device=device, requires_grad=True)
+                              for _ in range(4))
+        # with area lights, the level's state for area_replay (stand-ins without)
+        state = [wp.zeros(level.count if area else 1, dtype=wp.vec3, device=device, requires_grad=True)
+                 for _ in range(7)]
+        kernel = make_tree_replay_kernel(hits.lights, hits.smooth, hits.light_model, hits.texture, i == 0,
+                                         hits.absorption, area)
+        then.append((kernel, level.count, [*common, level.face, level.visible, level.medium, level.ray_of, level.kind,
+                                           level.child, o, dirs, w, start, rays, o_n, d_n, w_n, s_n, *state], []))
+        if area:
+            hit_p, hit_n, hit_kd, hit_ks, level_weight, acc, ray_dirs = state
+            then.append((area_replay, (level.count, int(first[-1])),
+                         [hits.words, level.face, ray_dirs, level.area_bits, geom.tri_material, shininess, hit_p,
+                          hit_n, hit_kd, hit_ks, a.points, a.normals, a.dA, sample_light, radiance], [acc]))
+            then.append((tree_area_combine, level.count, [level.face, level.emit, radiance, level.ray_of,
+                                                          level_weight, acc], [rays]))
+        o, dirs, w, start = o_n, d_n, w_n, s_n
+    arrays = {"ka": ka, "kd": kd, "ks": ks, "shininess": shininess, "reflectivity": kr, "color": light_color,
+              "position": light_pos, "direction": axis, "texels": table.arrays[0], "ior": ior, "transmittance": kt,
+              "absorption": sigma}
+    if area:
+        arrays["radiance"] = radiance
+    if vertices:
+        arrays["points"] = points
+    if camera:
+        arrays["camera"], arrays["fovy"] = eye, fovy
+    return ReplayLaunch(None, n, [], rays, arrays, table.images, then, rays, before)

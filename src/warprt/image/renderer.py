@@ -267,7 +267,8 @@ class Renderer:
     def backward(self, d_image, wrt=None, *, arrays: bool = False) -> dict:
         """d(sum(d_image * image)) / d(param) at the last frame, rendered with grad=True, for each name in
         ``wrt`` (r.params names: materials.<name>.ka | kd | ks | shininess | reflectivity | ka_texture |
-        kd_texture | ks_texture (image textures' texels), lights.<i>.color |
+        kd_texture | ks_texture (image textures' texels), a dielectric's ior | transmittance | absorption
+        (through the ray tree), lights.<i>.color |
         position | direction, objects.<name>.vertices, camera.eye | center | up | fovy;
         all of them by default, less a reflectivity of 0 the frame did not record): a dict of float64 NumPy
         arrays shaped as the parameters; kd's carries ka's where ka follows kd (as r.params keeps it following).

@@ -4,7 +4,8 @@
     vertices, normal and Woop test), interaction.py (the hit record, its error bound, the ray offset,
     reflect), texture.py (a material colour's texture at a hit), shading.py (Phong), shadow.py (whether a
     shadow ray is blocked: the BVH's any-hit query or the light-space grid), dielectric.py (Fresnel, Snell,
-    Beer), trace.py (the Whitted kernel and its ray tree), aov.py (what a first hit records besides
+    Beer), trace.py (the Whitted kernel and its ray tree), grad.py and grad_tree.py (the gradient's record
+    and differentiable replay: camera and mirror rays; the ray tree with glass), aov.py (what a first hit records besides
     colour), clip.py and raster.py (the Z-buffer: Fragments), hybrid.py (where the Z-buffer's first hit is
     the tracer's), mirror.py (a reflection ray's first hit from a planar mirror's virtual camera),
     zbuffer_shade.py.
@@ -18,6 +19,7 @@ from .dielectric import beer, beer_forever, fresnel_dielectric, refract
 from .grad import (MAX_GRAD_LIGHTS, TEXTURE_CLAMP, TEXTURE_MIRROR, TEXTURE_WRAP, area_replay, area_sample_term, bilinear,
                    camera_direction, camera_rays, corner_angle, light_factor, make_area_combine, make_grad_record_kernel, make_grad_shade_kernel, sample_mean,
                    smooth_vertex_normals, spot_cone, texture_factor, vertex_normal_sums)
+from .grad_tree import make_tree_record_kernel, make_tree_replay_kernel, tree_area_combine, tree_camera_rays
 from .hybrid import MARGIN_PX, uncertain, uncertain_np
 from .interaction import OFFSET_SCALE, make_surface, offset_ray_origin, reflect
 from .mirror import MARGIN_PX as MIRROR_MARGIN_PX, MAX_BOUNCES, Mirrors, gather_kernel, mirror_chain, mirror_hit, probe_kernel, total_kernel
@@ -31,7 +33,7 @@ from .zbuffer_shade import make_shade_kernel
 # What image/ launches and reads, and what tests and benchmarks compose into kernels of their own.
 __all__ = ["CLIP_SCALE", "CameraData", "Fragments", "MARGIN_PX", "MAX_GRAD_LIGHTS", "TEXTURE_CLAMP", "TEXTURE_MIRROR", "TEXTURE_WRAP", "bilinear",
            "make_grad_record_kernel", "area_replay", "area_sample_term", "camera_direction", "camera_rays", "corner_angle", "smooth_vertex_normals", "vertex_normal_sums", "make_area_combine",
-           "make_grad_shade_kernel", "MAX_BOUNCES", "MAX_TREE_DEPTH", "MIRROR_MARGIN_PX",
+           "make_grad_shade_kernel", "make_tree_record_kernel", "make_tree_replay_kernel", "tree_area_combine", "tree_camera_rays", "MAX_BOUNCES", "MAX_TREE_DEPTH", "MIRROR_MARGIN_PX",
            "Mirrors", "OFFSET_SCALE", "aov_buffers", "aov_bytes", "aov_sums", "camera_data", "camera_ray",
            "beer", "beer_forever", "count_kernel", "empty_aov_buffers", "fill_kernel", "fresnel_dielectric", "gather_kernel", "grid_occluded",
            "init_warp", "light_factor", "make_shade_kernel", "make_surface", "make_trace_kernel", "mirror_chain", "mirror_hit",

@@ -12,7 +12,8 @@ positions, colours and directions): C = C_amb ka + sum_l vis_l C_l w_l (kd n.L +
 (wp.static): Warp does not replay a dynamic loop backwards, and a loop longer than max_unroll becomes one.
 Area lights' sample points, up to 4096 a light, are no loop: area_replay runs one thread per ray level and
 point and adds the point's term (area_sample_term, shading.area_light's) with wp.atomic_add, differentiable;
-make_area_combine then sums the levels with the emitted radiance, as the tracer does.
+make_area_combine then sums the levels with the emitted radiance, as the tracer does. A scene with glass
+has a ray tree, not a chain of levels: its record and replay are grad_tree.py's, one launch per level.
 """
 
 from __future__ import annotations

@@ -1,0 +1,349 @@
+"""Gradients of an image through Whitted's full ray tree, glass included (image/grad.py's tree record and
+replay): a record kernel and a differentiable replay kernel, each launched once per ray level.
+
+Warp does not replay a dynamic loop backwards, nor a stack pushed and popped in place, so the tree is not
+walked as the forward walks it (trace.py's depth-first loop and ray stack). The record follows the forward's
+tree level by level instead: per level a flat list of rays (the camera rays, then each level's children in
+their parents' order, the reflected child before the transmitted one), each ray's nearest hit, the lights it
+sees and its children found with the forward's own functions (make_surface, absorbed, make_light_test,
+dielectric_children, spawn_ray), so every ray is the forward's to the bit; the host compacts each level's
+children into the next level's list (image/grad.py). The replay kernel, one launch per level, reads the
+level's rays (origin, direction, weight, where its segment began) from arrays the previous level's launch
+wrote, and writes its children's into new arrays, never in place: a wp.Tape replays each launch backwards.
+Each node recomputes its hit on the recorded face from the moving ray (a differentiable Moller-Trumbore
+test, as make_grad_shade_kernel's moving hits), Beer's law over the segment in the ray's medium, the local
+Phong terms with the recorded visibility, and its children: a mirror's (k_r), or a dielectric's reflected
+(F) and refracted ((1 - F) k_t) ray through Fresnel (fresnel_dielectric), Snell (refract) and the spawn
+offset, as dielectric_children does it. Held fixed: each ray's face, each shadow ray's visibility, the
+tree's structure (which children exist, total internal reflection), each ray's medium. The tree is the
+forward's, and where a transmittance of 0 keeps the forward from tracing a refracted ray (it would carry
+nothing), that ray too, with weight 0: its radiance is the derivative in that transmittance.
+"""
+
+from __future__ import annotations
+
+import functools
+
+from .._warp import wp
+from ..geometry import LIGHT_DIRECTIONAL, SceneData
+from .camera import CameraData, camera_ray, sample_offset
+from .dielectric import beer, beer_forever, dielectric_children, fresnel_dielectric, refract
+from .grad import light_factor, texture_factor
+from .interaction import hit_point_error, make_surface, offset_ray_origin, reflect, spawn_ray
+from .shading import make_area_sample_test, make_light_test, phong_specular
+from .trace import absorbed, culled, past
+from .triangle import triangle, unit_normal
+
+CHILD_NONE, CHILD_MIRROR, CHILD_DIELECTRIC = 0, 1, 2  # what a recorded ray spawns
+
+
+@wp.kernel(module="unique", enable_backward=False)
+def tree_camera_rays(s: SceneData, c: CameraData, k: int, first: int, orig: wp.array(dtype=wp.vec3),
+                     dirs: wp.array(dtype=wp.vec3), weight: wp.array(dtype=wp.vec3), start: wp.array(dtype=wp.vec3),
+                     medium: wp.array(dtype=int)):
+    """The tree's first level: each camera ray (ray pixel * k^2 + sample, as make_grad_record_kernel numbers
+    them) as the trace kernel makes it: from the eye, weight 1, in the eye's medium."""
+    ray = first + wp.tid()
+    pixel = ray / (k * k)
+    offset = sample_offset(ray % (k * k), k)
+    orig[ray] = c.eye
+    dirs[ray] = camera_ray(c, pixel % c.width, pixel / c.width, offset[0], offset[1])
+    weight[ray] = wp.vec3(1.0)
+    start[ray] = c.eye
+    medium[ray] = s.eye_medium
+
+
+@functools.cache
+def make_tree_record_kernel(L: int, smooth: bool, shadows: bool, cull: bool, light_model: bool, reflection: bool,
+                            absorption: bool, area: bool = False):
+    """record(s, max_depth, level, first, <the level's rays>, <what it records>, <its children>): per ray of
+    a level's list (from ``first``), its nearest hit's face (-1: none), whether it sees each light
+    (shading.make_light_test, the forward's own test) and what it spawns (kind: CHILD_NONE,
+    CHILD_MIRROR while k_r > 0 and the level allows, else CHILD_DIELECTRIC where ior > 0, as the forward's
+    path decides), with each child (has: reflected, transmitted) as the forward makes it: origin, direction,
+    weight and medium; and the children a transmittance of 0 keeps the forward from tracing (its refracted
+    ray, weight 0, and what that one spawns: ``reach``, each ray's weight with such transmittances taken as
+    1, decides), so that the derivative in that transmittance is not lost. ``reflection``, ``absorption``: the forward's effects of those names. With ``area``, also
+    the area light whose emitting side the ray meets (emit, -1: none) and which area-light sample points the
+    hit sees (``words`` int32 bit masks a ray), as make_grad_record_kernel records them."""
+    surface = make_surface(smooth)
+    light_test = make_light_test(light_model, shadows)
+    area_sample_test = make_area_sample_test(shadows)
+
+    @wp.kernel(module="unique", enable_backward=False)
+    def record(s: SceneData, max_depth: int, level: int, first: int, orig: wp.array(dtype=wp.vec3),
+               dirs: wp.array(dtype=wp.vec3), weight: wp.array(dtype=wp.vec3), start: wp.array(dtype=wp.vec3),
+               medium: wp.array(dtype=int), face: wp.array(dtype=int), visible: wp.array(dtype=int), kind: wp.array(dtype=int), has: wp.array(dtype=wp.vec2i),
+               hit_p: wp.array(dtype=wp.vec3), o_r: wp.array(dtype=wp.vec3), d_r: wp.array(dtype=wp.vec3),
+               w_r: wp.array(dtype=wp.vec3), med_r: wp.array(dtype=int), o_t: wp.array(dtype=wp.vec3),
+               d_t: wp.array(dtype=wp.vec3), w_t: wp.array(dtype=wp.vec3), med_t: wp.array(dtype=int),
+               emit: wp.array(dtype=int), area_bits: wp.array(dtype=int), words: int, reach: wp.array(dtype=wp.vec3),
+               x_r: wp.array(dtype=wp.vec3), x_t: wp.array(dtype=wp.vec3)):
+        i = first + wp.tid()
+        d = dirs[i]
+        q = wp.mesh_query_ray(s.mesh, orig[i], d, 1.0e30)
+        if wp.static(cull):
+            while q.result and culled(s, q.face, d):
+                q = wp.mesh_query_ray(s.mesh, past(s, q.face, q.u, q.v, d), d, 1.0e30)
+        face[i] = -1
+        kind[i] = wp.static(CHILD_NONE)
+        has[i] = wp.vec2i(0, 0)
+        if q.result:
+            face[i] = q.face  # its barycentrics the replay finds again from its moving ray
+            hit = surface(s, q.face, q.u, q.v, q.normal, d)
+            hit_p[i] = hit.p
+            w = weight[i]
+            x = reach[i]
+            if wp.static(absorption):
+                w = absorbed(s, w, medium[i], start[i], hit)
+                x = absorbed(s, x, medium[i], start[i], hit)
+            for l in range(wp.static(L)):
+                visible[i * wp.static(L) + l] = light_test(s, hit, l).lit
+            if wp.static(area):  # shading.emitted's side, shading.area_light's samples and test
+                e = s.area.tri_emitter[q.face]
+                emit[i] = -1
+                if e >= 0:
+                    t0, t1, t2 = triangle(s, q.face)
+                    if wp.dot(d, unit_normal(t0, t1, t2)) < 0.0:
+                        emit[i] = e
+                a = s.area
+                for sq in range(a.first[a.num]):
+                    if area_sample_test(s, hit, sq).lit != 0:
+                        word = i * words + sq / 32
+                        area_bits[word] = area_bits[word] | (1 << (sq % 32))
+            children = level + 1
+            mirrored = False
+            if wp.static(reflection):
+                kr = s.kr[hit.material]
+                if children < max_depth and wp.max(kr) > 0.0:  # a mirror's ray stays in its medium
+                    ray = spawn_ray(hit, wp.normalize(reflect(d, hit.n)))
+                    o_r[i] = ray.o
+                    d_r[i] = ray.d
+                    w_r[i] = wp.cw_mul(w, kr)
+                    x_r[i] = wp.cw_mul(x, kr)
+                    med_r[i] = medium[i]
+                    kind[i] = wp.static(CHILD_MIRROR)
+                    has[i] = wp.vec2i(1, 0)
+                    mirrored = True
+            eta = s.ior[hit.material]
+            if not mirrored and eta > 0.0 and children < max_depth:
+                ch = dielectric_children(s, q.face, hit, d, w, eta)
+                # The reach: a transmittance of 0 (every channel) lets the forward's refracted ray carry
+                # nothing, so it is not traced, but the derivative in that transmittance is its radiance:
+                # the record follows it (and its own children) as if the transmittance were 1; its weight,
+                # the forward's, is 0, so the image is unchanged.
+                F = dielectric_children(s, q.face, hit, d, wp.vec3(1.0), eta).w_r[0]
+                kt = s.transmittance[hit.material]
+                if wp.max(kt) <= 0.0:
+                    kt = wp.vec3(1.0)
+                reach_r = x * F
+                reach_t = wp.cw_mul(x, kt) * (1.0 - F)
+                has_r = ch.has_r or wp.max(reach_r) > 0.0
+                has_t = ch.has_t or (F < 1.0 and wp.max(reach_t) > 0.0)
+                if has_r or has_t:
+                    kind[i] = wp.static(CHILD_DIELECTRIC)
+                    has[i] = wp.vec2i(wp.where(has_r, 1, 0), wp.where(has_t, 1, 0))
+                    if has_r:
+                        ray = spawn_ray(hit, ch.d_r)
+                        o_r[i] = ray.o
+                        d_r[i] = ray.d
+                        w_r[i] = ch.w_r
+                        x_r[i] = reach_r
+                        med_r[i] = ch.medium_r
+                    if has_t:
+                        ray = spawn_ray(hit, ch.d_t)
+                        o_t[i] = ray.o
+                        d_t[i] = ray.d
+                        w_t[i] = ch.w_t
+                        x_t[i] = reach_t
+                        med_t[i] = ch.medium_t
+
+    return record
+
+
+@wp.func
+def dielectric_normal(d: wp.vec3, ng: wp.vec3, n: wp.vec3) -> wp.vec3:
+    """The normal Fresnel and Snell use at a dielectric hit (dielectric_children's): the shading normal n
+    turned to the side of ng (the geometric normal facing the ray), or ng where n is tilted past the ray."""
+    m = n
+    if wp.dot(m, ng) < 0.0:
+        m = -m
+    if not (wp.dot(d, m) * wp.dot(d, ng) > 0.0):
+        m = ng
+    return m
+
+
+@functools.cache
+def make_tree_replay_kernel(L: int, smooth: bool, light_model: bool, texture: bool, first: bool, absorption: bool,
+                            area: bool = False):
+    """replay(...): one level of the recorded tree, differentiable. Per ray of the level's list: its ray
+    (with ``first``, the camera ray from ``eye[0]`` along ``dirs``, weight 1; else the origin, direction,
+    weight and segment start its parent's launch wrote), its hit recomputed on the recorded face from that
+    ray and ``points`` (Moller-Trumbore, Warp's barycentric convention), with ``absorption`` Beer's law over
+    the segment in the recorded medium (beer; beer_forever for a ray that meets nothing), its colour
+    (the background, or the ambient and recorded-visible lights' Phong terms, make_grad_shade_kernel's
+    arithmetic) times its weight added to its camera ray's (wp.atomic_add), and its recorded children
+    written at their places in the next level's arrays: a mirror's (k_r), a dielectric's reflected (weight
+    F) and refracted ((1 - F) k_t) ray, Fresnel's F at the ior (fresnel_dielectric), the direction by Snell
+    (refract), origins offset as spawn_ray offsets them. With ``area``, a ray that hits adds no colour here:
+    it leaves what the area lights' replay needs (kernels.area_replay: the hit point, normal, kd and ks, its
+    direction, its weight, and in ``acc`` its local colour, to which the samples are added), and
+    tree_area_combine adds it to its camera ray's."""
+
+    @wp.kernel(module="unique")
+    def replay(eye: wp.array(dtype=wp.vec3), points: wp.array(dtype=wp.vec3), indices: wp.array(dtype=int),
+               normals: wp.array(dtype=wp.vec3), tri_material: wp.array(dtype=int), tri_smooth: wp.array(dtype=int),
+               ka: wp.array(dtype=wp.vec3), kd: wp.array(dtype=wp.vec3), ks: wp.array(dtype=wp.vec3),
+               shininess: wp.array(dtype=float), kr: wp.array(dtype=wp.vec3), ior: wp.array(dtype=float),
+               kt: wp.array(dtype=wp.vec3), sigma: wp.array(dtype=wp.vec3), light_pos: wp.array(dtype=wp.vec3),
+               light_color: wp.array(dtype=wp.vec3), inverse_square: wp.array(dtype=int),
+               light_kind: wp.array(dtype=int), light_axis: wp.array(dtype=wp.vec3), light_cone: wp.array(dtype=wp.vec4),
+               uvs: wp.array(dtype=wp.vec2), texels: wp.array(dtype=wp.vec3), tex_shape: wp.array(dtype=wp.vec4i),
+               tex_wrap: wp.array(dtype=wp.vec2i), tex_u: wp.array(dtype=wp.vec3), tex_v: wp.array(dtype=wp.vec3),
+               tex_c0: wp.array(dtype=wp.vec3), tex_c1: wp.array(dtype=wp.vec3), ambient: wp.vec3, background: wp.vec3,
+               face: wp.array(dtype=int), visible: wp.array(dtype=int), medium: wp.array(dtype=int),
+               ray_of: wp.array(dtype=int), kind: wp.array(dtype=int), child: wp.array(dtype=wp.vec2i),
+               orig: wp.array(dtype=wp.vec3), dirs: wp.array(dtype=wp.vec3), weight: wp.array(dtype=wp.vec3),
+               start: wp.array(dtype=wp.vec3), rays: wp.array(dtype=wp.vec3), o_next: wp.array(dtype=wp.vec3),
+               d_next: wp.array(dtype=wp.vec3), w_next: wp.array(dtype=wp.vec3), start_next: wp.array(dtype=wp.vec3),
+               hit_p: wp.array(dtype=wp.vec3), hit_n: wp.array(dtype=wp.vec3), hit_kd: wp.array(dtype=wp.vec3),
+               hit_ks: wp.array(dtype=wp.vec3), level_weight: wp.array(dtype=wp.vec3), acc: wp.array(dtype=wp.vec3),
+               ray_dirs: wp.array(dtype=wp.vec3)):
+        i = wp.tid()
+        f = face[i]
+        d = dirs[i]
+        o = eye[0]
+        w = wp.vec3(1.0)
+        st = eye[0]
+        if wp.static(not first):
+            o = orig[i]
+            w = weight[i]
+            st = start[i]
+        med = medium[i]
+        if f == -1:
+            if wp.static(absorption):
+                if med >= 0:  # it leaves the scene inside the medium
+                    w = beer_forever(w, sigma[med])
+            wp.atomic_add(rays, ray_of[i], wp.cw_mul(w, background))
+        if f >= 0:
+            i0 = indices[3 * f]
+            i1 = indices[3 * f + 1]
+            i2 = indices[3 * f + 2]
+            p0 = points[i0]
+            p1 = points[i1]
+            p2 = points[i2]
+            e1 = p1 - p0
+            e2 = p2 - p0
+            pv = wp.cross(d, e2)
+            inv = 1.0 / wp.dot(e1, pv)
+            tv = o - p0
+            b1 = wp.dot(tv, pv) * inv
+            b2 = wp.dot(d, wp.cross(tv, e1)) * inv
+            u = 1.0 - b1 - b2  # Warp's convention: u weighs the face's first vertex, v its second
+            v = b1
+            bw = 1.0 - u - v
+            p = p0 * u + p1 * v + p2 * bw
+            ng = wp.normalize(wp.cross(p1 - p0, p2 - p0))
+            side = 1.0
+            if wp.dot(ng, d) > 0.0:
+                side = -1.0
+            n = ng * side
+            if wp.static(smooth):
+                if tri_smooth[f] != 0:
+                    ns = normals[i0] * u + normals[i1] * v + normals[i2] * bw
+                    if wp.length(ns) > 0.0:
+                        n = wp.normalize(ns) * side
+            if wp.static(absorption):
+                if med >= 0:  # the segment from where the ray began, not its offset origin
+                    w = beer(w, sigma[med], wp.length(p - st))
+            m = tri_material[f]
+            ka_m = ka[m]
+            kd_m = kd[m]
+            ks_m = ks[m]
+            if wp.static(texture):
+                t = uvs[i0] * u + uvs[i1] * v + uvs[i2] * bw
+                uv = wp.vec3(t[0], t[1], 1.0)
+                j = 3 * m
+                ka_m = wp.cw_mul(ka_m, texture_factor(texels, tex_shape[j], tex_wrap[j], tex_u[j], tex_v[j],
+                                                      tex_c0[j], tex_c1[j], uv))
+                kd_m = wp.cw_mul(kd_m, texture_factor(texels, tex_shape[j + 1], tex_wrap[j + 1], tex_u[j + 1],
+                                                      tex_v[j + 1], tex_c0[j + 1], tex_c1[j + 1], uv))
+                ks_m = wp.cw_mul(ks_m, texture_factor(texels, tex_shape[j + 2], tex_wrap[j + 2], tex_u[j + 2],
+                                                      tex_v[j + 2], tex_c0[j + 2], tex_c1[j + 2], uv))
+            local = wp.cw_mul(ambient, ka_m)
+            for l in range(wp.static(L)):
+                if visible[i * wp.static(L) + l] != 0:
+                    C_l = light_color[l]
+                    if wp.static(light_model):
+                        to_light = -light_axis[l]
+                        if light_kind[l] != wp.static(LIGHT_DIRECTIONAL):
+                            to_light = light_pos[l] - p
+                        L_dir = wp.normalize(to_light)
+                        C_l = C_l * light_factor(light_kind[l], light_cone[l], inverse_square[l], light_axis[l],
+                                                 to_light, L_dir)
+                    else:
+                        to_light = light_pos[l] - p
+                        L_dir = wp.normalize(to_light)
+                    n_dot_l = wp.dot(n, L_dir)
+                    lit = kd_m * n_dot_l + phong_specular(ks_m, shininess[m], n, L_dir, -d, n_dot_l)
+                    local = local + wp.cw_mul(C_l, lit)
+            if wp.static(area):
+                hit_p[i] = p
+                hit_n[i] = n
+                hit_kd[i] = kd_m
+                hit_ks[i] = ks_m
+                level_weight[i] = w
+                acc[i] = local
+                ray_dirs[i] = d
+            else:
+                wp.atomic_add(rays, ray_of[i], wp.cw_mul(w, local))
+            c = child[i]
+            facing = ng * side
+            err = hit_point_error(p0, p1, p2, u, v, bw)
+            if kind[i] == wp.static(CHILD_MIRROR):
+                d_m = wp.normalize(reflect(d, n))
+                o_next[c[0]] = offset_ray_origin(p, err, facing, d_m)
+                d_next[c[0]] = d_m
+                w_next[c[0]] = wp.cw_mul(w, kr[m])
+                start_next[c[0]] = p
+            if kind[i] == wp.static(CHILD_DIELECTRIC):
+                mn = dielectric_normal(d, facing, n)
+                cos_i = -wp.dot(d, mn)
+                eta = ior[m]
+                eta_rel = eta
+                cos_f = cos_i
+                if side < 0.0:  # leaving: the ray meets the winding normal's back
+                    eta_rel = 1.0 / eta
+                    cos_f = -cos_i
+                F = fresnel_dielectric(cos_f, eta)
+                if c[0] >= 0:
+                    d_r = wp.normalize(reflect(d, mn))
+                    o_next[c[0]] = offset_ray_origin(p, err, facing, d_r)
+                    d_next[c[0]] = d_r
+                    w_next[c[0]] = w * F
+                    start_next[c[0]] = p
+                if c[1] >= 0:
+                    tr, transmits = refract(d, mn, eta_rel)
+                    d_t = wp.normalize(tr)
+                    o_next[c[1]] = offset_ray_origin(p, err, facing, d_t)
+                    d_next[c[1]] = d_t
+                    w_next[c[1]] = wp.cw_mul(w, kt[m]) * (1.0 - F)
+                    start_next[c[1]] = p
+
+    return replay
+
+
+@wp.kernel(module="unique")
+def tree_area_combine(face: wp.array(dtype=int), emit: wp.array(dtype=int), radiance: wp.array(dtype=wp.vec3),
+                      ray_of: wp.array(dtype=int), level_weight: wp.array(dtype=wp.vec3), acc: wp.array(dtype=wp.vec3),
+                      rays: wp.array(dtype=wp.vec3)):
+    """With area lights, each hit of a tree level's colour added to its camera ray's: its weight times the
+    radiance of the area light whose emitting side it met (the recorded emit) and its local colour with the
+    area lights' samples (acc), as the tracer adds them (make_area_combine's, for a level's list)."""
+    i = wp.tid()
+    if face[i] >= 0:
+        c = acc[i]
+        e = emit[i]
+        if e >= 0:
+            c = radiance[e] + c
+        wp.atomic_add(rays, ray_of[i], wp.cw_mul(level_weight[i], c))
