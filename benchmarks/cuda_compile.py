@@ -56,6 +56,9 @@ RUNS = (
      {"render.spp": 4, "materials.ground.kd_texture": {"image": "textures/globe.png", "scale": [2, 1]}},
      dict(TRACED, grad=True)),
     ("gradients: area lights", "cornell_box.xml", {}, dict(TRACED, grad=True)),
+    # The ray tree's record and per-level replay: textured glass, a mirror, smooth objects (their vertices'
+    # normals made again: backward's default takes every vertex and the camera).
+    ("gradients: glass (the ray tree)", "whitted", {}, dict(TRACED, grad=True)),
 )
 
 
