@@ -12,7 +12,9 @@ call made once before it is timed; the median of ``repeat``):
   forward frame), and its AD (reference/mitsuba_ad.py: the same levels unrolled at the pixel centres, forward
   and dr.backward, the gradients read back).
 ``wrt``, the same on both sides: every material's ka, kd, ks, shininess and reflectivity and every light's
-colour (an area light's radiance, an emitting material's emission). ``d_image``: random weights, the loss
+colour (an area light's radiance, an emitting material's emission); with glass, every material's kd, a
+dielectric's ior, transmittance and absorption, and the lights' colours, through the whole ray tree (Mitsuba:
+reference/mitsuba_ad.py's tree_ad_gradients, its levels in Dr.Jit's AD graph). ``d_image``: random weights, the loss
 sum(w * image). Peak memory: the process's resident set's peak during the call less its size just before
 (PeakMemory; Dr.Jit's allocator cache flushed first, so that Mitsuba's is not hidden in memory it kept).
 """
@@ -30,13 +32,14 @@ import numpy as np
 import warprt
 from benchmarks.output import save
 from benchmarks.timing import SCENES, ms
-from reference.mitsuba_ad import ad_gradients
+from reference.mitsuba_ad import ad_gradients, tree_ad_gradients
 from reference.mitsuba_whitted import Switches, mitsuba_scene, mitsuba_variant
 from warprt.scene import resolve_effects
 
 ROOT = Path(__file__).resolve().parent
 RESULTS = ROOT / "results"
-NAMES = ("seed.toml", "cornell.toml", "mirrors.toml", "spot_lit.toml", "sun.toml", "cornell_box.xml")
+NAMES = ("seed.toml", "cornell.toml", "mirrors.toml", "spot_lit.toml", "sun.toml", "cornell_box.xml", "glass_sphere.toml",
+         "prism_tir.toml")
 FULL = {"size": (512, 384), "repeat": 5}
 QUICK = {"size": (96, 72), "repeat": 1}
 GOAL = 3.0  # issue 30: backward <= 3x the forward frame
@@ -84,9 +87,13 @@ def warm(fn, repeat: int, before=None) -> tuple[float, int, object]:
     return statistics.median(times), peak.bytes, out
 
 
-def parameters(r) -> list[str]:
-    """What both engines differentiate here: the material colours and exponents, the lights' colours."""
+def parameters(r, glass: bool = False) -> list[str]:
+    """What both engines differentiate here: the material colours and exponents, the lights' colours; with
+    glass, what the Mitsuba tree's AD takes (tree_ad_gradients): kd, a dielectric's ior, transmittance and
+    absorption, the lights' colours."""
     keys = (".ka", ".kd", ".ks", ".shininess", ".reflectivity", ".emission")
+    if glass:
+        keys = (".kd", ".ior", ".transmittance", ".absorption")
     names = [n for n in r.params.keys() if n.startswith("materials.") and n.endswith(keys)]
     names += [n for n in r.params.keys() if n.startswith("lights.") and n.endswith((".color", ".radiance"))]
     return names
@@ -101,7 +108,8 @@ def scene_run(path: Path, cfg: dict) -> dict:
     levels = scene.render.max_depth if fx.reflection else 1
     weights = np.random.default_rng(1).random((height, width, 3)).astype(np.float32)
     r = warprt.Renderer(scene)
-    wrt = parameters(r)
+    wrt = parameters(r, fx.refraction)
+    ad = tree_ad_gradients if fx.refraction else ad_gradients
     t_forward, m_forward, result = warm(lambda: r.render().image, cfg["repeat"])
     t_record, m_record, _ = warm(lambda: r.render(grad=True), cfg["repeat"])
     image = r.render(grad=True).image
@@ -116,7 +124,7 @@ def scene_run(path: Path, cfg: dict) -> dict:
     switches = Switches.for_effects(fx, scene.render)
     flush = dr.flush_malloc_cache
     t_mi_forward, m_mi_forward, mi_image = warm(lambda: ms_scene.render(switches), cfg["repeat"], flush)
-    t_mi_ad, m_mi_ad, (ad_image, theirs) = warm(lambda: ad_gradients(scene, weights), cfg["repeat"], flush)
+    t_mi_ad, m_mi_ad, (ad_image, theirs) = warm(lambda: ad(scene, weights), cfg["repeat"], flush)
     # Sanity: the two models' images where both see the same hits, and their gradients of the loss.
     same = (np.abs(image - ad_image).max(-1) < 1e-4)
     pixels = width * height
@@ -174,8 +182,10 @@ def report(data: dict) -> str:
         f"`python -m benchmarks.gradient_cost` (benchmarks/gradient_cost.py): warm {size} frames at 1 sample per pixel, "
         f"the median of {cfg['repeat']}, each scene's own ray levels and lights; the gradient with respect to every "
         "material's ka, kd, ks, shininess and reflectivity and every light's colour (radiance, emission), the "
-        "same names on both sides. Mitsuba: the reference's Whitted integrator (`mi.render`) forward, and its AD "
-        "of the same model (reference/mitsuba_ad.py: the levels unrolled at the pixel centres, `dr.backward`). "
+        "same names on both sides (with glass: every kd, the dielectrics' ior, transmittance and absorption, the "
+        "lights' colours, through the whole ray tree). Mitsuba: the reference's Whitted integrator (`mi.render`; "
+        "with glass its ray tree, reference/ray_tree.py) forward, and its AD of the same model "
+        "(reference/mitsuba_ad.py: the levels unrolled at the pixel centres, `dr.backward`). "
         "Peak memory: the resident set's peak during the call above its size before it (Linux's VmHWM, reset "
         "first; Dr.Jit's allocator cache and the C heap's free memory handed back before), the gradient frame's from before `render(grad=True)` to the end of `backward`.",
         "",
