@@ -7,13 +7,15 @@ frame may change without loading the scene again, each read and written as NumPy
     materials.<name>.ka_texture | kd_texture | ks_texture     (H, W, 3) linear float32, row 0 the image's top
     lights.<i>.position | color | direction | radiance (an area light's)         (3,)
     objects.<name>.vertices                                                     (N, 3), world space
+    objects.<name>.colors                      (N, 3) linear RGB, where the object has vertex colours
     camera.eye | center | up                                                    (3,)
     camera.fovy                                                                 ()
 
 Setting one makes the next frame render the changed scene exactly as a fresh load of a file saying the
 same would: the new scene is checked as a loaded one is, and the Renderer keeps what the change leaves
-valid (moved vertices refit the BVH). ior, transmittance and absorption are a dielectric's, a texture's
-texels an image texture's; a material whose ka follows kd (a file that leaves ka out) keeps following it.
+valid (moved vertices refit the BVH; new vertex colours are written over the kept ones). ior, transmittance
+and absorption are a dielectric's, a texture's texels an image texture's; a material whose ka follows kd
+(a file that leaves ka out) keeps following it.
 """
 
 from __future__ import annotations
@@ -47,6 +49,7 @@ def _names(scene) -> list[str]:
         out += [f"lights.{i}.{k}" for k in LIGHT_VECTORS if getattr(light, k) is not None
                 and not (light.area and k == "color")]  # an area light's light is its radiance
     out += [f"objects.{name}.vertices" for name in object_names(scene)]
+    out += [f"objects.{name}.colors" for name, i in object_names(scene).items() if scene.objects[i].colors is not None]
     out += [f"camera.{k}" for k in CAMERA_VECTORS + ("fovy",)]
     return out
 
@@ -91,7 +94,7 @@ class SceneParameters(MutableMapping):
         if section == "lights":
             return np.array(getattr(scene.lights[owner], key), np.float64)
         if section == "objects":
-            return np.array(scene.objects[owner].vertices, np.float64)
+            return np.array(getattr(scene.objects[owner], key), np.float64)
         return np.array(getattr(scene.camera, key), np.float64)
 
     def __setitem__(self, name: str, value):
@@ -114,7 +117,7 @@ class SceneParameters(MutableMapping):
                 lights[owner] = replace(lights[owner], **{key: tuple(_vector(name, value, (3,)))})
             elif section == "objects":
                 old = objects[owner]
-                objects[owner] = replace(old, vertices=_vector(name, value, old.vertices.shape))
+                objects[owner] = replace(old, **{key: _vector(name, value, getattr(old, key).shape)})
             elif key == "fovy":
                 camera = replace(camera, fovy=float(_vector(name, value, ())))
             else:
