@@ -67,8 +67,6 @@ def refusal(scene, fx, mirrored=()) -> str | None:
         return "glass (the ray tree) is not differentiated yet; mirrors and camera rays are"
     if (fx.reflection or mirrored) and scene.render.max_depth > MAX_GRAD_DEPTH:
         return f"at most {MAX_GRAD_DEPTH} ray levels (render.max_depth) are differentiated (Warp's unrolled loop)"
-    if fx.vertex_color:
-        return "vertex colours are not differentiated yet"
     if len(scene.whitted_lights) > MAX_GRAD_LIGHTS:
         return f"at most {MAX_GRAD_LIGHTS} lights are differentiated (Warp's unrolled loop)"
     return None
@@ -171,6 +169,7 @@ class FirstHits:
     area: object = None  # the frame's AreaLights table (its sample points, normals and areas), as recorded
     mirrored: tuple = ()  # the materials whose mirror rays were recorded whatever their k_r (mirrored_materials)
     reflects: bool = False  # whether the frame could reflect (render.max_depth > 1, reflection not switched off)
+    vertex_color: bool = False  # ka and kd times the vertex colours, as the frame's
 
 
 def record_first_hits(scene, geom, data, fx, device: str, threads: int = 1, bands: int = 1, pool=None,
@@ -205,7 +204,8 @@ def record_first_hits(scene, geom, data, fx, device: str, threads: int = 1, band
                                         reflect], n, threads, bands, device, pool=pool)
     reflects = scene.render.max_depth > 1 and (switched is None or "reflection" in switched)
     return FirstHits(face, bary, dirs, visible, cam.width, cam.height, L, D, fx.smooth, k * k, fx.light_model,
-                     fx.texture, emit, area_bits, words, data.area if words else None, tuple(mirrored), reflects)
+                     fx.texture, emit, area_bits, words, data.area if words else None, tuple(mirrored), reflects,
+                     fx.vertex_color)
 
 
 def parameter_names(scene) -> list[str]:
@@ -223,6 +223,8 @@ def parameter_names(scene) -> list[str]:
     emitters = _emitter_objects(scene)
     names += [f"objects.{name}.vertices" for name, i in object_names(scene).items()
               if scene.objects[i].name not in emitters]
+    names += [f"objects.{name}.colors" for name, i in object_names(scene).items()
+              if scene.objects[i].colors is not None]
     names += [f"camera.{k}" for k in CAMERA_KEYS]
     return names
 
@@ -336,7 +338,7 @@ def replay_launch(scene, geom, hits: FirstHits, device: str, vertices: bool = Fa
     points = wp.array(geom.points_np, dtype=wp.vec3, device=device, requires_grad=True) if vertices else geom.points
     area = hits.words > 0
     kernel = make_grad_shade_kernel(hits.lights, hits.levels, hits.smooth, vertices or camera, hits.light_model,
-                                    hits.texture, area)
+                                    hits.texture, area, hits.vertex_color)
     cam = scene.camera
     eye = vec([geom.eye_offset(cam.eye), geom.eye_offset(cam.center), cam.up])  # eye[0]: the rays' origin
     fovy = wp.array([cam.fovy], dtype=float, device=device, requires_grad=True)
@@ -358,11 +360,15 @@ def replay_launch(scene, geom, hits: FirstHits, device: str, vertices: bool = Fa
     if vertices and hits.smooth:  # a smooth object's vertex normals, computed from the moving points
         normals, launches = moving_normals(scene, geom, points, device)
         before += launches
+    colors = vertex_colours(geom, hits, device)  # ka's and kd's factor, per vertex
     inputs = [eye, points, geom.indices, normals, geom.tri_material, geom.tri_smooth, ka, kd, ks, shininess, kr,
               light_pos, light_color, inverse_square, kind, axis, cone, uvs, *table.arrays,
-              wp.vec3(*scene.render.ambient), background, hits.face, hits.bary, dirs, hits.visible, *state, ray_dirs]
+              wp.vec3(*scene.render.ambient), background, hits.face, hits.bary, dirs, hits.visible, *state, ray_dirs,
+              colors]
     arrays = {"ka": ka, "kd": kd, "ks": ks, "shininess": shininess, "reflectivity": kr, "color": light_color,
               "position": light_pos, "direction": axis, "texels": table.arrays[0]}
+    if hits.vertex_color:
+        arrays["colors"] = colors
     then = []
     if area:
         a = hits.area  # the forward's own sample points, normals and areas
@@ -382,6 +388,14 @@ def replay_launch(scene, geom, hits: FirstHits, device: str, vertices: bool = Fa
     if camera:
         arrays["camera"], arrays["fovy"] = eye, fovy
     return ReplayLaunch(kernel, n, inputs, rays, arrays, table.images, then, shaded, before)
+
+
+def vertex_colours(geom, hits: FirstHits, device: str) -> wp.array:
+    """The shade kernel's per-vertex colours: the forward's (Geometry.colors, white where an object has
+    none), differentiable, where the frame has vertex colours; else the forward's one-entry stand-in."""
+    if not hits.vertex_color:
+        return geom.colors
+    return wp.array(geom.colors.numpy(), dtype=wp.vec3, device=device, requires_grad=True)
 
 
 def moving_normals(scene, geom, points, device: str) -> tuple:
@@ -495,7 +509,7 @@ def backward(scene, geom, hits: FirstHits, d_image, wrt, device: str) -> dict:
     if d.shape != (hits.height, hits.width, 3) or not np.all(np.isfinite(d)):
         raise ArgumentError("backward", "d_image", f"expected finite values of shape {(hits.height, hits.width, 3)}, "
                                                    f"got {d.shape}")
-    moving = any(name.startswith("objects.") for name in wrt)
+    moving = any(name.startswith("objects.") and name.endswith(".vertices") for name in wrt)
     camera = any(name.startswith("camera.") for name in wrt)
     tape = wp.Tape()
     with tape:
@@ -513,14 +527,17 @@ def backward(scene, geom, hits: FirstHits, d_image, wrt, device: str) -> dict:
         offset, h, w = launched.images[(slot, key)]
         return grads["texels"][offset:offset + h * w].reshape(h, w, 3)[::-1].astype(np.float64)
 
+    starts = np.cumsum([0] + [len(o.vertices) for o in scene.objects])
     if moving:
         point_grads = arrays["points"].grad.numpy().astype(np.float64)
-        starts = np.cumsum([0] + [len(o.vertices) for o in scene.objects])
     out = {}
     for name in wrt:
         section, owner, key = (name.split(".") + [""])[:3]  # camera.<key>: two parts
         if section == "objects":  # the points are the objects' vertices in order, less the frame origin
             i = object_names(scene)[owner]
+            if key == "colors":  # the colours likewise, one per vertex
+                out[name] = grads["colors"][starts[i]:starts[i + 1]].astype(np.float64)
+                continue
             out[name] = point_grads[starts[i]:starts[i + 1]]
         elif section == "camera":  # eye and center less the frame origin (a shift: the same derivative), up
             out[name] = (grads["fovy"][0] if owner == "fovy" else grads["camera"][camera_rows[owner]]).astype(np.float64)

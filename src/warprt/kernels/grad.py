@@ -249,9 +249,18 @@ def make_grad_record_kernel(L: int, D: int, smooth: bool, shadows: bool, cull: b
     return record
 
 
+@wp.func
+def vertex_colour(colors: wp.array(dtype=wp.vec3), i0: int, i1: int, i2: int, u: float, v: float,
+                  w: float) -> wp.vec3:
+    """The colour at barycentrics (u, v, w) of the face (i0, i1, i2), as interaction.make_surface
+    interpolates it (u on the face's first vertex, v on its second, in that order): differentiable in the
+    per-vertex ``colors`` and in the barycentrics, which move with the vertices and the camera."""
+    return colors[i0] * u + colors[i1] * v + colors[i2] * w
+
+
 @functools.cache
 def make_grad_shade_kernel(L: int, D: int, smooth: bool, moving: bool = False, light_model: bool = False,
-                           texture: bool = False, area: bool = False):
+                           texture: bool = False, area: bool = False, vertex_color: bool = False):
     """shade(...): each camera ray's colour (one per pixel and sample, as recorded; sample_mean makes
     them the image) from the recorded hit and visibility and the differentiable
     material and light arrays, over the recorded ray levels (D at most), each weighted by the product of
@@ -269,7 +278,10 @@ def make_grad_shade_kernel(L: int, D: int, smooth: bool, moving: bool = False, l
     table's row 3 m + 0, 1, 2 for material slot m), the images' texels differentiable. With ``area``, the
     kernel writes no colour: per ray level it leaves what the area lights' replay needs (make_area_replay:
     the hit point, normal, kd and ks at the hit, the level's weight, and in ``acc`` the ambient and Whitted
-    lights' local colour, to which the area lights' samples are added), and area_combine makes the colour."""
+    lights' local colour, to which the area lights' samples are added), and area_combine makes the colour.
+    With ``vertex_color``, ka and kd (after their textures) times the colour interpolated from ``colors``
+    (one per vertex, differentiable) at the hit's barycentrics, the moving ones where the hit moves
+    (vertex_colour: shading.make_coefficients' and make_surface's arithmetic)."""
 
     @wp.kernel(module="unique")
     def shade(eye: wp.array(dtype=wp.vec3), points: wp.array(dtype=wp.vec3), indices: wp.array(dtype=int), normals: wp.array(dtype=wp.vec3),
@@ -285,7 +297,7 @@ def make_grad_shade_kernel(L: int, D: int, smooth: bool, moving: bool = False, l
               dirs: wp.array(dtype=wp.vec3), visible: wp.array(dtype=int), hit_p: wp.array(dtype=wp.vec3),
               hit_n: wp.array(dtype=wp.vec3), hit_kd: wp.array(dtype=wp.vec3), hit_ks: wp.array(dtype=wp.vec3),
               level_weight: wp.array(dtype=wp.vec3), acc: wp.array(dtype=wp.vec3), ray_dirs: wp.array(dtype=wp.vec3),
-              image: wp.array(dtype=wp.vec3)):
+              colors: wp.array(dtype=wp.vec3), image: wp.array(dtype=wp.vec3)):
         ray = wp.tid()
         color = wp.vec3(0.0)
         weight = wp.vec3(1.0)
@@ -347,6 +359,10 @@ def make_grad_shade_kernel(L: int, D: int, smooth: bool, moving: bool = False, l
                                                           tex_v[j + 1], tex_c0[j + 1], tex_c1[j + 1], uv))
                     ks_m = wp.cw_mul(ks_m, texture_factor(texels, tex_shape[j + 2], tex_wrap[j + 2], tex_u[j + 2],
                                                           tex_v[j + 2], tex_c0[j + 2], tex_c1[j + 2], uv))
+                if wp.static(vertex_color):  # shading.make_coefficients: ka and kd times the vertex colour
+                    vc = vertex_colour(colors, i0, i1, i2, u, v, w)
+                    ka_m = wp.cw_mul(ka_m, vc)
+                    kd_m = wp.cw_mul(kd_m, vc)
                 local = wp.cw_mul(ambient, ka_m)
                 for l in range(wp.static(L)):
                     if visible[k * wp.static(L) + l] != 0:
