@@ -267,6 +267,27 @@ def test_vertex_colours_set_render_as_a_fresh_load_the_bvh_kept(tmp_path):
         r.params["objects.ball.colors"] = np.ones((3, 3))  # the ball has none
 
 
+@pytest.mark.parametrize("shape", ["rectangle", "sphere"])
+def test_an_area_lights_centre_set_renders_as_a_fresh_load(tmp_path, shape):
+    """lights.<i>.center of a shape light: its drawn triangles and its sample points move together, as a file
+    saying the new centre gives them (the Geometry built again for the light's new triangles)."""
+    d = copy.deepcopy(doc())
+    light = {"type": "area", "shape": shape, "center": [0.5, 2.5, 0.5], "radiance": [3.0, 2.5, 2.0]}
+    light.update({"normal": [0.0, -1.0, 0.3], "size": [0.8, 0.5]} if shape == "rectangle" else {"radius": 0.3})
+    d["lights"] = [d["lights"][0], light]
+    d["render"]["light_samples"] = 4
+    r = warprt.Renderer(load(tmp_path, d), primary_query="raytrace")
+    before = r.render()
+    r.params["lights.1.center"] = [-0.4, 2.2, 0.9]
+    after = r.render()
+    edited = copy.deepcopy(d)
+    edited["lights"][1]["center"] = [-0.4, 2.2, 0.9]
+    fresh_scene = load(tmp_path, edited, "edited.toml")
+    assert_same_frame(after, warprt.render(fresh_scene, primary_query="raytrace"))
+    assert not np.array_equal(after.image, before.image)
+    assert "lights.0.center" not in r.params  # a point light has none
+
+
 @pytest.mark.parametrize("name, value, message", [
     ("materials.red.kdd", [0, 0, 0], "unknown parameter (did you mean 'materials.red.kd'?)"),
     ("materials.red.ior", 1.5, "unknown parameter"),  # an opaque material has no ior

@@ -38,7 +38,8 @@ from ..errors import ArgumentError
 from ..kernels.camera import camera_data
 from ..kernels.grad import (MAX_GRAD_LIGHTS, TEXTURE_CHECKER, TEXTURE_CLAMP, TEXTURE_IMAGE, TEXTURE_MIRROR, TEXTURE_NONE,
                             TEXTURE_WRAP, area_replay, camera_rays, make_area_combine, make_grad_record_kernel,
-                            make_grad_shade_kernel, sample_mean, smooth_vertex_normals, vertex_normal_sums)
+                            make_grad_shade_kernel, sample_mean, smooth_vertex_normals, translate_samples,
+                            vertex_normal_sums)
 from ..geometry import LightShape, light_shape
 from ..scene import camera_basis, drawn_objects, position_ids, scene_effects
 from .launch import launch_bands
@@ -220,6 +221,7 @@ def parameter_names(scene) -> list[str]:
     names += [f"lights.{i}.{k}" for i, light in enumerate(scene.lights) if not light.area for k in LIGHT_KEYS
               if getattr(light, k) is not None]  # as r.params has them: no position for a directional light
     names += [f"lights.{i}.radiance" for i, light in enumerate(scene.lights) if light.area]
+    names += [f"lights.{i}.center" for i, light in enumerate(scene.lights) if _centred(light)]
     emitters = _emitter_objects(scene)
     names += [f"objects.{name}.vertices" for name, i in object_names(scene).items()
               if scene.objects[i].name not in emitters]
@@ -227,6 +229,12 @@ def parameter_names(scene) -> list[str]:
               if scene.objects[i].colors is not None]
     names += [f"camera.{k}" for k in CAMERA_KEYS]
     return names
+
+
+def _centred(light) -> bool:
+    """Whether a light is an area light of its own shape (rectangle, disk, sphere) with a ``center``, which
+    r.params names and whose move translates its sample points (translate_samples)."""
+    return light.area and light.shape is not None and light.center is not None
 
 
 def _emits(material) -> bool:
@@ -377,10 +385,16 @@ def replay_launch(scene, geom, hits: FirstHits, device: str, vertices: bool = Fa
                                 device=device)
         radiance = vec([l.radiance for l in scene.area_lights])
         arrays["radiance"] = radiance
+        # The sample points moved with their light's centre (c - c0, 0 here: the forward's points to the bit),
+        # their normals and areas as they are: a shape light's points are its centre plus fixed offsets.
+        shift = wp.zeros(len(scene.area_lights), dtype=wp.vec3, device=device, requires_grad=True)
+        samples = wp.zeros(int(first[-1]), dtype=wp.vec3, device=device, requires_grad=True)
+        before.append((translate_samples, int(first[-1]), [a.points, sample_light, shift], [samples]))
+        arrays["center"] = shift
         hit_p, hit_n, hit_kd, hit_ks, level_weight, acc = state
         then.append((area_replay, (levels, int(first[-1])),
                      [hits.words, hits.face, ray_dirs if vertices or camera else dirs, hits.area_bits, geom.tri_material, shininess, hit_p, hit_n,
-                      hit_kd, hit_ks, a.points, a.normals, a.dA, sample_light, radiance], [acc]))
+                      hit_kd, hit_ks, samples, a.normals, a.dA, sample_light, radiance], [acc]))
         then.append((make_area_combine(hits.levels), n, [hits.face, hits.emit, radiance, background, level_weight,
                                                          acc], [rays]))
     if vertices:
@@ -541,6 +555,8 @@ def backward(scene, geom, hits: FirstHits, d_image, wrt, device: str) -> dict:
             out[name] = point_grads[starts[i]:starts[i + 1]]
         elif section == "camera":  # eye and center less the frame origin (a shift: the same derivative), up
             out[name] = (grads["fovy"][0] if owner == "fovy" else grads["camera"][camera_rows[owner]]).astype(np.float64)
+        elif key == "center":  # an area light's: its row among the area lights (area_sources' order)
+            out[name] = grads["center"][area_sources(scene).index(f"lights.{owner}.radiance")].astype(np.float64)
         elif key in ("radiance", "emission"):  # the area lights whose radiance it is
             rows = [j for j, source in enumerate(area_sources(scene)) if source == name]
             out[name] = grads["radiance"][rows].astype(np.float64).sum(0) if rows else np.zeros(3)

@@ -6,6 +6,7 @@ frame may change without loading the scene again, each read and written as NumPy
     materials.<name>.shininess | ior                                            ()
     materials.<name>.ka_texture | kd_texture | ks_texture     (H, W, 3) linear float32, row 0 the image's top
     lights.<i>.position | color | direction | radiance (an area light's)         (3,)
+    lights.<i>.center        (3,), an area light's of its own shape (rectangle, disk, sphere) given one
     objects.<name>.vertices                                                     (N, 3), world space
     objects.<name>.colors                      (N, 3) linear RGB, where the object has vertex colours
     camera.eye | center | up                                                    (3,)
@@ -30,7 +31,7 @@ from ..errors import SceneError
 MATERIAL_COLOURS = ("ka", "kd", "ks", "reflectivity")
 DIELECTRIC_COLOURS = ("transmittance", "absorption")
 TEXTURES = ("ka_texture", "kd_texture", "ks_texture")
-LIGHT_VECTORS = ("position", "color", "direction", "radiance")
+LIGHT_VECTORS = ("position", "color", "direction", "radiance", "center")
 CAMERA_VECTORS = ("eye", "center", "up")
 SOURCE = "Renderer.params"
 

@@ -435,6 +435,17 @@ def area_replay(words: int, face: wp.array(dtype=int), dirs: wp.array(dtype=wp.v
             wp.atomic_add(acc, k, term)
 
 
+@wp.kernel(module="unique")
+def translate_samples(points0: wp.array(dtype=wp.vec3), sample_light: wp.array(dtype=int),
+                      shift: wp.array(dtype=wp.vec3), points: wp.array(dtype=wp.vec3)):
+    """The area lights' sample points moved with their lights' centres: points0[q] (the forward's) plus its
+    light's shift (c - c0, the centre's move: a shape light's points are its centre plus offsets the
+    centre does not change), differentiable in the shift; its normal and dA stay. At a shift of 0 the
+    points are the forward's to the bit."""
+    q = wp.tid()
+    points[q] = points0[q] + shift[sample_light[q]]
+
+
 @functools.cache
 def make_area_combine(D: int):
     """combine(face, emit, radiance, background, level_weight, acc, image): each camera ray's colour from
