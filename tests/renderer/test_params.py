@@ -228,7 +228,7 @@ def test_several_parameters_at_once_and_the_caches_they_leave(tmp_path):
 
 
 def coloured() -> dict:
-    """doc() with vertex colours on a triangle object standing on the floor, and the zbuffer's scene too."""
+    """doc() with vertex colours on a triangle object standing on the floor."""
     d = copy.deepcopy(doc())
     d["objects"].append({"name": "fan", "shape": "triangles", "material": "red",
                          "vertices": [[-1.5, 0.05, -0.5], [1.5, 0.05, -0.8], [0.0, 1.8, -1.0]], "faces": [[0, 1, 2]],

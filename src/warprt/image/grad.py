@@ -15,15 +15,19 @@ moved normal; a smooth object's vertex normals made again from the moving points
 makes them, angle-weighted, kernels.vertex_normal_sums and smooth_vertex_normals, where the scene does not
 give them: moving_normals), of the camera's eye, center, up and fovy (the camera rays made again in Warp,
 kernels.camera_rays, and the hit recomputed on the recorded face from the moved ray, through the mirror
-rays too), and of the area lights' radiance (an area light's, an emitting material's emission): their
+rays too), of the area lights' radiance (an area light's, an emitting material's emission): their
 sample points' terms at each hit (the record's bit per point seen; kernels.area_replay, one thread per level
-and point) and the emitter's front met by a ray, the points themselves held fixed. The image is the mean of
+and point) and the emitter's front met by a ray, of a rectangle, disk or sphere light's centre (its sample
+points translated by the centre's move, kernels.translate_samples, their normals and areas unchanged; an
+object light's points, its shape and its emitting object's vertices held fixed), and of the vertex colours
+(ka and kd times the colour interpolated at the hit's barycentrics, the moving ones where the hit moves;
+kernels.vertex_colour: objects.<name>.colors) with every parameter above. The image is the mean of
 each pixel's rays, as the trace kernel makes it. A parameter whose value switches its effect off keeps
 its true derivative: a ks of 0 (the replay shades every Phong term), a light of colour 0 (its shadow rays
 traced for the record), and a reflectivity of 0 where the caller names it, render(grad=[names]) recording
 that material's mirror rays whatever its k_r (mirrored_materials; backward() refuses an unrecorded one in one
 line rather than give it 0). Covered for now: any render.spp and light_samples, camera
-and mirror rays (no glass), image and checker textures, area lights, no vertex colours; any other scene is
+and mirror rays (no glass), image and checker textures, vertex colours, area lights; any other scene is
 refused in one line naming what is not yet differentiated, so a gradient is never silently partial.
 """
 from __future__ import annotations
@@ -212,8 +216,9 @@ def record_first_hits(scene, geom, data, fx, device: str, threads: int = 1, band
 def parameter_names(scene) -> list[str]:
     """The r.params names backward() can differentiate with respect to: the objects' vertices too (a smooth
     object's computed vertex normals moving with them), but not an area light's own object's (its sample
-    points are held fixed); an area light's radiance and an emitting
-    material's emission; the camera's eye, center, up and fovy."""
+    points are held fixed), and their vertex colours where they have them; an area light's radiance and an
+    emitting material's emission, a rectangle, disk or sphere light's center; the camera's eye, center, up
+    and fovy."""
     names = [f"materials.{m}.{k}" for m in scene.materials for k in MATERIAL_KEYS]
     names += [f"materials.{name}.{k}" for name, m in scene.materials.items() for k in TEXTURE_KEYS
               if getattr(m, k) is not None and getattr(m, k).image is not None]
@@ -512,8 +517,8 @@ def backward(scene, geom, hits: FirstHits, d_image, wrt, device: str) -> dict:
             why = _name_refusal(scene, str(name)) or (
                 "not a parameter backward() differentiates yet (materials.<name>.ka | kd | ks | shininess | "
                 "reflectivity | ka_texture | kd_texture | ks_texture | emission, lights.<i>.color | position | "
-                "direction | radiance (an area light's), objects.<name>.vertices, "
-                "camera.eye | center | up | fovy)")
+                "direction | radiance | center (an area light's of its own shape), objects.<name>.vertices | "
+                "colors (vertex colours), camera.eye | center | up | fovy)")
             raise ArgumentError("backward", str(name), why)
         if _unrecorded(scene, geom, hits, name):
             raise ArgumentError("backward", str(name), f"a reflectivity of 0 switches the mirror rays off, and this "

@@ -274,8 +274,9 @@ class Renderer:
     def backward(self, d_image, wrt=None, *, arrays: bool = False) -> dict:
         """d(sum(d_image * image)) / d(param) at the last frame, rendered with grad=True, for each name in
         ``wrt`` (r.params names: materials.<name>.ka | kd | ks | shininess | reflectivity | ka_texture |
-        kd_texture | ks_texture (image textures' texels), lights.<i>.color |
-        position | direction, objects.<name>.vertices, camera.eye | center | up | fovy;
+        kd_texture | ks_texture (image textures' texels) | emission, lights.<i>.color | position | direction |
+        radiance | center (an area light's of its own shape), objects.<name>.vertices | colors (vertex
+        colours), camera.eye | center | up | fovy;
         all of them by default, less a reflectivity of 0 the frame did not record): a dict of float64 NumPy
         arrays shaped as the parameters; kd's carries ka's where ka follows kd (as r.params keeps it following).
         A reflectivity of 0 named here is refused unless the frame was rendered with grad=[that name] (its

@@ -12,7 +12,10 @@ positions, colours and directions): C = C_amb ka + sum_l vis_l C_l w_l (kd n.L +
 (wp.static): Warp does not replay a dynamic loop backwards, and a loop longer than max_unroll becomes one.
 Area lights' sample points, up to 4096 a light, are no loop: area_replay runs one thread per ray level and
 point and adds the point's term (area_sample_term, shading.area_light's) with wp.atomic_add, differentiable;
-make_area_combine then sums the levels with the emitted radiance, as the tracer does.
+make_area_combine then sums the levels with the emitted radiance, as the tracer does. The points it reads are
+the forward's translated by their light's centre's move (translate_samples, 0 in the replay: a light's
+lights.<i>.center gradient). Vertex colours multiply ka and kd as the forward's coefficients do, interpolated
+by vertex_colour at the (moving) barycentrics from a differentiable per-vertex array.
 """
 
 from __future__ import annotations
