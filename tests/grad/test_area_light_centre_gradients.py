@@ -53,13 +53,14 @@ def weights():
     return np.random.default_rng(17).random((HEIGHT, WIDTH, 3)).astype(np.float32)
 
 
-def test_the_replayed_image_is_the_forward_image():
-    s = lit()
+@pytest.mark.parametrize("shape", list(LIGHTS))
+def test_the_replayed_image_is_the_forward_image(shape):
+    s = lit(shape)
     r = warprt.Renderer(s)
     forward = r.render().image
     geom = r.geometry
     hits = warprt.image.record_first_hits(s, geom, geom.scene_data(s), resolve_effects(s), "cpu")
-    assert np.array_equal(warprt.image.replay_image(s, geom, hits, "cpu"), forward)
+    assert np.array_equal(warprt.image.replay_image(s, geom, hits, "cpu", centres=True), forward)
     r.close()
 
 
@@ -90,7 +91,7 @@ def test_the_points_held_are_not_the_differences(weights):
         r.render()
         geom = r.geometry
         hits = warprt.image.record_first_hits(s, geom, geom.scene_data(s), resolve_effects(s), "cpu")
-        launch = warprt.image.replay_launch(s, geom, hits, "cpu")
+        launch = warprt.image.replay_launch(s, geom, hits, "cpu", centres=True)
         before, then = list(launch.before), list(launch.then)
         if held:
             kernel, dim, inputs, outputs = then[0]

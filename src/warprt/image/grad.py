@@ -296,8 +296,8 @@ class ReplayLaunch:
     """The differentiable replay of a recorded frame, ready to launch: kernels/grad.py's shade kernel
     over ``dim`` camera rays with ``inputs``, writing each ray's colour to ``rays``; ``arrays`` the
     inputs it differentiates, by key: ka, kd, ks, shininess, reflectivity per material slot, color,
-    position and direction per Whitted light, radiance per area light, and with vertices the geometry's
-    points. With area lights, the shade kernel writes each level's state (its ``rays`` a stand-in) and
+    position and direction per Whitted light, radiance per area light, with vertices the geometry's
+    points, with vertex colours their per-vertex colors, with centres each area light's center (its shift). With area lights, the shade kernel writes each level's state (its ``rays`` a stand-in) and
     ``then`` holds the launches after it, (kernel, dim, inputs, outputs): the area lights' samples
     (kernels.area_replay) and the levels' sum into ``rays`` (make_area_combine)."""
 
@@ -312,10 +312,11 @@ class ReplayLaunch:
     before: list = None  # launches before the shade kernel's (with the camera: camera_rays)
 
 
-def replay(scene, geom, hits: FirstHits, device: str, vertices: bool = False, camera: bool = False) -> ReplayLaunch:
+def replay(scene, geom, hits: FirstHits, device: str, vertices: bool = False, camera: bool = False,
+           centres: bool = False) -> ReplayLaunch:
     """replay_launch's kernels launched, on the current wp.Tape if there is one: its ``rays`` hold each
     camera ray's colour (one per pixel and sample)."""
-    r = replay_launch(scene, geom, hits, device, vertices, camera)
+    r = replay_launch(scene, geom, hits, device, vertices, camera, centres)
     for kernel, dim, inputs, outputs in r.before or ():
         wp.launch(kernel, dim=dim, inputs=inputs, outputs=outputs, device=device)
     wp.launch(r.kernel, dim=r.dim, inputs=r.inputs, outputs=[r.shaded], device=device)
@@ -325,12 +326,14 @@ def replay(scene, geom, hits: FirstHits, device: str, vertices: bool = False, ca
 
 
 def replay_launch(scene, geom, hits: FirstHits, device: str, vertices: bool = False,
-                  camera: bool = False) -> ReplayLaunch:
+                  camera: bool = False, centres: bool = False) -> ReplayLaunch:
     """The replay of ``hits`` (a frame of ``scene`` on ``geom``) with its differentiable arrays made from
     the scene's values; with ``vertices``, the points too (the hits recomputed on the moved faces); with
     ``camera``, the camera too: its eye, center and up (``arrays["camera"]``, the eye and
     center relative to the frame origin) and fovy, the camera rays' directions made from them (camera_rays,
-    in ``before``) and the hits recomputed from the moved rays on the recorded faces."""
+    in ``before``) and the hits recomputed from the moved rays on the recorded faces; with ``centres`` (and area
+    lights), the area lights' sample points translated by their centres' moves (``arrays["center"]``, 0:
+    translate_samples, in ``before``), which the area lights' replay then reads."""
     mats = geom.slot_materials(scene)
     vec = lambda rows: wp.array(np.asarray(rows, np.float32).reshape(-1, 3), dtype=wp.vec3, device=device,  # noqa: E731
                                 requires_grad=True)
@@ -390,12 +393,14 @@ def replay_launch(scene, geom, hits: FirstHits, device: str, vertices: bool = Fa
                                 device=device)
         radiance = vec([l.radiance for l in scene.area_lights])
         arrays["radiance"] = radiance
-        # The sample points moved with their light's centre (c - c0, 0 here: the forward's points to the bit),
-        # their normals and areas as they are: a shape light's points are its centre plus fixed offsets.
-        shift = wp.zeros(len(scene.area_lights), dtype=wp.vec3, device=device, requires_grad=True)
-        samples = wp.zeros(int(first[-1]), dtype=wp.vec3, device=device, requires_grad=True)
-        before.append((translate_samples, int(first[-1]), [a.points, sample_light, shift], [samples]))
-        arrays["center"] = shift
+        samples = a.points
+        if centres:  # the sample points moved with their light's centre (c - c0, 0 here: the forward's points
+            # to the bit), their normals and areas as they are: a shape light's points are its centre plus
+            # fixed offsets
+            shift = wp.zeros(len(scene.area_lights), dtype=wp.vec3, device=device, requires_grad=True)
+            samples = wp.zeros(int(first[-1]), dtype=wp.vec3, device=device, requires_grad=True)
+            before.append((translate_samples, int(first[-1]), [a.points, sample_light, shift], [samples]))
+            arrays["center"] = shift
         hit_p, hit_n, hit_kd, hit_ks, level_weight, acc = state
         then.append((area_replay, (levels, int(first[-1])),
                      [hits.words, hits.face, ray_dirs if vertices or camera else dirs, hits.area_bits, geom.tri_material, shininess, hit_p, hit_n,
@@ -495,11 +500,12 @@ def texture_table(mats, device: str) -> TextureTable:
     return TextureTable(arrays, images)
 
 
-def replay_image(scene, geom, hits: FirstHits, device: str, camera: bool = False) -> np.ndarray:
+def replay_image(scene, geom, hits: FirstHits, device: str, camera: bool = False, centres: bool = False) -> np.ndarray:
     """The image the replay makes of a recorded frame, (height, width, 3): the forward's, to float32
     rounding, where the replay models what the forward traced (what the tests check); with ``camera``, the
-    replay camera gradients run (the rays made again from the camera, the hits re-intersected)."""
-    rays = replay(scene, geom, hits, device, camera=camera).rays
+    replay camera gradients run (the rays made again from the camera, the hits re-intersected); with ``centres``,
+    the area lights' sample points translated (by 0) as the replay of their centres' gradients does."""
+    rays = replay(scene, geom, hits, device, camera=camera, centres=centres).rays
     image = wp.empty(hits.width * hits.height, dtype=wp.vec3, device=device)
     wp.launch(sample_mean, dim=hits.width * hits.height, inputs=[rays, hits.samples], outputs=[image], device=device)
     return image.numpy().reshape(hits.height, hits.width, 3)
@@ -530,9 +536,10 @@ def backward(scene, geom, hits: FirstHits, d_image, wrt, device: str) -> dict:
                                                    f"got {d.shape}")
     moving = any(name.startswith("objects.") and name.endswith(".vertices") for name in wrt)
     camera = any(name.startswith("camera.") for name in wrt)
+    centres = any(name.startswith("lights.") and name.endswith(".center") for name in wrt)
     tape = wp.Tape()
     with tape:
-        launched = replay(scene, geom, hits, device, moving, camera)
+        launched = replay(scene, geom, hits, device, moving, camera, centres)
     rays, arrays = launched.rays, launched.arrays
     # The image is the mean of each pixel's rays (sample_mean): its adjoint, d_image / samples to each ray.
     d_rays = np.repeat(d.reshape(-1, 3), hits.samples, axis=0) / np.float32(hits.samples)
