@@ -327,3 +327,115 @@ def test_smooth_vertex_gradients_equal_mitsubas_ad():
     assert [n for n in names if not close(grads[n], theirs[n], 1e-4)] == []
     _, held = mitsuba_object_gradients(s, masked)  # the control
     assert not close(grads["objects.ball.vertices"], held["objects.ball.vertices"], 1e-2)
+
+
+def mitsuba_colour_gradients(s, weights, names, colours: bool = True) -> tuple[np.ndarray, dict]:
+    """Mitsuba's image and AD gradients of sum(weights * image) with respect to the named objects' vertex
+    colours (``names``: r.params' objects.<name>.colors) and every material's colours: the reference's
+    Attributes BSDF reads each mesh's "vertex_color" attribute (mi.traverse's object_<i>.vertex_color, with
+    dr.enable_grad), which its material() multiplies ka and kd by. ``colours=False``: the model without the
+    vertex colours (Switches.vertex_color off; a control: the materials' gradients then miss their factor)."""
+    mitsuba_variant()
+    import drjit as dr
+    import mitsuba as mi
+
+    ms = mitsuba_scene(s)
+    ms.integrator.switches = Switches(**{**Switches.for_effects(resolve_effects(s), s.render).__dict__,
+                                         "vertex_color": colours})
+    index = {o.name: i for i, o in enumerate(s.objects)}
+    params = mi.traverse(ms.mi_scene)
+    keys = {name: f"object_{index[name.split('.')[1]]:05d}.vertex_color" for name in names}
+    for key in keys.values():
+        dr.enable_grad(params[key])
+        dr.clear_grad(params[key])
+    params.update()
+    t = ms.integrator.tables
+    for table in (t.ka, t.kd, t.ks, t.shininess, t.kr):
+        dr.enable_grad(table)
+        dr.clear_grad(table)
+    color = backpropagated(ms, s, weights)
+    image = np.stack([np.array(c) for c in (color.x, color.y, color.z)], -1).reshape(s.camera.height, s.camera.width, 3)
+    out = {name: np.array(dr.grad(params[key]), np.float64).reshape(-1, 3) for name, key in keys.items()}
+    kd = np.array(dr.grad(t.kd), np.float64).reshape(len(np.array(t.shininess)), -1)
+    ka = np.array(dr.grad(t.ka), np.float64).reshape(len(np.array(t.shininess)), -1)
+    for name, m in s.materials.items():
+        rows = [t.row_of_object[i] for i, o in enumerate(s.objects) if o.material == name]
+        out[f"materials.{name}.kd"] = kd[rows].sum(0) + (ka[rows].sum(0) if m.ka_follows_kd else 0.0)
+        out[f"materials.{name}.ka"] = ka[rows].sum(0)
+    return image, out
+
+
+def test_vertex_colour_gradients_equal_mitsubas_ad():
+    """tests/grad/test_vertex_colour_gradients.py's scene (a coloured quad on a mirroring floor, a coloured
+    triangle casting its shadow on it, two levels): the colours and the materials' ka and kd they multiply,
+    against Mitsuba's AD of its Attributes BSDF's vertex_color attribute. Pixels whose images part are left out
+    of both losses. Measured: within 1e-6 relative of the largest component (colours), 5e-7 (materials). The
+    control: Mitsuba's model without the vertex colours gives the materials' kd other gradients."""
+    from grad.test_vertex_colour_gradients import HEIGHT as H, WIDTH as W, scene as coloured_scene
+
+    s = coloured_scene()
+    w = np.random.default_rng(5).random((H, W, 3)).astype(np.float32)
+    names = ["objects.quad.colors", "objects.fan.colors"]
+    r = warprt.Renderer(s)
+    masked = where_images_agree(r, lambda weights: mitsuba_colour_gradients(s, weights, names), w)
+    materials = ["materials.paint.kd", "materials.fan.kd", "materials.fan.ka", "materials.floor.kd"]
+    grads = r.backward(masked, wrt=names + materials)
+    _, theirs = mitsuba_colour_gradients(s, masked, names)
+    close = lambda a, b, rel: np.allclose(a, b, rtol=rel, atol=rel * np.abs(b).max())  # noqa: E731
+    assert [n for n in names + materials if not close(grads[n], theirs[n], REL)] == []
+    _, white = mitsuba_colour_gradients(s, masked, names, colours=False)  # the control
+    assert not close(grads["materials.paint.kd"], white["materials.paint.kd"], 1e-2)
+    assert not close(grads["materials.fan.kd"], white["materials.fan.kd"], 1e-2)
+
+
+def mitsuba_centre_gradients(s, weights, shadows: bool = True) -> tuple[np.ndarray, np.ndarray]:
+    """Mitsuba's image and AD gradient of sum(weights * image) with respect to the centre of the scene's one
+    area light, a rectangle or disk: its shape's to_world made again with a differentiable translation
+    (mi.traverse, dr.enable_grad on the centre), the reference's area_light() placing warprt's sample points
+    through Mitsuba's own emitter.sample_direction on it. ``shadows=False``: the model without shadows (a
+    control). The shape's to_world is put back as it was."""
+    mitsuba_variant()
+    import drjit as dr
+    import mitsuba as mi
+    from warprt.scene import shape_frame
+
+    ms = mitsuba_scene(s)
+    ms.integrator.switches = Switches(**{**Switches.for_effects(resolve_effects(s), s.render).__dict__,
+                                         "shadows": shadows})
+    (light,) = s.area_lights
+    shape = ms.integrator.tables.area_shapes[0]
+    p = mi.traverse(shape)
+    saved = type(p["to_world"])(p["to_world"])
+    _, u, v = shape_frame(light)
+    m = np.eye(4)
+    m[:3, 0], m[:3, 1], m[:3, 2] = u, v, np.cross(u, v) / np.linalg.norm(np.cross(u, v))
+    centre = mi.Point3f(*light.center)
+    dr.enable_grad(centre)
+    moved = mi.Transform4f().translate(centre) @ mi.Transform4f(m)
+    p["to_world"] = moved
+    p.update()
+    color = backpropagated(ms, s, weights)
+    image = np.stack([np.array(c) for c in (color.x, color.y, color.z)], -1).reshape(s.camera.height, s.camera.width, 3)
+    grad = np.array(dr.grad(centre), np.float64).ravel()
+    p["to_world"] = saved
+    p.update()
+    return image, grad
+
+
+def test_area_light_centre_gradients_equal_mitsubas_ad():
+    """tests/grad/test_area_light_centre_gradients.py's rectangle light over a glossy sphere and a mirroring
+    floor (two levels, 16 samples): lights.0.center against Mitsuba's AD through its rectangle's to_world, both
+    holding the faces and which sample points each hit sees. Pixels whose images part are left out of both
+    losses. Measured: within 2.6e-7 relative. The control: Mitsuba's model without shadows (every sample point
+    seen) is 0.21 off."""
+    from grad.test_area_light_centre_gradients import HEIGHT as H, WIDTH as W, lit
+
+    s = lit()
+    w = np.random.default_rng(5).random((H, W, 3)).astype(np.float32)
+    r = warprt.Renderer(s)
+    masked = where_images_agree(r, lambda weights: mitsuba_centre_gradients(s, weights), w)
+    ours = r.backward(masked, wrt=["lights.0.center"])["lights.0.center"]
+    _, theirs = mitsuba_centre_gradients(s, masked)
+    np.testing.assert_allclose(ours, theirs, rtol=REL, atol=REL * np.abs(theirs).max())
+    _, unshadowed = mitsuba_centre_gradients(s, masked, shadows=False)  # the control
+    assert not np.allclose(ours, unshadowed, rtol=REL, atol=REL * np.abs(ours).max())

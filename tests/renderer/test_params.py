@@ -227,6 +227,67 @@ def test_several_parameters_at_once_and_the_caches_they_leave(tmp_path):
     assert stats.geometry["bvh"] == "refit" and stats.shadow_grid["grid"] == "built"  # the triangles moved
 
 
+def coloured() -> dict:
+    """doc() with vertex colours on a triangle object standing on the floor."""
+    d = copy.deepcopy(doc())
+    d["objects"].append({"name": "fan", "shape": "triangles", "material": "red",
+                         "vertices": [[-1.5, 0.05, -0.5], [1.5, 0.05, -0.8], [0.0, 1.8, -1.0]], "faces": [[0, 1, 2]],
+                         "colors": [[1.0, 0.1, 0.1], [0.1, 1.0, 0.1], [0.1, 0.1, 1.0]]})
+    return d
+
+
+NEW_COLORS = [[0.2, 0.9, 0.4], [0.7, 0.3, 0.1], [0.4, 0.5, 1.5]]
+
+
+def test_vertex_colours_set_render_as_a_fresh_load_the_bvh_kept(tmp_path):
+    """objects.<name>.colors, where an object has them: the colours written over the kept Geometry's (its BVH
+    kept, not rebuilt), the frame a fresh load's to the bit; with its vertices at once, a rebuild, the same."""
+    d = coloured()
+    r = warprt.Renderer(load(tmp_path, d), primary_query="raytrace")
+    before = r.render()
+    mesh = r.geometry.mesh
+    assert [n for n in r.params if n.startswith("objects.")] == [f"objects.{o}.vertices" for o in
+                                                                  ("floor", "ball", "block", "wall", "fan")] + ["objects.fan.colors"]
+    r.params["objects.fan.colors"] = NEW_COLORS
+    after = r.render()
+    assert after.stats.geometry["bvh"] == "reused" and r.geometry.mesh is mesh
+    edited = copy.deepcopy(d)
+    edited["objects"][-1]["colors"] = NEW_COLORS
+    fresh_scene = load(tmp_path, edited, "edited.toml")
+    assert_same_frame(after, warprt.render(fresh_scene, primary_query="raytrace"))
+    assert not np.array_equal(after.image, before.image)
+    assert np.array_equal(r.params["objects.fan.colors"], warprt.Renderer(fresh_scene).params["objects.fan.colors"])
+    moved = np.asarray(d["objects"][-1]["vertices"]) + [0.1, 0.0, 0.2]
+    r.params.update({"objects.fan.colors": np.asarray(NEW_COLORS) * 0.5, "objects.fan.vertices": moved})
+    edited["objects"][-1].update(colors=(np.asarray(NEW_COLORS) * 0.5).tolist(), vertices=moved.tolist())
+    assert_same_frame(r.render(), warprt.render(load(tmp_path, edited, "moved.toml"), primary_query="raytrace"))
+    with pytest.raises(warprt.SceneError, match="objects.fan.colors"):
+        r.params["objects.fan.colors"] = [[0.1, 0.2, 0.3]]  # one colour per vertex
+    with pytest.raises(warprt.SceneError, match="unknown parameter"):
+        r.params["objects.ball.colors"] = np.ones((3, 3))  # the ball has none
+
+
+@pytest.mark.parametrize("shape", ["rectangle", "sphere"])
+def test_an_area_lights_centre_set_renders_as_a_fresh_load(tmp_path, shape):
+    """lights.<i>.center of a shape light: its drawn triangles and its sample points move together, as a file
+    saying the new centre gives them (the Geometry built again for the light's new triangles)."""
+    d = copy.deepcopy(doc())
+    light = {"type": "area", "shape": shape, "center": [0.5, 2.5, 0.5], "radiance": [3.0, 2.5, 2.0]}
+    light.update({"normal": [0.0, -1.0, 0.3], "size": [0.8, 0.5]} if shape == "rectangle" else {"radius": 0.3})
+    d["lights"] = [d["lights"][0], light]
+    d["render"]["light_samples"] = 4
+    r = warprt.Renderer(load(tmp_path, d), primary_query="raytrace")
+    before = r.render()
+    r.params["lights.1.center"] = [-0.4, 2.2, 0.9]
+    after = r.render()
+    edited = copy.deepcopy(d)
+    edited["lights"][1]["center"] = [-0.4, 2.2, 0.9]
+    fresh_scene = load(tmp_path, edited, "edited.toml")
+    assert_same_frame(after, warprt.render(fresh_scene, primary_query="raytrace"))
+    assert not np.array_equal(after.image, before.image)
+    assert "lights.0.center" not in r.params  # a point light has none
+
+
 @pytest.mark.parametrize("name, value, message", [
     ("materials.red.kdd", [0, 0, 0], "unknown parameter (did you mean 'materials.red.kd'?)"),
     ("materials.red.ior", 1.5, "unknown parameter"),  # an opaque material has no ior

@@ -120,6 +120,14 @@ class SceneData:
     area: AreaLights  # a stand-in of no lights where the scene has none
 
 
+def vertex_colors(objects) -> np.ndarray:
+    """The kernels' per-vertex colours of ``objects`` (float32): each object's, white for one without, or
+    one white stand-in where none has any."""
+    coloured = any(getattr(o, "colors", None) is not None for o in objects)
+    rgb = [o.colors if getattr(o, "colors", None) is not None else np.ones((len(o.vertices), 3)) for o in objects]
+    return np.concatenate(rgb).astype(np.float32) if coloured and rgb else np.ones((1, 3), np.float32)
+
+
 class Geometry:
     """Owns the device arrays and the BVH for one set of objects, in coordinates relative to
     ``origin`` (default: bvh.frame_origin, the objects' centre or a far eye); ``scene_data(scene)``
@@ -169,9 +177,7 @@ class Geometry:
         self._object_uv = [(len(obj.vertices), getattr(obj, "uv", None)) for obj in objects]
         self.object_uv = None  # uv_tables(), once built
         self._uv_array = None  # uv_array(), once a frame has textures or the uv AOV is asked for
-        coloured = any(getattr(o, "colors", None) is not None for o in objects)
-        rgb = [o.colors if getattr(o, "colors", None) is not None else np.ones((len(o.vertices), 3)) for o in objects]
-        colors = np.concatenate(rgb).astype(np.float32) if coloured and rgb else np.ones((1, 3), np.float32)
+        colors = vertex_colors(objects)
 
         d = device
         if build_bvh:
@@ -228,6 +234,12 @@ class Geometry:
         self.normals.assign(normals)
         self.data = self.scene_data(scene)
         return True
+
+    def recolor(self, scene):
+        """Take ``scene``'s objects' vertex colours, the objects being this Geometry's but for their colours
+        (present on the same objects, of the same shapes): written over the kept array in place, as a fresh
+        build would make it (vertex_colors), the kernels' tables sharing it."""
+        self.colors.assign(vertex_colors(drawn_objects(scene)))
 
     def triangle_boxes(self) -> tuple[np.ndarray, np.ndarray]:
         """Each triangle's (lowest, highest) corner in float64, computed once for these points."""

@@ -15,14 +15,19 @@ moved normal; a smooth object's vertex normals made again from the moving points
 makes them, angle-weighted, kernels.vertex_normal_sums and smooth_vertex_normals, where the scene does not
 give them: moving_normals), of the camera's eye, center, up and fovy (the camera rays made again in Warp,
 kernels.camera_rays, and the hit recomputed on the recorded face from the moved ray, through the mirror
-rays too), and of the area lights' radiance (an area light's, an emitting material's emission): their
+rays too), of the area lights' radiance (an area light's, an emitting material's emission): their
 sample points' terms at each hit (the record's bit per point seen; kernels.area_replay, one thread per level
-and point) and the emitter's front met by a ray, the points themselves held fixed. The image is the mean of
+and point) and the emitter's front met by a ray, of a rectangle, disk or sphere light's centre (its sample
+points translated by the centre's move, kernels.translate_samples, their normals and areas unchanged; an
+object light's points, its shape and its emitting object's vertices held fixed), and of the vertex colours
+(ka and kd times the colour interpolated at the hit's barycentrics, the moving ones where the hit moves;
+kernels.vertex_colour: objects.<name>.colors) with every parameter above. The image is the mean of
 each pixel's rays, as the trace kernel makes it. A parameter whose value switches its effect off keeps
 its true derivative: a ks of 0 (the replay shades every Phong term), a light of colour 0 (its shadow rays
 traced for the record), and a reflectivity of 0 where the caller names it, render(grad=[names]) recording
 that material's mirror rays whatever its k_r (mirrored_materials; backward() refuses an unrecorded one in one
-line rather than give it 0). 
+line rather than give it 0).
+
 With glass (fx.refraction), Whitted's full ray tree (record_tree, replay_tree_launch; kernels/grad_tree.py):
 the record follows the forward's tree level by level with the forward's own functions (each level's rays,
 hits, visibility and children, the children compacted on the host into the next level's list), and the
@@ -33,7 +38,7 @@ held fixed besides the faces and visibility: the tree's structure (which childre
 reflection) and each ray's medium. Its size is checked as it grows (_tree_too_big).
 
 Covered for now: any render.spp and light_samples, camera and mirror rays, glass, image and checker
-textures, area lights, no vertex colours; any other scene is refused in one line naming
+textures, vertex colours (not with glass), area lights; any other scene is refused in one line naming
 what is not yet differentiated, so a gradient is never silently partial.
 """
 from __future__ import annotations
@@ -48,7 +53,8 @@ from ..errors import ArgumentError
 from ..kernels.camera import camera_data
 from ..kernels.grad import (MAX_GRAD_LIGHTS, TEXTURE_CHECKER, TEXTURE_CLAMP, TEXTURE_IMAGE, TEXTURE_MIRROR, TEXTURE_NONE,
                             TEXTURE_WRAP, area_replay, camera_rays, make_area_combine, make_grad_record_kernel,
-                            make_grad_shade_kernel, sample_mean, smooth_vertex_normals, vertex_normal_sums)
+                            make_grad_shade_kernel, sample_mean, smooth_vertex_normals, translate_samples,
+                            vertex_normal_sums)
 from ..kernels.grad_tree import make_tree_record_kernel, make_tree_replay_kernel, tree_area_combine, tree_camera_rays
 from ..geometry import LightShape, light_shape
 from ..scene import camera_basis, drawn_objects, position_ids, scene_effects
@@ -81,8 +87,8 @@ def refusal(scene, fx, mirrored=()) -> str | None:
                 "mirror rays where k_r > 0 only): " + ", ".join(f"materials.{m}.reflectivity" for m in dark))
     if (fx.reflection or mirrored) and not fx.refraction and scene.render.max_depth > MAX_GRAD_DEPTH:
         return f"at most {MAX_GRAD_DEPTH} ray levels (render.max_depth) are differentiated (Warp's unrolled loop)"
-    if fx.vertex_color:
-        return "vertex colours are not differentiated yet"
+    if fx.refraction and fx.vertex_color:
+        return "vertex colours in a scene with glass are not differentiated yet (the ray tree's replay does not read them)"
     if len(scene.whitted_lights) > MAX_GRAD_LIGHTS:
         return f"at most {MAX_GRAD_LIGHTS} lights are differentiated (Warp's unrolled loop)"
     return None
@@ -186,6 +192,7 @@ class FirstHits:
     area: object = None  # the frame's AreaLights table (its sample points, normals and areas), as recorded
     mirrored: tuple = ()  # the materials whose mirror rays were recorded whatever their k_r (mirrored_materials)
     reflects: bool = False  # whether the frame could reflect (render.max_depth > 1, reflection not switched off)
+    vertex_color: bool = False  # ka and kd times the vertex colours, as the frame's
 
 
 def record_first_hits(scene, geom, data, fx, device: str, threads: int = 1, bands: int = 1, pool=None,
@@ -222,14 +229,16 @@ def record_first_hits(scene, geom, data, fx, device: str, threads: int = 1, band
                                         reflect], n, threads, bands, device, pool=pool)
     reflects = scene.render.max_depth > 1 and (switched is None or "reflection" in switched)
     return FirstHits(face, bary, dirs, visible, cam.width, cam.height, L, D, fx.smooth, k * k, fx.light_model,
-                     fx.texture, emit, area_bits, words, data.area if words else None, tuple(mirrored), reflects)
+                     fx.texture, emit, area_bits, words, data.area if words else None, tuple(mirrored), reflects,
+                     fx.vertex_color)
 
 
 def parameter_names(scene) -> list[str]:
     """The r.params names backward() can differentiate with respect to: the objects' vertices too (a smooth
     object's computed vertex normals moving with them), but not an area light's own object's (its sample
-    points are held fixed); an area light's radiance and an emitting
-    material's emission; the camera's eye, center, up and fovy."""
+    points are held fixed), and their vertex colours where they have them; an area light's radiance and an
+    emitting material's emission, a rectangle, disk or sphere light's center; the camera's eye, center, up
+    and fovy."""
     names = [f"materials.{m}.{k}" for m in scene.materials for k in MATERIAL_KEYS]
     names += [f"materials.{name}.{k}" for name, m in scene.materials.items() if m.dielectric for k in DIELECTRIC_KEYS]
     names += [f"materials.{name}.{k}" for name, m in scene.materials.items() for k in TEXTURE_KEYS
@@ -238,11 +247,20 @@ def parameter_names(scene) -> list[str]:
     names += [f"lights.{i}.{k}" for i, light in enumerate(scene.lights) if not light.area for k in LIGHT_KEYS
               if getattr(light, k) is not None]  # as r.params has them: no position for a directional light
     names += [f"lights.{i}.radiance" for i, light in enumerate(scene.lights) if light.area]
+    names += [f"lights.{i}.center" for i, light in enumerate(scene.lights) if _centred(light)]
     emitters = _emitter_objects(scene)
     names += [f"objects.{name}.vertices" for name, i in object_names(scene).items()
               if scene.objects[i].name not in emitters]
+    names += [f"objects.{name}.colors" for name, i in object_names(scene).items()
+              if scene.objects[i].colors is not None]
     names += [f"camera.{k}" for k in CAMERA_KEYS]
     return names
+
+
+def _centred(light) -> bool:
+    """Whether a light is an area light of its own shape (rectangle, disk, sphere) with a ``center``, which
+    r.params names and whose move translates its sample points (translate_samples)."""
+    return light.area and light.shape is not None and light.center is not None
 
 
 def _emits(material) -> bool:
@@ -302,8 +320,8 @@ class ReplayLaunch:
     """The differentiable replay of a recorded frame, ready to launch: kernels/grad.py's shade kernel
     over ``dim`` camera rays with ``inputs``, writing each ray's colour to ``rays``; ``arrays`` the
     inputs it differentiates, by key: ka, kd, ks, shininess, reflectivity per material slot, color,
-    position and direction per Whitted light, radiance per area light, and with vertices the geometry's
-    points. With area lights, the shade kernel writes each level's state (its ``rays`` a stand-in) and
+    position and direction per Whitted light, radiance per area light, with vertices the geometry's
+    points, with vertex colours their per-vertex colors, with centres each area light's center (its shift). With area lights, the shade kernel writes each level's state (its ``rays`` a stand-in) and
     ``then`` holds the launches after it, (kernel, dim, inputs, outputs): the area lights' samples
     (kernels.area_replay) and the levels' sum into ``rays`` (make_area_combine)."""
 
@@ -318,13 +336,14 @@ class ReplayLaunch:
     before: list = None  # launches before the shade kernel's (with the camera: camera_rays)
 
 
-def replay(scene, geom, hits: FirstHits, device: str, vertices: bool = False, camera: bool = False) -> ReplayLaunch:
+def replay(scene, geom, hits: FirstHits, device: str, vertices: bool = False, camera: bool = False,
+           centres: bool = False) -> ReplayLaunch:
     """replay_launch's kernels launched, on the current wp.Tape if there is one: its ``rays`` hold each
     camera ray's colour (one per pixel and sample)."""
     if isinstance(hits, TreeHits):
         r = replay_tree_launch(scene, geom, hits, device, vertices, camera)
     else:
-        r = replay_launch(scene, geom, hits, device, vertices, camera)
+        r = replay_launch(scene, geom, hits, device, vertices, camera, centres)
     for kernel, dim, inputs, outputs in r.before or ():
         wp.launch(kernel, dim=dim, inputs=inputs, outputs=outputs, device=device)
     if r.kernel is not None:  # a tree's levels are all in ``then``
@@ -335,12 +354,14 @@ def replay(scene, geom, hits: FirstHits, device: str, vertices: bool = False, ca
 
 
 def replay_launch(scene, geom, hits: FirstHits, device: str, vertices: bool = False,
-                  camera: bool = False) -> ReplayLaunch:
+                  camera: bool = False, centres: bool = False) -> ReplayLaunch:
     """The replay of ``hits`` (a frame of ``scene`` on ``geom``) with its differentiable arrays made from
     the scene's values; with ``vertices``, the points too (the hits recomputed on the moved faces); with
     ``camera``, the camera too: its eye, center and up (``arrays["camera"]``, the eye and
     center relative to the frame origin) and fovy, the camera rays' directions made from them (camera_rays,
-    in ``before``) and the hits recomputed from the moved rays on the recorded faces."""
+    in ``before``) and the hits recomputed from the moved rays on the recorded faces; with ``centres`` (and area
+    lights), the area lights' sample points translated by their centres' moves (``arrays["center"]``, 0:
+    translate_samples, in ``before``), which the area lights' replay then reads."""
     mats = geom.slot_materials(scene)
     vec = lambda rows: wp.array(np.asarray(rows, np.float32).reshape(-1, 3), dtype=wp.vec3, device=device,  # noqa: E731
                                 requires_grad=True)
@@ -361,7 +382,7 @@ def replay_launch(scene, geom, hits: FirstHits, device: str, vertices: bool = Fa
     points = wp.array(geom.points_np, dtype=wp.vec3, device=device, requires_grad=True) if vertices else geom.points
     area = hits.words > 0
     kernel = make_grad_shade_kernel(hits.lights, hits.levels, hits.smooth, vertices or camera, hits.light_model,
-                                    hits.texture, area)
+                                    hits.texture, area, hits.vertex_color)
     cam = scene.camera
     eye = vec([geom.eye_offset(cam.eye), geom.eye_offset(cam.center), cam.up])  # eye[0]: the rays' origin
     fovy = wp.array([cam.fovy], dtype=float, device=device, requires_grad=True)
@@ -383,11 +404,15 @@ def replay_launch(scene, geom, hits: FirstHits, device: str, vertices: bool = Fa
     if vertices and hits.smooth:  # a smooth object's vertex normals, computed from the moving points
         normals, launches = moving_normals(scene, geom, points, device)
         before += launches
+    colors = vertex_colours(geom, hits, device)  # ka's and kd's factor, per vertex
     inputs = [eye, points, geom.indices, normals, geom.tri_material, geom.tri_smooth, ka, kd, ks, shininess, kr,
               light_pos, light_color, inverse_square, kind, axis, cone, uvs, *table.arrays,
-              wp.vec3(*scene.render.ambient), background, hits.face, hits.bary, dirs, hits.visible, *state, ray_dirs]
+              wp.vec3(*scene.render.ambient), background, hits.face, hits.bary, dirs, hits.visible, *state, ray_dirs,
+              colors]
     arrays = {"ka": ka, "kd": kd, "ks": ks, "shininess": shininess, "reflectivity": kr, "color": light_color,
               "position": light_pos, "direction": axis, "texels": table.arrays[0]}
+    if hits.vertex_color:
+        arrays["colors"] = colors
     then = []
     if area:
         a = hits.area  # the forward's own sample points, normals and areas
@@ -396,10 +421,18 @@ def replay_launch(scene, geom, hits: FirstHits, device: str, vertices: bool = Fa
                                 device=device)
         radiance = vec([l.radiance for l in scene.area_lights])
         arrays["radiance"] = radiance
+        samples = a.points
+        if centres:  # the sample points moved with their light's centre (c - c0, 0 here: the forward's points
+            # to the bit), their normals and areas as they are: a shape light's points are its centre plus
+            # fixed offsets
+            shift = wp.zeros(len(scene.area_lights), dtype=wp.vec3, device=device, requires_grad=True)
+            samples = wp.zeros(int(first[-1]), dtype=wp.vec3, device=device, requires_grad=True)
+            before.append((translate_samples, int(first[-1]), [a.points, sample_light, shift], [samples]))
+            arrays["center"] = shift
         hit_p, hit_n, hit_kd, hit_ks, level_weight, acc = state
         then.append((area_replay, (levels, int(first[-1])),
                      [hits.words, hits.face, ray_dirs if vertices or camera else dirs, hits.area_bits, geom.tri_material, shininess, hit_p, hit_n,
-                      hit_kd, hit_ks, a.points, a.normals, a.dA, sample_light, radiance], [acc]))
+                      hit_kd, hit_ks, samples, a.normals, a.dA, sample_light, radiance], [acc]))
         then.append((make_area_combine(hits.levels), n, [hits.face, hits.emit, radiance, background, level_weight,
                                                          acc], [rays]))
     if vertices:
@@ -407,6 +440,14 @@ def replay_launch(scene, geom, hits: FirstHits, device: str, vertices: bool = Fa
     if camera:
         arrays["camera"], arrays["fovy"] = eye, fovy
     return ReplayLaunch(kernel, n, inputs, rays, arrays, table.images, then, shaded, before)
+
+
+def vertex_colours(geom, hits: FirstHits, device: str) -> wp.array:
+    """The shade kernel's per-vertex colours: the forward's (Geometry.colors, white where an object has
+    none), differentiable, where the frame has vertex colours; else the forward's one-entry stand-in."""
+    if not hits.vertex_color:
+        return geom.colors
+    return wp.array(geom.colors.numpy(), dtype=wp.vec3, device=device, requires_grad=True)
 
 
 def moving_normals(scene, geom, points, device: str) -> tuple:
@@ -487,11 +528,12 @@ def texture_table(mats, device: str) -> TextureTable:
     return TextureTable(arrays, images)
 
 
-def replay_image(scene, geom, hits: FirstHits, device: str, camera: bool = False) -> np.ndarray:
+def replay_image(scene, geom, hits: FirstHits, device: str, camera: bool = False, centres: bool = False) -> np.ndarray:
     """The image the replay makes of a recorded frame, (height, width, 3): the forward's, to float32
     rounding, where the replay models what the forward traced (what the tests check); with ``camera``, the
-    replay camera gradients run (the rays made again from the camera, the hits re-intersected)."""
-    rays = replay(scene, geom, hits, device, camera=camera).rays
+    replay camera gradients run (the rays made again from the camera, the hits re-intersected); with ``centres``,
+    the area lights' sample points translated (by 0) as the replay of their centres' gradients does."""
+    rays = replay(scene, geom, hits, device, camera=camera, centres=centres).rays
     image = wp.empty(hits.width * hits.height, dtype=wp.vec3, device=device)
     wp.launch(sample_mean, dim=hits.width * hits.height, inputs=[rays, hits.samples], outputs=[image], device=device)
     return image.numpy().reshape(hits.height, hits.width, 3)
@@ -509,10 +551,13 @@ def backward(scene, geom, hits: FirstHits, d_image, wrt, device: str) -> dict:
             why = _name_refusal(scene, str(name)) or (
                 "not a parameter backward() differentiates yet (materials.<name>.ka | kd | ks | shininess | "
                 "reflectivity | ka_texture | kd_texture | ks_texture | emission, a dielectric's ior | "
-                "transmittance | absorption, lights.<i>.color | position | "
-                "direction | radiance (an area light's), objects.<name>.vertices, "
+                "transmittance | absorption, lights.<i>.color | position | direction | radiance | center (an "
+                "area light's of its own shape), objects.<name>.vertices | colors (vertex colours), "
                 "camera.eye | center | up | fovy)")
             raise ArgumentError("backward", str(name), why)
+        if isinstance(hits, TreeHits) and name.startswith("lights.") and name.endswith(".center"):
+            raise ArgumentError("backward", str(name), "an area light's centre in a scene with glass is not "
+                                "differentiated yet (the ray tree's replay holds the sample points where they are)")
         if _unrecorded(scene, geom, hits, name) and isinstance(hits, TreeHits):
             raise ArgumentError("backward", str(name), "a reflectivity of 0 switches the mirror rays off, and in a "
                                 "scene with glass the ray tree's record does not hold them yet: not differentiated "
@@ -525,11 +570,12 @@ def backward(scene, geom, hits: FirstHits, d_image, wrt, device: str) -> dict:
     if d.shape != (hits.height, hits.width, 3) or not np.all(np.isfinite(d)):
         raise ArgumentError("backward", "d_image", f"expected finite values of shape {(hits.height, hits.width, 3)}, "
                                                    f"got {d.shape}")
-    moving = any(name.startswith("objects.") for name in wrt)
+    moving = any(name.startswith("objects.") and name.endswith(".vertices") for name in wrt)
     camera = any(name.startswith("camera.") for name in wrt)
+    centres = any(name.startswith("lights.") and name.endswith(".center") for name in wrt)
     tape = wp.Tape()
     with tape:
-        launched = replay(scene, geom, hits, device, moving, camera)
+        launched = replay(scene, geom, hits, device, moving, camera, centres)
     rays, arrays = launched.rays, launched.arrays
     # The image is the mean of each pixel's rays (sample_mean): its adjoint, d_image / samples to each ray.
     d_rays = np.repeat(d.reshape(-1, 3), hits.samples, axis=0) / np.float32(hits.samples)
@@ -543,17 +589,22 @@ def backward(scene, geom, hits: FirstHits, d_image, wrt, device: str) -> dict:
         offset, h, w = launched.images[(slot, key)]
         return grads["texels"][offset:offset + h * w].reshape(h, w, 3)[::-1].astype(np.float64)
 
+    starts = np.cumsum([0] + [len(o.vertices) for o in scene.objects])
     if moving:
         point_grads = arrays["points"].grad.numpy().astype(np.float64)
-        starts = np.cumsum([0] + [len(o.vertices) for o in scene.objects])
     out = {}
     for name in wrt:
         section, owner, key = (name.split(".") + [""])[:3]  # camera.<key>: two parts
         if section == "objects":  # the points are the objects' vertices in order, less the frame origin
             i = object_names(scene)[owner]
+            if key == "colors":  # the colours likewise, one per vertex
+                out[name] = grads["colors"][starts[i]:starts[i + 1]].astype(np.float64)
+                continue
             out[name] = point_grads[starts[i]:starts[i + 1]]
         elif section == "camera":  # eye and center less the frame origin (a shift: the same derivative), up
             out[name] = (grads["fovy"][0] if owner == "fovy" else grads["camera"][camera_rows[owner]]).astype(np.float64)
+        elif key == "center":  # an area light's: its row among the area lights (area_sources' order)
+            out[name] = grads["center"][area_sources(scene).index(f"lights.{owner}.radiance")].astype(np.float64)
         elif key in ("radiance", "emission"):  # the area lights whose radiance it is
             rows = [j for j, source in enumerate(area_sources(scene)) if source == name]
             out[name] = grads["radiance"][rows].astype(np.float64).sum(0) if rows else np.zeros(3)

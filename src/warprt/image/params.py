@@ -6,14 +6,17 @@ frame may change without loading the scene again, each read and written as NumPy
     materials.<name>.shininess | ior                                            ()
     materials.<name>.ka_texture | kd_texture | ks_texture     (H, W, 3) linear float32, row 0 the image's top
     lights.<i>.position | color | direction | radiance (an area light's)         (3,)
+    lights.<i>.center        (3,), an area light's of its own shape (rectangle, disk, sphere) given one
     objects.<name>.vertices                                                     (N, 3), world space
+    objects.<name>.colors                      (N, 3) linear RGB, where the object has vertex colours
     camera.eye | center | up                                                    (3,)
     camera.fovy                                                                 ()
 
 Setting one makes the next frame render the changed scene exactly as a fresh load of a file saying the
 same would: the new scene is checked as a loaded one is, and the Renderer keeps what the change leaves
-valid (moved vertices refit the BVH). ior, transmittance and absorption are a dielectric's, a texture's
-texels an image texture's; a material whose ka follows kd (a file that leaves ka out) keeps following it.
+valid (moved vertices refit the BVH; new vertex colours are written over the kept ones). ior, transmittance
+and absorption are a dielectric's, a texture's texels an image texture's; a material whose ka follows kd
+(a file that leaves ka out) keeps following it.
 """
 
 from __future__ import annotations
@@ -28,7 +31,7 @@ from ..errors import SceneError
 MATERIAL_COLOURS = ("ka", "kd", "ks", "reflectivity")
 DIELECTRIC_COLOURS = ("transmittance", "absorption")
 TEXTURES = ("ka_texture", "kd_texture", "ks_texture")
-LIGHT_VECTORS = ("position", "color", "direction", "radiance")
+LIGHT_VECTORS = ("position", "color", "direction", "radiance", "center")
 CAMERA_VECTORS = ("eye", "center", "up")
 SOURCE = "Renderer.params"
 
@@ -47,6 +50,7 @@ def _names(scene) -> list[str]:
         out += [f"lights.{i}.{k}" for k in LIGHT_VECTORS if getattr(light, k) is not None
                 and not (light.area and k == "color")]  # an area light's light is its radiance
     out += [f"objects.{name}.vertices" for name in object_names(scene)]
+    out += [f"objects.{name}.colors" for name, i in object_names(scene).items() if scene.objects[i].colors is not None]
     out += [f"camera.{k}" for k in CAMERA_VECTORS + ("fovy",)]
     return out
 
@@ -91,7 +95,7 @@ class SceneParameters(MutableMapping):
         if section == "lights":
             return np.array(getattr(scene.lights[owner], key), np.float64)
         if section == "objects":
-            return np.array(scene.objects[owner].vertices, np.float64)
+            return np.array(getattr(scene.objects[owner], key), np.float64)
         return np.array(getattr(scene.camera, key), np.float64)
 
     def __setitem__(self, name: str, value):
@@ -114,7 +118,7 @@ class SceneParameters(MutableMapping):
                 lights[owner] = replace(lights[owner], **{key: tuple(_vector(name, value, (3,)))})
             elif section == "objects":
                 old = objects[owner]
-                objects[owner] = replace(old, vertices=_vector(name, value, old.vertices.shape))
+                objects[owner] = replace(old, **{key: _vector(name, value, getattr(old, key).shape)})
             elif key == "fovy":
                 camera = replace(camera, fovy=float(_vector(name, value, ())))
             else:

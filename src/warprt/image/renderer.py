@@ -89,13 +89,20 @@ def _object_keys(objects) -> list:
     return [(o, o.vertices, o.faces, o.material, o.smooth, o.normals, o.uv, o.colors) for o in objects]
 
 
-def objects_match(a: list, b: list, but_vertices: bool = False) -> bool:
+def objects_match(a: list, b: list, but_vertices: bool = False, but_colors: bool = False) -> bool:
     """Whether two _object_keys lists name the same objects and arrays (all but the vertices, with
-    ``but_vertices``, whose shape must still agree)."""
+    ``but_vertices``, whose shape must still agree; all but the objects and their vertex colours, with
+    ``but_colors``, the colours present on the same objects and of the same shape)."""
     if len(a) != len(b):
         return False
     for x, y in zip(a, b):
-        same = [x[i] is y[i] for i in (2, 5, 6, 7)] + [x[3] == y[3], x[4] == y[4]]
+        same = [x[i] is y[i] for i in (2, 5, 6)] + [x[3] == y[3], x[4] == y[4]]
+        if but_colors:
+            same += [x[1] is y[1], x[7] is y[7] or (x[7] is not None and y[7] is not None and x[7].shape == y[7].shape)]
+            if not all(same):
+                return False
+            continue
+        same.append(x[7] is y[7])
         if but_vertices:
             same.append(x[1].shape == y[1].shape)
         else:
@@ -267,9 +274,9 @@ class Renderer:
     def backward(self, d_image, wrt=None, *, arrays: bool = False) -> dict:
         """d(sum(d_image * image)) / d(param) at the last frame, rendered with grad=True, for each name in
         ``wrt`` (r.params names: materials.<name>.ka | kd | ks | shininess | reflectivity | ka_texture |
-        kd_texture | ks_texture (image textures' texels), a dielectric's ior | transmittance | absorption
-        (through the ray tree), lights.<i>.color |
-        position | direction, objects.<name>.vertices, camera.eye | center | up | fovy;
+        kd_texture | ks_texture (image textures' texels) | emission, a dielectric's ior | transmittance |
+        absorption (through the ray tree), lights.<i>.color | position | direction | radiance | center (an area
+        light's of its own shape), objects.<name>.vertices | colors (vertex colours), camera.eye | center | up | fovy;
         all of them by default, less a reflectivity of 0 the frame did not record): a dict of float64 NumPy
         arrays shaped as the parameters; kd's carries ka's where ka follows kd (as r.params keeps it following).
         A reflectivity of 0 named here is refused unless the frame was rendered with grad=[that name] (its
@@ -307,6 +314,12 @@ class Renderer:
                 self._built_from = keys
                 self.caches.clear()
                 return geom, {"bvh": "refit", "reason": "the objects' vertices moved"}
+            elif objects_match(self._built_from, keys, but_colors=True) and \
+                    np.array_equal(geom.origin_for(eye), geom.planned_origin) and geom.covers(eye):
+                geom.recolor(scene)  # only vertex colours changed: written over the kept ones
+                self._built_from = keys
+                self.caches.clear()
+                return geom, {"bvh": "reused", "reason": "only the objects' vertex colours changed"}
             else:
                 reason = "the objects changed"
         else:

@@ -12,7 +12,10 @@ positions, colours and directions): C = C_amb ka + sum_l vis_l C_l w_l (kd n.L +
 (wp.static): Warp does not replay a dynamic loop backwards, and a loop longer than max_unroll becomes one.
 Area lights' sample points, up to 4096 a light, are no loop: area_replay runs one thread per ray level and
 point and adds the point's term (area_sample_term, shading.area_light's) with wp.atomic_add, differentiable;
-make_area_combine then sums the levels with the emitted radiance, as the tracer does. A scene with glass
+make_area_combine then sums the levels with the emitted radiance, as the tracer does. The points it reads are
+the forward's translated by their light's centre's move (translate_samples, 0 in the replay: a light's
+lights.<i>.center gradient). Vertex colours multiply ka and kd as the forward's coefficients do, interpolated
+by vertex_colour at the (moving) barycentrics from a differentiable per-vertex array. A scene with glass
 has a ray tree, not a chain of levels: its record and replay are grad_tree.py's, one launch per level.
 """
 
@@ -250,9 +253,18 @@ def make_grad_record_kernel(L: int, D: int, smooth: bool, shadows: bool, cull: b
     return record
 
 
+@wp.func
+def vertex_colour(colors: wp.array(dtype=wp.vec3), i0: int, i1: int, i2: int, u: float, v: float,
+                  w: float) -> wp.vec3:
+    """The colour at barycentrics (u, v, w) of the face (i0, i1, i2), as interaction.make_surface
+    interpolates it (u on the face's first vertex, v on its second, in that order): differentiable in the
+    per-vertex ``colors`` and in the barycentrics, which move with the vertices and the camera."""
+    return colors[i0] * u + colors[i1] * v + colors[i2] * w
+
+
 @functools.cache
 def make_grad_shade_kernel(L: int, D: int, smooth: bool, moving: bool = False, light_model: bool = False,
-                           texture: bool = False, area: bool = False):
+                           texture: bool = False, area: bool = False, vertex_color: bool = False):
     """shade(...): each camera ray's colour (one per pixel and sample, as recorded; sample_mean makes
     them the image) from the recorded hit and visibility and the differentiable
     material and light arrays, over the recorded ray levels (D at most), each weighted by the product of
@@ -270,7 +282,10 @@ def make_grad_shade_kernel(L: int, D: int, smooth: bool, moving: bool = False, l
     table's row 3 m + 0, 1, 2 for material slot m), the images' texels differentiable. With ``area``, the
     kernel writes no colour: per ray level it leaves what the area lights' replay needs (make_area_replay:
     the hit point, normal, kd and ks at the hit, the level's weight, and in ``acc`` the ambient and Whitted
-    lights' local colour, to which the area lights' samples are added), and area_combine makes the colour."""
+    lights' local colour, to which the area lights' samples are added), and area_combine makes the colour.
+    With ``vertex_color``, ka and kd (after their textures) times the colour interpolated from ``colors``
+    (one per vertex, differentiable) at the hit's barycentrics, the moving ones where the hit moves
+    (vertex_colour: shading.make_coefficients' and make_surface's arithmetic)."""
 
     @wp.kernel(module="unique")
     def shade(eye: wp.array(dtype=wp.vec3), points: wp.array(dtype=wp.vec3), indices: wp.array(dtype=int), normals: wp.array(dtype=wp.vec3),
@@ -286,7 +301,7 @@ def make_grad_shade_kernel(L: int, D: int, smooth: bool, moving: bool = False, l
               dirs: wp.array(dtype=wp.vec3), visible: wp.array(dtype=int), hit_p: wp.array(dtype=wp.vec3),
               hit_n: wp.array(dtype=wp.vec3), hit_kd: wp.array(dtype=wp.vec3), hit_ks: wp.array(dtype=wp.vec3),
               level_weight: wp.array(dtype=wp.vec3), acc: wp.array(dtype=wp.vec3), ray_dirs: wp.array(dtype=wp.vec3),
-              image: wp.array(dtype=wp.vec3)):
+              colors: wp.array(dtype=wp.vec3), image: wp.array(dtype=wp.vec3)):
         ray = wp.tid()
         color = wp.vec3(0.0)
         weight = wp.vec3(1.0)
@@ -348,6 +363,10 @@ def make_grad_shade_kernel(L: int, D: int, smooth: bool, moving: bool = False, l
                                                           tex_v[j + 1], tex_c0[j + 1], tex_c1[j + 1], uv))
                     ks_m = wp.cw_mul(ks_m, texture_factor(texels, tex_shape[j + 2], tex_wrap[j + 2], tex_u[j + 2],
                                                           tex_v[j + 2], tex_c0[j + 2], tex_c1[j + 2], uv))
+                if wp.static(vertex_color):  # shading.make_coefficients: ka and kd times the vertex colour
+                    vc = vertex_colour(colors, i0, i1, i2, u, v, w)
+                    ka_m = wp.cw_mul(ka_m, vc)
+                    kd_m = wp.cw_mul(kd_m, vc)
                 local = wp.cw_mul(ambient, ka_m)
                 for l in range(wp.static(L)):
                     if visible[k * wp.static(L) + l] != 0:
@@ -418,6 +437,17 @@ def area_replay(words: int, face: wp.array(dtype=int), dirs: wp.array(dtype=wp.v
             term = area_sample_term(hit_p[k], hit_n[k], -dirs[k], hit_kd[k], hit_ks[k], shininess[tri_material[f]],
                                     points[q], normals[q], dA[q], radiance[sample_light[q]])
             wp.atomic_add(acc, k, term)
+
+
+@wp.kernel(module="unique")
+def translate_samples(points0: wp.array(dtype=wp.vec3), sample_light: wp.array(dtype=int),
+                      shift: wp.array(dtype=wp.vec3), points: wp.array(dtype=wp.vec3)):
+    """The area lights' sample points moved with their lights' centres: points0[q] (the forward's) plus its
+    light's shift (c - c0, the centre's move: a shape light's points are its centre plus offsets the
+    centre does not change), differentiable in the shift; its normal and dA stay. At a shift of 0 the
+    points are the forward's to the bit."""
+    q = wp.tid()
+    points[q] = points0[q] + shift[sample_light[q]]
 
 
 @functools.cache
