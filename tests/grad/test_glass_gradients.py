@@ -372,3 +372,19 @@ def test_a_reflectivity_of_0_is_refused_with_glass(weights):
     r.render(grad=[name])
     assert np.abs(r.backward(weights, wrt=[name])[name]).max() > 0.0
     r.close()
+
+
+def test_vertex_colours_and_an_area_lights_centre_are_refused_with_glass(weights):
+    """What the tree's replay does not read yet is refused in one line, never a gradient that leaves it out:
+    a scene with glass and vertex colours (at render), an area light's centre in one (at backward)."""
+    s = sphere()
+    floor = s.objects[1]
+    coloured = replace(floor, colors=np.full((len(floor.vertices), 3), 0.8))
+    with pytest.raises(SceneError, match="vertex colours in a scene with glass"):
+        warprt.Renderer(replace(s, objects=[s.objects[0], coloured])).render(grad=True)
+    r = warprt.Renderer(area_lit())
+    r.render(grad=True)
+    with pytest.raises(SceneError, match="centre in a scene with glass"):
+        r.backward(weights, wrt=["lights.1.center"])
+    assert "lights.1.center" not in r.backward(weights)  # nor among the defaults
+    r.close()

@@ -315,6 +315,21 @@ def _unrecorded(scene, geom, hits: FirstHits, name: str) -> bool:
     return hits.reflects and owner not in hits.mirrored and max(m.reflectivity) <= 0.0
 
 
+def _frame_refusal(scene, geom, hits, name: str) -> str | None:
+    """Why backward() cannot differentiate ``name`` at this recorded frame (None: it can): a reflectivity
+    of 0 the record holds no mirror rays for; with glass (a TreeHits record), an area light's centre."""
+    if isinstance(hits, TreeHits) and name.startswith("lights.") and name.endswith(".center"):
+        return ("an area light's centre in a scene with glass is not differentiated yet (the ray tree's replay "
+                "holds the sample points where they are)")
+    if _unrecorded(scene, geom, hits, name) and isinstance(hits, TreeHits):
+        return ("a reflectivity of 0 switches the mirror rays off, and in a scene with glass the ray tree's "
+                "record does not hold them yet: not differentiated at 0 (any k_r > 0 is)")
+    if _unrecorded(scene, geom, hits, name):
+        return (f"a reflectivity of 0 switches the mirror rays off, and this frame did not record them: render "
+                f"with grad=[{name!r}] (its mirror rays recorded for its derivative)")
+    return None
+
+
 @dataclass
 class ReplayLaunch:
     """The differentiable replay of a recorded frame, ready to launch: kernels/grad.py's shade kernel
@@ -544,7 +559,7 @@ def backward(scene, geom, hits: FirstHits, d_image, wrt, device: str) -> dict:
     as the parameter: (3,) for colours and positions, () for an exponent."""
     known = parameter_names(scene)
     if wrt is None:  # everything this frame can be differentiated in
-        wrt = [n for n in known if not _unrecorded(scene, geom, hits, n)]
+        wrt = [n for n in known if _frame_refusal(scene, geom, hits, n) is None]
     wrt = list(wrt)
     for name in wrt:
         if name not in known:
@@ -555,17 +570,9 @@ def backward(scene, geom, hits: FirstHits, d_image, wrt, device: str) -> dict:
                 "area light's of its own shape), objects.<name>.vertices | colors (vertex colours), "
                 "camera.eye | center | up | fovy)")
             raise ArgumentError("backward", str(name), why)
-        if isinstance(hits, TreeHits) and name.startswith("lights.") and name.endswith(".center"):
-            raise ArgumentError("backward", str(name), "an area light's centre in a scene with glass is not "
-                                "differentiated yet (the ray tree's replay holds the sample points where they are)")
-        if _unrecorded(scene, geom, hits, name) and isinstance(hits, TreeHits):
-            raise ArgumentError("backward", str(name), "a reflectivity of 0 switches the mirror rays off, and in a "
-                                "scene with glass the ray tree's record does not hold them yet: not differentiated "
-                                "at 0 (any k_r > 0 is)")
-        if _unrecorded(scene, geom, hits, name):
-            raise ArgumentError("backward", str(name), f"a reflectivity of 0 switches the mirror rays off, and this "
-                                f"frame did not record them: render with grad=[{name!r}] (its mirror rays recorded "
-                                f"for its derivative)")
+        why = _frame_refusal(scene, geom, hits, name)
+        if why is not None:
+            raise ArgumentError("backward", str(name), why)
     d = np.asarray(d_image.numpy() if isinstance(d_image, wp.array) else d_image, np.float32)
     if d.shape != (hits.height, hits.width, 3) or not np.all(np.isfinite(d)):
         raise ArgumentError("backward", "d_image", f"expected finite values of shape {(hits.height, hits.width, 3)}, "
