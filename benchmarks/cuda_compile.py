@@ -59,6 +59,7 @@ RUNS = (
     # The ray tree's record and per-level replay: textured glass, a mirror, smooth objects (their vertices'
     # normals made again: backward's default takes every vertex and the camera).
     ("gradients: glass (the ray tree)", "whitted", {}, dict(TRACED, grad=True)),
+    ("gradients: vertex colours", "vertex_colors", {}, dict(TRACED, grad=True)),
 )
 
 
