@@ -71,20 +71,37 @@ class PeakMemory:
         self.bytes = max(_status("VmHWM") - self.start, 0)
 
 
-def warm(fn, repeat: int, before=None) -> tuple[float, int, object]:
-    """(median seconds, peak bytes of the last call, its value) of ``repeat`` calls of ``fn`` after two
-    untimed calls; ``before`` runs ahead of each (untimed: Dr.Jit's cache flush)."""
+def warm(fn, repeat: int, before=None, compiled=None) -> tuple[float, int, object, int]:
+    """(median seconds, peak bytes of the last call, its value, calls that compiled) of ``repeat`` calls of
+    ``fn`` after two untimed calls; ``before`` runs ahead of each (untimed: Dr.Jit's cache flush);
+    ``compiled``: the seconds the last call spent compiling kernels (Dr.Jit's kernel history), taken out of
+    its time: Dr.Jit here compiles a few of its kernels again now and then (about one warm call in five,
+    1 s of 0.45 on seed at 512x384, measured), which is not the cost of its AD."""
     for _ in range(2):  # Dr.Jit may still compile a kernel on a second call
         (before or (lambda: None))()
         out = fn()
-    times = []
+        (compiled or (lambda: 0.0))()
+    times, recompiled = [], 0
     for _ in range(max(1, repeat)):
         (before or (lambda: None))()
         with PeakMemory() as peak:
             t = time.perf_counter()
             out = fn()
-            times.append(time.perf_counter() - t)
-    return statistics.median(times), peak.bytes, out
+            seconds = time.perf_counter() - t
+        spent = (compiled or (lambda: 0.0))()
+        recompiled += spent > 0.05
+        times.append(seconds - spent)
+    return statistics.median(times), peak.bytes, out, recompiled
+
+
+def drjit_compile_seconds() -> float:
+    """The seconds Dr.Jit's kernels launched since the last call spent in code generation and LLVM (its
+    kernel history, which reading clears)."""
+    import drjit as dr
+
+    history = dr.kernel_history()
+    return sum(h.get("codegen_time", 0.0) + h.get("backend_time", 0.0) for h in history
+               if h["type"] == dr.KernelType.JIT) / 1000.0
 
 
 def parameters(r, glass: bool = False) -> list[str]:
@@ -96,7 +113,9 @@ def parameters(r, glass: bool = False) -> list[str]:
         keys = (".kd", ".ior", ".transmittance", ".absorption")
     names = [n for n in r.params.keys() if n.startswith("materials.") and n.endswith(keys)]
     names += [n for n in r.params.keys() if n.startswith("lights.") and n.endswith((".color", ".radiance"))]
-    return names
+    # A reflectivity of 0: Mitsuba's model spawns no mirror ray there (its derivative 0); warprt's true one
+    # needs render(grad=[it]), more rays than the frame: left out on both sides.
+    return [n for n in names if not (n.endswith(".reflectivity") and not np.any(r.params[n] > 0))]
 
 
 def scene_run(path: Path, cfg: dict) -> dict:
@@ -105,26 +124,30 @@ def scene_run(path: Path, cfg: dict) -> dict:
     width, height = cfg["size"]
     scene = warprt.load_scene(path).with_camera(width=width, height=height).with_render(spp=1)
     fx = resolve_effects(scene)
-    levels = scene.render.max_depth if fx.reflection else 1
+    levels = scene.render.max_depth if fx.reflection or fx.refraction else 1
     weights = np.random.default_rng(1).random((height, width, 3)).astype(np.float32)
     r = warprt.Renderer(scene)
     wrt = parameters(r, fx.refraction)
     ad = tree_ad_gradients if fx.refraction else ad_gradients
-    t_forward, m_forward, result = warm(lambda: r.render().image, cfg["repeat"])
-    t_record, m_record, _ = warm(lambda: r.render(grad=True), cfg["repeat"])
+    t_forward, m_forward, result, _ = warm(lambda: r.render().image, cfg["repeat"])
+    t_record, m_record, _, _ = warm(lambda: r.render(grad=True), cfg["repeat"])
     image = r.render(grad=True).image
     with PeakMemory() as frame:  # the record and the backward pass together, from before the frame
         r.render(grad=True)
         r.backward(weights, wrt=wrt)
-    t_backward, m_backward, grads = warm(lambda: r.backward(weights, wrt=wrt), cfg["repeat"])
+    t_backward, m_backward, grads, _ = warm(lambda: r.backward(weights, wrt=wrt), cfg["repeat"])
     r.close()
 
     mitsuba_variant()
     ms_scene = mitsuba_scene(scene)
     switches = Switches.for_effects(fx, scene.render)
     flush = dr.flush_malloc_cache
-    t_mi_forward, m_mi_forward, mi_image = warm(lambda: ms_scene.render(switches), cfg["repeat"], flush)
-    t_mi_ad, m_mi_ad, (ad_image, theirs) = warm(lambda: ad(scene, weights), cfg["repeat"], flush)
+    dr.set_flag(dr.JitFlag.KernelHistory, True)
+    t_mi_forward, m_mi_forward, mi_image, c_forward = warm(lambda: ms_scene.render(switches), cfg["repeat"], flush,
+                                                           drjit_compile_seconds)
+    t_mi_ad, m_mi_ad, (ad_image, theirs), c_ad = warm(lambda: ad(scene, weights), cfg["repeat"], flush,
+                                                      drjit_compile_seconds)
+    dr.set_flag(dr.JitFlag.KernelHistory, False)
     # Sanity: the two models' images where both see the same hits, and their gradients of the loss.
     same = (np.abs(image - ad_image).max(-1) < 1e-4)
     pixels = width * height
@@ -133,7 +156,8 @@ def scene_run(path: Path, cfg: dict) -> dict:
         "levels": levels, "lights": len(scene.lights), "parameters": len(wrt),
         "warprt": {"forward": t_forward, "grad_forward": t_record, "backward": t_backward,
                    "forward_bytes": m_forward, "grad_bytes": frame.bytes, "backward_bytes": m_backward},
-        "mitsuba": {"forward": t_mi_forward, "ad": t_mi_ad, "forward_bytes": m_mi_forward, "ad_bytes": m_mi_ad},
+        "mitsuba": {"forward": t_mi_forward, "ad": t_mi_ad, "forward_bytes": m_mi_forward, "ad_bytes": m_mi_ad,
+                    "recompiled": [c_forward, c_ad], "repeat": cfg["repeat"]},
         "images_agree": float(same.mean()), "image_vs_mitsuba_forward": float(np.abs(image - mi_image).max()),
         "grad_bytes_per_pixel_level": frame.bytes / (pixels * levels),
         "ad_bytes_per_pixel_level": m_mi_ad / (pixels * levels),
@@ -182,12 +206,16 @@ def report(data: dict) -> str:
         f"`python -m benchmarks.gradient_cost` (benchmarks/gradient_cost.py): warm {size} frames at 1 sample per pixel, "
         f"the median of {cfg['repeat']}, each scene's own ray levels and lights; the gradient with respect to every "
         "material's ka, kd, ks, shininess and reflectivity and every light's colour (radiance, emission), the "
-        "same names on both sides (with glass: every kd, the dielectrics' ior, transmittance and absorption, the "
+        "same names on both sides (less a reflectivity of 0, whose true derivative takes `render(grad=[it])`; with glass: every kd, the dielectrics' ior, transmittance and absorption, the "
         "lights' colours, through the whole ray tree). Mitsuba: the reference's Whitted integrator (`mi.render`; "
         "with glass its ray tree, reference/ray_tree.py) forward, and its AD of the same model "
-        "(reference/mitsuba_ad.py: the levels unrolled at the pixel centres, `dr.backward`). "
+        "(reference/mitsuba_ad.py: the levels unrolled at the pixel centres, `dr.backward`), its times less the "
+        "seconds Dr.Jit spent compiling kernels again during a timed call "
+        f"({sum(sum(r['mitsuba']['recompiled']) for r in rows)} of {2 * cfg['repeat'] * len(rows)} timed calls did: "
+        "Dr.Jit here compiles a few kernels again now and then, about a second each time). "
         "Peak memory: the resident set's peak during the call above its size before it (Linux's VmHWM, reset "
-        "first; Dr.Jit's allocator cache and the C heap's free memory handed back before), the gradient frame's from before `render(grad=True)` to the end of `backward`.",
+        "first; Dr.Jit's allocator cache and the C heap's free memory handed back before), the gradient frame's "
+        "from before `render(grad=True)` to the end of `backward`.",
         "",
         "| scene | levels | params | forward | grad frame | backward | backward / forward | Mitsuba forward | "
         "Mitsuba AD | warprt grad / Mitsuba AD | peak memory: warprt grad | Mitsuba AD | per pixel and level: warprt | Mitsuba |",
@@ -200,6 +228,20 @@ def report(data: dict) -> str:
             f"{ms(w['backward'])} | {w['backward'] / w['forward']:.2f}x | {ms(m['forward'])} | {ms(m['ad'])} | "
             f"{(w['grad_forward'] + w['backward']) / m['ad']:.2f}x | {_mib(w['grad_bytes'])} | {_mib(m['ad_bytes'])} | "
             f"{r['grad_bytes_per_pixel_level']:.0f} B | {r['ad_bytes_per_pixel_level']:.0f} B |")
+    opaque = [r for r in rows if not r["name"].startswith(("glass", "prism"))]
+    glass = [r for r in rows if r not in opaque]
+    span = lambda values: f"{min(values):.2f}x to {max(values):.2f}x"  # noqa: E731
+    record = [(r["warprt"]["grad_forward"] - r["warprt"]["forward"]) / r["warprt"]["forward"] for r in rows]
+    lines += ["", "Reading it: warprt's gradient frame is its forward frame, the record (its own trace of the same "
+              f"rays, {span(record)} the frame: with glass the tree's levels are compacted on the host between "
+              "launches) and the backward pass (one replay of the shading on a wp.Tape and its adjoint). Mitsuba's "
+              "forward is Embree's SIMD traversal, "
+              f"{span([r['warprt']['forward'] / r['mitsuba']['forward'] for r in opaque])} faster than warprt's on "
+              "the opaque scenes (the known gap of the Targets above), and its AD costs "
+              f"{span([r['mitsuba']['ad'] / r['mitsuba']['forward'] for r in opaque])} its forward there; so on "
+              f"opaque scenes warprt's gradient frame is {span([(r['warprt']['grad_forward'] + r['warprt']['backward']) / r['mitsuba']['ad'] for r in opaque])} "
+              "Mitsuba's AD, and through glass, where the reference's tree runs level by level through NumPy "
+              f"as warprt's record does, {span([(r['warprt']['grad_forward'] + r['warprt']['backward']) / r['mitsuba']['ad'] for r in glass]) if glass else 'n/a'}."]
     lines += ["", "Targets (also in the table at the top):", ""]
     lines += [f"- {a}: {b} ({c})" for a, b, c in target_rows(data)]
     lines.append("")
