@@ -1,4 +1,4 @@
-"""Derivatives of an image (issue 30, its first parts): Renderer.render(grad=True) records, per camera ray
+"""Derivatives of an image (issue 30): Renderer.render(grad=True) records, per camera ray
 (render.spp of them a pixel, where the trace kernel puts them) and ray level (the camera ray, then the
 mirror rays the tracer follows), the hit and the lights it sees; Renderer.backward(d_image, wrt) returns
 d(sum(d_image * image)) / d(param) for the parameters named as r.params names them, through a
@@ -33,8 +33,9 @@ the record follows the forward's tree level by level with the forward's own func
 hits, visibility and children, the children compacted on the host into the next level's list), and the
 replay is one differentiable launch per level, each level's rays in their own arrays (Warp replays neither
 the forward's dynamic loop nor its in-place ray stack backwards). It differentiates a dielectric's ior,
-transmittance and absorption through Fresnel, Snell and Beer, and everything above seen through the glass;
-held fixed besides the faces and visibility: the tree's structure (which children exist, total internal
+transmittance and absorption through Fresnel, Snell and Beer, and everything above seen through the glass
+but vertex colours, a light's centre and a reflectivity of 0 (refused, each in one line: refusal,
+_frame_refusal); held fixed besides the faces and visibility: the tree's structure (which children exist, total internal
 reflection) and each ray's medium. Its size is checked as it grows (_tree_too_big).
 
 Covered for now: any render.spp and light_samples, camera and mirror rays, glass, image and checker
