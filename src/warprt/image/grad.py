@@ -89,7 +89,8 @@ def refusal(scene, fx, mirrored=()) -> str | None:
     if (fx.reflection or mirrored) and not fx.refraction and scene.render.max_depth > MAX_GRAD_DEPTH:
         return f"at most {MAX_GRAD_DEPTH} ray levels (render.max_depth) are differentiated (Warp's unrolled loop)"
     if fx.refraction and fx.vertex_color:
-        return "vertex colours in a scene with glass are not differentiated yet (the ray tree's replay does not read them)"
+        return ("vertex colours in a scene with glass are not differentiated yet (the ray tree's replay does not "
+                "read them)")
     if len(scene.whitted_lights) > MAX_GRAD_LIGHTS:
         return f"at most {MAX_GRAD_LIGHTS} lights are differentiated (Warp's unrolled loop)"
     return None
