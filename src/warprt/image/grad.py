@@ -34,8 +34,7 @@ hits, visibility and children, the children compacted on the host into the next 
 replay is one differentiable launch per level, each level's rays in their own arrays (Warp replays neither
 the forward's dynamic loop nor its in-place ray stack backwards). It differentiates a dielectric's ior,
 transmittance and absorption through Fresnel, Snell and Beer, and everything above seen through the glass
-but vertex colours, a light's centre and a reflectivity of 0 (refused, each in one line: refusal,
-_frame_refusal); held fixed besides the faces and visibility: the tree's structure (which children exist, total internal
+but vertex colours and a reflectivity of 0 (refused, each in one line: refusal, _frame_refusal); held fixed besides the faces and visibility: the tree's structure (which children exist, total internal
 reflection) and each ray's medium. Its size is checked as it grows (_tree_too_big).
 
 Covered for now: any render.spp and light_samples, camera and mirror rays, glass, image and checker
@@ -319,10 +318,7 @@ def _unrecorded(scene, geom, hits: FirstHits, name: str) -> bool:
 
 def _frame_refusal(scene, geom, hits, name: str) -> str | None:
     """Why backward() cannot differentiate ``name`` at this recorded frame (None: it can): a reflectivity
-    of 0 the record holds no mirror rays for; with glass (a TreeHits record), an area light's centre."""
-    if isinstance(hits, TreeHits) and name.startswith("lights.") and name.endswith(".center"):
-        return ("an area light's centre in a scene with glass is not differentiated yet (the ray tree's replay "
-                "holds the sample points where they are)")
+    of 0 the record holds no mirror rays for."""
     if _unrecorded(scene, geom, hits, name) and isinstance(hits, TreeHits):
         return ("a reflectivity of 0 switches the mirror rays off, and in a scene with glass the ray tree's "
                 "record does not hold them yet: not differentiated at 0 (any k_r > 0 is)")
@@ -358,7 +354,7 @@ def replay(scene, geom, hits: FirstHits, device: str, vertices: bool = False, ca
     """replay_launch's kernels launched, on the current wp.Tape if there is one: its ``rays`` hold each
     camera ray's colour (one per pixel and sample)."""
     if isinstance(hits, TreeHits):
-        r = replay_tree_launch(scene, geom, hits, device, vertices, camera)
+        r = replay_tree_launch(scene, geom, hits, device, vertices, camera, centres)
     else:
         r = replay_launch(scene, geom, hits, device, vertices, camera, centres)
     for kernel, dim, inputs, outputs in r.before or ():
@@ -785,9 +781,10 @@ def record_tree(scene, geom, data, fx, device: str, threads: int = 1, bands: int
 
 
 def replay_tree_launch(scene, geom, hits: TreeHits, device: str, vertices: bool = False,
-                       camera: bool = False) -> ReplayLaunch:
+                       camera: bool = False, centres: bool = False) -> ReplayLaunch:
     """replay_launch for a recorded tree: the same differentiable arrays (materials, lights, textures,
-    with ``vertices`` the points, with ``camera`` the camera and its rays made again in ``before``) and a
+    with ``vertices`` the points, with ``camera`` the camera and its rays made again in ``before``, with
+    ``centres`` the area lights' sample points translated by their centres' moves, in ``before``) and a
     dielectric's ior, transmittance and absorption per material slot; ``then`` holds one launch of
     grad_tree's replay kernel per recorded level, each reading the rays its parent level wrote into their
     own arrays and adding its rays' colours to their camera rays' in ``rays``."""
@@ -839,6 +836,11 @@ def replay_tree_launch(scene, geom, hits: TreeHits, device: str, vertices: bool 
         sample_light = wp.array(np.repeat(np.arange(len(first) - 1), np.diff(first)).astype(np.int32), dtype=int,
                                 device=device)
         radiance = vec([l.radiance for l in scene.area_lights])
+        samples = a.points
+        if centres:  # replay_launch's: the sample points moved with their light's centre (by 0 here)
+            shift = wp.zeros(len(scene.area_lights), dtype=wp.vec3, device=device, requires_grad=True)
+            samples = wp.zeros(int(first[-1]), dtype=wp.vec3, device=device, requires_grad=True)
+            before.append((translate_samples, int(first[-1]), [a.points, sample_light, shift], [samples]))
     for i, level in enumerate(hits.tree):
         count = hits.tree[i + 1].count if i + 1 < len(hits.tree) else 0
         o_n, d_n, w_n, s_n = (wp.zeros(max(count, 1), dtype=wp.vec3, device=device, requires_grad=True)
@@ -854,7 +856,7 @@ def replay_tree_launch(scene, geom, hits: TreeHits, device: str, vertices: bool 
             hit_p, hit_n, hit_kd, hit_ks, level_weight, acc, ray_dirs = state
             then.append((area_replay, (level.count, int(first[-1])),
                          [hits.words, level.face, ray_dirs, level.area_bits, geom.tri_material, shininess, hit_p,
-                          hit_n, hit_kd, hit_ks, a.points, a.normals, a.dA, sample_light, radiance], [acc]))
+                          hit_n, hit_kd, hit_ks, samples, a.normals, a.dA, sample_light, radiance], [acc]))
             then.append((tree_area_combine, level.count, [level.face, level.emit, radiance, level.ray_of,
                                                           level_weight, acc], [rays]))
         o, dirs, w, start = o_n, d_n, w_n, s_n
@@ -863,6 +865,8 @@ def replay_tree_launch(scene, geom, hits: TreeHits, device: str, vertices: bool 
               "absorption": sigma}
     if area:
         arrays["radiance"] = radiance
+        if centres:
+            arrays["center"] = shift
     if vertices:
         arrays["points"] = points
     if camera:
