@@ -93,8 +93,17 @@ def inside():
     return warprt.load_scene(ROOT / "scenes" / "inside_glass.toml").with_camera(width=WIDTH, height=HEIGHT)
 
 
+def coloured():
+    """The glass sphere over a floor with vertex colours (a colour per corner, kd and ka times their
+    interpolation at the hit), seen directly and through the ball."""
+    s = sphere()
+    floor = s.objects[1]
+    colors = np.random.default_rng(2).uniform(0.3, 1.0, (len(floor.vertices), 3))
+    return replace(s, objects=[s.objects[0], replace(floor, colors=colors)])
+
+
 SCENES = {"sphere": sphere, "prism": prism, "inside": inside, "mirror": lambda: sphere(mirror=True), "area": area_lit,
-          "spp4": lambda: sphere(spp=4)}
+          "spp4": lambda: sphere(spp=4), "coloured": coloured}
 
 
 @pytest.fixture(scope="module")
@@ -113,7 +122,7 @@ def replayed(s):
 
 
 @pytest.mark.parametrize("name, spp", [("sphere", 1), ("sphere", 4), ("prism", 1), ("inside", 1), ("mirror", 1),
-                                        ("area", 1)])
+                                        ("area", 1), ("coloured", 1)])
 def test_the_replayed_tree_is_the_forward_image(name, spp):
     s = SCENES[name]() if spp == 1 else sphere(spp)
     forward, image, hits = replayed(s)
@@ -223,7 +232,8 @@ CHECKS = [("sphere", "materials.glass.ior"), ("sphere", "materials.glass.transmi
           ("area", "materials.glass.absorption"), ("spp4", "materials.glass.ior"),
           # vertices through the tree: the hits on the moved faces, the smooth sphere's normals made from them
           ("prism", "objects.prism.vertices"), ("sphere", "objects.sphere.vertices"),
-          ("sphere", "objects.plane.vertices"), ("area", "lights.1.center")]
+          ("sphere", "objects.plane.vertices"), ("area", "lights.1.center"), ("coloured", "objects.plane.colors"),
+          ("coloured", "materials.floor.kd")]
 
 
 # Nearly linear in k_r (a path meets the floor once, mostly): a wider step lowers float32's noise, which at
@@ -257,7 +267,8 @@ def test_glass_gradients_equal_central_differences(checks, scene_name, name):
 @pytest.mark.parametrize("scene_name, name", [("sphere", "materials.glass.transmittance"),
                                               ("prism", "materials.glass.absorption"),
                                               ("sphere", "objects.sphere.vertices"),
-                                              ("area", "lights.1.center")])
+                                              ("area", "lights.1.center"),
+                                              ("coloured", "objects.plane.colors")])
 def test_a_gradient_along_another_direction_does_not(checks, scene_name, name):
     """The control: the gradient read along another random step than the differences took."""
     d, grads = checks[scene_name, name]
@@ -373,13 +384,3 @@ def test_a_reflectivity_of_0_is_refused_with_glass(weights):
     r.render(grad=[name])
     assert np.abs(r.backward(weights, wrt=[name])[name]).max() > 0.0
     r.close()
-
-
-def test_vertex_colours_are_refused_with_glass():
-    """What the tree's replay does not read yet is refused in one line, never a gradient that leaves it out:
-    a scene with glass and vertex colours, at render."""
-    s = sphere()
-    floor = s.objects[1]
-    coloured = replace(floor, colors=np.full((len(floor.vertices), 3), 0.8))
-    with pytest.raises(SceneError, match="vertex colours in a scene with glass"):
-        warprt.Renderer(replace(s, objects=[s.objects[0], coloured])).render(grad=True)

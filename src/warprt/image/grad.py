@@ -34,11 +34,11 @@ hits, visibility and children, the children compacted on the host into the next 
 replay is one differentiable launch per level, each level's rays in their own arrays (Warp replays neither
 the forward's dynamic loop nor its in-place ray stack backwards). It differentiates a dielectric's ior,
 transmittance and absorption through Fresnel, Snell and Beer, and everything above seen through the glass
-but vertex colours and a reflectivity of 0 (refused, each in one line: refusal, _frame_refusal); held fixed besides the faces and visibility: the tree's structure (which children exist, total internal
+but a reflectivity of 0 (refused in one line: refusal, _frame_refusal); held fixed besides the faces and visibility: the tree's structure (which children exist, total internal
 reflection) and each ray's medium. Its size is checked as it grows (_tree_too_big).
 
 Covered for now: any render.spp and light_samples, camera and mirror rays, glass, image and checker
-textures, vertex colours (not with glass), area lights; any other scene is refused in one line naming
+textures, vertex colours, area lights; any other scene is refused in one line naming
 what is not yet differentiated, so a gradient is never silently partial.
 """
 from __future__ import annotations
@@ -87,9 +87,6 @@ def refusal(scene, fx, mirrored=()) -> str | None:
                 "mirror rays where k_r > 0 only): " + ", ".join(f"materials.{m}.reflectivity" for m in dark))
     if (fx.reflection or mirrored) and not fx.refraction and scene.render.max_depth > MAX_GRAD_DEPTH:
         return f"at most {MAX_GRAD_DEPTH} ray levels (render.max_depth) are differentiated (Warp's unrolled loop)"
-    if fx.refraction and fx.vertex_color:
-        return ("vertex colours in a scene with glass are not differentiated yet (the ray tree's replay does not "
-                "read them)")
     if len(scene.whitted_lights) > MAX_GRAD_LIGHTS:
         return f"at most {MAX_GRAD_LIGHTS} lights are differentiated (Warp's unrolled loop)"
     return None
@@ -690,6 +687,7 @@ class TreeHits:
     words: int = 0  # 0: no area lights
     area: object = None  # the frame's AreaLights table, as recorded
     mirrored: tuple = ()  # none: the tree spawns mirror rays where k_r > 0 only
+    vertex_color: bool = False  # ka and kd times the vertex colours, as the frame's
     reflects: bool = True  # its levels could hold mirror rays
 
     @property
@@ -777,7 +775,7 @@ def record_tree(scene, geom, data, fx, device: str, threads: int = 1, bands: int
         nxt[child[ht, 1]] = ray_of[ht]
         ray_of = nxt
     return TreeHits(levels, cam.width, cam.height, L, D, fx.smooth, k * k, fx.light_model, fx.texture, absorb, words,
-                    data.area if words else None)
+                    data.area if words else None, vertex_color=fx.vertex_color)
 
 
 def replay_tree_launch(scene, geom, hits: TreeHits, device: str, vertices: bool = False,
@@ -827,6 +825,7 @@ def replay_tree_launch(scene, geom, hits: TreeHits, device: str, vertices: bool 
     common = [eye, points, geom.indices, normals, geom.tri_material, geom.tri_smooth, ka, kd, ks, shininess, kr,
               ior, kt, sigma, light_pos, light_color, inverse_square, kind, axis, cone, uvs, *table.arrays,
               wp.vec3(*scene.render.ambient), wp.vec3(*scene.render.background)]
+    colors = vertex_colours(geom, hits, device)  # ka's and kd's factor, per vertex
     stand_in = wp.zeros(1, dtype=wp.vec3, device=device)
     o, w, start, then = stand_in, stand_in, stand_in, []
     area = hits.words > 0
@@ -849,9 +848,10 @@ def replay_tree_launch(scene, geom, hits: TreeHits, device: str, vertices: bool 
         state = [wp.zeros(level.count if area else 1, dtype=wp.vec3, device=device, requires_grad=True)
                  for _ in range(7)]
         kernel = make_tree_replay_kernel(hits.lights, hits.smooth, hits.light_model, hits.texture, i == 0,
-                                         hits.absorption, area)
+                                         hits.absorption, area, hits.vertex_color)
         then.append((kernel, level.count, [*common, level.face, level.visible, level.medium, level.ray_of, level.kind,
-                                           level.child, o, dirs, w, start, rays, o_n, d_n, w_n, s_n, *state], []))
+                                           level.child, o, dirs, w, start, rays, o_n, d_n, w_n, s_n, *state, colors],
+                     []))
         if area:
             hit_p, hit_n, hit_kd, hit_ks, level_weight, acc, ray_dirs = state
             then.append((area_replay, (level.count, int(first[-1])),
@@ -863,6 +863,8 @@ def replay_tree_launch(scene, geom, hits: TreeHits, device: str, vertices: bool 
     arrays = {"ka": ka, "kd": kd, "ks": ks, "shininess": shininess, "reflectivity": kr, "color": light_color,
               "position": light_pos, "direction": axis, "texels": table.arrays[0], "ior": ior, "transmittance": kt,
               "absorption": sigma}
+    if hits.vertex_color:
+        arrays["colors"] = colors
     if area:
         arrays["radiance"] = radiance
         if centres:

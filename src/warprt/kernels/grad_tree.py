@@ -28,7 +28,7 @@ from .._warp import wp
 from ..geometry import LIGHT_DIRECTIONAL, SceneData
 from .camera import CameraData, camera_ray, sample_offset
 from .dielectric import beer, beer_forever, dielectric_children, fresnel_dielectric, refract
-from .grad import light_factor, texture_factor
+from .grad import light_factor, texture_factor, vertex_colour
 from .interaction import hit_point_error, make_surface, offset_ray_origin, reflect, spawn_ray
 from .shading import make_area_sample_test, make_light_test, phong_specular
 from .trace import absorbed, culled, past
@@ -175,7 +175,7 @@ def dielectric_normal(d: wp.vec3, ng: wp.vec3, n: wp.vec3) -> wp.vec3:
 
 @functools.cache
 def make_tree_replay_kernel(L: int, smooth: bool, light_model: bool, texture: bool, first: bool, absorption: bool,
-                            area: bool = False):
+                            area: bool = False, vertex_color: bool = False):
     """replay(...): one level of the recorded tree, differentiable. Per ray of the level's list: its ray
     (with ``first``, the camera ray from ``eye[0]`` along ``dirs``, weight 1; else the origin, direction,
     weight and segment start its parent's launch wrote), its hit recomputed on the recorded face from that
@@ -188,7 +188,8 @@ def make_tree_replay_kernel(L: int, smooth: bool, light_model: bool, texture: bo
     (refract), origins offset as spawn_ray offsets them. With ``area``, a ray that hits adds no colour here:
     it leaves what the area lights' replay needs (kernels.area_replay: the hit point, normal, kd and ks, its
     direction, its weight, and in ``acc`` its local colour, to which the samples are added), and
-    tree_area_combine adds it to its camera ray's."""
+    tree_area_combine adds it to its camera ray's. With ``vertex_color``, ka and kd (after their textures)
+    times the colour interpolated from ``colors`` at the moving hit (vertex_colour, the chain's)."""
 
     @wp.kernel(module="unique")
     def replay(eye: wp.array(dtype=wp.vec3), points: wp.array(dtype=wp.vec3), indices: wp.array(dtype=int),
@@ -208,7 +209,7 @@ def make_tree_replay_kernel(L: int, smooth: bool, light_model: bool, texture: bo
                d_next: wp.array(dtype=wp.vec3), w_next: wp.array(dtype=wp.vec3), start_next: wp.array(dtype=wp.vec3),
                hit_p: wp.array(dtype=wp.vec3), hit_n: wp.array(dtype=wp.vec3), hit_kd: wp.array(dtype=wp.vec3),
                hit_ks: wp.array(dtype=wp.vec3), level_weight: wp.array(dtype=wp.vec3), acc: wp.array(dtype=wp.vec3),
-               ray_dirs: wp.array(dtype=wp.vec3)):
+               ray_dirs: wp.array(dtype=wp.vec3), colors: wp.array(dtype=wp.vec3)):
         i = wp.tid()
         f = face[i]
         d = dirs[i]
@@ -270,6 +271,10 @@ def make_tree_replay_kernel(L: int, smooth: bool, light_model: bool, texture: bo
                                                       tex_v[j + 1], tex_c0[j + 1], tex_c1[j + 1], uv))
                 ks_m = wp.cw_mul(ks_m, texture_factor(texels, tex_shape[j + 2], tex_wrap[j + 2], tex_u[j + 2],
                                                       tex_v[j + 2], tex_c0[j + 2], tex_c1[j + 2], uv))
+            if wp.static(vertex_color):  # shading.make_coefficients: ka and kd times the vertex colour
+                vc = vertex_colour(colors, i0, i1, i2, u, v, bw)
+                ka_m = wp.cw_mul(ka_m, vc)
+                kd_m = wp.cw_mul(kd_m, vc)
             local = wp.cw_mul(ambient, ka_m)
             for l in range(wp.static(L)):
                 if visible[i * wp.static(L) + l] != 0:
