@@ -34,8 +34,9 @@ hits, visibility and children, the children compacted on the host into the next 
 replay is one differentiable launch per level, each level's rays in their own arrays (Warp replays neither
 the forward's dynamic loop nor its in-place ray stack backwards). It differentiates a dielectric's ior,
 transmittance and absorption through Fresnel, Snell and Beer, and everything above seen through the glass
-but a reflectivity of 0 (refused in one line: refusal, _frame_refusal); held fixed besides the faces and visibility: the tree's structure (which children exist, total internal
-reflection) and each ray's medium. Its size is checked as it grows (_tree_too_big).
+(a reflectivity of 0 too, its mirror rays recorded as the chain's: mirror_anyway); held fixed besides the
+faces and visibility: the tree's structure (which children exist, total internal reflection) and each ray's
+medium. Its size is checked as it grows (_tree_too_big).
 
 Covered for now: any render.spp and light_samples, camera and mirror rays, glass, image and checker
 textures, vertex colours, area lights; any other scene is refused in one line naming
@@ -81,10 +82,6 @@ def refusal(scene, fx, mirrored=()) -> str | None:
     off = [name for name in ("ambient", "diffuse", "specular") if getattr(called, name) and not getattr(fx, name)]
     if off:
         return f"the gradient's replay shades every Phong term: {', '.join(off)} switched off is not differentiated yet"
-    dark = [m for m in mirrored if max(scene.materials[m].reflectivity) <= 0.0 and not scene.materials[m].dielectric]
-    if fx.refraction and dark:
-        return ("a reflectivity of 0 in a scene with glass is not differentiated yet (the ray tree's record spawns "
-                "mirror rays where k_r > 0 only): " + ", ".join(f"materials.{m}.reflectivity" for m in dark))
     if (fx.reflection or mirrored) and not fx.refraction and scene.render.max_depth > MAX_GRAD_DEPTH:
         return f"at most {MAX_GRAD_DEPTH} ray levels (render.max_depth) are differentiated (Warp's unrolled loop)"
     if len(scene.whitted_lights) > MAX_GRAD_LIGHTS:
@@ -201,7 +198,7 @@ def record_first_hits(scene, geom, data, fx, device: str, threads: int = 1, band
     options leave on (effects.switched_on; None: every one). ``mirrored``: the materials whose mirror rays
     are recorded whatever their k_r (mirrored_materials), over render.max_depth levels."""
     if fx.refraction:  # glass: the whole ray tree, level by level
-        return record_tree(scene, geom, data, fx, device, threads, bands, pool, switched)
+        return record_tree(scene, geom, data, fx, device, threads, bands, pool, switched, mirrored)
     cam = scene.camera
     k = math.isqrt(scene.render.spp) if fx.supersampling else 1
     n, L = cam.width * cam.height * k * k, len(scene.whitted_lights)
@@ -316,9 +313,6 @@ def _unrecorded(scene, geom, hits: FirstHits, name: str) -> bool:
 def _frame_refusal(scene, geom, hits, name: str) -> str | None:
     """Why backward() cannot differentiate ``name`` at this recorded frame (None: it can): a reflectivity
     of 0 the record holds no mirror rays for."""
-    if _unrecorded(scene, geom, hits, name) and isinstance(hits, TreeHits):
-        return ("a reflectivity of 0 switches the mirror rays off, and in a scene with glass the ray tree's "
-                "record does not hold them yet: not differentiated at 0 (any k_r > 0 is)")
     if _unrecorded(scene, geom, hits, name):
         return (f"a reflectivity of 0 switches the mirror rays off, and this frame did not record them: render "
                 f"with grad=[{name!r}] (its mirror rays recorded for its derivative)")
@@ -686,7 +680,7 @@ class TreeHits:
     absorption: bool = True
     words: int = 0  # 0: no area lights
     area: object = None  # the frame's AreaLights table, as recorded
-    mirrored: tuple = ()  # none: the tree spawns mirror rays where k_r > 0 only
+    mirrored: tuple = ()  # the opaque materials whose mirror rays were recorded whatever their k_r
     vertex_color: bool = False  # ka and kd times the vertex colours, as the frame's
     reflects: bool = True  # its levels could hold mirror rays
 
@@ -707,7 +701,7 @@ def _tree_too_big(scene, need: int, device: str):
 
 
 def record_tree(scene, geom, data, fx, device: str, threads: int = 1, bands: int = 1, pool=None,
-                switched=None) -> TreeHits:
+                switched=None, mirrored=()) -> TreeHits:
     """record_first_hits for a scene with glass: the forward's ray tree, one launch of grad_tree's record
     kernel a level (in ``bands`` bands on ``threads`` threads), the children of each level compacted on the
     host into the next level's list (the reflected before the transmitted, parents in order); the rays'
@@ -729,8 +723,13 @@ def record_tree(scene, geom, data, fx, device: str, threads: int = 1, bands: int
                  bands, device, pool=pool)
     reach = wp.array(np.ones((max(n, 1), 3), np.float32), dtype=wp.vec3, device=device)  # the camera rays': 1
     words = _words(area_samples(scene)) if fx.area_lights else 0
-    kernel = make_tree_record_kernel(L, fx.smooth, shadows, fx.culling, fx.light_model, fx.reflection, fx.absorption,
-                                     bool(words))
+    # The opaque materials named by render(grad=[...reflectivity]): their mirror rays recorded whatever their k_r
+    # (a dielectric's k_r > 0 makes it a mirror: a jump, not a slope).
+    mirrored = tuple(m for m in mirrored if not scene.materials[m].dielectric)
+    anyway = wp.array(np.asarray([int(m in mirrored) for m in geom.material_names] or [0], np.int32), dtype=int,
+                      device=device)
+    kernel = make_tree_record_kernel(L, fx.smooth, shadows, fx.culling, fx.light_model, fx.reflection or bool(mirrored),
+                                     fx.absorption, bool(words))
     per_ray = TREE_BYTES_PER_RAY + 4 * L + (TREE_AREA_BYTES_PER_RAY + 4 * words if words else 0)
     ray_of, levels, held = np.arange(n, dtype=np.int32), [], 0
     for level in range(D):
@@ -745,7 +744,7 @@ def record_tree(scene, geom, data, fx, device: str, threads: int = 1, bands: int
         area_bits = wp.zeros(max(m * words, 1), dtype=int, device=device)
         launch_bands(kernel, lambda first: [data, D, level, first, orig, dirs, weight, start, medium, face,
                                             visible, kind, has, hit_p, o_r, d_r, w_r, med_r, o_t, d_t, w_t, med_t,
-                                            emit, area_bits, words, reach, x_r, x_t],
+                                            emit, area_bits, words, reach, x_r, x_t, anyway],
                      m, threads, bands, device, pool=pool)
         h = has.numpy()[:m]
         hr, ht = h[:, 0] != 0, h[:, 1] != 0
@@ -775,7 +774,7 @@ def record_tree(scene, geom, data, fx, device: str, threads: int = 1, bands: int
         nxt[child[ht, 1]] = ray_of[ht]
         ray_of = nxt
     return TreeHits(levels, cam.width, cam.height, L, D, fx.smooth, k * k, fx.light_model, fx.texture, absorb, words,
-                    data.area if words else None, vertex_color=fx.vertex_color)
+                    data.area if words else None, mirrored=mirrored, vertex_color=fx.vertex_color)
 
 
 def replay_tree_launch(scene, geom, hits: TreeHits, device: str, vertices: bool = False,

@@ -63,7 +63,8 @@ def make_tree_record_kernel(L: int, smooth: bool, shadows: bool, cull: bool, lig
     path decides), with each child (has: reflected, transmitted) as the forward makes it: origin, direction,
     weight and medium; and the children a transmittance of 0 keeps the forward from tracing (its refracted
     ray, weight 0, and what that one spawns: ``reach``, each ray's weight with such transmittances taken as
-    1, decides), so that the derivative in that transmittance is not lost. ``reflection``, ``absorption``: the forward's effects of those names. With ``area``, also
+    1, decides), so that the derivative in that transmittance is not lost; likewise the mirror rays of the
+    materials ``mirror_anyway`` flags (render(grad=[their reflectivity]): a k_r of 0's derivative). ``reflection``, ``absorption``: the forward's effects of those names. With ``area``, also
     the area light whose emitting side the ray meets (emit, -1: none) and which area-light sample points the
     hit sees (``words`` int32 bit masks a ray), as make_grad_record_kernel records them."""
     surface = make_surface(smooth)
@@ -78,7 +79,7 @@ def make_tree_record_kernel(L: int, smooth: bool, shadows: bool, cull: bool, lig
                w_r: wp.array(dtype=wp.vec3), med_r: wp.array(dtype=int), o_t: wp.array(dtype=wp.vec3),
                d_t: wp.array(dtype=wp.vec3), w_t: wp.array(dtype=wp.vec3), med_t: wp.array(dtype=int),
                emit: wp.array(dtype=int), area_bits: wp.array(dtype=int), words: int, reach: wp.array(dtype=wp.vec3),
-               x_r: wp.array(dtype=wp.vec3), x_t: wp.array(dtype=wp.vec3)):
+               x_r: wp.array(dtype=wp.vec3), x_t: wp.array(dtype=wp.vec3), mirror_anyway: wp.array(dtype=int)):
         i = first + wp.tid()
         d = dirs[i]
         q = wp.mesh_query_ray(s.mesh, orig[i], d, 1.0e30)
@@ -115,12 +116,15 @@ def make_tree_record_kernel(L: int, smooth: bool, shadows: bool, cull: bool, lig
             mirrored = False
             if wp.static(reflection):
                 kr = s.kr[hit.material]
-                if children < max_depth and wp.max(kr) > 0.0:  # a mirror's ray stays in its medium
+                anyway = mirror_anyway[hit.material] != 0  # render(grad=[its reflectivity]), k_r 0 or not
+                if children < max_depth and (wp.max(kr) > 0.0 or anyway):  # a mirror's ray stays in its medium
                     ray = spawn_ray(hit, wp.normalize(reflect(d, hit.n)))
                     o_r[i] = ray.o
                     d_r[i] = ray.d
                     w_r[i] = wp.cw_mul(w, kr)
                     x_r[i] = wp.cw_mul(x, kr)
+                    if anyway and wp.max(kr) <= 0.0:  # the reach as if k_r were 1: its subtree is recorded too
+                        x_r[i] = x
                     med_r[i] = medium[i]
                     kind[i] = wp.static(CHILD_MIRROR)
                     has[i] = wp.vec2i(1, 0)
