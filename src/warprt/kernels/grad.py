@@ -144,6 +144,45 @@ def texture_factor(texels: wp.array(dtype=wp.vec3), shape: wp.vec4i, wrap: wp.ve
 
 
 @wp.func
+def textured(colour: wp.vec3, texels: wp.array(dtype=wp.vec3), tex_shape: wp.array(dtype=wp.vec4i),
+             tex_wrap: wp.array(dtype=wp.vec2i), tex_u: wp.array(dtype=wp.vec3), tex_v: wp.array(dtype=wp.vec3),
+             tex_c0: wp.array(dtype=wp.vec3), tex_c1: wp.array(dtype=wp.vec3), j: int, uv: wp.vec3) -> wp.vec3:
+    """shading.make_coefficients' textured colour: ``colour`` times the texture of the replay's table row j
+    (3 m + 0, 1, 2: material slot m's ka, kd, ks) at uv (texture_factor)."""
+    return wp.cw_mul(colour, texture_factor(texels, tex_shape[j], tex_wrap[j], tex_u[j], tex_v[j], tex_c0[j],
+                                            tex_c1[j], uv))
+
+
+@functools.cache
+def make_whitted_light(light_model: bool):
+    """whitted_light(l, ...): Whitted light l's Phong term at a hit it lights (p, normal n, towards the viewer
+    v, colours kd and ks, exponent shininess), C_l (kd n.L + ks max(0, r.v)^n): with ``light_model``,
+    shading's general model (a directional light's L is -its axis, a spot's cone and 1 / r^2 for
+    inverse_square: light_factor); without, the seed's point lights. What the chain's and the tree's
+    replays add per light the record saw."""
+
+    @wp.func
+    def whitted_light(l: int, light_pos: wp.array(dtype=wp.vec3), light_color: wp.array(dtype=wp.vec3),
+                      inverse_square: wp.array(dtype=int), light_kind: wp.array(dtype=int),
+                      light_axis: wp.array(dtype=wp.vec3), light_cone: wp.array(dtype=wp.vec4), p: wp.vec3,
+                      n: wp.vec3, v: wp.vec3, kd: wp.vec3, ks: wp.vec3, shininess: float) -> wp.vec3:
+        C_l = light_color[l]
+        if wp.static(light_model):
+            to_light = -light_axis[l]
+            if light_kind[l] != wp.static(LIGHT_DIRECTIONAL):
+                to_light = light_pos[l] - p
+            L_dir = wp.normalize(to_light)
+            C_l = C_l * light_factor(light_kind[l], light_cone[l], inverse_square[l], light_axis[l], to_light, L_dir)
+        else:  # the seed's point lights: no falloff
+            to_light = light_pos[l] - p
+            L_dir = wp.normalize(to_light)
+        n_dot_l = wp.dot(n, L_dir)
+        return wp.cw_mul(C_l, kd * n_dot_l + phong_specular(ks, shininess, n, L_dir, v, n_dot_l))
+
+    return whitted_light
+
+
+@wp.func
 def camera_direction(eye: wp.vec3, center: wp.vec3, up: wp.vec3, fovy: float, near: float, aspect: float,
                      px: float, py: float) -> wp.vec3:
     """The unit direction of the camera ray through the point (px, py) of the image plane (0 to 1 from its
@@ -287,6 +326,8 @@ def make_grad_shade_kernel(L: int, D: int, smooth: bool, moving: bool = False, l
     (one per vertex, differentiable) at the hit's barycentrics, the moving ones where the hit moves
     (vertex_colour: shading.make_coefficients' and make_surface's arithmetic)."""
 
+    whitted_light = make_whitted_light(light_model)
+
     @wp.kernel(module="unique")
     def shade(eye: wp.array(dtype=wp.vec3), points: wp.array(dtype=wp.vec3), indices: wp.array(dtype=int), normals: wp.array(dtype=wp.vec3),
               tri_material: wp.array(dtype=int), tri_smooth: wp.array(dtype=int),
@@ -357,12 +398,9 @@ def make_grad_shade_kernel(L: int, D: int, smooth: bool, moving: bool = False, l
                     t = uvs[i0] * u + uvs[i1] * v + uvs[i2] * w
                     uv = wp.vec3(t[0], t[1], 1.0)
                     j = 3 * m
-                    ka_m = wp.cw_mul(ka_m, texture_factor(texels, tex_shape[j], tex_wrap[j], tex_u[j], tex_v[j],
-                                                          tex_c0[j], tex_c1[j], uv))
-                    kd_m = wp.cw_mul(kd_m, texture_factor(texels, tex_shape[j + 1], tex_wrap[j + 1], tex_u[j + 1],
-                                                          tex_v[j + 1], tex_c0[j + 1], tex_c1[j + 1], uv))
-                    ks_m = wp.cw_mul(ks_m, texture_factor(texels, tex_shape[j + 2], tex_wrap[j + 2], tex_u[j + 2],
-                                                          tex_v[j + 2], tex_c0[j + 2], tex_c1[j + 2], uv))
+                    ka_m = textured(ka_m, texels, tex_shape, tex_wrap, tex_u, tex_v, tex_c0, tex_c1, j, uv)
+                    kd_m = textured(kd_m, texels, tex_shape, tex_wrap, tex_u, tex_v, tex_c0, tex_c1, j + 1, uv)
+                    ks_m = textured(ks_m, texels, tex_shape, tex_wrap, tex_u, tex_v, tex_c0, tex_c1, j + 2, uv)
                 if wp.static(vertex_color):  # shading.make_coefficients: ka and kd times the vertex colour
                     vc = vertex_colour(colors, i0, i1, i2, u, v, w)
                     ka_m = wp.cw_mul(ka_m, vc)
@@ -370,20 +408,8 @@ def make_grad_shade_kernel(L: int, D: int, smooth: bool, moving: bool = False, l
                 local = wp.cw_mul(ambient, ka_m)
                 for l in range(wp.static(L)):
                     if visible[k * wp.static(L) + l] != 0:
-                        C_l = light_color[l]
-                        if wp.static(light_model):
-                            to_light = -light_axis[l]
-                            if light_kind[l] != wp.static(LIGHT_DIRECTIONAL):
-                                to_light = light_pos[l] - p
-                            L_dir = wp.normalize(to_light)
-                            C_l = C_l * light_factor(light_kind[l], light_cone[l], inverse_square[l], light_axis[l],
-                                                     to_light, L_dir)
-                        else:  # the seed's point lights: no falloff
-                            to_light = light_pos[l] - p
-                            L_dir = wp.normalize(to_light)
-                        n_dot_l = wp.dot(n, L_dir)
-                        lit = kd_m * n_dot_l + phong_specular(ks_m, shininess[m], n, L_dir, -d, n_dot_l)
-                        local = local + wp.cw_mul(C_l, lit)
+                        local = local + whitted_light(l, light_pos, light_color, inverse_square, light_kind,
+                                                      light_axis, light_cone, p, n, -d, kd_m, ks_m, shininess[m])
                 if wp.static(area):
                     hit_p[k] = p
                     hit_n[k] = n

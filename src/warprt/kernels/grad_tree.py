@@ -25,12 +25,12 @@ from __future__ import annotations
 import functools
 
 from .._warp import wp
-from ..geometry import LIGHT_DIRECTIONAL, SceneData
+from ..geometry import SceneData
 from .camera import CameraData, camera_ray, sample_offset
 from .dielectric import beer, beer_forever, dielectric_children, fresnel_dielectric, refract
-from .grad import light_factor, texture_factor, vertex_colour
+from .grad import make_whitted_light, textured, vertex_colour
 from .interaction import hit_point_error, make_surface, offset_ray_origin, reflect, spawn_ray
-from .shading import make_area_sample_test, make_light_test, phong_specular
+from .shading import make_area_sample_test, make_light_test
 from .trace import absorbed, culled, past
 from .triangle import triangle, unit_normal
 
@@ -195,6 +195,8 @@ def make_tree_replay_kernel(L: int, smooth: bool, light_model: bool, texture: bo
     tree_area_combine adds it to its camera ray's. With ``vertex_color``, ka and kd (after their textures)
     times the colour interpolated from ``colors`` at the moving hit (vertex_colour, the chain's)."""
 
+    whitted_light = make_whitted_light(light_model)
+
     @wp.kernel(module="unique")
     def replay(eye: wp.array(dtype=wp.vec3), points: wp.array(dtype=wp.vec3), indices: wp.array(dtype=int),
                normals: wp.array(dtype=wp.vec3), tri_material: wp.array(dtype=int), tri_smooth: wp.array(dtype=int),
@@ -269,12 +271,9 @@ def make_tree_replay_kernel(L: int, smooth: bool, light_model: bool, texture: bo
                 t = uvs[i0] * u + uvs[i1] * v + uvs[i2] * bw
                 uv = wp.vec3(t[0], t[1], 1.0)
                 j = 3 * m
-                ka_m = wp.cw_mul(ka_m, texture_factor(texels, tex_shape[j], tex_wrap[j], tex_u[j], tex_v[j],
-                                                      tex_c0[j], tex_c1[j], uv))
-                kd_m = wp.cw_mul(kd_m, texture_factor(texels, tex_shape[j + 1], tex_wrap[j + 1], tex_u[j + 1],
-                                                      tex_v[j + 1], tex_c0[j + 1], tex_c1[j + 1], uv))
-                ks_m = wp.cw_mul(ks_m, texture_factor(texels, tex_shape[j + 2], tex_wrap[j + 2], tex_u[j + 2],
-                                                      tex_v[j + 2], tex_c0[j + 2], tex_c1[j + 2], uv))
+                ka_m = textured(ka_m, texels, tex_shape, tex_wrap, tex_u, tex_v, tex_c0, tex_c1, j, uv)
+                kd_m = textured(kd_m, texels, tex_shape, tex_wrap, tex_u, tex_v, tex_c0, tex_c1, j + 1, uv)
+                ks_m = textured(ks_m, texels, tex_shape, tex_wrap, tex_u, tex_v, tex_c0, tex_c1, j + 2, uv)
             if wp.static(vertex_color):  # shading.make_coefficients: ka and kd times the vertex colour
                 vc = vertex_colour(colors, i0, i1, i2, u, v, bw)
                 ka_m = wp.cw_mul(ka_m, vc)
@@ -282,20 +281,8 @@ def make_tree_replay_kernel(L: int, smooth: bool, light_model: bool, texture: bo
             local = wp.cw_mul(ambient, ka_m)
             for l in range(wp.static(L)):
                 if visible[i * wp.static(L) + l] != 0:
-                    C_l = light_color[l]
-                    if wp.static(light_model):
-                        to_light = -light_axis[l]
-                        if light_kind[l] != wp.static(LIGHT_DIRECTIONAL):
-                            to_light = light_pos[l] - p
-                        L_dir = wp.normalize(to_light)
-                        C_l = C_l * light_factor(light_kind[l], light_cone[l], inverse_square[l], light_axis[l],
-                                                 to_light, L_dir)
-                    else:
-                        to_light = light_pos[l] - p
-                        L_dir = wp.normalize(to_light)
-                    n_dot_l = wp.dot(n, L_dir)
-                    lit = kd_m * n_dot_l + phong_specular(ks_m, shininess[m], n, L_dir, -d, n_dot_l)
-                    local = local + wp.cw_mul(C_l, lit)
+                    local = local + whitted_light(l, light_pos, light_color, inverse_square, light_kind, light_axis,
+                                                  light_cone, p, n, -d, kd_m, ks_m, shininess[m])
             if wp.static(area):
                 hit_p[i] = p
                 hit_n[i] = n
