@@ -357,6 +357,28 @@ def replay(scene, geom, hits: FirstHits, device: str, vertices: bool = False, ca
     return r
 
 
+def replay_arrays(scene, geom, mats, device: str) -> tuple:
+    """The replays' material and Whitted-light inputs (the chain's and the tree's), from the scene's values:
+    per material slot (``mats``, geom.slot_materials) ka, kd, ks, shininess and reflectivity, per light its
+    position, colour, falloff, kind, axis (unit, as Light keeps it: backward() projects its adjoint) and
+    cone; the colours, exponents, positions and axes differentiable."""
+    vec = lambda rows: wp.array(np.asarray(rows, np.float32).reshape(-1, 3), dtype=wp.vec3, device=device,  # noqa: E731
+                                requires_grad=True)
+    ka, kd, ks, kr = (vec([getattr(m, k) for m in mats] or [[0, 0, 0]]) for k in ("ka", "kd", "ks", "reflectivity"))
+    shininess = wp.array(np.asarray([m.shininess for m in mats] or [0.0], np.float32), dtype=float, device=device,
+                         requires_grad=True)
+    lights = scene.whitted_lights
+    light_pos = vec(geom.light_positions(scene) if lights else [[0, 0, 0]])
+    light_color = vec([l.color for l in lights] or [[0, 0, 0]])
+    shapes = [light_shape(l) for l in lights] or [LightShape()]
+    ints = lambda values: wp.array(np.asarray(values, np.int32), dtype=int, device=device)  # noqa: E731
+    inverse_square, kind = ints([x.inverse_square for x in shapes]), ints([x.kind for x in shapes])
+    axis = vec([list(x.direction) for x in shapes])
+    cone = wp.array(np.asarray([[x.cos_cutoff, x.cos_beam, x.cutoff, x.inv_ramp] for x in shapes], np.float32),
+                    dtype=wp.vec4, device=device)
+    return ka, kd, ks, shininess, kr, light_pos, light_color, inverse_square, kind, axis, cone
+
+
 def replay_launch(scene, geom, hits: FirstHits, device: str, vertices: bool = False,
                   camera: bool = False, centres: bool = False) -> ReplayLaunch:
     """The replay of ``hits`` (a frame of ``scene`` on ``geom``) with its differentiable arrays made from
@@ -369,18 +391,8 @@ def replay_launch(scene, geom, hits: FirstHits, device: str, vertices: bool = Fa
     mats = geom.slot_materials(scene)
     vec = lambda rows: wp.array(np.asarray(rows, np.float32).reshape(-1, 3), dtype=wp.vec3, device=device,  # noqa: E731
                                 requires_grad=True)
-    ka, kd, ks, kr = (vec([getattr(m, k) for m in mats] or [[0, 0, 0]]) for k in ("ka", "kd", "ks", "reflectivity"))
-    shininess = wp.array(np.asarray([m.shininess for m in mats] or [0.0], np.float32), dtype=float, device=device,
-                         requires_grad=True)
-    lights = scene.whitted_lights
-    light_pos = vec(geom.light_positions(scene) if lights else [[0, 0, 0]])
-    light_color = vec([l.color for l in lights] or [[0, 0, 0]])
-    shapes = [light_shape(l) for l in lights] or [LightShape()]
-    ints = lambda values: wp.array(np.asarray(values, np.int32), dtype=int, device=device)  # noqa: E731
-    inverse_square, kind = ints([x.inverse_square for x in shapes]), ints([x.kind for x in shapes])
-    axis = vec([list(x.direction) for x in shapes])  # unit, as Light keeps it: backward() projects its adjoint
-    cone = wp.array(np.asarray([[x.cos_cutoff, x.cos_beam, x.cutoff, x.inv_ramp] for x in shapes], np.float32),
-                    dtype=wp.vec4, device=device)
+    ka, kd, ks, shininess, kr, light_pos, light_color, inverse_square, kind, axis, cone = replay_arrays(
+        scene, geom, mats, device)
     n = hits.width * hits.height * hits.samples
     rays = wp.zeros(n, dtype=wp.vec3, device=device, requires_grad=True)
     points = wp.array(geom.points_np, dtype=wp.vec3, device=device, requires_grad=True) if vertices else geom.points
@@ -788,22 +800,12 @@ def replay_tree_launch(scene, geom, hits: TreeHits, device: str, vertices: bool 
     mats = geom.slot_materials(scene)
     vec = lambda rows: wp.array(np.asarray(rows, np.float32).reshape(-1, 3), dtype=wp.vec3, device=device,  # noqa: E731
                                 requires_grad=True)
-    scalars = lambda values: wp.array(np.asarray(values, np.float32), dtype=float, device=device,  # noqa: E731
-                                      requires_grad=True)
-    ka, kd, ks, kr = (vec([getattr(m, k) for m in mats] or [[0, 0, 0]]) for k in ("ka", "kd", "ks", "reflectivity"))
-    shininess = scalars([m.shininess for m in mats] or [0.0])
-    ior = scalars([m.ior or 0.0 for m in mats] or [0.0])
+    ka, kd, ks, shininess, kr, light_pos, light_color, inverse_square, kind, axis, cone = replay_arrays(
+        scene, geom, mats, device)
+    ior = wp.array(np.asarray([m.ior or 0.0 for m in mats] or [0.0], np.float32), dtype=float, device=device,
+                   requires_grad=True)
     kt = vec([m.transmittance for m in mats] or [[1, 1, 1]])
     sigma = vec([m.absorption for m in mats] or [[0, 0, 0]])
-    lights = scene.whitted_lights
-    light_pos = vec(geom.light_positions(scene) if lights else [[0, 0, 0]])
-    light_color = vec([l.color for l in lights] or [[0, 0, 0]])
-    shapes = [light_shape(l) for l in lights] or [LightShape()]
-    ints = lambda values: wp.array(np.asarray(values, np.int32), dtype=int, device=device)  # noqa: E731
-    inverse_square, kind = ints([x.inverse_square for x in shapes]), ints([x.kind for x in shapes])
-    axis = vec([list(x.direction) for x in shapes])
-    cone = wp.array(np.asarray([[x.cos_cutoff, x.cos_beam, x.cutoff, x.inv_ramp] for x in shapes], np.float32),
-                    dtype=wp.vec4, device=device)
     n = hits.width * hits.height * hits.samples
     rays = wp.zeros(n, dtype=wp.vec3, device=device, requires_grad=True)
     points = wp.array(geom.points_np, dtype=wp.vec3, device=device, requires_grad=True) if vertices else geom.points
