@@ -44,6 +44,22 @@ def backpropagated(ms, s, weights, detach: bool = False):
     return color
 
 
+def light_colours_with_grad(tables) -> tuple[list, list]:
+    """Each point, spot or directional emitter of the reference's ``tables`` traversed (mi.traverse) with
+    its C_l (a point or spot emitter's intensity, a directional one's irradiance) under AD, its gradient
+    cleared (mitsuba_scene keeps a converted scene for the next calls on the same Scene): (parameters, keys)."""
+    import drjit as dr
+    import mitsuba as mi
+
+    emitters = [mi.traverse(e) for e, _ in tables.lights]
+    keys = ["irradiance.value" if "irradiance.value" in p.keys() else "intensity.value" for p in emitters]
+    for p, key in zip(emitters, keys):
+        dr.enable_grad(p[key])
+        dr.clear_grad(p[key])
+        p.update()
+    return emitters, keys
+
+
 def ad_gradients(s, weights, shadows: bool = True) -> tuple[np.ndarray, dict]:
     """Mitsuba's image (H, W, 3) and its AD gradients of sum(weights * image), by r.params name: every
     material's ka, kd, ks, shininess and reflectivity (summed over the table rows of its objects; kd carries
@@ -64,13 +80,7 @@ def ad_gradients(s, weights, shadows: bool = True) -> tuple[np.ndarray, dict]:
     for table in (t.ka, t.kd, t.ks, t.shininess, t.kr):
         dr.enable_grad(table)
         dr.clear_grad(table)
-    whitted = [mi.traverse(e) for e, _ in t.lights]
-    # C_l: a point or spot emitter's intensity, a directional one's irradiance
-    keys = ["irradiance.value" if "irradiance.value" in p.keys() else "intensity.value" for p in whitted]
-    for p, key in zip(whitted, keys):
-        dr.enable_grad(p[key])
-        dr.clear_grad(p[key])
-        p.update()
+    whitted, keys = light_colours_with_grad(t)
     # Per area light, the emitters that are its radiance: the scene's (a shape light's own shape, an object
     # light's mesh) and the sampler's (t.area, the same emitter for a shape light).
     drawn = {shape.id(): shape.emitter() for shape in ms.mi_scene.shapes() if shape.emitter() is not None}
@@ -126,12 +136,7 @@ def tree_ad_gradients(s, weights, detach_fresnel: bool = False) -> tuple[np.ndar
     for key in TABLES.values():
         dr.enable_grad(getattr(t, key))
         dr.clear_grad(getattr(t, key))
-    emitters = [mi.traverse(e) for e, _ in t.lights]
-    keys = ["irradiance.value" if "irradiance.value" in p.keys() else "intensity.value" for p in emitters]
-    for p, key in zip(emitters, keys):
-        dr.enable_grad(p[key])
-        dr.clear_grad(p[key])
-        p.update()
+    emitters, keys = light_colours_with_grad(t)
     W, H = s.camera.width, s.camera.height
     o, d, maxt, pixel, _ = primary_rays(ms, s.camera, 1)
     n = len(o)
