@@ -144,6 +144,21 @@ def texture_factor(texels: wp.array(dtype=wp.vec3), shape: wp.vec4i, wrap: wp.ve
 
 
 @wp.func
+def barycentrics_on(p0: wp.vec3, p1: wp.vec3, p2: wp.vec3, o: wp.vec3, d: wp.vec3) -> wp.vec2:
+    """Where the ray o + t d meets the plane of the triangle (p0, p1, p2), as (u, v) in Warp's convention (u
+    weighs p0, v p1): Moller-Trumbore, differentiable in the points and the ray, without its inside test
+    (the face is the recorded one). The replays' hit on a moved face or from a moved ray."""
+    e1 = p1 - p0
+    e2 = p2 - p0
+    pv = wp.cross(d, e2)
+    inv = 1.0 / wp.dot(e1, pv)
+    tv = o - p0
+    b1 = wp.dot(tv, pv) * inv
+    b2 = wp.dot(d, wp.cross(tv, e1)) * inv
+    return wp.vec2(1.0 - b1 - b2, b1)
+
+
+@wp.func
 def textured(colour: wp.vec3, texels: wp.array(dtype=wp.vec3), tex_shape: wp.array(dtype=wp.vec4i),
              tex_wrap: wp.array(dtype=wp.vec2i), tex_u: wp.array(dtype=wp.vec3), tex_v: wp.array(dtype=wp.vec3),
              tex_c0: wp.array(dtype=wp.vec3), tex_c1: wp.array(dtype=wp.vec3), j: int, uv: wp.vec3) -> wp.vec3:
@@ -369,15 +384,9 @@ def make_grad_shade_kernel(L: int, D: int, smooth: bool, moving: bool = False, l
                 u = bary[k][0]
                 v = bary[k][1]
                 if wp.static(moving):
-                    e1 = p1 - p0
-                    e2 = p2 - p0
-                    pv = wp.cross(d, e2)
-                    inv = 1.0 / wp.dot(e1, pv)
-                    tv = o - p0
-                    b1 = wp.dot(tv, pv) * inv
-                    b2 = wp.dot(d, wp.cross(tv, e1)) * inv
-                    u = 1.0 - b1 - b2  # Warp's convention: u weighs the face's first vertex, v its second
-                    v = b1
+                    moved = barycentrics_on(p0, p1, p2, o, d)
+                    u = moved[0]
+                    v = moved[1]
                 w = 1.0 - u - v
                 p = p0 * u + p1 * v + p2 * w
                 ng = wp.normalize(wp.cross(p1 - p0, p2 - p0))

@@ -28,7 +28,7 @@ from .._warp import wp
 from ..geometry import SceneData
 from .camera import CameraData, camera_ray, sample_offset
 from .dielectric import beer, beer_forever, dielectric_children, fresnel_dielectric, refract
-from .grad import make_whitted_light, textured, vertex_colour
+from .grad import barycentrics_on, make_whitted_light, textured, vertex_colour
 from .interaction import hit_point_error, make_surface, offset_ray_origin, reflect, spawn_ray
 from .shading import make_area_sample_test, make_light_test
 from .trace import absorbed, culled, past
@@ -239,15 +239,9 @@ def make_tree_replay_kernel(L: int, smooth: bool, light_model: bool, texture: bo
             p0 = points[i0]
             p1 = points[i1]
             p2 = points[i2]
-            e1 = p1 - p0
-            e2 = p2 - p0
-            pv = wp.cross(d, e2)
-            inv = 1.0 / wp.dot(e1, pv)
-            tv = o - p0
-            b1 = wp.dot(tv, pv) * inv
-            b2 = wp.dot(d, wp.cross(tv, e1)) * inv
-            u = 1.0 - b1 - b2  # Warp's convention: u weighs the face's first vertex, v its second
-            v = b1
+            moved = barycentrics_on(p0, p1, p2, o, d)
+            u = moved[0]  # Warp's convention: u weighs the face's first vertex, v its second
+            v = moved[1]
             bw = 1.0 - u - v
             p = p0 * u + p1 * v + p2 * bw
             ng = wp.normalize(wp.cross(p1 - p0, p2 - p0))
