@@ -153,7 +153,7 @@ def make_light_test(LIGHT_MODEL: bool, SHADOWS: bool, GRID: bool = False):
     The shadow ray (SHADOWS) leaves spawn_ray's origin for the light, answered by the BVH or the grid (GRID)."""
     occluded = make_occluded(GRID)
 
-    @wp.func
+    @wp.func(inline=True)
     def light_test(s: SceneData, hit: Surface, l: int) -> LightTest:
         out = LightTest()
         out.shadow_ray = 0

@@ -199,7 +199,7 @@ def make_path(fx, raster_primary: bool, stack: int, report_truncated: bool, aovs
     RayRows, waiting, resumed = make_ray_stack(max(stack, 1))
     COUNTS_T = wp.vec4i if REFRACTION else wp.vec3i
 
-    @wp.func
+    @wp.func(inline=True)
     def path(s: SceneData, frags: Fragments, mir: Mirrors, aov: AovBuffers, camera: TreeRay, max_depth: int, i: int,
              pixel: int, samples: int, sample: int, x: int, row: int, truncated_in: wp.vec3, rays_in: COUNTS_T):
         r = camera
