@@ -27,7 +27,7 @@ from benchmarks.output import save
 from warprt.geometry import Geometry, SceneData
 from warprt.image import launch_bands
 from warprt.kernels import (MAX_BOUNCES, CameraData, Fragments, Mirrors, beer, beer_forever, camera_data, camera_ray,
-                            empty_aov_buffers, fresnel_dielectric, init_warp, make_surface, make_trace_kernel,
+                            empty_aov_buffers, empty_record, fresnel_dielectric, init_warp, make_surface, make_trace_kernel,
                             offset_ray_origin, phong_diffuse, phong_specular, reflect, refract, stack_size, triangle,
                             unit_normal, wp)
 from warprt.scene import camera_basis, resolve_effects
@@ -214,6 +214,7 @@ class Pair:
             wp.load_module(k.module, device="cpu")
         self.bands = self.reference.stats.bands  # render()'s for one thread
         self.frags, self.mirrors, self.aov = no_fragments(), no_mirrors(), empty_aov_buffers("cpu")
+        self.rec = empty_record("cpu")
         self.image = wp.empty(self.n, dtype=wp.vec3)
         self.counts = wp.empty(self.n, dtype=wp.vec4i if fx.refraction else wp.vec3i)
 
@@ -225,7 +226,7 @@ class Pair:
     def run_warprt(self, bands: int | None = None, tile=TILE) -> float:
         """warprt's kernel over ``bands`` launches on one thread (render()'s by default), pixels in ``tile`` order."""
         inputs = lambda first: [self.data, self.c, self.max_depth, 1, first, tile[0], tile[1], self.frags,  # noqa: E731
-                                self.mirrors, self.aov, self.image, self.counts]
+                                self.mirrors, self.aov, self.rec, self.image, self.counts]
         t = time.perf_counter()
         launch_bands(self.warprt, inputs, self.n, 1, bands or self.bands, "cpu")
         return time.perf_counter() - t

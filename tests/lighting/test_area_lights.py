@@ -259,7 +259,7 @@ def _generated_source(fx) -> str:
 
 def test_the_area_light_code_is_absent_from_the_other_variants():
     """A line of the area lights' sum and of the emitted radiance, as Warp quotes them in the C++."""
-    markers = ("out = area_light(s, hit, k, v, out)", "emitted(s, h.face, r.ray.d)")
+    markers = ("out = area_light(s, hit, k, v, out, rec, j)", "emitted(s, h.face, r.ray.d)")
     assert not any(m in _generated_source(EffectSet()) for m in markers)
     assert all(m in _generated_source(EffectSet(area_lights=True)) for m in markers)
 

@@ -8,7 +8,8 @@ image files (film.py) and the progress line (progress.py).
 from ..options import RenderOptions
 from .aovs import AOVS, check_aovs
 from .caches import FrameCaches, LightHistory
-from .grad import FirstHits, ReplayLaunch, TreeHits, record_first_hits, replay_image, replay_launch
+from .grad import FirstHits, ReplayLaunch, TreeHits, replay_image, replay_launch
+from .trace_record import record_first_hits
 from .film import aov_paths, partial_files, read_aovs, read_image, to_srgb8, write_image
 from .launch import bands_of, default_threads, launch_bands
 from .mirrors import MirrorFrame

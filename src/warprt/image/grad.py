@@ -53,7 +53,7 @@ from .._warp import wp
 from ..errors import ArgumentError
 from ..kernels.camera import camera_data
 from ..kernels.grad import (MAX_GRAD_LIGHTS, TEXTURE_CHECKER, TEXTURE_CLAMP, TEXTURE_IMAGE, TEXTURE_MIRROR, TEXTURE_NONE,
-                            TEXTURE_WRAP, area_replay, camera_rays, make_area_combine, make_grad_record_kernel,
+                            TEXTURE_WRAP, area_replay, camera_rays, make_area_combine,
                             make_grad_shade_kernel, sample_mean, smooth_vertex_normals, translate_samples,
                             vertex_normal_sums)
 from ..kernels.grad_tree import make_tree_record_kernel, make_tree_replay_kernel, tree_area_combine, tree_camera_rays
@@ -188,44 +188,6 @@ class FirstHits:
     mirrored: tuple = ()  # the materials whose mirror rays were recorded whatever their k_r (mirrored_materials)
     reflects: bool = False  # whether the frame could reflect (render.max_depth > 1, reflection not switched off)
     vertex_color: bool = False  # ka and kd times the vertex colours, as the frame's
-
-
-def record_first_hits(scene, geom, data, fx, device: str, threads: int = 1, bands: int = 1, pool=None,
-                      switched=None, mirrored=()) -> FirstHits:
-    """Run the record kernel for a frame of ``scene`` on ``geom`` and its tables ``data``, in ``bands`` bands
-    of camera rays on ``threads`` threads (launch_bands; ``pool`` the Renderer's): render.spp of them per
-    pixel, where the trace kernel puts them (its k x k strata). ``switched``: the effects the caller's
-    options leave on (effects.switched_on; None: every one). ``mirrored``: the materials whose mirror rays
-    are recorded whatever their k_r (mirrored_materials), over render.max_depth levels."""
-    if fx.refraction:  # glass: the whole ray tree, level by level
-        return record_tree(scene, geom, data, fx, device, threads, bands, pool, switched, mirrored)
-    cam = scene.camera
-    k = math.isqrt(scene.render.spp) if fx.supersampling else 1
-    n, L = cam.width * cam.height * k * k, len(scene.whitted_lights)
-    D = ray_levels(scene, fx, mirrored)
-    reflect = wp.array(np.asarray([int(m in mirrored) for m in geom.material_names] or [0], np.int32), dtype=int,
-                       device=device)
-    face = wp.empty(n * D, dtype=int, device=device)
-    bary = wp.zeros(n * D, dtype=wp.vec2, device=device)
-    dirs = wp.zeros(n * D, dtype=wp.vec3, device=device)
-    visible = wp.zeros(max(n * D * L, 1), dtype=int, device=device)
-    words = _words(area_samples(scene)) if fx.area_lights else 0
-    emit = wp.full(max(n * D, 1) if words else 1, -1, dtype=int, device=device)
-    area_bits = wp.zeros(max(n * D * words, 1), dtype=int, device=device)
-    c = camera_data(camera_basis(cam), geom.eye_offset(cam.eye))
-    # Shadows the scene asks for but its values leave out (every light dark, or no kd and ks anywhere): the
-    # forward traces none, its image the same without, but the derivative there (a light of radiance or
-    # colour 0, where inverse rendering may start) is the shadowed one's.
-    # Shadows switched off (render.effects, effects=, disable=) stay off.
-    wanted = switched is None or "shadows" in switched
-    shadows = fx.shadows or (scene.render.shadows and wanted and not scene_effects(scene).shadows)
-    kernel = make_grad_record_kernel(L, D, fx.smooth, shadows, fx.culling, fx.light_model, bool(words))
-    launch_bands(kernel, lambda first: [data, c, D, k, first, face, bary, dirs, visible, emit, area_bits, words,
-                                        reflect], n, threads, bands, device, pool=pool)
-    reflects = scene.render.max_depth > 1 and (switched is None or "reflection" in switched)
-    return FirstHits(face, bary, dirs, visible, cam.width, cam.height, L, D, fx.smooth, k * k, fx.light_model,
-                     fx.texture, emit, area_bits, words, data.area if words else None, tuple(mirrored), reflects,
-                     fx.vertex_color)
 
 
 def parameter_names(scene) -> list[str]:

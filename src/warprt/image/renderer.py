@@ -23,7 +23,8 @@ from ..timing import timed
 from .aovs import finish_aovs
 from .caches import SHADOW_GRIDS_KEPT, FrameCaches
 from .grad import (backward as grad_backward, check_record_memory, mirrored_materials, named_parameters,
-                   record_first_hits, refusal as grad_refusal)
+                   record_tree, refusal as grad_refusal)
+from .trace_record import empty_record, record_arrays, recording_plan, records_in_trace
 from .launch import band_pool, bands_of, launch_bands, launch_plan
 from .memory import check_frame_memory, frame_estimate, frame_memory
 from .mirrors import MirrorFrame, empty_mirrors, mirror_frame
@@ -48,17 +49,18 @@ class TraceVariant:
     aovs: tuple
     shadow_grid: bool
     mirrors: bool
+    record: bool = False  # a grad=True frame's: the trace writes the gradient's record
 
     @property
     def name(self) -> str:
         return (f"trace_{self.fx.variant}" + ("_zprimary" if self.raster_primary else "")
                 + ("_gshadow" if self.shadow_grid else "") + ("_mreflect" if self.mirrors else "")
-                + ("_aov_" + "_".join(self.aovs) if self.aovs else ""))
+                + ("_aov_" + "_".join(self.aovs) if self.aovs else "") + ("_record" if self.record else ""))
 
     def kernel(self):
         return make_trace_kernel(self.fx, raster_primary=self.raster_primary, stack=self.stack,
                                  report_truncated=self.report_truncated, aovs=self.aovs,
-                                 shadow_grid=self.shadow_grid, mirrors=self.mirrors)
+                                 shadow_grid=self.shadow_grid, mirrors=self.mirrors, record=self.record)
 
 
 @dataclass
@@ -237,6 +239,9 @@ class Renderer:
                 raise ArgumentError("render", "grad", why)
             if grad:
                 check_record_memory(scene, plan.fx, o.device, mirrored)
+            in_trace = grad and records_in_trace(plan.fx)  # the trace writes the record as it goes
+            if in_trace:
+                plan = recording_plan(scene, plan, switched, mirrored)
             pool = self._bands_pool(plan.threads)
             estimate = frame_estimate(scene, plan.grid.per_pixel, plan.raster)
             check_frame_memory(scene, _without_geometry(estimate, self._given), o.device)  # before any buffer
@@ -248,7 +253,7 @@ class Renderer:
             mirrors = self._virtual_cameras(scene, plan, geom, data, shortcuts, times, pool)
             used = mirrors if mirrors is not None and mirrors.mirrors is not None else None  # None: no chain rasterized
             variant = TraceVariant(plan.fx, shortcuts.raster, plan.stack, o.report_truncated, o.aovs,
-                                   grid is not None and grid.grid is not None, used is not None)
+                                   grid is not None and grid.grid is not None, used is not None, in_trace)
             with timed(times, "compile"):
                 kernel = variant.kernel()
                 wp.load_module(kernel.module, device=o.device)
@@ -259,14 +264,18 @@ class Renderer:
                 with timed(times, "raster"):
                     zb = ZBuffer(scene, geom, replace(plan.fx, shadows=False, reflection=False), device=o.device)
                     zb.rasterize(plan.threads, plan.bands, pool=pool)
+            rec, hits = None, None
+            if in_trace:
+                rec, hits = record_arrays(scene, geom, data, plan.fx, plan.max_depth, o.device, mirrored, switched)
             with timed(times, "trace"):
-                frame = _trace(scene, o, plan, geom, data, kernel, zb, used, progress, pool)
+                frame = _trace(scene, o, plan, geom, data, kernel, zb, used, progress, pool, rec)
             result = _finish(scene, o, plan, geom, frame)
-            if grad:
+            if grad and not in_trace:  # glass: the ray tree, recorded level by level
                 with timed(times, "grad_record"):
-                    self._first_hits = (scene, geom, record_first_hits(scene, geom, data, plan.fx, o.device,
-                                                                       plan.threads, plan.bands, pool, switched,
-                                                                       mirrored))
+                    hits = record_tree(scene, geom, data, plan.fx, o.device, plan.threads, plan.bands, pool, switched,
+                                       mirrored)
+            if grad:
+                self._first_hits = (scene, geom, hits)
         stats = _frame_stats(scene, o, plan, shortcuts, variant, geom, geometry_info, grid, mirrors, zb, frame, times)
         stats.memory["estimate"] = estimate
         return RenderResult(result[0], stats, result[1])
@@ -392,9 +401,9 @@ def given_geometry(geom: Geometry, eye) -> dict:
 
 
 def _trace(scene, o: RenderOptions, plan: FramePlan, geom: Geometry, data, kernel, zb, mirror_frame,
-           progress, pool) -> TracedFrame:
+           progress, pool, rec=None) -> TracedFrame:
     """Launch the kernel over the image: the image, the truncated weights after it (report_truncated),
-    each pixel's ray counts and the AOV buffers."""
+    each pixel's ray counts and the AOV buffers; with ``rec`` (a GradRecord), the gradient's record too."""
     cam, device = scene.camera, o.device
     # With report_truncated the kernel writes the truncated weights after the image.
     image = wp.empty(plan.n_pixels * (2 if o.report_truncated else 1), dtype=wp.vec3, device=device)
@@ -405,7 +414,7 @@ def _trace(scene, o: RenderOptions, plan: FramePlan, geom: Geometry, data, kerne
     mirrors = mirror_frame.mirrors if mirror_frame is not None else empty_mirrors(device)
     tile_w, tile_h = o.pixel_tile or PIXEL_TILE
     inputs = lambda first: [data, c, plan.max_depth, plan.grid.k, first, tile_w, tile_h, frags, mirrors,  # noqa: E731
-                            buffers, image, counts]
+                            buffers, rec if rec is not None else empty_record(device), image, counts]
     _launch_with_progress(kernel, inputs, plan.n_pixels, plan.threads, plan.bands, device, counts, progress, pool)
     pixels = image.numpy().reshape(-1, cam.height, cam.width, 3)
     return TracedFrame(image=pixels[0].copy(), truncated=pixels[1].copy() if o.report_truncated else None,

@@ -17,7 +17,7 @@ from .camera import CameraData, camera_data, camera_ray, raster_camera, sample_o
 from .clip import CLIP_SCALE
 from .dielectric import beer, beer_forever, fresnel_dielectric, refract
 from .grad import (MAX_GRAD_LIGHTS, TEXTURE_CLAMP, TEXTURE_MIRROR, TEXTURE_WRAP, area_replay, area_sample_term, bilinear,
-                   camera_direction, camera_rays, corner_angle, light_factor, make_area_combine, make_grad_record_kernel, make_grad_shade_kernel, sample_mean,
+                   camera_direction, camera_rays, corner_angle, light_factor, make_area_combine, make_grad_shade_kernel, sample_mean,
                    smooth_vertex_normals, spot_cone, texture_factor, vertex_normal_sums)
 from .grad_tree import make_tree_record_kernel, make_tree_replay_kernel, tree_area_combine, tree_camera_rays
 from .grad import translate_samples, vertex_colour
@@ -33,7 +33,7 @@ from .zbuffer_shade import make_shade_kernel
 
 # What image/ launches and reads, and what tests and benchmarks compose into kernels of their own.
 __all__ = ["CLIP_SCALE", "CameraData", "Fragments", "MARGIN_PX", "MAX_GRAD_LIGHTS", "TEXTURE_CLAMP", "TEXTURE_MIRROR", "TEXTURE_WRAP", "bilinear",
-           "make_grad_record_kernel", "area_replay", "area_sample_term", "camera_direction", "camera_rays", "corner_angle", "smooth_vertex_normals", "vertex_normal_sums", "make_area_combine",
+           "area_replay", "area_sample_term", "camera_direction", "camera_rays", "corner_angle", "smooth_vertex_normals", "vertex_normal_sums", "make_area_combine",
            "make_grad_shade_kernel", "make_tree_record_kernel", "make_tree_replay_kernel", "tree_area_combine", "tree_camera_rays", "MAX_BOUNCES", "MAX_TREE_DEPTH", "MIRROR_MARGIN_PX",
            "Mirrors", "OFFSET_SCALE", "aov_buffers", "aov_bytes", "aov_sums", "camera_data", "camera_ray",
            "beer", "beer_forever", "count_kernel", "empty_aov_buffers", "fill_kernel", "fresnel_dielectric", "gather_kernel", "grid_occluded",
@@ -42,3 +42,6 @@ __all__ = ["CLIP_SCALE", "CameraData", "Fragments", "MARGIN_PX", "MAX_GRAD_LIGHT
            "raster_camera", "raster_kernel", "raster_pixel_kernel", "reflect", "refract", "sample_mean", "sample_offset", "spot_cone", "stack_size", "texture_factor", "tile_order_pixel",
            "triangle", "uncertain", "uncertain_np", "unit_normal", "woop_hit", "wp"]
 __all__ += ["translate_samples", "vertex_colour"]  # the gradient's vertex colours and area lights' centres
+from .record import NO_RAY, GradRecord, empty_record  # noqa: E402 (what a grad=True frame's trace writes)
+
+__all__ += ["NO_RAY", "GradRecord", "empty_record"]

@@ -1,11 +1,10 @@
-"""Gradients of an image through its camera rays' first hits (image/grad.py): a record kernel and a
-differentiable shading kernel.
+"""Gradients of an image through its camera rays' first hits (image/grad.py): the differentiable replay of a
+recorded chain of rays (the camera ray, then its mirror rays).
 
-The record kernel finds each camera ray's hits as the tracer does (the rays through the centres of the
-pixel's strata, the BVH's closest hit, single-sided back faces passed through, the mirror rays) and which
-Whitted lights and area-light sample points each hit sees (shading's make_light_test and
-make_area_sample_test, the very functions the forward's shading calls): what the
-gradient holds fixed. The shading kernel recomputes the local Phong model at those hits from arrays a
+The record is the forward's own: the trace kernel's recording variant (kernels/record.py) writes each level's
+hit and the Whitted lights and area-light sample points it sees as it traces, with the very tests its shading
+makes (shading's make_light_test and make_area_sample_test): what the gradient holds fixed.
+The shading kernel recomputes the local Phong model at those hits from arrays a
 wp.Tape differentiates (the material colours and exponents per slot, their textures' texels, the lights'
 positions, colours and directions): C = C_amb ka + sum_l vis_l C_l w_l (kd n.L + ks max(0, r.v)^n), w_l a spot's cone times
 1 / r^2 for inverse_square (light_factor, shading.light_weight's arithmetic). Its lights loop is unrolled
@@ -24,12 +23,10 @@ from __future__ import annotations
 import functools
 
 from .._warp import wp
-from ..geometry import LIGHT_DIRECTIONAL, LIGHT_SPOT, SceneData
-from .camera import CameraData, camera_ray, sample_offset
-from .interaction import hit_point_error, make_surface, offset_ray_origin, reflect, spawn_ray
-from .shading import make_area_sample_test, make_light_test, phong_diffuse, phong_specular
-from .trace import culled, past
-from .triangle import triangle, unit_normal
+from ..geometry import LIGHT_DIRECTIONAL, LIGHT_SPOT
+from .camera import sample_offset
+from .interaction import hit_point_error, offset_ray_origin, reflect
+from .shading import phong_diffuse, phong_specular
 
 MAX_GRAD_LIGHTS = 16  # Warp's max_unroll: a longer static loop would silently turn dynamic
 
@@ -231,80 +228,6 @@ def camera_rays(camera: wp.array(dtype=wp.vec3), fovy: wp.array(dtype=float), ne
     dirs[ray * levels] = camera_direction(camera[0], camera[1], camera[2], fovy[0], near,
                                           float(width) / float(height), (float(x) + offset[0]) / float(width),
                                           (y + offset[1]) / float(height))
-
-
-@functools.cache
-def make_grad_record_kernel(L: int, D: int, smooth: bool, shadows: bool, cull: bool, light_model: bool = False,
-                            area: bool = False):
-    """record(s, c, max_depth, k, first, face, bary, dirs, visible): per camera ray (from ``first``: ray
-    pixel * k^2 + sample, pixels row-major, row 0 the top; sample j k + i the tracer's stratum (i, j),
-    camera.sample_offset, the pixel's centre where k = 1) and ray level
-    (D at most: the camera ray, then the mirror rays the tracer spawns while k_r > 0 and max_depth allows, and
-    also from the material slots ``mirrored`` flags whatever their k_r, for the derivative of a k_r of 0),
-    the face of the level's hit (-1: it met nothing, -2: no ray at that level), its barycentrics (u on the
-    face's first vertex, v on its second), the ray's direction, and per light whether the hit sees it (1
-    where n.L > 0 and no shadow ray is blocked): the tracer's own surface, and the forward's own test
-    (shading.make_light_test, called here as the forward's shade calls it, so the two cannot disagree).
-    With ``light_model`` (spot and directional lights, falloff), shading's general light model: a spot
-    outside its cone is not seen, a directional light lies along -direction, its shadow ray unbounded.
-    With ``area``, also per ray level the area light whose emitting side the ray meets (emit, -1: none;
-    shading.emitted's test) and, as ``words`` int32 bit masks, which area-light sample points the hit sees
-    (bit q of word q / 32: r^2 > 0, n.L > 0, the emitter's cosine > 0 and the shadow ray, stopping
-    SHADOW_EPSILON short of the point, unblocked): shading.make_area_sample_test, the forward area_light's
-    own test."""
-    surface = make_surface(smooth)
-    light_test = make_light_test(light_model, shadows)
-    area_sample_test = make_area_sample_test(shadows)
-
-    @wp.kernel(module="unique", enable_backward=False)
-    def record(s: SceneData, c: CameraData, max_depth: int, k: int, first: int, face: wp.array(dtype=int),
-               bary: wp.array(dtype=wp.vec2), dirs: wp.array(dtype=wp.vec3), visible: wp.array(dtype=int),
-               emit: wp.array(dtype=int), area_bits: wp.array(dtype=int), words: int, mirrored: wp.array(dtype=int)):
-        ray = first + wp.tid()
-        pixel = ray / (k * k)
-        x = pixel % c.width
-        row = pixel / c.width
-        offset = sample_offset(ray % (k * k), k)  # the trace kernel's: (0.5, 0.5) exactly where k = 1
-        o = c.eye
-        d = camera_ray(c, x, row, offset[0], offset[1])
-        alive = True
-        for level in range(wp.static(D)):
-            j = ray * wp.static(D) + level
-            face[j] = -2
-            if alive:
-                dirs[j] = d
-                q = wp.mesh_query_ray(s.mesh, o, d, 1.0e30)
-                if wp.static(cull):
-                    while q.result and culled(s, q.face, d):
-                        q = wp.mesh_query_ray(s.mesh, past(s, q.face, q.u, q.v, d), d, 1.0e30)
-                face[j] = -1
-                alive = False
-                if q.result:
-                    face[j] = q.face
-                    bary[j] = wp.vec2(q.u, q.v)
-                    hit = surface(s, q.face, q.u, q.v, q.normal, d)
-                    for l in range(wp.static(L)):  # shading's own test: its light model and shadow ray
-                        visible[j * wp.static(L) + l] = light_test(s, hit, l).lit
-                    if wp.static(area):
-                        # shading.emitted: the emitter's side its winding's normal points to
-                        e = s.area.tri_emitter[q.face]
-                        emit[j] = -1
-                        if e >= 0:
-                            t0, t1, t2 = triangle(s, q.face)
-                            if wp.dot(d, unit_normal(t0, t1, t2)) < 0.0:
-                                emit[j] = e
-                        a = s.area
-                        for sq in range(a.first[a.num]):  # shading.area_light's samples and test, lights in order
-                            if area_sample_test(s, hit, sq).lit != 0:
-                                word = j * words + sq / 32
-                                area_bits[word] = area_bits[word] | (1 << (sq % 32))
-                    if level + 1 < max_depth and (wp.max(s.kr[hit.material]) > 0.0 or mirrored[hit.material] != 0):
-                        spawned = spawn_ray(hit, wp.normalize(reflect(d, hit.n)))
-                        o = spawned.o
-                        d = spawned.d
-                        alive = True
-
-    return record
 
 
 @wp.func

@@ -41,7 +41,7 @@ CHILD_NONE, CHILD_MIRROR, CHILD_DIELECTRIC = 0, 1, 2  # what a recorded ray spaw
 def tree_camera_rays(s: SceneData, c: CameraData, k: int, first: int, orig: wp.array(dtype=wp.vec3),
                      dirs: wp.array(dtype=wp.vec3), weight: wp.array(dtype=wp.vec3), start: wp.array(dtype=wp.vec3),
                      medium: wp.array(dtype=int)):
-    """The tree's first level: each camera ray (ray pixel * k^2 + sample, as make_grad_record_kernel numbers
+    """The tree's first level: each camera ray (ray pixel * k^2 + sample, as the trace kernel's record numbers
     them) as the trace kernel makes it: from the eye, weight 1, in the eye's medium."""
     ray = first + wp.tid()
     pixel = ray / (k * k)
@@ -66,7 +66,7 @@ def make_tree_record_kernel(L: int, smooth: bool, shadows: bool, cull: bool, lig
     1, decides), so that the derivative in that transmittance is not lost; likewise the mirror rays of the
     materials ``mirror_anyway`` flags (render(grad=[their reflectivity]): a k_r of 0's derivative). ``reflection``, ``absorption``: the forward's effects of those names. With ``area``, also
     the area light whose emitting side the ray meets (emit, -1: none) and which area-light sample points the
-    hit sees (``words`` int32 bit masks a ray), as make_grad_record_kernel records them."""
+    hit sees (``words`` int32 bit masks a ray), as the trace kernel's record (kernels/record.py) holds them."""
     surface = make_surface(smooth)
     light_test = make_light_test(light_model, shadows)
     area_sample_test = make_area_sample_test(shadows)

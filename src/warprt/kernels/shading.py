@@ -22,6 +22,7 @@ import functools
 from .._warp import wp
 from ..geometry import LIGHT_DIRECTIONAL, LIGHT_SPOT, LightShape, SceneData
 from .interaction import Surface, reflect, spawn_ray
+from .record import GradRecord
 from .shadow import make_occluded
 from .texture import texel
 from .triangle import triangle, unit_normal
@@ -48,14 +49,23 @@ SHADOW_EPSILON = 1.0e-3  # the share of an area light's shadow ray left short of
 
 
 @wp.func
-def emitted(s: SceneData, f: int, d: wp.vec3) -> wp.vec3:
-    """The radiance a ray along d sees at face f: its area light's L_e from the side its winding's
-    normal points to (Mitsuba's area emitter: one-sided, si.n the winding's normal), else nothing."""
+def emitter_met(s: SceneData, f: int, d: wp.vec3) -> int:
+    """The area light a ray along d sees emitting at face f (-1: none): face f's, from the side its
+    winding's normal points to (Mitsuba's area emitter: one-sided, si.n the winding's normal)."""
     e = s.area.tri_emitter[f]
     if e < 0:
-        return wp.vec3(0.0)
+        return -1
     p0, p1, p2 = triangle(s, f)
     if wp.dot(d, unit_normal(p0, p1, p2)) >= 0.0:
+        return -1
+    return e
+
+
+@wp.func
+def emitted(s: SceneData, f: int, d: wp.vec3) -> wp.vec3:
+    """The radiance a ray along d sees at face f: its area light's L_e (emitter_met), else nothing."""
+    e = emitter_met(s, f, d)
+    if e < 0:
         return wp.vec3(0.0)
     return s.area.radiance[e]
 
@@ -122,13 +132,15 @@ def make_coefficients(TEXTURE: bool, VERTEX_COLOR: bool):
     return coefficients
 
 
-def make_shade(fx, shadow_grid: bool = False):
+def make_shade(fx, shadow_grid: bool = False, record: bool = False):
     """The local shading function for one effect set (its ambient, diffuse, specular and shadow
     switches, and how ka, kd and ks are read): ambient + the lit terms of every light, with shadow
     rays when fx.shadows, answered by the BVH or, with ``shadow_grid``, by the light-space grid (the
-    same answers: kernels/shadow.py)."""
+    same answers: kernels/shadow.py). shade(s, hit, v, rec, j): with ``record``, also which lights and
+    area-light sample points the hit sees, written into the GradRecord ``rec`` at ray level ``j``
+    (kernels/record.py); without, ``rec`` is never read. Inlined: its arguments are not copied."""
     return _make_shade(fx.ambient, fx.diffuse, fx.specular, fx.shadows, fx.texture, fx.vertex_color,
-                       fx.shadows and shadow_grid, fx.light_model, fx.area_lights)
+                       fx.shadows and shadow_grid, fx.light_model, fx.area_lights, record)
 
 
 @wp.struct
@@ -269,22 +281,27 @@ def make_phong_lit(DIFFUSE: bool, SPECULAR: bool):
 
 
 @functools.cache
-def make_area_light(DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool):
-    """area_light(s, hit, k, v, out): ``out`` plus the light of every area light at the hit, over its
-    sample points, one shadow ray (the BVH's any-hit query) each where the point faces both ways
-    (make_area_sample_test)."""
+def make_area_light(DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool, RECORD: bool = False):
+    """area_light(s, hit, k, v, out, rec, j): ``out`` plus the light of every area light at the hit, over
+    its sample points, one shadow ray (the BVH's any-hit query) each where the point faces both ways
+    (make_area_sample_test); with RECORD, a bit per point seen set in ``rec`` at level j."""
     area_sample_test = make_area_sample_test(SHADOWS)
     phong_lit = make_phong_lit(DIFFUSE, SPECULAR)
 
-    @wp.func
-    def area_light(s: SceneData, hit: Surface, k: Coefficients, v: wp.vec3, out: ShadeResult) -> ShadeResult:
+    @wp.func(inline=True)
+    def area_light(s: SceneData, hit: Surface, k: Coefficients, v: wp.vec3, out: ShadeResult, rec: GradRecord,
+                   j: int) -> ShadeResult:
         a = s.area
         n = hit.n
-        for j in range(a.num):
-            L_e = a.radiance[j]
-            for q in range(a.first[j], a.first[j + 1]):
+        for e in range(a.num):
+            L_e = a.radiance[e]
+            for q in range(a.first[e], a.first[e + 1]):
                 t = area_sample_test(s, hit, q)
                 out.shadow_rays += t.shadow_ray
+                if wp.static(RECORD):
+                    if t.lit != 0:
+                        word = j * rec.words + q / 32
+                        rec.area_bits[word] = rec.area_bits[word] | (1 << (q % 32))
                 if t.lit != 0:
                     lit = phong_lit(k, s.shininess[hit.material], n, t.L, v, t.n_dot_l)
                     out.color = out.color + wp.cw_mul(L_e, lit) * (t.cos_q * a.dA[q] / t.r2)
@@ -295,16 +312,16 @@ def make_area_light(DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool):
 
 @functools.cache
 def _make_shade(AMBIENT: bool, DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool, TEXTURE: bool, VERTEX_COLOR: bool,
-                GRID: bool = False, LIGHT_MODEL: bool = False, AREA: bool = False):
+                GRID: bool = False, LIGHT_MODEL: bool = False, AREA: bool = False, RECORD: bool = False):
     coefficients = make_coefficients(TEXTURE, VERTEX_COLOR)
 
     # Disabled terms are absent from the generated code (wp.static).
     light_test = make_light_test(LIGHT_MODEL, SHADOWS, GRID)
     phong_lit = make_phong_lit(DIFFUSE, SPECULAR)
-    area_light = make_area_light(DIFFUSE, SPECULAR, SHADOWS)
+    area_light = make_area_light(DIFFUSE, SPECULAR, SHADOWS, RECORD)
 
-    @wp.func
-    def shade(s: SceneData, hit: Surface, v: wp.vec3) -> ShadeResult:
+    @wp.func(inline=True)
+    def shade(s: SceneData, hit: Surface, v: wp.vec3, rec: GradRecord, j: int) -> ShadeResult:
         out = ShadeResult()
         out.color = wp.vec3(0.0)
         out.shadow_rays = 0
@@ -317,10 +334,12 @@ def _make_shade(AMBIENT: bool, DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool, TEX
             for l in range(s.num_lights):
                 t = light_test(s, hit, l)
                 out.shadow_rays += t.shadow_ray
+                if wp.static(RECORD):
+                    rec.visible[j * rec.lights + l] = t.lit
                 if t.lit != 0:
                     out.color = out.color + wp.cw_mul(t.C, phong_lit(k, s.shininess[m], n, t.L, v, t.n_dot_l))
         if wp.static(AREA and (DIFFUSE or SPECULAR)):
-            out = area_light(s, hit, k, v, out)
+            out = area_light(s, hit, k, v, out, rec, j)
         return out
 
     return shade

@@ -18,7 +18,8 @@ from .hybrid import uncertain
 from .interaction import Ray, Surface, hit_point_error, make_surface, offset_ray_origin, reflect, spawn_ray
 from .mirror import FROM_CAMERA, NO_CHAIN, Mirrors, mirror_chain, mirror_hit
 from .raster import Fragments
-from .shading import emitted, make_shade
+from .record import GradRecord
+from .shading import emitted, emitter_met, make_shade
 from .triangle import query_normal, triangle, unit_normal, woop_hit
 
 # The ray tree is walked depth first: at a dielectric hit one child waits on the stack while the
@@ -183,35 +184,49 @@ def make_ray_stack(size: int):
 
 @functools.cache
 def make_path(fx, raster_primary: bool, stack: int, report_truncated: bool, aovs: tuple, shadow_grid: bool,
-              mirrors: bool):
-    """The walk of one camera ray's tree, make_trace_kernel's inner loop: ``path(s, frags, mir, aov, r,
+              mirrors: bool, record: bool = False):
+    """The walk of one camera ray's tree, make_trace_kernel's inner loop: ``path(s, frags, mir, aov, rec, r,
     max_depth, i, pixel, samples, sample, x, row, truncated, rays)`` follows ``r`` (the camera ray) and
     the rays it spawns to max_depth levels and returns (its colour, ``truncated`` plus the weight it cut
     off, ``rays`` plus the rays it cast). ``truncated`` and ``rays`` go in and out, not a sum per sample,
-    so the kernel adds them in the order a single loop does: the image is the same to the bit."""
-    shade = make_shade(fx, shadow_grid)
+    so the kernel adds them in the order a single loop does: the image is the same to the bit. With
+    ``record`` (a chain: no refraction), each level's hit, the lights and area-light points it sees and
+    the emitter it meets are written into ``rec`` (kernels/record.py) as they are found, and the mirror
+    rays of the materials ``rec.mirrored`` flags are followed whatever their k_r (weight 0: the image the
+    same). Inlined into the kernel: Warp passes structs by value, and the walk's five would be copied
+    once a sample (1.2x the atrium's warm frame, issue 37)."""
+    if record and fx.refraction:
+        raise ValueError("the trace kernel records chains of rays; glass's ray tree is recorded level by level")
+    shade = make_shade(fx, shadow_grid, record)
     surface = make_surface(fx.smooth, fx.texture, fx.vertex_color)
     record_first_hit = make_record_first_hit(tuple(aovs), fx.texture, fx.vertex_color)
     MIRRORS = fx.reflection and mirrors
     first_hit = make_first_hit(raster_primary, MIRRORS, fx.culling)
     REFLECTION, AOVS, AREA = fx.reflection, bool(aovs), fx.area_lights
-    REFRACTION, ABSORPTION, TRUNCATED = fx.refraction, fx.absorption, report_truncated
+    REFRACTION, ABSORPTION, TRUNCATED, RECORD = fx.refraction, fx.absorption, report_truncated, record
     RayRows, waiting, resumed = make_ray_stack(max(stack, 1))
     COUNTS_T = wp.vec4i if REFRACTION else wp.vec3i
 
     @wp.func(inline=True)
-    def path(s: SceneData, frags: Fragments, mir: Mirrors, aov: AovBuffers, camera: TreeRay, max_depth: int, i: int,
-             pixel: int, samples: int, sample: int, x: int, row: int, truncated_in: wp.vec3, rays_in: COUNTS_T):
+    def path(s: SceneData, frags: Fragments, mir: Mirrors, aov: AovBuffers, rec: GradRecord, camera: TreeRay,
+             max_depth: int, i: int, pixel: int, samples: int, sample: int, x: int, row: int, truncated_in: wp.vec3,
+             rays_in: COUNTS_T):
         r = camera
         truncated = truncated_in
         rays = rays_in
         color = wp.vec3(0.0)
         top = int(0)  # rays waiting on the stack
+        j = int(0)  # with the record: this ray's entry (camera ray, level)
         if wp.static(REFRACTION):
             stack = RayRows()
         while r.depth < max_depth:
             # ---- nearest hit ----
             h = first_hit(s, frags, mir, r, i, pixel * samples + sample, x, row, sample)
+            if wp.static(RECORD):
+                j = (pixel * samples + sample) * rec.levels + r.depth
+                rec.face[j] = h.face
+                rec.dirs[j] = r.ray.d
+                rec.bary[j] = wp.vec2(h.u, h.v)
             if h.face < 0:
                 if wp.static(ABSORPTION):
                     if r.medium >= 0:
@@ -226,16 +241,21 @@ def make_path(fx, raster_primary: bool, stack: int, report_truncated: bool, aovs
                         record_first_hit(aov, s, pixel, sample, h.face, h.u, h.v, hit, r.ray.o)
                 # ---- emitted: an area light's own surface ----
                 if wp.static(AREA):
+                    if wp.static(RECORD):
+                        rec.emit[j] = emitter_met(s, h.face, r.ray.d)
                     color = color + wp.cw_mul(r.weight, emitted(s, h.face, r.ray.d))
                 # ---- local shading ----
-                lit = shade(s, hit, -r.ray.d)
+                lit = shade(s, hit, -r.ray.d, rec, j)
                 color = color + wp.cw_mul(r.weight, lit.color)
                 rays[1] += lit.shadow_rays
                 level = r.depth + 1  # the children's
                 # ---- mirror ----
                 if wp.static(REFLECTION):
                     kr = s.kr[hit.material]
-                    if level < max_depth and wp.max(kr) > 0.0:
+                    mirrors_here = wp.max(kr) > 0.0
+                    if wp.static(RECORD):  # a named reflectivity of 0: its mirror rays followed, weight 0
+                        mirrors_here = mirrors_here or rec.mirrored[hit.material] != 0
+                    if level < max_depth and mirrors_here:
                         chain = int(NO_CHAIN)
                         if wp.static(MIRRORS):
                             chain = mirror_chain(mir, r.chain, h.face)
@@ -282,7 +302,7 @@ def make_path(fx, raster_primary: bool, stack: int, report_truncated: bool, aovs
 
 @functools.cache
 def make_trace_kernel(fx, raster_primary: bool = False, stack: int = 0, report_truncated: bool = False,
-                      aovs: tuple = (), shadow_grid: bool = False, mirrors: bool = False):
+                      aovs: tuple = (), shadow_grid: bool = False, mirrors: bool = False, record: bool = False):
     """The kernel for one EffectSet; code for disabled effects is removed by wp.static. With
     raster_primary (hybrid rendering), a sample's first hit is the Z-buffer's visible triangle, tested
     with the ray query's own triangle test, wherever the rasterizer's answer is certain to be the
@@ -295,16 +315,18 @@ def make_trace_kernel(fx, raster_primary: bool = False, stack: int = 0, report_t
     values: the radiance, then the weight of the paths cut off at max_depth (the energy the image is
     missing), both averaged over the samples. With ``aovs`` (names, aov.py), each camera ray's first
     hit is also recorded into the AOV buffers; without, that code is absent. With fx.culling, camera,
-    reflection and refraction rays pass through single-sided materials' back faces (shadow rays do not)."""
+    reflection and refraction rays pass through single-sided materials' back faces (shadow rays do not).
+    With ``record``, a grad=True frame's: what its derivative holds fixed is written into ``rec`` as the
+    rays are traced (make_path); without, ``rec`` is a stand-in never read (kernels/record.py)."""
     if fx.refraction and stack < 1:
         raise ValueError("a kernel with refraction needs a stack: stack_size(max_depth)")
-    path = make_path(fx, raster_primary, stack, report_truncated, tuple(aovs), shadow_grid, mirrors)
+    path = make_path(fx, raster_primary, stack, report_truncated, tuple(aovs), shadow_grid, mirrors, record)
     SUPERSAMPLING, TRUNCATED = fx.supersampling, report_truncated
     COUNTS = wp.vec4i if fx.refraction else wp.vec3i
 
     @wp.kernel(module="unique", enable_backward=False)
     def trace(s: SceneData, c: CameraData, max_depth: int, k: int, first: int, tile_w: int, tile_h: int,
-              frags: Fragments, mir: Mirrors, aov: AovBuffers, image: wp.array(dtype=wp.vec3),
+              frags: Fragments, mir: Mirrors, aov: AovBuffers, rec: GradRecord, image: wp.array(dtype=wp.vec3),
               counts: wp.array(dtype=COUNTS)):
         i = first + wp.tid()  # position in tile order; the image itself is row-major
         xy = tile_order_pixel(i, c.width, c.height, tile_w, tile_h)
@@ -323,7 +345,7 @@ def make_trace_kernel(fx, raster_primary: bool = False, stack: int = 0, report_t
                 offset = sample_offset(sample, k)
             r = TreeRay(Ray(c.eye, camera_ray(c, x, row, offset[0], offset[1])), wp.vec3(1.0), c.eye, 0,
                         s.eye_medium, FROM_CAMERA, -1)
-            color, truncated, rays = path(s, frags, mir, aov, r, max_depth, i, pixel, samples, sample, x, row,
+            color, truncated, rays = path(s, frags, mir, aov, rec, r, max_depth, i, pixel, samples, sample, x, row,
                                           truncated, rays)
             total = total + color
         image[pixel] = total / float(samples)

@@ -1,0 +1,144 @@
+"""The gradient's record is the forward's own trace (issue 37): Renderer.render(grad=True) writes what
+backward() holds fixed as its trace kernel finds it, so a grad frame traces no ray twice, its image is the
+plain frame's to the bit, and the record does not depend on which exact query answered a ray.
+
+Independent checks: the plain frame's image (another kernel variant, without the record's code), the record
+made with every ray traced by the BVH against the one made with the Z-buffer's first hits, the shadow grid
+and the mirrors' virtual cameras (each exact: the same answers), the Z-buffer's own visible faces, and the
+generated C++ of the plain variant (the record's code absent from it).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import warprt
+import warprt.image
+from warprt.kernels import NO_RAY, init_warp, make_trace_kernel, wp
+from warprt.scene import EffectSet
+
+WIDTH, HEIGHT = 40, 30
+
+
+def scene(light_colour=1.0, floor_kr=0.3):
+    """A mirror floor, a smooth ball and a box, two point lights with shadows: camera rays, shadow rays and
+    mirror rays over three levels, each shortcut's case (a planar mirror, grid shadows, Z-buffer hits)."""
+    return warprt.load_dict({
+        "camera": {"eye": [0.0, 2.0, 5.0], "center": [0.0, 0.5, 0.0], "width": WIDTH, "height": HEIGHT},
+        "render": {"ambient": [0.1] * 3, "max_depth": 3},
+        "lights": [{"position": [2.0, 4.0, 3.0], "color": [0.8 * light_colour] * 3},
+                   {"position": [-3.0, 2.5, 1.0], "color": [0.4 * light_colour] * 3}],
+        "materials": {"floor": {"kd": [0.4, 0.35, 0.3], "ks": [0.2] * 3, "shininess": 16.0,
+                                "reflectivity": floor_kr},
+                      "ball": {"kd": [0.6, 0.2, 0.1], "ks": [0.5] * 3, "shininess": 40.0}},
+        "objects": [{"shape": "plane", "size": [8.0, 8.0], "material": "floor"},
+                    {"shape": "sphere", "subdivisions": 3, "smooth": True, "translate": [0.0, 0.8, 0.0],
+                     "scale": 0.8, "material": "ball"},
+                    {"shape": "box", "size": [0.6, 0.6, 0.6], "translate": [1.3, 0.3, 0.5], "material": "ball"}]})
+
+
+TRACED = dict(primary_query="raytrace", shadow_query="bvh", reflection_query="bvh")
+SHORTCUTS = dict(primary_query="zbuffer", shadow_query="grid", reflection_query="mirrors")
+
+
+def record(s, **options):
+    r = warprt.Renderer(s, threads=1, **options)
+    result = r.render(grad=True)
+    return result, r._first_hits[2]
+
+
+@pytest.fixture(scope="module")
+def traced():
+    return record(scene(), **TRACED)
+
+
+def arrays(hits) -> dict:
+    return {k: getattr(hits, k).numpy() for k in ("face", "bary", "dirs", "visible")}
+
+
+def test_a_grad_frame_is_the_plain_frame_to_the_bit(traced):
+    result, _ = traced
+    plain = warprt.Renderer(scene(), threads=1, **TRACED).render()
+    assert np.array_equal(result.image, plain.image)
+    assert result.stats.rays == plain.stats.rays  # no ray traced twice: the record is the trace's own
+    assert "grad_record" not in result.stats.times
+
+
+def test_the_record_holds_the_frames_levels(traced):
+    _, hits = traced
+    face = hits.face.numpy().reshape(-1, hits.levels)
+    assert hits.levels == 3 and face.shape[0] == WIDTH * HEIGHT
+    assert (face[:, 0] != NO_RAY).all()  # every camera ray is recorded
+    # a chain reaches level j + 1 only from a hit at level j (the floor mirrors, the ball does not)
+    assert ((face[:, 1:] == NO_RAY) | (face[:, :-1] >= 0)).all()
+    assert (face[:, 1] >= 0).any() and (face[:, 1] == NO_RAY).any()
+    # the camera rays' directions are unit, the mirror rays' too where they exist
+    dirs = hits.dirs.numpy().reshape(-1, hits.levels, 3)
+    np.testing.assert_allclose(np.linalg.norm(dirs[face >= -1], axis=1), 1.0, atol=1e-6)
+
+
+def test_the_record_is_the_same_whichever_exact_query_answers(traced):
+    """The Z-buffer's first hits, the light-space grid's shadow answers and the mirrors' virtual cameras
+    give the BVH's answers to the bit, so the record they write is the traced one's; the same image too."""
+    result, hits = traced
+    short_result, short = record(scene(), **SHORTCUTS)
+    assert short_result.stats.shadow_query == "grid" and short_result.stats.primary_query == "zbuffer"
+    assert np.array_equal(short_result.image, result.image)
+    for key, a in arrays(hits).items():
+        b = arrays(short)[key]
+        taken = hits.face.numpy() >= 0 if key != "visible" else np.repeat(hits.face.numpy() >= 0, hits.lights)
+        assert np.array_equal(a[taken], b[taken]), key
+
+
+def test_the_camera_rays_faces_are_the_zbuffers_visible_faces(traced):
+    """Independent of the tracer: the rasterizer's visible triangle per pixel (render_zbuffer's faces)."""
+    _, hits = traced
+    _, faces = warprt.image.render_zbuffer(scene(), threads=1, return_faces=True)
+    first = hits.face.numpy().reshape(HEIGHT, WIDTH, hits.levels)[..., 0]
+    agree = first == faces[..., 0]
+    assert agree.mean() > 0.97  # silhouette pixels may differ (the rasterizer's own coverage rule)
+
+
+def test_values_that_switch_an_effect_off_are_recorded_and_add_nothing():
+    """A light of colour 0 (no shadow rays in the plain frame), kd and ks of 0 everywhere (no light loop) and
+    a named reflectivity of 0 (no mirror rays): the grad frame traces what the record needs, and its image
+    is still the plain frame's to the bit."""
+    dark = scene(light_colour=0.0)
+    r = warprt.Renderer(dark, threads=1, **TRACED)
+    result = r.render(grad=True)
+    hits = r._first_hits[2]
+    assert np.array_equal(result.image, warprt.Renderer(dark, threads=1, **TRACED).render().image)
+    visible = hits.visible.numpy()
+    assert visible.any() and not visible.all()  # shadow rays traced: some hits see a light, some do not
+    assert result.stats.rays["shadow"] > 0
+
+    s = scene(floor_kr=0.0)
+    r = warprt.Renderer(s, threads=1, **TRACED)
+    result = r.render(grad=["materials.floor.reflectivity"])
+    face = r._first_hits[2].face.numpy().reshape(-1, 3)
+    assert (face[:, 1] >= -1).any()  # the floor's mirror rays, followed with weight 0
+    assert np.array_equal(result.image, warprt.Renderer(s, threads=1, **TRACED).render().image)
+
+
+def _generated_source(**kwargs) -> str:
+    init_warp()
+    kernel = make_trace_kernel(EffectSet(reflection=True, area_lights=True), **kwargs)
+    wp.load_module(kernel.module, device="cpu")
+    (module_exec,) = kernel.module.execs.values()
+    return Path(module_exec.binary_path).with_suffix("").with_suffix(".cpp").read_text()
+
+
+def test_the_record_is_absent_from_the_plain_kernel():
+    """The lines that write the record, as Warp quotes them in the C++ it compiles."""
+    markers = ("rec.face[j] = h.face", "rec.visible[j * rec.lights + l] = t.lit", "rec.emit[j] = emitter_met(",
+               "rec.area_bits[word] = rec.area_bits[word] | (1 << (q % 32))")
+    assert not any(m in _generated_source() for m in markers)
+    assert all(m in _generated_source(record=True) for m in markers)
+
+
+def test_glass_is_not_recorded_by_the_trace():
+    with pytest.raises(ValueError, match="ray tree"):
+        make_trace_kernel(EffectSet(refraction=True), stack=4, record=True)
