@@ -22,8 +22,9 @@ from ..scene import (EffectSet, camera_basis, drawn_objects, switched_on, valida
 from ..timing import timed
 from .aovs import finish_aovs
 from .caches import SHADOW_GRIDS_KEPT, FrameCaches
-from .grad import (backward as grad_backward, check_record_memory, mirrored_materials, named_parameters,
-                   record_first_hits, refusal as grad_refusal)
+from .grad import backward as grad_backward
+from .grad_params import mirrored_materials, named_parameters, refusal as grad_refusal
+from .grad_record import check_record_memory, record_first_hits
 from .launch import band_pool, bands_of, launch_bands, launch_plan
 from .memory import check_frame_memory, frame_estimate, frame_memory
 from .mirrors import MirrorFrame, empty_mirrors, mirror_frame

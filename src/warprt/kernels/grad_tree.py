@@ -1,5 +1,5 @@
-"""Gradients of an image through Whitted's full ray tree, glass included (image/grad.py's tree record and
-replay): a record kernel and a differentiable replay kernel, each launched once per ray level.
+"""Gradients of an image through Whitted's full ray tree, glass included (image/grad_record.py's tree record,
+image/grad.py's replay): a record kernel and a differentiable replay kernel, each launched once per ray level.
 
 Warp does not replay a dynamic loop backwards, nor a stack pushed and popped in place, so the tree is not
 walked as the forward walks it (trace.py's depth-first loop and ray stack). The record follows the forward's
@@ -7,7 +7,7 @@ tree level by level instead: per level a flat list of rays (the camera rays, the
 their parents' order, the reflected child before the transmitted one), each ray's nearest hit, the lights it
 sees and its children found with the forward's own functions (make_surface, absorbed, make_light_test,
 dielectric_children, spawn_ray), so every ray is the forward's to the bit; the host compacts each level's
-children into the next level's list (image/grad.py). The replay kernel, one launch per level, reads the
+children into the next level's list (image/grad_record.py). The replay kernel, one launch per level, reads the
 level's rays (origin, direction, weight, where its segment began) from arrays the previous level's launch
 wrote, and writes its children's into new arrays, never in place: a wp.Tape replays each launch backwards.
 Each node recomputes its hit on the recorded face from the moving ray (a differentiable Moller-Trumbore
