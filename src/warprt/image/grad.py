@@ -103,13 +103,17 @@ def replay(scene, geom, hits: FirstHits, device: str, vertices: bool = False, ca
     return r
 
 
+def _vec3(rows, device: str) -> wp.array:
+    """``rows`` as a differentiable float32 array of wp.vec3."""
+    return wp.array(np.asarray(rows, np.float32).reshape(-1, 3), dtype=wp.vec3, device=device, requires_grad=True)
+
+
 def replay_arrays(scene, geom, mats, device: str) -> tuple:
     """The replays' material and Whitted-light inputs (the chain's and the tree's), from the scene's values:
     per material slot (``mats``, geom.slot_materials) ka, kd, ks, shininess and reflectivity, per light its
     position, colour, falloff, kind, axis (unit, as Light keeps it: backward() projects its adjoint) and
     cone; the colours, exponents, positions and axes differentiable."""
-    vec = lambda rows: wp.array(np.asarray(rows, np.float32).reshape(-1, 3), dtype=wp.vec3, device=device,  # noqa: E731
-                                requires_grad=True)
+    vec = lambda rows: _vec3(rows, device)  # noqa: E731
     ka, kd, ks, kr = (vec([getattr(m, k) for m in mats] or [[0, 0, 0]]) for k in ("ka", "kd", "ks", "reflectivity"))
     shininess = wp.array(np.asarray([m.shininess for m in mats] or [0.0], np.float32), dtype=float, device=device,
                          requires_grad=True)
@@ -125,6 +129,122 @@ def replay_arrays(scene, geom, mats, device: str) -> tuple:
     return ka, kd, ks, shininess, kr, light_pos, light_color, inverse_square, kind, axis, cone
 
 
+@dataclass
+class ReplayScene:
+    """What the chain's and the tree's replays read besides the record: replay_arrays' materials and lights,
+    the points (differentiable with vertices) and vertex normals (moving_normals where they move), the
+    camera (eye, center and up relative to the frame origin; fovy) and the camera rays' directions (the
+    recorded ones, or made again by camera_rays with the camera), the texture table, the uvs and the
+    vertex colours (vertex_colours); ``before`` the launches that make the directions and normals."""
+
+    ka: wp.array
+    kd: wp.array
+    ks: wp.array
+    shininess: wp.array
+    kr: wp.array
+    light_pos: wp.array
+    light_color: wp.array
+    inverse_square: wp.array
+    kind: wp.array
+    axis: wp.array
+    cone: wp.array
+    mats: list  # geom.slot_materials
+    points: wp.array
+    normals: wp.array
+    eye: wp.array
+    fovy: wp.array
+    dirs: wp.array
+    table: TextureTable
+    uvs: wp.array
+    colors: wp.array
+    before: list
+
+    def inputs(self, scene, geom, dielectric: tuple = ()) -> list:
+        """The replay kernels' leading inputs, in their order: the geometry, the materials (with
+        ``dielectric``, the tree's ior, k_t and sigma after them), the lights, the textures, ambient and
+        background."""
+        return [self.eye, self.points, geom.indices, self.normals, geom.tri_material, geom.tri_smooth, self.ka,
+                self.kd, self.ks, self.shininess, self.kr, *dielectric, self.light_pos, self.light_color,
+                self.inverse_square, self.kind, self.axis, self.cone, self.uvs, *self.table.arrays,
+                wp.vec3(*scene.render.ambient), wp.vec3(*scene.render.background)]
+
+    def arrays(self, vertex_color: bool, vertices: bool, camera: bool) -> dict:
+        """The differentiable inputs by ReplayLaunch.arrays' keys."""
+        out = {"ka": self.ka, "kd": self.kd, "ks": self.ks, "shininess": self.shininess, "reflectivity": self.kr,
+               "color": self.light_color, "position": self.light_pos, "direction": self.axis,
+               "texels": self.table.arrays[0]}
+        if vertex_color:
+            out["colors"] = self.colors
+        if vertices:
+            out["points"] = self.points
+        if camera:
+            out["camera"], out["fovy"] = self.eye, self.fovy
+        return out
+
+
+def replay_scene(scene, geom, hits, device: str, vertices: bool, camera: bool, dirs: wp.array,
+                 levels: int) -> ReplayScene:
+    """The ReplayScene of a recorded frame: ``dirs`` the camera rays' recorded directions; with ``camera``,
+    made again instead, differentiable in the camera, by camera_rays (the first launch in ``before``),
+    written every ``levels`` entries (the chain's record has ``levels`` a ray, the tree's first level one)."""
+    mats = geom.slot_materials(scene)
+    cam = scene.camera
+    eye = _vec3([geom.eye_offset(cam.eye), geom.eye_offset(cam.center), cam.up], device)  # eye[0]: the rays' origin
+    fovy = wp.array([cam.fovy], dtype=float, device=device, requires_grad=True)
+    n, before = hits.width * hits.height * hits.samples, []
+    if camera:  # the camera rays made again, differentiable in the camera, the recorded directions unused
+        dirs = wp.zeros(n * levels, dtype=wp.vec3, device=device, requires_grad=True)
+        before.append((camera_rays, n, [eye, fovy, float(cam.near), hits.width, hits.height,
+                                        math.isqrt(hits.samples), levels], [dirs]))
+    points = wp.array(geom.points_np, dtype=wp.vec3, device=device, requires_grad=True) if vertices else geom.points
+    normals = geom.normals
+    if vertices and hits.smooth:  # a smooth object's vertex normals, computed from the moving points
+        normals, launches = moving_normals(scene, geom, points, device)
+        before += launches
+    uvs = geom.uv_array() if hits.texture else wp.zeros(1, dtype=wp.vec2, device=device)
+    return ReplayScene(*replay_arrays(scene, geom, mats, device), mats=mats, points=points, normals=normals, eye=eye,
+                       fovy=fovy, dirs=dirs, table=texture_table(mats, device), uvs=uvs,
+                       colors=vertex_colours(geom, hits, device), before=before)
+
+
+@dataclass
+class AreaSampleTable:
+    """The area lights' sample points as area_replay reads them (``inputs``): the forward's own (the
+    record's AreaLights table: points, normals, areas), each point's light, and per area light its
+    radiance, differentiable; with centres, the points moved with their light's centre (c - c0, 0 here:
+    the forward's points to the bit; their normals and areas as they are, a shape light's points being its
+    centre plus fixed offsets) by translate_samples, the launch in ``before``, the shift differentiable."""
+
+    points: wp.array
+    normals: wp.array
+    dA: wp.array
+    light: wp.array
+    radiance: wp.array
+    count: int
+    arrays: dict  # by ReplayLaunch.arrays' keys: radiance, and with centres center (the shift)
+    before: list
+
+    @property
+    def inputs(self) -> list:
+        """area_replay's inputs after the hits' state: the points, their normals, areas and lights, the radiance."""
+        return [self.points, self.normals, self.dA, self.light, self.radiance]
+
+
+def area_sample_table(scene, area, device: str, centres: bool) -> AreaSampleTable:
+    """The AreaSampleTable of the recorded AreaLights table ``area``; with ``centres``, its points moving."""
+    first = area.first.numpy()
+    count = int(first[-1])
+    light = wp.array(np.repeat(np.arange(len(first) - 1), np.diff(first)).astype(np.int32), dtype=int, device=device)
+    radiance = _vec3([l.radiance for l in scene.area_lights], device)
+    points, arrays, before = area.points, {"radiance": radiance}, []
+    if centres:
+        shift = wp.zeros(len(scene.area_lights), dtype=wp.vec3, device=device, requires_grad=True)
+        points = wp.zeros(count, dtype=wp.vec3, device=device, requires_grad=True)
+        before.append((translate_samples, count, [area.points, light, shift], [points]))
+        arrays["center"] = shift
+    return AreaSampleTable(points, area.normals, area.dA, light, radiance, count, arrays, before)
+
+
 def replay_launch(scene, geom, hits: FirstHits, device: str, vertices: bool = False,
                   camera: bool = False, centres: bool = False) -> ReplayLaunch:
     """The replay of ``hits`` (a frame of ``scene`` on ``geom``) with its differentiable arrays made from
@@ -134,74 +254,30 @@ def replay_launch(scene, geom, hits: FirstHits, device: str, vertices: bool = Fa
     in ``before``) and the hits recomputed from the moved rays on the recorded faces; with ``centres`` (and area
     lights), the area lights' sample points translated by their centres' moves (``arrays["center"]``, 0:
     translate_samples, in ``before``), which the area lights' replay then reads."""
-    mats = geom.slot_materials(scene)
-    vec = lambda rows: wp.array(np.asarray(rows, np.float32).reshape(-1, 3), dtype=wp.vec3, device=device,  # noqa: E731
-                                requires_grad=True)
-    ka, kd, ks, shininess, kr, light_pos, light_color, inverse_square, kind, axis, cone = replay_arrays(
-        scene, geom, mats, device)
-    n = hits.width * hits.height * hits.samples
+    sc = replay_scene(scene, geom, hits, device, vertices, camera, hits.dirs, hits.levels)
+    n, moving, area = hits.width * hits.height * hits.samples, vertices or camera, hits.words > 0
+    kernel = make_grad_shade_kernel(hits.lights, hits.levels, hits.smooth, moving, hits.light_model, hits.texture,
+                                    area, hits.vertex_color)
     rays = wp.zeros(n, dtype=wp.vec3, device=device, requires_grad=True)
-    points = wp.array(geom.points_np, dtype=wp.vec3, device=device, requires_grad=True) if vertices else geom.points
-    area = hits.words > 0
-    kernel = make_grad_shade_kernel(hits.lights, hits.levels, hits.smooth, vertices or camera, hits.light_model,
-                                    hits.texture, area, hits.vertex_color)
-    cam = scene.camera
-    eye = vec([geom.eye_offset(cam.eye), geom.eye_offset(cam.center), cam.up])  # eye[0]: the rays' origin
-    fovy = wp.array([cam.fovy], dtype=float, device=device, requires_grad=True)
-    dirs, before = hits.dirs, []
-    if camera:  # the camera rays made again, differentiable in the camera, the recorded directions unused
-        dirs = wp.zeros(n * hits.levels, dtype=wp.vec3, device=device, requires_grad=True)
-        before.append((camera_rays, n, [eye, fovy, float(cam.near), hits.width, hits.height,
-                                        math.isqrt(hits.samples), hits.levels], [dirs]))
     # each level's direction, as the moving replay makes it (vertices, camera): what the area lights' replay reads
-    ray_dirs = wp.zeros(n * hits.levels if vertices or camera else 1, dtype=wp.vec3, device=device,
-                        requires_grad=True)
-    table = texture_table(mats, device)
-    uvs = geom.uv_array() if hits.texture else wp.zeros(1, dtype=wp.vec2, device=device)
-    background = wp.vec3(*scene.render.background)
+    ray_dirs = wp.zeros(n * hits.levels if moving else 1, dtype=wp.vec3, device=device, requires_grad=True)
     levels = n * hits.levels if area else 1  # the area lights' per-level state (stand-ins without)
     state = [wp.zeros(levels, dtype=wp.vec3, device=device, requires_grad=True) for _ in range(6)]
     shaded = wp.zeros(1, dtype=wp.vec3, device=device, requires_grad=True) if area else rays
-    normals = geom.normals
-    if vertices and hits.smooth:  # a smooth object's vertex normals, computed from the moving points
-        normals, launches = moving_normals(scene, geom, points, device)
-        before += launches
-    colors = vertex_colours(geom, hits, device)  # ka's and kd's factor, per vertex
-    inputs = [eye, points, geom.indices, normals, geom.tri_material, geom.tri_smooth, ka, kd, ks, shininess, kr,
-              light_pos, light_color, inverse_square, kind, axis, cone, uvs, *table.arrays,
-              wp.vec3(*scene.render.ambient), background, hits.face, hits.bary, dirs, hits.visible, *state, ray_dirs,
-              colors]
-    arrays = {"ka": ka, "kd": kd, "ks": ks, "shininess": shininess, "reflectivity": kr, "color": light_color,
-              "position": light_pos, "direction": axis, "texels": table.arrays[0]}
-    if hits.vertex_color:
-        arrays["colors"] = colors
-    then = []
+    inputs = [*sc.inputs(scene, geom), hits.face, hits.bary, sc.dirs, hits.visible, *state, ray_dirs, sc.colors]
+    arrays, then = sc.arrays(hits.vertex_color, vertices, camera), []
     if area:
-        a = hits.area  # the forward's own sample points, normals and areas
-        first = a.first.numpy()
-        sample_light = wp.array(np.repeat(np.arange(len(first) - 1), np.diff(first)).astype(np.int32), dtype=int,
-                                device=device)
-        radiance = vec([l.radiance for l in scene.area_lights])
-        arrays["radiance"] = radiance
-        samples = a.points
-        if centres:  # the sample points moved with their light's centre (c - c0, 0 here: the forward's points
-            # to the bit), their normals and areas as they are: a shape light's points are its centre plus
-            # fixed offsets
-            shift = wp.zeros(len(scene.area_lights), dtype=wp.vec3, device=device, requires_grad=True)
-            samples = wp.zeros(int(first[-1]), dtype=wp.vec3, device=device, requires_grad=True)
-            before.append((translate_samples, int(first[-1]), [a.points, sample_light, shift], [samples]))
-            arrays["center"] = shift
+        table = area_sample_table(scene, hits.area, device, centres)
+        sc.before += table.before
+        arrays.update(table.arrays)
         hit_p, hit_n, hit_kd, hit_ks, level_weight, acc = state
-        then.append((area_replay, (levels, int(first[-1])),
-                     [hits.words, hits.face, ray_dirs if vertices or camera else dirs, hits.area_bits, geom.tri_material, shininess, hit_p, hit_n,
-                      hit_kd, hit_ks, samples, a.normals, a.dA, sample_light, radiance], [acc]))
-        then.append((make_area_combine(hits.levels), n, [hits.face, hits.emit, radiance, background, level_weight,
-                                                         acc], [rays]))
-    if vertices:
-        arrays["points"] = points
-    if camera:
-        arrays["camera"], arrays["fovy"] = eye, fovy
-    return ReplayLaunch(kernel, n, inputs, rays, arrays, table.images, then, shaded, before)
+        then.append((area_replay, (levels, table.count),
+                     [hits.words, hits.face, ray_dirs if moving else sc.dirs, hits.area_bits, geom.tri_material,
+                      sc.shininess, hit_p, hit_n, hit_kd, hit_ks, *table.inputs], [acc]))
+        then.append((make_area_combine(hits.levels), n, [hits.face, hits.emit, table.radiance,
+                                                         wp.vec3(*scene.render.background), level_weight, acc],
+                     [rays]))
+    return ReplayLaunch(kernel, n, inputs, rays, arrays, sc.table.images, then, shaded, sc.before)
 
 
 def vertex_colours(geom, hits: FirstHits, device: str) -> wp.array:
@@ -333,50 +409,22 @@ def replay_tree_launch(scene, geom, hits: TreeHits, device: str, vertices: bool 
     dielectric's ior, transmittance and absorption per material slot; ``then`` holds one launch of
     grad_tree's replay kernel per recorded level, each reading the rays its parent level wrote into their
     own arrays and adding its rays' colours to their camera rays' in ``rays``."""
-    mats = geom.slot_materials(scene)
-    vec = lambda rows: wp.array(np.asarray(rows, np.float32).reshape(-1, 3), dtype=wp.vec3, device=device,  # noqa: E731
-                                requires_grad=True)
-    ka, kd, ks, shininess, kr, light_pos, light_color, inverse_square, kind, axis, cone = replay_arrays(
-        scene, geom, mats, device)
-    ior = wp.array(np.asarray([m.ior or 0.0 for m in mats] or [0.0], np.float32), dtype=float, device=device,
+    sc = replay_scene(scene, geom, hits, device, vertices, camera, hits.tree[0].dirs, 1)
+    ior = wp.array(np.asarray([m.ior or 0.0 for m in sc.mats] or [0.0], np.float32), dtype=float, device=device,
                    requires_grad=True)
-    kt = vec([m.transmittance for m in mats] or [[1, 1, 1]])
-    sigma = vec([m.absorption for m in mats] or [[0, 0, 0]])
+    kt = _vec3([m.transmittance for m in sc.mats] or [[1, 1, 1]], device)
+    sigma = _vec3([m.absorption for m in sc.mats] or [[0, 0, 0]], device)
     n = hits.width * hits.height * hits.samples
     rays = wp.zeros(n, dtype=wp.vec3, device=device, requires_grad=True)
-    points = wp.array(geom.points_np, dtype=wp.vec3, device=device, requires_grad=True) if vertices else geom.points
-    cam = scene.camera
-    eye = vec([geom.eye_offset(cam.eye), geom.eye_offset(cam.center), cam.up])
-    fovy = wp.array([cam.fovy], dtype=float, device=device, requires_grad=True)
-    dirs, before = hits.tree[0].dirs, []
-    if camera:
-        dirs = wp.zeros(n, dtype=wp.vec3, device=device, requires_grad=True)
-        before.append((camera_rays, n, [eye, fovy, float(cam.near), hits.width, hits.height,
-                                        math.isqrt(hits.samples), 1], [dirs]))
-    normals = geom.normals
-    if vertices and hits.smooth:  # a smooth object's vertex normals, computed from the moving points
-        normals, launches = moving_normals(scene, geom, points, device)
-        before += launches
-    table = texture_table(mats, device)
-    uvs = geom.uv_array() if hits.texture else wp.zeros(1, dtype=wp.vec2, device=device)
-    common = [eye, points, geom.indices, normals, geom.tri_material, geom.tri_smooth, ka, kd, ks, shininess, kr,
-              ior, kt, sigma, light_pos, light_color, inverse_square, kind, axis, cone, uvs, *table.arrays,
-              wp.vec3(*scene.render.ambient), wp.vec3(*scene.render.background)]
-    colors = vertex_colours(geom, hits, device)  # ka's and kd's factor, per vertex
-    stand_in = wp.zeros(1, dtype=wp.vec3, device=device)
-    o, w, start, then = stand_in, stand_in, stand_in, []
+    common = sc.inputs(scene, geom, (ior, kt, sigma))
+    arrays = {**sc.arrays(hits.vertex_color, vertices, camera), "ior": ior, "transmittance": kt, "absorption": sigma}
     area = hits.words > 0
     if area:
-        a = hits.area  # the forward's own sample points, normals and areas
-        first = a.first.numpy()
-        sample_light = wp.array(np.repeat(np.arange(len(first) - 1), np.diff(first)).astype(np.int32), dtype=int,
-                                device=device)
-        radiance = vec([l.radiance for l in scene.area_lights])
-        samples = a.points
-        if centres:  # replay_launch's: the sample points moved with their light's centre (by 0 here)
-            shift = wp.zeros(len(scene.area_lights), dtype=wp.vec3, device=device, requires_grad=True)
-            samples = wp.zeros(int(first[-1]), dtype=wp.vec3, device=device, requires_grad=True)
-            before.append((translate_samples, int(first[-1]), [a.points, sample_light, shift], [samples]))
+        table = area_sample_table(scene, hits.area, device, centres)
+        sc.before += table.before
+        arrays.update(table.arrays)
+    stand_in = wp.zeros(1, dtype=wp.vec3, device=device)
+    o, dirs, w, start, then = stand_in, sc.dirs, stand_in, stand_in, []
     for i, level in enumerate(hits.tree):
         count = hits.tree[i + 1].count if i + 1 < len(hits.tree) else 0
         o_n, d_n, w_n, s_n = (wp.zeros(max(count, 1), dtype=wp.vec3, device=device, requires_grad=True)
@@ -387,27 +435,14 @@ def replay_tree_launch(scene, geom, hits: TreeHits, device: str, vertices: bool 
         kernel = make_tree_replay_kernel(hits.lights, hits.smooth, hits.light_model, hits.texture, i == 0,
                                          hits.absorption, area, hits.vertex_color)
         then.append((kernel, level.count, [*common, level.face, level.visible, level.medium, level.ray_of, level.kind,
-                                           level.child, o, dirs, w, start, rays, o_n, d_n, w_n, s_n, *state, colors],
+                                           level.child, o, dirs, w, start, rays, o_n, d_n, w_n, s_n, *state, sc.colors],
                      []))
         if area:
             hit_p, hit_n, hit_kd, hit_ks, level_weight, acc, ray_dirs = state
-            then.append((area_replay, (level.count, int(first[-1])),
-                         [hits.words, level.face, ray_dirs, level.area_bits, geom.tri_material, shininess, hit_p,
-                          hit_n, hit_kd, hit_ks, samples, a.normals, a.dA, sample_light, radiance], [acc]))
-            then.append((tree_area_combine, level.count, [level.face, level.emit, radiance, level.ray_of,
+            then.append((area_replay, (level.count, table.count),
+                         [hits.words, level.face, ray_dirs, level.area_bits, geom.tri_material, sc.shininess, hit_p,
+                          hit_n, hit_kd, hit_ks, *table.inputs], [acc]))
+            then.append((tree_area_combine, level.count, [level.face, level.emit, table.radiance, level.ray_of,
                                                           level_weight, acc], [rays]))
         o, dirs, w, start = o_n, d_n, w_n, s_n
-    arrays = {"ka": ka, "kd": kd, "ks": ks, "shininess": shininess, "reflectivity": kr, "color": light_color,
-              "position": light_pos, "direction": axis, "texels": table.arrays[0], "ior": ior, "transmittance": kt,
-              "absorption": sigma}
-    if hits.vertex_color:
-        arrays["colors"] = colors
-    if area:
-        arrays["radiance"] = radiance
-        if centres:
-            arrays["center"] = shift
-    if vertices:
-        arrays["points"] = points
-    if camera:
-        arrays["camera"], arrays["fovy"] = eye, fovy
-    return ReplayLaunch(None, n, [], rays, arrays, table.images, then, rays, before)
+    return ReplayLaunch(None, n, [], rays, arrays, sc.table.images, then, rays, sc.before)
