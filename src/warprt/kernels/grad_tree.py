@@ -28,8 +28,8 @@ from .._warp import wp
 from ..geometry import SceneData
 from .camera import CameraData, camera_ray, sample_offset
 from .dielectric import beer, beer_forever, dielectric_children, fresnel_dielectric, refract
-from .grad import barycentrics_on, make_whitted_light, textured, vertex_colour
-from .interaction import hit_point_error, make_surface, offset_ray_origin, reflect, spawn_ray
+from .grad import keep_for_area, make_replay_local, make_replay_surface
+from .interaction import make_surface, offset_ray_origin, reflect, spawn_ray
 from .shading import make_area_sample_test, make_light_test
 from .trace import absorbed, culled, past
 from .triangle import triangle, unit_normal
@@ -195,7 +195,46 @@ def make_tree_replay_kernel(L: int, smooth: bool, light_model: bool, texture: bo
     tree_area_combine adds it to its camera ray's. With ``vertex_color``, ka and kd (after their textures)
     times the colour interpolated from ``colors`` at the moving hit (vertex_colour, the chain's)."""
 
-    whitted_light = make_whitted_light(light_model)
+    surface = make_replay_surface(smooth, texture, vertex_color, True)
+    local_colour = make_replay_local(L, light_model)
+
+    @wp.func
+    def children(p: wp.vec3, err: wp.vec3, ng: wp.vec3, side: float, n: wp.vec3, m: int, d: wp.vec3, w: wp.vec3,
+                 kind: int, c: wp.vec2i, kr: wp.array(dtype=wp.vec3), ior: wp.array(dtype=float),
+                 kt: wp.array(dtype=wp.vec3), o_next: wp.array(dtype=wp.vec3), d_next: wp.array(dtype=wp.vec3),
+                 w_next: wp.array(dtype=wp.vec3), start_next: wp.array(dtype=wp.vec3)):
+        """The recorded children of a ray along d with weight w at its replayed hit (replay_surface's p, err,
+        ng, side, n, m), at their places c in the next level's arrays: a mirror's (k_r), or a dielectric's
+        reflected (F) and refracted ((1 - F) k_t) ray."""
+        if kind == wp.static(CHILD_MIRROR):
+            d_m = wp.normalize(reflect(d, n))
+            o_next[c[0]] = offset_ray_origin(p, err, ng, d_m)
+            d_next[c[0]] = d_m
+            w_next[c[0]] = wp.cw_mul(w, kr[m])
+            start_next[c[0]] = p
+        if kind == wp.static(CHILD_DIELECTRIC):
+            mn = dielectric_normal(d, ng, n)
+            cos_i = -wp.dot(d, mn)
+            eta = ior[m]
+            eta_rel = eta
+            cos_f = cos_i
+            if side < 0.0:  # leaving: the ray meets the winding normal's back
+                eta_rel = 1.0 / eta
+                cos_f = -cos_i
+            F = fresnel_dielectric(cos_f, eta)
+            if c[0] >= 0:
+                d_r = wp.normalize(reflect(d, mn))
+                o_next[c[0]] = offset_ray_origin(p, err, ng, d_r)
+                d_next[c[0]] = d_r
+                w_next[c[0]] = w * F
+                start_next[c[0]] = p
+            if c[1] >= 0:
+                tr, transmits = refract(d, mn, eta_rel)
+                d_t = wp.normalize(tr)
+                o_next[c[1]] = offset_ray_origin(p, err, ng, d_t)
+                d_next[c[1]] = d_t
+                w_next[c[1]] = wp.cw_mul(w, kt[m]) * (1.0 - F)
+                start_next[c[1]] = p
 
     @wp.kernel(module="unique")
     def replay(eye: wp.array(dtype=wp.vec3), points: wp.array(dtype=wp.vec3), indices: wp.array(dtype=int),
@@ -233,92 +272,22 @@ def make_tree_replay_kernel(L: int, smooth: bool, light_model: bool, texture: bo
                     w = beer_forever(w, sigma[med])
             wp.atomic_add(rays, ray_of[i], wp.cw_mul(w, background))
         if f >= 0:
-            i0 = indices[3 * f]
-            i1 = indices[3 * f + 1]
-            i2 = indices[3 * f + 2]
-            p0 = points[i0]
-            p1 = points[i1]
-            p2 = points[i2]
-            moved = barycentrics_on(p0, p1, p2, o, d)
-            u = moved[0]  # Warp's convention: u weighs the face's first vertex, v its second
-            v = moved[1]
-            bw = 1.0 - u - v
-            p = p0 * u + p1 * v + p2 * bw
-            ng = wp.normalize(wp.cross(p1 - p0, p2 - p0))
-            side = 1.0
-            if wp.dot(ng, d) > 0.0:
-                side = -1.0
-            n = ng * side
-            if wp.static(smooth):
-                if tri_smooth[f] != 0:
-                    ns = normals[i0] * u + normals[i1] * v + normals[i2] * bw
-                    if wp.length(ns) > 0.0:
-                        n = wp.normalize(ns) * side
+            p, err, ng, side, n, m, ka_m, kd_m, ks_m = surface(f, wp.vec2(0.0, 0.0), o, d, points, indices, normals,
+                                                              tri_material, tri_smooth, ka, kd, ks, uvs, texels,
+                                                              tex_shape, tex_wrap, tex_u, tex_v, tex_c0, tex_c1,
+                                                              colors)  # on the face, from the moving ray
             if wp.static(absorption):
                 if med >= 0:  # the segment from where the ray began, not its offset origin
                     w = beer(w, sigma[med], wp.length(p - st))
-            m = tri_material[f]
-            ka_m = ka[m]
-            kd_m = kd[m]
-            ks_m = ks[m]
-            if wp.static(texture):
-                t = uvs[i0] * u + uvs[i1] * v + uvs[i2] * bw
-                uv = wp.vec3(t[0], t[1], 1.0)
-                j = 3 * m
-                ka_m = textured(ka_m, texels, tex_shape, tex_wrap, tex_u, tex_v, tex_c0, tex_c1, j, uv)
-                kd_m = textured(kd_m, texels, tex_shape, tex_wrap, tex_u, tex_v, tex_c0, tex_c1, j + 1, uv)
-                ks_m = textured(ks_m, texels, tex_shape, tex_wrap, tex_u, tex_v, tex_c0, tex_c1, j + 2, uv)
-            if wp.static(vertex_color):  # shading.make_coefficients: ka and kd times the vertex colour
-                vc = vertex_colour(colors, i0, i1, i2, u, v, bw)
-                ka_m = wp.cw_mul(ka_m, vc)
-                kd_m = wp.cw_mul(kd_m, vc)
-            local = wp.cw_mul(ambient, ka_m)
-            for l in range(wp.static(L)):
-                if visible[i * wp.static(L) + l] != 0:
-                    local = local + whitted_light(l, light_pos, light_color, inverse_square, light_kind, light_axis,
-                                                  light_cone, p, n, -d, kd_m, ks_m, shininess[m])
+            local = local_colour(p, n, d, ka_m, kd_m, ks_m, m, visible, i, ambient, shininess, light_pos, light_color,
+                                 inverse_square, light_kind, light_axis, light_cone)
             if wp.static(area):
-                hit_p[i] = p
-                hit_n[i] = n
-                hit_kd[i] = kd_m
-                hit_ks[i] = ks_m
+                keep_for_area(i, p, n, kd_m, ks_m, local, hit_p, hit_n, hit_kd, hit_ks, acc)
                 level_weight[i] = w
-                acc[i] = local
                 ray_dirs[i] = d
             else:
                 wp.atomic_add(rays, ray_of[i], wp.cw_mul(w, local))
-            c = child[i]
-            facing = ng * side
-            err = hit_point_error(p0, p1, p2, u, v, bw)
-            if kind[i] == wp.static(CHILD_MIRROR):
-                d_m = wp.normalize(reflect(d, n))
-                o_next[c[0]] = offset_ray_origin(p, err, facing, d_m)
-                d_next[c[0]] = d_m
-                w_next[c[0]] = wp.cw_mul(w, kr[m])
-                start_next[c[0]] = p
-            if kind[i] == wp.static(CHILD_DIELECTRIC):
-                mn = dielectric_normal(d, facing, n)
-                cos_i = -wp.dot(d, mn)
-                eta = ior[m]
-                eta_rel = eta
-                cos_f = cos_i
-                if side < 0.0:  # leaving: the ray meets the winding normal's back
-                    eta_rel = 1.0 / eta
-                    cos_f = -cos_i
-                F = fresnel_dielectric(cos_f, eta)
-                if c[0] >= 0:
-                    d_r = wp.normalize(reflect(d, mn))
-                    o_next[c[0]] = offset_ray_origin(p, err, facing, d_r)
-                    d_next[c[0]] = d_r
-                    w_next[c[0]] = w * F
-                    start_next[c[0]] = p
-                if c[1] >= 0:
-                    tr, transmits = refract(d, mn, eta_rel)
-                    d_t = wp.normalize(tr)
-                    o_next[c[1]] = offset_ray_origin(p, err, facing, d_t)
-                    d_next[c[1]] = d_t
-                    w_next[c[1]] = wp.cw_mul(w, kt[m]) * (1.0 - F)
-                    start_next[c[1]] = p
+            children(p, err, ng, side, n, m, d, w, kind[i], child[i], kr, ior, kt, o_next, d_next, w_next, start_next)
 
     return replay
 
