@@ -27,7 +27,7 @@ from .._warp import wp
 from ..geometry import LIGHT_DIRECTIONAL, LIGHT_SPOT, SceneData
 from ..geometry.bvh import face_vertices
 from .camera import CameraData, camera_ray, sample_offset
-from .interaction import hit_point_error, make_surface, offset_ray_origin, reflect, spawn_ray
+from .interaction import Surface, hit_point_error, make_surface, offset_ray_origin, reflect, spawn_ray
 from .shading import make_area_sample_test, make_light_test, phong_diffuse, phong_specular
 from .trace import culled, past
 from .triangle import triangle, unit_normal
@@ -235,6 +235,33 @@ def camera_rays(camera: wp.array(dtype=wp.vec3), fovy: wp.array(dtype=float), ne
 
 
 @functools.cache
+def make_area_record(shadows: bool):
+    """record_area(s, hit, f, d, j, words, emit, area_bits): what the records keep of the area lights at
+    hit j (``hit`` on face f, met along d): the area light whose emitting side the ray meets (emit[j], -1:
+    none; shading.emitted's side, its winding's normal) and, as ``words`` int32 bit masks from j words,
+    which sample points the hit sees (bit q of word q / 32: shading.make_area_sample_test, the forward
+    area_light's own test, lights in order)."""
+    area_sample_test = make_area_sample_test(shadows)
+
+    @wp.func
+    def record_area(s: SceneData, hit: Surface, f: int, d: wp.vec3, j: int, words: int, emit: wp.array(dtype=int),
+                    area_bits: wp.array(dtype=int)):
+        e = s.area.tri_emitter[f]
+        emit[j] = -1
+        if e >= 0:
+            t0, t1, t2 = triangle(s, f)
+            if wp.dot(d, unit_normal(t0, t1, t2)) < 0.0:
+                emit[j] = e
+        a = s.area
+        for sq in range(a.first[a.num]):
+            if area_sample_test(s, hit, sq).lit != 0:
+                word = j * words + sq / 32
+                area_bits[word] = area_bits[word] | (1 << (sq % 32))
+
+    return record_area
+
+
+@functools.cache
 def make_grad_record_kernel(L: int, D: int, smooth: bool, shadows: bool, cull: bool, light_model: bool = False,
                             area: bool = False):
     """record(s, c, max_depth, k, first, face, bary, dirs, visible): per camera ray (from ``first``: ray
@@ -255,7 +282,7 @@ def make_grad_record_kernel(L: int, D: int, smooth: bool, shadows: bool, cull: b
     own test."""
     surface = make_surface(smooth)
     light_test = make_light_test(light_model, shadows)
-    area_sample_test = make_area_sample_test(shadows)
+    record_area = make_area_record(shadows)
 
     @wp.kernel(module="unique", enable_backward=False)
     def record(s: SceneData, c: CameraData, max_depth: int, k: int, first: int, face: wp.array(dtype=int),
@@ -287,18 +314,7 @@ def make_grad_record_kernel(L: int, D: int, smooth: bool, shadows: bool, cull: b
                     for l in range(wp.static(L)):  # shading's own test: its light model and shadow ray
                         visible[j * wp.static(L) + l] = light_test(s, hit, l).lit
                     if wp.static(area):
-                        # shading.emitted: the emitter's side its winding's normal points to
-                        e = s.area.tri_emitter[q.face]
-                        emit[j] = -1
-                        if e >= 0:
-                            t0, t1, t2 = triangle(s, q.face)
-                            if wp.dot(d, unit_normal(t0, t1, t2)) < 0.0:
-                                emit[j] = e
-                        a = s.area
-                        for sq in range(a.first[a.num]):  # shading.area_light's samples and test, lights in order
-                            if area_sample_test(s, hit, sq).lit != 0:
-                                word = j * words + sq / 32
-                                area_bits[word] = area_bits[word] | (1 << (sq % 32))
+                        record_area(s, hit, q.face, d, j, words, emit, area_bits)
                     if level + 1 < max_depth and (wp.max(s.kr[hit.material]) > 0.0 or mirrored[hit.material] != 0):
                         spawned = spawn_ray(hit, wp.normalize(reflect(d, hit.n)))
                         o = spawned.o

@@ -28,11 +28,11 @@ from .._warp import wp
 from ..geometry import SceneData
 from .camera import CameraData, camera_ray, sample_offset
 from .dielectric import beer, beer_forever, dielectric_children, fresnel_dielectric, refract
-from .grad import keep_for_area, make_replay_local, make_replay_surface
-from .interaction import make_surface, offset_ray_origin, reflect, spawn_ray
-from .shading import make_area_sample_test, make_light_test
+from .grad import keep_for_area, make_area_record, make_replay_local, make_replay_surface
+from .interaction import Surface, make_surface, offset_ray_origin, reflect, spawn_ray
+from .shading import make_light_test
 from .trace import absorbed, culled, past
-from .triangle import triangle, unit_normal
+
 
 CHILD_NONE, CHILD_MIRROR, CHILD_DIELECTRIC = 0, 1, 2  # what a recorded ray spawns
 
@@ -53,6 +53,20 @@ def tree_camera_rays(s: SceneData, c: CameraData, k: int, first: int, orig: wp.a
     medium[ray] = s.eye_medium
 
 
+@wp.func
+def put_child(o: wp.array(dtype=wp.vec3), d: wp.array(dtype=wp.vec3), w: wp.array(dtype=wp.vec3),
+              x: wp.array(dtype=wp.vec3), med: wp.array(dtype=int), i: int, hit: Surface, direction: wp.vec3,
+              weight: wp.vec3, reach: wp.vec3, medium: int):
+    """A child of ray i recorded as the forward spawns it off ``hit`` along ``direction`` (spawn_ray): its
+    origin, direction, weight, reach and medium at i of the child kind's arrays."""
+    ray = spawn_ray(hit, direction)
+    o[i] = ray.o
+    d[i] = ray.d
+    w[i] = weight
+    x[i] = reach
+    med[i] = medium
+
+
 @functools.cache
 def make_tree_record_kernel(L: int, smooth: bool, shadows: bool, cull: bool, light_model: bool, reflection: bool,
                             absorption: bool, area: bool = False):
@@ -69,7 +83,7 @@ def make_tree_record_kernel(L: int, smooth: bool, shadows: bool, cull: bool, lig
     hit sees (``words`` int32 bit masks a ray), as make_grad_record_kernel records them."""
     surface = make_surface(smooth)
     light_test = make_light_test(light_model, shadows)
-    area_sample_test = make_area_sample_test(shadows)
+    record_area = make_area_record(shadows)
 
     @wp.kernel(module="unique", enable_backward=False)
     def record(s: SceneData, max_depth: int, level: int, first: int, orig: wp.array(dtype=wp.vec3),
@@ -100,32 +114,19 @@ def make_tree_record_kernel(L: int, smooth: bool, shadows: bool, cull: bool, lig
                 x = absorbed(s, x, medium[i], start[i], hit)
             for l in range(wp.static(L)):
                 visible[i * wp.static(L) + l] = light_test(s, hit, l).lit
-            if wp.static(area):  # shading.emitted's side, shading.area_light's samples and test
-                e = s.area.tri_emitter[q.face]
-                emit[i] = -1
-                if e >= 0:
-                    t0, t1, t2 = triangle(s, q.face)
-                    if wp.dot(d, unit_normal(t0, t1, t2)) < 0.0:
-                        emit[i] = e
-                a = s.area
-                for sq in range(a.first[a.num]):
-                    if area_sample_test(s, hit, sq).lit != 0:
-                        word = i * words + sq / 32
-                        area_bits[word] = area_bits[word] | (1 << (sq % 32))
+            if wp.static(area):
+                record_area(s, hit, q.face, d, i, words, emit, area_bits)
             children = level + 1
             mirrored = False
             if wp.static(reflection):
                 kr = s.kr[hit.material]
                 anyway = mirror_anyway[hit.material] != 0  # render(grad=[its reflectivity]), k_r 0 or not
                 if children < max_depth and (wp.max(kr) > 0.0 or anyway):  # a mirror's ray stays in its medium
-                    ray = spawn_ray(hit, wp.normalize(reflect(d, hit.n)))
-                    o_r[i] = ray.o
-                    d_r[i] = ray.d
-                    w_r[i] = wp.cw_mul(w, kr)
-                    x_r[i] = wp.cw_mul(x, kr)
+                    reach_m = wp.cw_mul(x, kr)
                     if anyway and wp.max(kr) <= 0.0:  # the reach as if k_r were 1: its subtree is recorded too
-                        x_r[i] = x
-                    med_r[i] = medium[i]
+                        reach_m = x
+                    put_child(o_r, d_r, w_r, x_r, med_r, i, hit, wp.normalize(reflect(d, hit.n)), wp.cw_mul(w, kr),
+                              reach_m, medium[i])
                     kind[i] = wp.static(CHILD_MIRROR)
                     has[i] = wp.vec2i(1, 0)
                     mirrored = True
@@ -148,19 +149,9 @@ def make_tree_record_kernel(L: int, smooth: bool, shadows: bool, cull: bool, lig
                     kind[i] = wp.static(CHILD_DIELECTRIC)
                     has[i] = wp.vec2i(wp.where(has_r, 1, 0), wp.where(has_t, 1, 0))
                     if has_r:
-                        ray = spawn_ray(hit, ch.d_r)
-                        o_r[i] = ray.o
-                        d_r[i] = ray.d
-                        w_r[i] = ch.w_r
-                        x_r[i] = reach_r
-                        med_r[i] = ch.medium_r
+                        put_child(o_r, d_r, w_r, x_r, med_r, i, hit, ch.d_r, ch.w_r, reach_r, ch.medium_r)
                     if has_t:
-                        ray = spawn_ray(hit, ch.d_t)
-                        o_t[i] = ray.o
-                        d_t[i] = ray.d
-                        w_t[i] = ch.w_t
-                        x_t[i] = reach_t
-                        med_t[i] = ch.medium_t
+                        put_child(o_t, d_t, w_t, x_t, med_t, i, hit, ch.d_t, ch.w_t, reach_t, ch.medium_t)
 
     return record
 
