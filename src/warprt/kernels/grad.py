@@ -1,5 +1,5 @@
-"""Gradients of an image through its camera rays' first hits (image/grad.py): a record kernel and a
-differentiable shading kernel.
+"""Gradients of an image through its camera rays' first hits (launched by image/grad_record.py and
+image/grad.py): a record kernel and a differentiable shading kernel.
 
 The record kernel finds each camera ray's hits as the tracer does (the rays through the centres of the
 pixel's strata, the BVH's closest hit, single-sided back faces passed through, the mirror rays) and which
@@ -16,7 +16,9 @@ make_area_combine then sums the levels with the emitted radiance, as the tracer 
 the forward's translated by their light's centre's move (translate_samples, 0 in the replay: a light's
 lights.<i>.center gradient). Vertex colours multiply ka and kd as the forward's coefficients do, interpolated
 by vertex_colour at the (moving) barycentrics from a differentiable per-vertex array. A scene with glass
-has a ray tree, not a chain of levels: its record and replay are grad_tree.py's, one launch per level.
+has a ray tree, not a chain of levels: its record and replay are grad_tree.py's, one launch per level; the
+hit and local colour both replays shade are make_replay_surface's and make_replay_local's, and both records
+keep the area lights through make_area_record.
 """
 
 from __future__ import annotations
@@ -443,26 +445,18 @@ def keep_for_area(k: int, p: wp.vec3, n: wp.vec3, kd: wp.vec3, ks: wp.vec3, loca
 def make_grad_shade_kernel(L: int, D: int, smooth: bool, moving: bool = False, light_model: bool = False,
                            texture: bool = False, area: bool = False, vertex_color: bool = False):
     """shade(...): each camera ray's colour (one per pixel and sample, as recorded; sample_mean makes
-    them the image) from the recorded hit and visibility and the differentiable
-    material and light arrays, over the recorded ray levels (D at most), each weighted by the product of
-    the k_r of the mirrors before it; the background where a ray met nothing. With ``moving``, the
-    hit's barycentrics are those of the moving ray (at the first level from ``eye[0]`` along ``dirs`` at
-    ray * D, each differentiable: the camera's, camera_rays; then the mirror ray from the level's hit point
-    along its direction reflected about the hit's normal, offset off the surface as the tracer's spawn_ray
-    does) on the recorded face recomputed from ``points`` by a differentiable
-    Moller-Trumbore test, so that the hit point moves with the vertices and the camera (Warp's mesh query
-    gives the points no adjoint), each level's direction written to ``ray_dirs`` (the area lights' replay
-    reads it); without, the recorded ones. With ``light_model``,
-    shading's general light model (light_factor): a directional light's L is -its axis, a spot's C_l is
-    weighted by its cone, an inverse_square light's by 1 / r^2; without, the seed's point lights. With
-    ``texture``, ka, kd and ks times their textures at the hit's interpolated uv (texture_factor: the
-    table's row 3 m + 0, 1, 2 for material slot m), the images' texels differentiable. With ``area``, the
-    kernel writes no colour: per ray level it leaves what the area lights' replay needs (make_area_replay:
-    the hit point, normal, kd and ks at the hit, the level's weight, and in ``acc`` the ambient and Whitted
-    lights' local colour, to which the area lights' samples are added), and area_combine makes the colour.
-    With ``vertex_color``, ka and kd (after their textures) times the colour interpolated from ``colors``
-    (one per vertex, differentiable) at the hit's barycentrics, the moving ones where the hit moves
-    (vertex_colour: shading.make_coefficients' and make_surface's arithmetic)."""
+    them the image) from the recorded hits and visibility and the differentiable material and light arrays,
+    over the recorded ray levels (D at most), each weighted by the product of the k_r of the mirrors before
+    it; the background where a ray met nothing. Each hit is make_replay_surface's and its local colour
+    make_replay_local's (``smooth``, ``texture``, ``vertex_color`` and ``light_model`` are theirs). With
+    ``moving``, the hit's barycentrics are those of the moving ray (at the first level from ``eye[0]`` along
+    ``dirs`` at ray * D, each differentiable: the camera's, camera_rays; then the mirror ray from the
+    level's hit point along its direction reflected about the hit's normal, offset off the surface as the
+    tracer's spawn_ray does) on the recorded face's ``points``, so that the hit point moves with the
+    vertices and the camera (Warp's mesh query gives the points no adjoint), each level's direction written
+    to ``ray_dirs`` (the area lights' replay reads it); without, the recorded ones. With ``area``, the
+    kernel writes no colour: per ray level it leaves what the area lights' replay needs (keep_for_area, and
+    the level's weight), and make_area_combine makes the colour."""
 
     surface = make_replay_surface(smooth, texture, vertex_color, moving)
     local_colour = make_replay_local(L, light_model)

@@ -174,17 +174,14 @@ def make_tree_replay_kernel(L: int, smooth: bool, light_model: bool, texture: bo
     """replay(...): one level of the recorded tree, differentiable. Per ray of the level's list: its ray
     (with ``first``, the camera ray from ``eye[0]`` along ``dirs``, weight 1; else the origin, direction,
     weight and segment start its parent's launch wrote), its hit recomputed on the recorded face from that
-    ray and ``points`` (Moller-Trumbore, Warp's barycentric convention), with ``absorption`` Beer's law over
-    the segment in the recorded medium (beer; beer_forever for a ray that meets nothing), its colour
-    (the background, or the ambient and recorded-visible lights' Phong terms, make_grad_shade_kernel's
-    arithmetic) times its weight added to its camera ray's (wp.atomic_add), and its recorded children
-    written at their places in the next level's arrays: a mirror's (k_r), a dielectric's reflected (weight
-    F) and refracted ((1 - F) k_t) ray, Fresnel's F at the ior (fresnel_dielectric), the direction by Snell
-    (refract), origins offset as spawn_ray offsets them. With ``area``, a ray that hits adds no colour here:
-    it leaves what the area lights' replay needs (kernels.area_replay: the hit point, normal, kd and ks, its
-    direction, its weight, and in ``acc`` its local colour, to which the samples are added), and
-    tree_area_combine adds it to its camera ray's. With ``vertex_color``, ka and kd (after their textures)
-    times the colour interpolated from ``colors`` at the moving hit (vertex_colour, the chain's)."""
+    ray (make_replay_surface, moving), with ``absorption`` Beer's law over the segment in the recorded
+    medium (beer; beer_forever for a ray that meets nothing), its colour (the background, or
+    make_replay_local's) times its weight added to its camera ray's (wp.atomic_add), and its recorded
+    children written at their places in the next level's arrays (children): a mirror's (k_r), a
+    dielectric's reflected (weight F) and refracted ((1 - F) k_t) ray, Fresnel's F at the ior
+    (fresnel_dielectric), the direction by Snell (refract), origins offset as spawn_ray offsets them. With
+    ``area``, a ray that hits adds no colour here: it leaves what the area lights' replay needs
+    (keep_for_area, its direction and its weight), and tree_area_combine adds it to its camera ray's."""
 
     surface = make_replay_surface(smooth, texture, vertex_color, True)
     local_colour = make_replay_local(L, light_model)
@@ -195,8 +192,7 @@ def make_tree_replay_kernel(L: int, smooth: bool, light_model: bool, texture: bo
                  kt: wp.array(dtype=wp.vec3), o_next: wp.array(dtype=wp.vec3), d_next: wp.array(dtype=wp.vec3),
                  w_next: wp.array(dtype=wp.vec3), start_next: wp.array(dtype=wp.vec3)):
         """The recorded children of a ray along d with weight w at its replayed hit (replay_surface's p, err,
-        ng, side, n, m), at their places c in the next level's arrays: a mirror's (k_r), or a dielectric's
-        reflected (F) and refracted ((1 - F) k_t) ray."""
+        ng, side, n, m), at their places c in the next level's arrays."""
         if kind == wp.static(CHILD_MIRROR):
             d_m = wp.normalize(reflect(d, n))
             o_next[c[0]] = offset_ray_origin(p, err, ng, d_m)
