@@ -245,7 +245,7 @@ def make_area_record(shadows: bool):
     area_light's own test, lights in order)."""
     area_sample_test = make_area_sample_test(shadows)
 
-    @wp.func
+    @wp.func(inline=True)
     def record_area(s: SceneData, hit: Surface, f: int, d: wp.vec3, j: int, words: int, emit: wp.array(dtype=int),
                     area_bits: wp.array(dtype=int)):
         e = s.area.tri_emitter[f]
@@ -350,7 +350,7 @@ def make_replay_surface(smooth: bool, texture: bool, vertex_color: bool, moving:
     tree's replays both shade. Plain values, not a struct: each then has one adjoint, summed in the order
     the replay uses it (a struct's field read gets an adjoint of its own, summed apart)."""
 
-    @wp.func
+    @wp.func(inline=True)
     def replay_surface(f: int, uv: wp.vec2, o: wp.vec3, d: wp.vec3, points: wp.array(dtype=wp.vec3),
                        indices: wp.array(dtype=int), normals: wp.array(dtype=wp.vec3), tri_material: wp.array(dtype=int),
                        tri_smooth: wp.array(dtype=int), ka: wp.array(dtype=wp.vec3), kd: wp.array(dtype=wp.vec3),
@@ -412,7 +412,7 @@ def make_replay_local(L: int, light_model: bool):
 
     whitted_light = make_whitted_light(light_model)
 
-    @wp.func
+    @wp.func(inline=True)
     def replay_local(p: wp.vec3, n: wp.vec3, d: wp.vec3, ka: wp.vec3, kd: wp.vec3, ks: wp.vec3, m: int,
                      visible: wp.array(dtype=int), k: int, ambient: wp.vec3, shininess: wp.array(dtype=float),
                      light_pos: wp.array(dtype=wp.vec3), light_color: wp.array(dtype=wp.vec3),
@@ -428,7 +428,7 @@ def make_replay_local(L: int, light_model: bool):
     return replay_local
 
 
-@wp.func
+@wp.func(inline=True)
 def keep_for_area(k: int, p: wp.vec3, n: wp.vec3, kd: wp.vec3, ks: wp.vec3, local: wp.vec3,
                   hit_p: wp.array(dtype=wp.vec3), hit_n: wp.array(dtype=wp.vec3), hit_kd: wp.array(dtype=wp.vec3),
                   hit_ks: wp.array(dtype=wp.vec3), acc: wp.array(dtype=wp.vec3)):

@@ -53,7 +53,7 @@ def tree_camera_rays(s: SceneData, c: CameraData, k: int, first: int, orig: wp.a
     medium[ray] = s.eye_medium
 
 
-@wp.func
+@wp.func(inline=True)
 def put_child(o: wp.array(dtype=wp.vec3), d: wp.array(dtype=wp.vec3), w: wp.array(dtype=wp.vec3),
               x: wp.array(dtype=wp.vec3), med: wp.array(dtype=int), i: int, hit: Surface, direction: wp.vec3,
               weight: wp.vec3, reach: wp.vec3, medium: int):
@@ -186,7 +186,7 @@ def make_tree_replay_kernel(L: int, smooth: bool, light_model: bool, texture: bo
     surface = make_replay_surface(smooth, texture, vertex_color, True)
     local_colour = make_replay_local(L, light_model)
 
-    @wp.func
+    @wp.func(inline=True)
     def children(p: wp.vec3, err: wp.vec3, ng: wp.vec3, side: float, n: wp.vec3, m: int, d: wp.vec3, w: wp.vec3,
                  kind: int, c: wp.vec2i, kr: wp.array(dtype=wp.vec3), ior: wp.array(dtype=float),
                  kt: wp.array(dtype=wp.vec3), o_next: wp.array(dtype=wp.vec3), d_next: wp.array(dtype=wp.vec3),
