@@ -355,7 +355,7 @@ def test_a_tree_too_big_for_memory_is_refused_in_one_line(monkeypatch):
         calls.append(device)
         return (10**12 if len(calls) == 1 else 20_000), "left in this test"
 
-    monkeypatch.setattr("warprt.image.grad.available_memory", little)
+    monkeypatch.setattr("warprt.image.grad_record.available_memory", little)
     with pytest.raises(SceneError, match="ray tree.*render.max_depth"):
         warprt.Renderer(sphere()).render(grad=True)
 

@@ -2,14 +2,15 @@
 (renderer.py), its plan and policies (plan.py), the caches it keeps (caches.py) and the parameters it
 changes between frames (params.py); launching bands (launch.py), the stats (stats.py), the Z-buffer
 (zbuffer.py), the planar mirrors' virtual cameras (mirrors.py), the AOVs (aovs.py), memory (memory.py),
-image files (film.py) and the progress line (progress.py).
+image files (film.py) and the progress line (progress.py); the gradient: its record (grad_record.py), its
+parameters (grad_params.py), and its replay and backward() (grad.py).
 """
 
 from ..options import RenderOptions
 from .aovs import AOVS, check_aovs
 from .caches import FrameCaches, LightHistory
-from .grad import FirstHits, ReplayLaunch, TreeHits, replay_image, replay_launch
-from .trace_record import record_first_hits
+from .grad import ReplayLaunch, replay_image, replay_launch
+from .grad_record import FirstHits, TreeHits, record_first_hits
 from .film import aov_paths, partial_files, read_aovs, read_image, to_srgb8, write_image
 from .launch import bands_of, default_threads, launch_bands
 from .mirrors import MirrorFrame

@@ -13,7 +13,7 @@ import numpy as np
 
 from .._warp import init_warp, wp
 from ..geometry import Geometry, ShadowGridBuild, shadow_grid
-from ..kernels import (aov_buffers, aov_bytes, aov_sums, camera_data, empty_aov_buffers, make_shade_kernel,
+from ..kernels import (aov_buffers, aov_bytes, aov_sums, camera_data, empty_aov_buffers, empty_record, make_shade_kernel,
                        make_trace_kernel, raster_kernel, total_kernel)
 from ..errors import ArgumentError
 from ..options import RenderOptions
@@ -22,9 +22,9 @@ from ..scene import (EffectSet, camera_basis, drawn_objects, switched_on, valida
 from ..timing import timed
 from .aovs import finish_aovs
 from .caches import SHADOW_GRIDS_KEPT, FrameCaches
-from .grad import (backward as grad_backward, check_record_memory, mirrored_materials, named_parameters,
-                   record_tree, refusal as grad_refusal)
-from .trace_record import empty_record, record_arrays, recording_plan, records_in_trace
+from .grad import backward as grad_backward
+from .grad_params import mirrored_materials, named_parameters, refusal as grad_refusal
+from .grad_record import check_record_memory, record_arrays, record_tree, recording_plan, records_in_trace
 from .launch import band_pool, bands_of, launch_bands, launch_plan
 from .memory import check_frame_memory, frame_estimate, frame_memory
 from .mirrors import MirrorFrame, empty_mirrors, mirror_frame

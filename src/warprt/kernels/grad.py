@@ -1,9 +1,10 @@
-"""Gradients of an image through its camera rays' first hits (image/grad.py): the differentiable replay of a
-recorded chain of rays (the camera ray, then its mirror rays).
+"""Gradients of an image through its recorded rays (launched by image/grad.py): the differentiable replay of a
+chain of rays (the camera ray, then its mirror rays), and what it shares with glass's tree (grad_tree.py).
 
 The record is the forward's own: the trace kernel's recording variant (kernels/record.py) writes each level's
 hit and the Whitted lights and area-light sample points it sees as it traces, with the very tests its shading
-makes (shading's make_light_test and make_area_sample_test): what the gradient holds fixed.
+makes (shading's make_light_test and make_area_sample_test): what the gradient holds fixed. Glass's tree is
+recorded by grad_tree.py's record kernel, which keeps the area lights through make_area_record.
 The shading kernel recomputes the local Phong model at those hits from arrays a
 wp.Tape differentiates (the material colours and exponents per slot, their textures' texels, the lights'
 positions, colours and directions): C = C_amb ka + sum_l vis_l C_l w_l (kd n.L + ks max(0, r.v)^n), w_l a spot's cone times
@@ -15,7 +16,8 @@ make_area_combine then sums the levels with the emitted radiance, as the tracer 
 the forward's translated by their light's centre's move (translate_samples, 0 in the replay: a light's
 lights.<i>.center gradient). Vertex colours multiply ka and kd as the forward's coefficients do, interpolated
 by vertex_colour at the (moving) barycentrics from a differentiable per-vertex array. A scene with glass
-has a ray tree, not a chain of levels: its record and replay are grad_tree.py's, one launch per level.
+has a ray tree, not a chain of levels: its record and replay are grad_tree.py's, one launch per level; the
+hit and local colour both replays shade are make_replay_surface's and make_replay_local's.
 """
 
 from __future__ import annotations
@@ -23,10 +25,11 @@ from __future__ import annotations
 import functools
 
 from .._warp import wp
-from ..geometry import LIGHT_DIRECTIONAL, LIGHT_SPOT
+from ..geometry import LIGHT_DIRECTIONAL, LIGHT_SPOT, SceneData
+from ..geometry.bvh import face_vertices
 from .camera import sample_offset
-from .interaction import hit_point_error, offset_ray_origin, reflect
-from .shading import phong_diffuse, phong_specular
+from .interaction import Surface, hit_point_error, offset_ray_origin, reflect
+from .shading import emitter_met, make_area_sample_test, phong_diffuse, phong_specular
 
 MAX_GRAD_LIGHTS = 16  # Warp's max_unroll: a longer static loop would silently turn dynamic
 
@@ -230,6 +233,28 @@ def camera_rays(camera: wp.array(dtype=wp.vec3), fovy: wp.array(dtype=float), ne
                                           (y + offset[1]) / float(height))
 
 
+@functools.cache
+def make_area_record(shadows: bool):
+    """record_area(s, hit, f, d, j, words, emit, area_bits): what the tree's record keeps of the area lights at
+    hit j (``hit`` on face f, met along d): the area light whose emitting side the ray meets (emit[j], -1:
+    none; shading.emitter_met, the forward's test) and, as ``words`` int32 bit masks from j words,
+    which sample points the hit sees (bit q of word q / 32: shading.make_area_sample_test, the forward
+    area_light's own test, lights in order)."""
+    area_sample_test = make_area_sample_test(shadows)
+
+    @wp.func(inline=True)
+    def record_area(s: SceneData, hit: Surface, f: int, d: wp.vec3, j: int, words: int, emit: wp.array(dtype=int),
+                    area_bits: wp.array(dtype=int)):
+        emit[j] = emitter_met(s, f, d)
+        a = s.area
+        for sq in range(a.first[a.num]):
+            if area_sample_test(s, hit, sq).lit != 0:
+                word = j * words + sq / 32
+                area_bits[word] = area_bits[word] | (1 << (sq % 32))
+
+    return record_area
+
+
 @wp.func
 def vertex_colour(colors: wp.array(dtype=wp.vec3), i0: int, i1: int, i2: int, u: float, v: float,
                   w: float) -> wp.vec3:
@@ -240,31 +265,130 @@ def vertex_colour(colors: wp.array(dtype=wp.vec3), i0: int, i1: int, i2: int, u:
 
 
 @functools.cache
+def make_replay_surface(smooth: bool, texture: bool, vertex_color: bool, moving: bool):
+    """replay_surface(f, uv, o, d, <geometry>, <colours>, <texture table>, colors) -> (p, err, ng, side, n,
+    m, ka, kd, ks): the hit of the ray o + t d on recorded face f, made again from the replay's arrays as
+    make_surface and shading.make_coefficients make the forward's: at the recorded barycentrics ``uv``, or
+    with ``moving`` at those of the moving ray on the face's points (barycentrics_on; ``uv`` unread), the
+    point p and with ``moving`` its error bound (hit_point_error; else 0); the geometric normal ng turned
+    to face the ray and the side it was turned to (-1: the winding normal's back), the shading normal n on
+    that side (with ``smooth``, the interpolated vertex normals where the face's object is smooth); the
+    material slot m and its ka, kd, ks at the hit, with ``texture`` times their textures at the
+    interpolated uv (textured: the table's rows 3 m + 0, 1, 2), with ``vertex_color`` ka and kd (after
+    their textures) times the colour interpolated from ``colors`` (vertex_colour). What the chain's and the
+    tree's replays both shade. Plain values, not a struct: each then has one adjoint, summed in the order
+    the replay uses it (a struct's field read gets an adjoint of its own, summed apart)."""
+
+    @wp.func(inline=True)
+    def replay_surface(f: int, uv: wp.vec2, o: wp.vec3, d: wp.vec3, points: wp.array(dtype=wp.vec3),
+                       indices: wp.array(dtype=int), normals: wp.array(dtype=wp.vec3), tri_material: wp.array(dtype=int),
+                       tri_smooth: wp.array(dtype=int), ka: wp.array(dtype=wp.vec3), kd: wp.array(dtype=wp.vec3),
+                       ks: wp.array(dtype=wp.vec3), uvs: wp.array(dtype=wp.vec2), texels: wp.array(dtype=wp.vec3),
+                       tex_shape: wp.array(dtype=wp.vec4i), tex_wrap: wp.array(dtype=wp.vec2i),
+                       tex_u: wp.array(dtype=wp.vec3), tex_v: wp.array(dtype=wp.vec3), tex_c0: wp.array(dtype=wp.vec3),
+                       tex_c1: wp.array(dtype=wp.vec3), colors: wp.array(dtype=wp.vec3)):
+        i0, i1, i2 = face_vertices(indices, f)
+        p0 = points[i0]
+        p1 = points[i1]
+        p2 = points[i2]
+        u = uv[0]
+        v = uv[1]
+        if wp.static(moving):
+            moved = barycentrics_on(p0, p1, p2, o, d)
+            u = moved[0]
+            v = moved[1]
+        w = 1.0 - u - v
+        p = p0 * u + p1 * v + p2 * w
+        ng = wp.normalize(wp.cross(p1 - p0, p2 - p0))
+        side = 1.0
+        if wp.dot(ng, d) > 0.0:
+            side = -1.0
+        n = ng * side
+        if wp.static(smooth):
+            if tri_smooth[f] != 0:
+                ns = normals[i0] * u + normals[i1] * v + normals[i2] * w
+                if wp.length(ns) > 0.0:
+                    n = wp.normalize(ns) * side
+        m = tri_material[f]
+        ka_m = ka[m]
+        kd_m = kd[m]
+        ks_m = ks[m]
+        if wp.static(texture):  # shading.make_coefficients: the colour times its texture at uv
+            t = uvs[i0] * u + uvs[i1] * v + uvs[i2] * w
+            uvw = wp.vec3(t[0], t[1], 1.0)
+            j = 3 * m
+            ka_m = textured(ka_m, texels, tex_shape, tex_wrap, tex_u, tex_v, tex_c0, tex_c1, j, uvw)
+            kd_m = textured(kd_m, texels, tex_shape, tex_wrap, tex_u, tex_v, tex_c0, tex_c1, j + 1, uvw)
+            ks_m = textured(ks_m, texels, tex_shape, tex_wrap, tex_u, tex_v, tex_c0, tex_c1, j + 2, uvw)
+        if wp.static(vertex_color):  # shading.make_coefficients: ka and kd times the vertex colour
+            vc = vertex_colour(colors, i0, i1, i2, u, v, w)
+            ka_m = wp.cw_mul(ka_m, vc)
+            kd_m = wp.cw_mul(kd_m, vc)
+        err = wp.vec3(0.0)
+        if wp.static(moving):  # what the spawned rays' offset needs (spawn_ray's)
+            err = hit_point_error(p0, p1, p2, u, v, w)
+        return p, err, ng * side, side, n, m, ka_m, kd_m, ks_m
+
+    return replay_surface
+
+
+@functools.cache
+def make_replay_local(L: int, light_model: bool):
+    """replay_local(p, n, d, ka, kd, ks, m, visible, k, ambient, shininess, <lights>): the local colour at a
+    replayed hit (point p, shading normal n, material slot m's colours ka, kd, ks there) of the ray along
+    d, C_amb ka plus the Phong term of each Whitted light the record saw from it (visible[k L + l]:
+    whitted_light), the lights unrolled (wp.static). What the chain's and the tree's replays both add."""
+
+    whitted_light = make_whitted_light(light_model)
+
+    @wp.func(inline=True)
+    def replay_local(p: wp.vec3, n: wp.vec3, d: wp.vec3, ka: wp.vec3, kd: wp.vec3, ks: wp.vec3, m: int,
+                     visible: wp.array(dtype=int), k: int, ambient: wp.vec3, shininess: wp.array(dtype=float),
+                     light_pos: wp.array(dtype=wp.vec3), light_color: wp.array(dtype=wp.vec3),
+                     inverse_square: wp.array(dtype=int), light_kind: wp.array(dtype=int),
+                     light_axis: wp.array(dtype=wp.vec3), light_cone: wp.array(dtype=wp.vec4)) -> wp.vec3:
+        local = wp.cw_mul(ambient, ka)
+        for l in range(wp.static(L)):
+            if visible[k * wp.static(L) + l] != 0:
+                local = local + whitted_light(l, light_pos, light_color, inverse_square, light_kind, light_axis,
+                                              light_cone, p, n, -d, kd, ks, shininess[m])
+        return local
+
+    return replay_local
+
+
+@wp.func(inline=True)
+def keep_for_area(k: int, p: wp.vec3, n: wp.vec3, kd: wp.vec3, ks: wp.vec3, local: wp.vec3,
+                  hit_p: wp.array(dtype=wp.vec3), hit_n: wp.array(dtype=wp.vec3), hit_kd: wp.array(dtype=wp.vec3),
+                  hit_ks: wp.array(dtype=wp.vec3), acc: wp.array(dtype=wp.vec3)):
+    """What the area lights' replay (area_replay) reads of replayed hit k: its point, normal, kd and ks, and
+    in ``acc`` its local colour (replay_local), to which the area lights' samples are added."""
+    hit_p[k] = p
+    hit_n[k] = n
+    hit_kd[k] = kd
+    hit_ks[k] = ks
+    acc[k] = local
+
+
+@functools.cache
 def make_grad_shade_kernel(L: int, D: int, smooth: bool, moving: bool = False, light_model: bool = False,
                            texture: bool = False, area: bool = False, vertex_color: bool = False):
     """shade(...): each camera ray's colour (one per pixel and sample, as recorded; sample_mean makes
-    them the image) from the recorded hit and visibility and the differentiable
-    material and light arrays, over the recorded ray levels (D at most), each weighted by the product of
-    the k_r of the mirrors before it; the background where a ray met nothing. With ``moving``, the
-    hit's barycentrics are those of the moving ray (at the first level from ``eye[0]`` along ``dirs`` at
-    ray * D, each differentiable: the camera's, camera_rays; then the mirror ray from the level's hit point
-    along its direction reflected about the hit's normal, offset off the surface as the tracer's spawn_ray
-    does) on the recorded face recomputed from ``points`` by a differentiable
-    Moller-Trumbore test, so that the hit point moves with the vertices and the camera (Warp's mesh query
-    gives the points no adjoint), each level's direction written to ``ray_dirs`` (the area lights' replay
-    reads it); without, the recorded ones. With ``light_model``,
-    shading's general light model (light_factor): a directional light's L is -its axis, a spot's C_l is
-    weighted by its cone, an inverse_square light's by 1 / r^2; without, the seed's point lights. With
-    ``texture``, ka, kd and ks times their textures at the hit's interpolated uv (texture_factor: the
-    table's row 3 m + 0, 1, 2 for material slot m), the images' texels differentiable. With ``area``, the
-    kernel writes no colour: per ray level it leaves what the area lights' replay needs (make_area_replay:
-    the hit point, normal, kd and ks at the hit, the level's weight, and in ``acc`` the ambient and Whitted
-    lights' local colour, to which the area lights' samples are added), and area_combine makes the colour.
-    With ``vertex_color``, ka and kd (after their textures) times the colour interpolated from ``colors``
-    (one per vertex, differentiable) at the hit's barycentrics, the moving ones where the hit moves
-    (vertex_colour: shading.make_coefficients' and make_surface's arithmetic)."""
+    them the image) from the recorded hits and visibility and the differentiable material and light arrays,
+    over the recorded ray levels (D at most), each weighted by the product of the k_r of the mirrors before
+    it; the background where a ray met nothing. Each hit is make_replay_surface's and its local colour
+    make_replay_local's (``smooth``, ``texture``, ``vertex_color`` and ``light_model`` are theirs). With
+    ``moving``, the hit's barycentrics are those of the moving ray (at the first level from ``eye[0]`` along
+    ``dirs`` at ray * D, each differentiable: the camera's, camera_rays; then the mirror ray from the
+    level's hit point along its direction reflected about the hit's normal, offset off the surface as the
+    tracer's spawn_ray does) on the recorded face's ``points``, so that the hit point moves with the
+    vertices and the camera (Warp's mesh query gives the points no adjoint), each level's direction written
+    to ``ray_dirs`` (the area lights' replay reads it); without, the recorded ones. With ``area``, the
+    kernel writes no colour: per ray level it leaves what the area lights' replay needs (keep_for_area, and
+    the level's weight), and make_area_combine makes the colour."""
 
-    whitted_light = make_whitted_light(light_model)
+    surface = make_replay_surface(smooth, texture, vertex_color, moving)
+    local_colour = make_replay_local(L, light_model)
 
     @wp.kernel(module="unique")
     def shade(eye: wp.array(dtype=wp.vec3), points: wp.array(dtype=wp.vec3), indices: wp.array(dtype=int), normals: wp.array(dtype=wp.vec3),
@@ -284,6 +408,7 @@ def make_grad_shade_kernel(L: int, D: int, smooth: bool, moving: bool = False, l
         ray = wp.tid()
         color = wp.vec3(0.0)
         weight = wp.vec3(1.0)
+        o = wp.vec3(0.0)  # the moving ray's origin, unread without ``moving``
         if wp.static(moving):  # the moving ray: from the eye along the camera ray, then the mirror rays
             o = eye[0]
             d_next = dirs[ray * wp.static(D)]
@@ -298,63 +423,21 @@ def make_grad_shade_kernel(L: int, D: int, smooth: bool, moving: bool = False, l
                 d = dirs[k]
                 if wp.static(moving):
                     d = d_next
-                i0 = indices[3 * f]
-                i1 = indices[3 * f + 1]
-                i2 = indices[3 * f + 2]
-                p0 = points[i0]
-                p1 = points[i1]
-                p2 = points[i2]
-                u = bary[k][0]
-                v = bary[k][1]
-                if wp.static(moving):
-                    moved = barycentrics_on(p0, p1, p2, o, d)
-                    u = moved[0]
-                    v = moved[1]
-                w = 1.0 - u - v
-                p = p0 * u + p1 * v + p2 * w
-                ng = wp.normalize(wp.cross(p1 - p0, p2 - p0))
-                side = 1.0
-                if wp.dot(ng, d) > 0.0:
-                    side = -1.0
-                n = ng * side
-                if wp.static(smooth):
-                    if tri_smooth[f] != 0:
-                        ns = normals[i0] * u + normals[i1] * v + normals[i2] * w
-                        if wp.length(ns) > 0.0:
-                            n = wp.normalize(ns) * side
-                m = tri_material[f]
-                ka_m = ka[m]
-                kd_m = kd[m]
-                ks_m = ks[m]
-                if wp.static(texture):  # shading.make_coefficients: the colour times its texture at uv
-                    t = uvs[i0] * u + uvs[i1] * v + uvs[i2] * w
-                    uv = wp.vec3(t[0], t[1], 1.0)
-                    j = 3 * m
-                    ka_m = textured(ka_m, texels, tex_shape, tex_wrap, tex_u, tex_v, tex_c0, tex_c1, j, uv)
-                    kd_m = textured(kd_m, texels, tex_shape, tex_wrap, tex_u, tex_v, tex_c0, tex_c1, j + 1, uv)
-                    ks_m = textured(ks_m, texels, tex_shape, tex_wrap, tex_u, tex_v, tex_c0, tex_c1, j + 2, uv)
-                if wp.static(vertex_color):  # shading.make_coefficients: ka and kd times the vertex colour
-                    vc = vertex_colour(colors, i0, i1, i2, u, v, w)
-                    ka_m = wp.cw_mul(ka_m, vc)
-                    kd_m = wp.cw_mul(kd_m, vc)
-                local = wp.cw_mul(ambient, ka_m)
-                for l in range(wp.static(L)):
-                    if visible[k * wp.static(L) + l] != 0:
-                        local = local + whitted_light(l, light_pos, light_color, inverse_square, light_kind,
-                                                      light_axis, light_cone, p, n, -d, kd_m, ks_m, shininess[m])
+                p, err, ng, side, n, m, ka_m, kd_m, ks_m = surface(f, bary[k], o, d, points, indices, normals,
+                                                                  tri_material, tri_smooth, ka, kd, ks, uvs, texels,
+                                                                  tex_shape, tex_wrap, tex_u, tex_v, tex_c0, tex_c1,
+                                                                  colors)
+                local = local_colour(p, n, d, ka_m, kd_m, ks_m, m, visible, k, ambient, shininess, light_pos,
+                                     light_color, inverse_square, light_kind, light_axis, light_cone)
                 if wp.static(area):
-                    hit_p[k] = p
-                    hit_n[k] = n
-                    hit_kd[k] = kd_m
-                    hit_ks[k] = ks_m
-                    acc[k] = local
+                    keep_for_area(k, p, n, kd_m, ks_m, local, hit_p, hit_n, hit_kd, hit_ks, acc)
                 else:
                     color = color + wp.cw_mul(weight, local)
                 weight = wp.cw_mul(weight, kr[m])
                 if wp.static(moving):  # the mirror ray the tracer spawns here: spawn_ray's, off the surface
                     ray_dirs[k] = d
                     d_next = wp.normalize(reflect(d, n))
-                    o = offset_ray_origin(p, hit_point_error(p0, p1, p2, u, v, w), ng * side, d_next)
+                    o = offset_ray_origin(p, err, ng, d_next)
         if wp.static(not area):
             image[ray] = color
 
@@ -467,10 +550,7 @@ def vertex_normal_sums(points: wp.array(dtype=wp.vec3), indices: wp.array(dtype=
     each corner's angle (corner_angle) added by wp.atomic_add to the sum of the corner's position
     (``position``: one id per distinct position of an object, normals.position_ids, so that vertices a seam
     splits share one normal)."""
-    f = faces[wp.tid()]
-    i0 = indices[3 * f]
-    i1 = indices[3 * f + 1]
-    i2 = indices[3 * f + 2]
+    i0, i1, i2 = face_vertices(indices, faces[wp.tid()])
     p0 = points[i0]
     p1 = points[i1]
     p2 = points[i2]

@@ -1,5 +1,5 @@
-"""Gradients of an image through Whitted's full ray tree, glass included (image/grad.py's tree record and
-replay): a record kernel and a differentiable replay kernel, each launched once per ray level.
+"""Gradients of an image through Whitted's full ray tree, glass included (image/grad_record.py's tree record,
+image/grad.py's replay): a record kernel and a differentiable replay kernel, each launched once per ray level.
 
 Warp does not replay a dynamic loop backwards, nor a stack pushed and popped in place, so the tree is not
 walked as the forward walks it (trace.py's depth-first loop and ray stack). The record follows the forward's
@@ -7,7 +7,7 @@ tree level by level instead: per level a flat list of rays (the camera rays, the
 their parents' order, the reflected child before the transmitted one), each ray's nearest hit, the lights it
 sees and its children found with the forward's own functions (make_surface, absorbed, make_light_test,
 dielectric_children, spawn_ray), so every ray is the forward's to the bit; the host compacts each level's
-children into the next level's list (image/grad.py). The replay kernel, one launch per level, reads the
+children into the next level's list (image/grad_record.py). The replay kernel, one launch per level, reads the
 level's rays (origin, direction, weight, where its segment began) from arrays the previous level's launch
 wrote, and writes its children's into new arrays, never in place: a wp.Tape replays each launch backwards.
 Each node recomputes its hit on the recorded face from the moving ray (a differentiable Moller-Trumbore
@@ -28,11 +28,11 @@ from .._warp import wp
 from ..geometry import SceneData
 from .camera import CameraData, camera_ray, sample_offset
 from .dielectric import beer, beer_forever, dielectric_children, fresnel_dielectric, refract
-from .grad import barycentrics_on, make_whitted_light, textured, vertex_colour
-from .interaction import hit_point_error, make_surface, offset_ray_origin, reflect, spawn_ray
-from .shading import make_area_sample_test, make_light_test
+from .grad import keep_for_area, make_area_record, make_replay_local, make_replay_surface
+from .interaction import Surface, make_surface, offset_ray_origin, reflect, spawn_ray
+from .shading import make_light_test
 from .trace import absorbed, culled, past
-from .triangle import triangle, unit_normal
+
 
 CHILD_NONE, CHILD_MIRROR, CHILD_DIELECTRIC = 0, 1, 2  # what a recorded ray spawns
 
@@ -53,6 +53,20 @@ def tree_camera_rays(s: SceneData, c: CameraData, k: int, first: int, orig: wp.a
     medium[ray] = s.eye_medium
 
 
+@wp.func(inline=True)
+def put_child(o: wp.array(dtype=wp.vec3), d: wp.array(dtype=wp.vec3), w: wp.array(dtype=wp.vec3),
+              x: wp.array(dtype=wp.vec3), med: wp.array(dtype=int), i: int, hit: Surface, direction: wp.vec3,
+              weight: wp.vec3, reach: wp.vec3, medium: int):
+    """A child of ray i recorded as the forward spawns it off ``hit`` along ``direction`` (spawn_ray): its
+    origin, direction, weight, reach and medium at i of the child kind's arrays."""
+    ray = spawn_ray(hit, direction)
+    o[i] = ray.o
+    d[i] = ray.d
+    w[i] = weight
+    x[i] = reach
+    med[i] = medium
+
+
 @functools.cache
 def make_tree_record_kernel(L: int, smooth: bool, shadows: bool, cull: bool, light_model: bool, reflection: bool,
                             absorption: bool, area: bool = False):
@@ -69,7 +83,7 @@ def make_tree_record_kernel(L: int, smooth: bool, shadows: bool, cull: bool, lig
     hit sees (``words`` int32 bit masks a ray), as the trace kernel's record (kernels/record.py) holds them."""
     surface = make_surface(smooth)
     light_test = make_light_test(light_model, shadows)
-    area_sample_test = make_area_sample_test(shadows)
+    record_area = make_area_record(shadows)
 
     @wp.kernel(module="unique", enable_backward=False)
     def record(s: SceneData, max_depth: int, level: int, first: int, orig: wp.array(dtype=wp.vec3),
@@ -100,32 +114,19 @@ def make_tree_record_kernel(L: int, smooth: bool, shadows: bool, cull: bool, lig
                 x = absorbed(s, x, medium[i], start[i], hit)
             for l in range(wp.static(L)):
                 visible[i * wp.static(L) + l] = light_test(s, hit, l).lit
-            if wp.static(area):  # shading.emitted's side, shading.area_light's samples and test
-                e = s.area.tri_emitter[q.face]
-                emit[i] = -1
-                if e >= 0:
-                    t0, t1, t2 = triangle(s, q.face)
-                    if wp.dot(d, unit_normal(t0, t1, t2)) < 0.0:
-                        emit[i] = e
-                a = s.area
-                for sq in range(a.first[a.num]):
-                    if area_sample_test(s, hit, sq).lit != 0:
-                        word = i * words + sq / 32
-                        area_bits[word] = area_bits[word] | (1 << (sq % 32))
+            if wp.static(area):
+                record_area(s, hit, q.face, d, i, words, emit, area_bits)
             children = level + 1
             mirrored = False
             if wp.static(reflection):
                 kr = s.kr[hit.material]
                 anyway = mirror_anyway[hit.material] != 0  # render(grad=[its reflectivity]), k_r 0 or not
                 if children < max_depth and (wp.max(kr) > 0.0 or anyway):  # a mirror's ray stays in its medium
-                    ray = spawn_ray(hit, wp.normalize(reflect(d, hit.n)))
-                    o_r[i] = ray.o
-                    d_r[i] = ray.d
-                    w_r[i] = wp.cw_mul(w, kr)
-                    x_r[i] = wp.cw_mul(x, kr)
+                    reach_m = wp.cw_mul(x, kr)
                     if anyway and wp.max(kr) <= 0.0:  # the reach as if k_r were 1: its subtree is recorded too
-                        x_r[i] = x
-                    med_r[i] = medium[i]
+                        reach_m = x
+                    put_child(o_r, d_r, w_r, x_r, med_r, i, hit, wp.normalize(reflect(d, hit.n)), wp.cw_mul(w, kr),
+                              reach_m, medium[i])
                     kind[i] = wp.static(CHILD_MIRROR)
                     has[i] = wp.vec2i(1, 0)
                     mirrored = True
@@ -148,19 +149,9 @@ def make_tree_record_kernel(L: int, smooth: bool, shadows: bool, cull: bool, lig
                     kind[i] = wp.static(CHILD_DIELECTRIC)
                     has[i] = wp.vec2i(wp.where(has_r, 1, 0), wp.where(has_t, 1, 0))
                     if has_r:
-                        ray = spawn_ray(hit, ch.d_r)
-                        o_r[i] = ray.o
-                        d_r[i] = ray.d
-                        w_r[i] = ch.w_r
-                        x_r[i] = reach_r
-                        med_r[i] = ch.medium_r
+                        put_child(o_r, d_r, w_r, x_r, med_r, i, hit, ch.d_r, ch.w_r, reach_r, ch.medium_r)
                     if has_t:
-                        ray = spawn_ray(hit, ch.d_t)
-                        o_t[i] = ray.o
-                        d_t[i] = ray.d
-                        w_t[i] = ch.w_t
-                        x_t[i] = reach_t
-                        med_t[i] = ch.medium_t
+                        put_child(o_t, d_t, w_t, x_t, med_t, i, hit, ch.d_t, ch.w_t, reach_t, ch.medium_t)
 
     return record
 
@@ -183,19 +174,54 @@ def make_tree_replay_kernel(L: int, smooth: bool, light_model: bool, texture: bo
     """replay(...): one level of the recorded tree, differentiable. Per ray of the level's list: its ray
     (with ``first``, the camera ray from ``eye[0]`` along ``dirs``, weight 1; else the origin, direction,
     weight and segment start its parent's launch wrote), its hit recomputed on the recorded face from that
-    ray and ``points`` (Moller-Trumbore, Warp's barycentric convention), with ``absorption`` Beer's law over
-    the segment in the recorded medium (beer; beer_forever for a ray that meets nothing), its colour
-    (the background, or the ambient and recorded-visible lights' Phong terms, make_grad_shade_kernel's
-    arithmetic) times its weight added to its camera ray's (wp.atomic_add), and its recorded children
-    written at their places in the next level's arrays: a mirror's (k_r), a dielectric's reflected (weight
-    F) and refracted ((1 - F) k_t) ray, Fresnel's F at the ior (fresnel_dielectric), the direction by Snell
-    (refract), origins offset as spawn_ray offsets them. With ``area``, a ray that hits adds no colour here:
-    it leaves what the area lights' replay needs (kernels.area_replay: the hit point, normal, kd and ks, its
-    direction, its weight, and in ``acc`` its local colour, to which the samples are added), and
-    tree_area_combine adds it to its camera ray's. With ``vertex_color``, ka and kd (after their textures)
-    times the colour interpolated from ``colors`` at the moving hit (vertex_colour, the chain's)."""
+    ray (make_replay_surface, moving), with ``absorption`` Beer's law over the segment in the recorded
+    medium (beer; beer_forever for a ray that meets nothing), its colour (the background, or
+    make_replay_local's) times its weight added to its camera ray's (wp.atomic_add), and its recorded
+    children written at their places in the next level's arrays (children): a mirror's (k_r), a
+    dielectric's reflected (weight F) and refracted ((1 - F) k_t) ray, Fresnel's F at the ior
+    (fresnel_dielectric), the direction by Snell (refract), origins offset as spawn_ray offsets them. With
+    ``area``, a ray that hits adds no colour here: it leaves what the area lights' replay needs
+    (keep_for_area, its direction and its weight), and tree_area_combine adds it to its camera ray's."""
 
-    whitted_light = make_whitted_light(light_model)
+    surface = make_replay_surface(smooth, texture, vertex_color, True)
+    local_colour = make_replay_local(L, light_model)
+
+    @wp.func(inline=True)
+    def children(p: wp.vec3, err: wp.vec3, ng: wp.vec3, side: float, n: wp.vec3, m: int, d: wp.vec3, w: wp.vec3,
+                 kind: int, c: wp.vec2i, kr: wp.array(dtype=wp.vec3), ior: wp.array(dtype=float),
+                 kt: wp.array(dtype=wp.vec3), o_next: wp.array(dtype=wp.vec3), d_next: wp.array(dtype=wp.vec3),
+                 w_next: wp.array(dtype=wp.vec3), start_next: wp.array(dtype=wp.vec3)):
+        """The recorded children of a ray along d with weight w at its replayed hit (replay_surface's p, err,
+        ng, side, n, m), at their places c in the next level's arrays."""
+        if kind == wp.static(CHILD_MIRROR):
+            d_m = wp.normalize(reflect(d, n))
+            o_next[c[0]] = offset_ray_origin(p, err, ng, d_m)
+            d_next[c[0]] = d_m
+            w_next[c[0]] = wp.cw_mul(w, kr[m])
+            start_next[c[0]] = p
+        if kind == wp.static(CHILD_DIELECTRIC):
+            mn = dielectric_normal(d, ng, n)
+            cos_i = -wp.dot(d, mn)
+            eta = ior[m]
+            eta_rel = eta
+            cos_f = cos_i
+            if side < 0.0:  # leaving: the ray meets the winding normal's back
+                eta_rel = 1.0 / eta
+                cos_f = -cos_i
+            F = fresnel_dielectric(cos_f, eta)
+            if c[0] >= 0:
+                d_r = wp.normalize(reflect(d, mn))
+                o_next[c[0]] = offset_ray_origin(p, err, ng, d_r)
+                d_next[c[0]] = d_r
+                w_next[c[0]] = w * F
+                start_next[c[0]] = p
+            if c[1] >= 0:
+                tr, transmits = refract(d, mn, eta_rel)
+                d_t = wp.normalize(tr)
+                o_next[c[1]] = offset_ray_origin(p, err, ng, d_t)
+                d_next[c[1]] = d_t
+                w_next[c[1]] = wp.cw_mul(w, kt[m]) * (1.0 - F)
+                start_next[c[1]] = p
 
     @wp.kernel(module="unique")
     def replay(eye: wp.array(dtype=wp.vec3), points: wp.array(dtype=wp.vec3), indices: wp.array(dtype=int),
@@ -233,92 +259,22 @@ def make_tree_replay_kernel(L: int, smooth: bool, light_model: bool, texture: bo
                     w = beer_forever(w, sigma[med])
             wp.atomic_add(rays, ray_of[i], wp.cw_mul(w, background))
         if f >= 0:
-            i0 = indices[3 * f]
-            i1 = indices[3 * f + 1]
-            i2 = indices[3 * f + 2]
-            p0 = points[i0]
-            p1 = points[i1]
-            p2 = points[i2]
-            moved = barycentrics_on(p0, p1, p2, o, d)
-            u = moved[0]  # Warp's convention: u weighs the face's first vertex, v its second
-            v = moved[1]
-            bw = 1.0 - u - v
-            p = p0 * u + p1 * v + p2 * bw
-            ng = wp.normalize(wp.cross(p1 - p0, p2 - p0))
-            side = 1.0
-            if wp.dot(ng, d) > 0.0:
-                side = -1.0
-            n = ng * side
-            if wp.static(smooth):
-                if tri_smooth[f] != 0:
-                    ns = normals[i0] * u + normals[i1] * v + normals[i2] * bw
-                    if wp.length(ns) > 0.0:
-                        n = wp.normalize(ns) * side
+            p, err, ng, side, n, m, ka_m, kd_m, ks_m = surface(f, wp.vec2(0.0, 0.0), o, d, points, indices, normals,
+                                                              tri_material, tri_smooth, ka, kd, ks, uvs, texels,
+                                                              tex_shape, tex_wrap, tex_u, tex_v, tex_c0, tex_c1,
+                                                              colors)  # on the face, from the moving ray
             if wp.static(absorption):
                 if med >= 0:  # the segment from where the ray began, not its offset origin
                     w = beer(w, sigma[med], wp.length(p - st))
-            m = tri_material[f]
-            ka_m = ka[m]
-            kd_m = kd[m]
-            ks_m = ks[m]
-            if wp.static(texture):
-                t = uvs[i0] * u + uvs[i1] * v + uvs[i2] * bw
-                uv = wp.vec3(t[0], t[1], 1.0)
-                j = 3 * m
-                ka_m = textured(ka_m, texels, tex_shape, tex_wrap, tex_u, tex_v, tex_c0, tex_c1, j, uv)
-                kd_m = textured(kd_m, texels, tex_shape, tex_wrap, tex_u, tex_v, tex_c0, tex_c1, j + 1, uv)
-                ks_m = textured(ks_m, texels, tex_shape, tex_wrap, tex_u, tex_v, tex_c0, tex_c1, j + 2, uv)
-            if wp.static(vertex_color):  # shading.make_coefficients: ka and kd times the vertex colour
-                vc = vertex_colour(colors, i0, i1, i2, u, v, bw)
-                ka_m = wp.cw_mul(ka_m, vc)
-                kd_m = wp.cw_mul(kd_m, vc)
-            local = wp.cw_mul(ambient, ka_m)
-            for l in range(wp.static(L)):
-                if visible[i * wp.static(L) + l] != 0:
-                    local = local + whitted_light(l, light_pos, light_color, inverse_square, light_kind, light_axis,
-                                                  light_cone, p, n, -d, kd_m, ks_m, shininess[m])
+            local = local_colour(p, n, d, ka_m, kd_m, ks_m, m, visible, i, ambient, shininess, light_pos, light_color,
+                                 inverse_square, light_kind, light_axis, light_cone)
             if wp.static(area):
-                hit_p[i] = p
-                hit_n[i] = n
-                hit_kd[i] = kd_m
-                hit_ks[i] = ks_m
+                keep_for_area(i, p, n, kd_m, ks_m, local, hit_p, hit_n, hit_kd, hit_ks, acc)
                 level_weight[i] = w
-                acc[i] = local
                 ray_dirs[i] = d
             else:
                 wp.atomic_add(rays, ray_of[i], wp.cw_mul(w, local))
-            c = child[i]
-            facing = ng * side
-            err = hit_point_error(p0, p1, p2, u, v, bw)
-            if kind[i] == wp.static(CHILD_MIRROR):
-                d_m = wp.normalize(reflect(d, n))
-                o_next[c[0]] = offset_ray_origin(p, err, facing, d_m)
-                d_next[c[0]] = d_m
-                w_next[c[0]] = wp.cw_mul(w, kr[m])
-                start_next[c[0]] = p
-            if kind[i] == wp.static(CHILD_DIELECTRIC):
-                mn = dielectric_normal(d, facing, n)
-                cos_i = -wp.dot(d, mn)
-                eta = ior[m]
-                eta_rel = eta
-                cos_f = cos_i
-                if side < 0.0:  # leaving: the ray meets the winding normal's back
-                    eta_rel = 1.0 / eta
-                    cos_f = -cos_i
-                F = fresnel_dielectric(cos_f, eta)
-                if c[0] >= 0:
-                    d_r = wp.normalize(reflect(d, mn))
-                    o_next[c[0]] = offset_ray_origin(p, err, facing, d_r)
-                    d_next[c[0]] = d_r
-                    w_next[c[0]] = w * F
-                    start_next[c[0]] = p
-                if c[1] >= 0:
-                    tr, transmits = refract(d, mn, eta_rel)
-                    d_t = wp.normalize(tr)
-                    o_next[c[1]] = offset_ray_origin(p, err, facing, d_t)
-                    d_next[c[1]] = d_t
-                    w_next[c[1]] = wp.cw_mul(w, kt[m]) * (1.0 - F)
-                    start_next[c[1]] = p
+            children(p, err, ng, side, n, m, d, w, kind[i], child[i], kr, ior, kt, o_next, d_next, w_next, start_next)
 
     return replay
 
