@@ -36,6 +36,32 @@ class GradRecord:
     words: int
 
 
+@wp.func(inline=True)
+def record_hit(rec: GradRecord, camera_ray: int, depth: int, face: int, u: float, v: float, d: wp.vec3) -> int:
+    """Write a ray's nearest hit (face, Warp's barycentrics) and direction at its level of camera ray
+    ``camera_ray``; its entry j, where shade() then writes what the hit sees."""
+    j = camera_ray * rec.levels + depth
+    rec.face[j] = face
+    rec.dirs[j] = d
+    rec.bary[j] = wp.vec2(u, v)
+    return j
+
+
+@functools.cache
+def make_follows_mirror(RECORD: bool):
+    """follows_mirror(kr, rec, m): whether a hit of material slot m with reflectivity kr spawns a mirror ray:
+    where some k_r > 0, and with RECORD also where ``rec.mirrored`` flags m (a named reflectivity of 0:
+    its mirror rays followed with weight 0, for its derivative)."""
+
+    @wp.func(inline=True)
+    def follows_mirror(kr: wp.vec3, rec: GradRecord, m: int) -> bool:
+        if wp.static(RECORD):
+            return wp.max(kr) > 0.0 or rec.mirrored[m] != 0
+        return wp.max(kr) > 0.0
+
+    return follows_mirror
+
+
 @functools.cache
 def empty_record(device: str) -> GradRecord:
     """The stand-in a frame without the record passes (its kernel never reads it), made once a device."""

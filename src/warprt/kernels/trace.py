@@ -18,7 +18,7 @@ from .hybrid import uncertain
 from .interaction import Ray, Surface, hit_point_error, make_surface, offset_ray_origin, reflect, spawn_ray
 from .mirror import FROM_CAMERA, NO_CHAIN, Mirrors, mirror_chain, mirror_hit
 from .raster import Fragments
-from .record import GradRecord
+from .record import GradRecord, make_follows_mirror, record_hit
 from .shading import emitted, emitter_met, make_shade
 from .triangle import query_normal, triangle, unit_normal, woop_hit
 
@@ -74,6 +74,14 @@ def absorbed(s: SceneData, weight: wp.vec3, medium: int, start: wp.vec3, hit: Su
     """The weight of a ray that went from start to the hit through medium (-1: air, which absorbs nothing)."""
     if medium >= 0:
         weight = beer(weight, s.absorption[medium], wp.length(hit.p - start))
+    return weight
+
+
+@wp.func
+def absorbed_forever(s: SceneData, weight: wp.vec3, medium: int) -> wp.vec3:
+    """The weight of a ray that leaves through medium (-1: air) and meets nothing: Beer's law to infinity."""
+    if medium >= 0:
+        weight = beer_forever(weight, s.absorption[medium])
     return weight
 
 
@@ -205,6 +213,7 @@ def make_path(fx, raster_primary: bool, stack: int, report_truncated: bool, aovs
     REFLECTION, AOVS, AREA = fx.reflection, bool(aovs), fx.area_lights
     REFRACTION, ABSORPTION, TRUNCATED, RECORD = fx.refraction, fx.absorption, report_truncated, record
     RayRows, waiting, resumed = make_ray_stack(max(stack, 1))
+    follows_mirror = make_follows_mirror(RECORD)
     COUNTS_T = wp.vec4i if REFRACTION else wp.vec3i
 
     @wp.func(inline=True)
@@ -223,14 +232,10 @@ def make_path(fx, raster_primary: bool, stack: int, report_truncated: bool, aovs
             # ---- nearest hit ----
             h = first_hit(s, frags, mir, r, i, pixel * samples + sample, x, row, sample)
             if wp.static(RECORD):
-                j = (pixel * samples + sample) * rec.levels + r.depth
-                rec.face[j] = h.face
-                rec.dirs[j] = r.ray.d
-                rec.bary[j] = wp.vec2(h.u, h.v)
+                j = record_hit(rec, pixel * samples + sample, r.depth, h.face, h.u, h.v, r.ray.d)
             if h.face < 0:
                 if wp.static(ABSORPTION):
-                    if r.medium >= 0:
-                        r.weight = beer_forever(r.weight, s.absorption[r.medium])
+                    r.weight = absorbed_forever(s, r.weight, r.medium)
                 color = color + wp.cw_mul(r.weight, s.background)
             else:
                 hit = surface(s, h.face, h.u, h.v, h.normal, r.ray.d)
@@ -252,10 +257,7 @@ def make_path(fx, raster_primary: bool, stack: int, report_truncated: bool, aovs
                 # ---- mirror ----
                 if wp.static(REFLECTION):
                     kr = s.kr[hit.material]
-                    mirrors_here = wp.max(kr) > 0.0
-                    if wp.static(RECORD):  # a named reflectivity of 0: its mirror rays followed, weight 0
-                        mirrors_here = mirrors_here or rec.mirrored[hit.material] != 0
-                    if level < max_depth and mirrors_here:
+                    if level < max_depth and follows_mirror(kr, rec, hit.material):
                         chain = int(NO_CHAIN)
                         if wp.static(MIRRORS):
                             chain = mirror_chain(mir, r.chain, h.face)
@@ -270,10 +272,7 @@ def make_path(fx, raster_primary: bool, stack: int, report_truncated: bool, aovs
                 # ---- dielectric ----
                 if wp.static(REFRACTION):
                     eta = s.ior[hit.material]
-                    wanted = level < max_depth  # the children are traced, or (report_truncated) counted
-                    if wp.static(TRUNCATED):
-                        wanted = True
-                    if eta > 0.0 and wanted:
+                    if eta > 0.0 and (level < max_depth or wp.static(TRUNCATED)):  # traced, or counted
                         ch = dielectric_children(s, h.face, hit, r.ray.d, r.weight, eta)
                         if level < max_depth and (ch.has_r or ch.has_t):
                             r = TreeRay(spawn_ray(hit, ch.d_r), ch.w_r, hit.p, level, ch.medium_r, NO_CHAIN, -1)
