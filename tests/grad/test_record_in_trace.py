@@ -133,7 +133,7 @@ def _generated_source(**kwargs) -> str:
 
 def test_the_record_is_absent_from_the_plain_kernel():
     """The lines that write the record, as Warp quotes them in the C++ it compiles."""
-    markers = ("rec.face[j] = h.face", "rec.visible[j * rec.lights + l] = t.lit", "rec.emit[j] = emitter_met(",
+    markers = ("j = record_hit(rec, ", "rec.visible[j * rec.lights + l] = t.lit", "rec.emit[j] = emitter_met(",
                "rec.area_bits[word] = rec.area_bits[word] | (1 << (q % 32))")
     assert not any(m in _generated_source() for m in markers)
     assert all(m in _generated_source(record=True) for m in markers)
