@@ -1,6 +1,7 @@
 """Derivatives of an image (issue 30): Renderer.render(grad=True) records, per camera ray
 (render.spp of them a pixel, where the trace kernel puts them) and ray level (the camera ray, then the
-mirror rays the tracer follows), the hit and the lights it sees; Renderer.backward(d_image, wrt) returns
+mirror rays the tracer follows), the hit and the lights it sees, as its own trace finds them (the trace
+kernel's recording variant, kernels/record.py: no ray is traced twice); Renderer.backward(d_image, wrt) returns
 d(sum(d_image * image)) / d(param) for the parameters named as r.params names them, through a
 differentiable replay of the rays' local shading over the levels (kernels/grad.py) on a wp.Tape.
 
@@ -24,12 +25,13 @@ object light's points, its shape and its emitting object's vertices held fixed),
 kernels.vertex_colour: objects.<name>.colors) with every parameter above. The image is the mean of
 each pixel's rays, as the trace kernel makes it. A parameter whose value switches its effect off keeps
 its true derivative: a ks of 0 (the replay shades every Phong term), a light of colour 0 (its shadow rays
-traced for the record), and a reflectivity of 0 where the caller names it, render(grad=[names]) recording
+traced by the recording frame, grad_record.recording_effects: each such effect adds exactly 0 to the image), and a reflectivity of 0 where the caller names it, render(grad=[names]) recording
 that material's mirror rays whatever its k_r (mirrored_materials; backward() refuses an unrecorded one in one
 line rather than give it 0).
 
 With glass (fx.refraction), Whitted's full ray tree (record_tree, replay_tree_launch; kernels/grad_tree.py):
-the record follows the forward's tree level by level with the forward's own functions (each level's rays,
+the record, a kernel of its own still (the forward walks the tree depth first, the record lays it out level
+by level), follows the forward's tree with the forward's own functions (each level's rays,
 hits, visibility and children, the children compacted on the host into the next level's list), and the
 replay is one differentiable launch per level, each level's rays in their own arrays (Warp replays neither
 the forward's dynamic loop nor its in-place ray stack backwards). It differentiates a dielectric's ior,

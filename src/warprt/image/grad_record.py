@@ -126,24 +126,34 @@ def recording_plan(scene, plan, switched=None, mirrored=()):
     return replace(plan, fx=fx, max_depth=ray_levels(scene, fx, mirrored))
 
 
-def record_arrays(scene, geom, data, fx, levels: int, device: str, mirrored=(), switched=None) -> tuple[GradRecord,
-                                                                                                     FirstHits]:
-    """The record's arrays for a recording frame (``plan``: recording_plan's), as the trace kernel writes them
-    (GradRecord) and as backward() reads them (FirstHits, the same arrays): per camera ray and level, the face
-    (NO_RAY until a ray reaches that level), barycentrics, direction, each Whitted light's visibility, the
-    emitter met (-1 until one is) and the area-light points seen; ``fx`` and ``levels``: the recording frame's
-    effects (recording_effects) and ray levels."""
+def record_arrays(scene, geom, data, fx, levels: int, device: str, mirrored=(), switched=None,
+                  reuse: GradRecord | None = None) -> tuple[GradRecord, FirstHits]:
+    """The record's arrays for a recording frame, as the trace kernel writes them (GradRecord) and as
+    backward() reads them (FirstHits, the same arrays): per camera ray and level, the face (NO_RAY until a ray
+    reaches that level), barycentrics, direction, each Whitted light's visibility, the emitter met and the
+    area-light points seen (all but the faces and the points seen are written at every hit and read only
+    there: not filled). ``fx`` and ``levels``: the recording frame's effects (recording_effects) and ray
+    levels. ``reuse``: the last grad frame's record, whose arrays are taken again where their sizes are this
+    frame's (its FirstHits is then stale: the Renderer drops it when a frame starts)."""
     cam = scene.camera
     k = math.isqrt(scene.render.spp) if fx.supersampling else 1
     n, L, D = cam.width * cam.height * k * k, len(scene.whitted_lights), levels
     words = _words(area_samples(scene)) if fx.area_lights else 0
-    r = GradRecord()
-    r.face = wp.full(n * D, NO_RAY, dtype=int, device=device)
-    r.bary = wp.empty(n * D, dtype=wp.vec2, device=device)
-    r.dirs = wp.empty(n * D, dtype=wp.vec3, device=device)
-    r.visible = wp.zeros(max(n * D * L, 1), dtype=int, device=device)
-    r.emit = wp.full(max(n * D, 1) if words else 1, -1, dtype=int, device=device)
-    r.area_bits = wp.zeros(max(n * D * words, 1), dtype=int, device=device)
+    sizes = (n * D, max(n * D * L, 1), max(n * D, 1) if words else 1, max(n * D * words, 1))
+    if reuse is not None and (reuse.face.shape[0], reuse.visible.shape[0], reuse.emit.shape[0],
+                              reuse.area_bits.shape[0]) == sizes and reuse.face.device == wp.get_device(device):
+        r = reuse
+        r.face.fill_(NO_RAY)
+        if words:
+            r.area_bits.zero_()
+    else:
+        r = GradRecord()
+        r.face = wp.full(sizes[0], NO_RAY, dtype=int, device=device)
+        r.bary = wp.empty(sizes[0], dtype=wp.vec2, device=device)
+        r.dirs = wp.empty(sizes[0], dtype=wp.vec3, device=device)
+        r.visible = wp.empty(sizes[1], dtype=int, device=device)
+        r.emit = wp.empty(sizes[2], dtype=int, device=device)
+        r.area_bits = wp.zeros(sizes[3], dtype=int, device=device)
     r.mirrored = wp.array(np.asarray([int(m in mirrored) for m in geom.material_names] or [0], np.int32),
                           dtype=int, device=device)
     r.levels, r.lights, r.words = D, L, words

@@ -145,12 +145,15 @@ class Renderer:
         self._scene, self._checked, self._checked_for = None, None, None
         self._pool: ThreadPoolExecutor | None = None  # the frames' band threads, from the first that needs them
         self._first_hits = None  # (scene, Geometry, FirstHits) of the last grad=True frame, for backward()
+        self._record = None  # that frame's GradRecord: its arrays taken again by the next grad frame of its size
         self._pool_threads = 0
         self.set_scene(scene)
 
     def close(self):
-        """Stop the threads the frames' bands ran on (a next frame starts them again). ``with
-        warprt.Renderer(scene) as r:`` closes at the end; a Renderer let go closes when collected."""
+        """Stop the threads the frames' bands ran on (a next frame starts them again) and let the last grad
+        frame's record go (backward() then needs a new one). ``with warprt.Renderer(scene) as r:`` closes at
+        the end; a Renderer let go closes when collected."""
+        self._first_hits = self._record = None
         if self._pool is not None:
             self._pool.shutdown(wait=True)  # idle threads: they end at once
             self._pool = None
@@ -266,7 +269,9 @@ class Renderer:
                     zb.rasterize(plan.threads, plan.bands, pool=pool)
             rec, hits = None, None
             if in_trace:
-                rec, hits = record_arrays(scene, geom, data, plan.fx, plan.max_depth, o.device, mirrored, switched)
+                rec, hits = record_arrays(scene, geom, data, plan.fx, plan.max_depth, o.device, mirrored, switched,
+                                          self._record)
+                self._record = rec
             with timed(times, "trace"):
                 frame = _trace(scene, o, plan, geom, data, kernel, zb, used, progress, pool, rec)
             result = _finish(scene, o, plan, geom, frame)
