@@ -24,7 +24,8 @@ def runs(by_length: dict) -> dict:
 
 DATA = runs({48: {"loop": [(12.0, 0.6), (10.0, 0.6)], "loop_reload": [(14.0, 0.5), (13.0, 0.5)],
                   "local": [(6.0, 0.9), (5.0, 0.95)], "local_1": [(9.0, 0.6), (9.5, 0.6)], "local_2": [(6.0, 0.9), (5.0, 0.95)],
-                  "ray_1": [(9.0, 0.5), (9.0, 0.5)], "ray_2": [(6.5, 0.8), (7.0, 0.8)], "cluster_2": [(8.0, 0.7), (8.0, 0.7)]},
+                  "ray_1": [(9.0, 0.5), (9.0, 0.5)], "ray_2": [(6.5, 0.8), (7.0, 0.8)], "cluster_2": [(8.0, 0.7), (8.0, 0.7)],
+                  "mitsuba_loop": [(4.5, 0.9), (4.0, 0.9)]},
              480: {"loop": [(100.0, 0.6), (90.0, 0.6)], "local": [(80.0, 0.99), (75.0, 0.85)], "ray_2": [(80.0, 0.9)]}})
 
 
@@ -34,6 +35,7 @@ def test_ratios_take_each_configurations_best_run_at_each_length():
     assert q["cpu_use"] == {48: 0.95, 480: 0.85}  # the best run's, not the highest
     # At 48 frames against local_2's best; at 480, where only the default ran, against it (2 workers x 1 thread).
     assert q["ray_over_local"] == {48: 6.5 / 5.0, 480: 80.0 / 75.0}
+    assert q["local_over_mitsuba"] == {48: 4.0 / 5.0}  # where the Mitsuba script ran: its best over local's best
 
 
 def test_report_lists_every_configuration_and_the_targets_their_verdicts():
@@ -52,6 +54,8 @@ def test_report_lists_every_configuration_and_the_targets_their_verdicts():
     cpu = next(line for line in table.splitlines() if "CPU use" in line)
     ray = next(line for line in table.splitlines() if "--ray" in line and "48 frames" in line)
     ray480 = next(line for line in table.splitlines() if "--ray" in line and "480 frames" in line)
+    mitsuba = next(line for line in table.splitlines() if "Mitsuba script" in line)
+    assert "0.80x" in mitsuba and mitsuba.endswith("| not met |")
     assert "2.00x" in at48 and at48.endswith("| met |")
     assert "1.20x" in at480 and at480.endswith("| not met |")
     assert "95% at 48 frames, 85% at 480 frames" in cpu and cpu.endswith("| not met |")
