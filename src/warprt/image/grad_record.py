@@ -72,7 +72,7 @@ def check_record_memory(scene, fx, device: str, mirrored=()):
 class FirstHits:
     """What a grad=True frame recorded: per camera ray (``samples`` per pixel, ray pixel * samples +
     sample, the tracer's strata) and ray level (``levels``: the camera ray, then the mirror rays) the
-    hit's face (-1: none, -2: no ray at that level), barycentrics and ray direction, and per light
+    hit's face (-1: none, NO_RAY: no ray at that level), barycentrics and ray direction, and per light
     whether the hit saw it; with area lights (``words`` > 0), the area light whose emitting side the ray met
     (``emit``, -1: none) and a bit per area-light sample point the hit sees (``area_bits``, ``words`` int32s
     a level)."""
@@ -100,7 +100,7 @@ class FirstHits:
 
 def records_in_trace(fx) -> bool:
     """Whether a grad=True frame's record is its trace's: a chain of rays (no glass: the ray tree is
-    recorded level by level, image/grad.py's record_tree)."""
+    recorded level by level, record_tree)."""
     return not fx.refraction
 
 
