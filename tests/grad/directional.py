@@ -48,14 +48,16 @@ def random_direction(scene, names, seed: int = 3, rel: float = 1.0, only=None) -
 
 
 def directional(scene, direction: dict, weights, h: float = 1e-3, tol: float = 0.05, same_faces: bool = False,
-                **options) -> Directional:
+                start: dict | None = None, **options) -> Directional:
     """Central differences of sum(weights * image) along ``direction`` (parameters set to value + t step),
     at t = +-h and +-h/2; pixels where the two disagree by more than ``tol`` of their size (plus a floor
     for float32 noise) are masked out. With ``same_faces`` (one camera ray a pixel), so are the pixels
     whose camera ray meets another triangle at any of the steps (the face AOV): a crease between two
     triangles of a smooth mesh crossing the ray bends the differences (a kink, not a jump) by less than
-    the h / h/2 test sees."""
+    the h / h/2 test sees. ``start``: r.params values set first, the point the differences are taken at
+    (a pose, which lives in the Renderer rather than the scene)."""
     r = warprt.Renderer(scene, **({"aovs": ("face",)} if same_faces else {}), **options)
+    r.params.update(start or {})
     base = {n: np.asarray(r.params[n], np.float64) for n in direction}
     faces = []
 
@@ -80,9 +82,10 @@ def directional(scene, direction: dict, weights, h: float = 1e-3, tol: float = 0
     return Directional(direction, fd, mask, 1.0 - float(keep.mean()))
 
 
-def backward_masked(scene, weights, d: Directional, **options) -> dict:
-    """backward() of the masked weights, for the parameters of ``d``."""
+def backward_masked(scene, weights, d: Directional, start: dict | None = None, **options) -> dict:
+    """backward() of the masked weights, for the parameters of ``d`` (at ``start``, as directional's)."""
     r = warprt.Renderer(scene, **options)
+    r.params.update(start or {})
     r.render(grad=True)
     g = r.backward((weights * d.mask).astype(np.float32), wrt=list(d.direction))
     r.close()

@@ -3,7 +3,7 @@ and the textbooks' formulas. It imports nothing from warprt: it reads a Camera, 
 Scene by its fields, and never calls warprt's geometry or shading.
 
     camera.py (the seed's pinhole rays) -> geometry.py (ray-triangle, ray-plane, ray-sphere, normals),
-    transform.py (the scene file's rotate), shading.py (Phong), optics.py (Fresnel, Snell, the slab's
+    transform.py (the scene file's rotate, an object's pose and its Jacobian), shading.py (Phong), optics.py (Fresnel, Snell, the slab's
     series, Beer) -> whitted.py (brute-force tracers, glass's ray tree included)
 """
 
@@ -11,7 +11,7 @@ from .camera import Pinhole, camera_rays, pinhole, pixel_directions, ray_directi
 from .geometry import (TriangleHit, face_normals, nearest_triangle, ray_plane, ray_sphere_distance, ray_triangle,
                        vertex_normals, winding_number)
 from .shading import TERMS, light_direction, light_intensity, light_source, phong, phong_terms, spot_profile
-from .transform import axis_rotation, rotation
+from .transform import axis_rotation, cross_matrix, pose_gradients, pose_jacobian, posed, rotation, rotation_vector
 from .whitted import (MITSUBA_RAY_EPSILON, MITSUBA_SHADOW_EPSILON, OFFSET_SWEEP, Branch, PixelTrace, Whitted,
                       shade_triangles, texture_value)
 
@@ -21,3 +21,4 @@ __all__ = ["Branch", "MITSUBA_RAY_EPSILON", "MITSUBA_SHADOW_EPSILON", "OFFSET_SW
            "nearest_triangle", "phong", "phong_terms", "pinhole", "pixel_directions", "ray_directions", "ray_plane",
            "ray_sphere_distance", "ray_triangle", "rotation", "shade_triangles", "spot_profile", "texture_value", "vertex_normals",
            "winding_number"]
+__all__ += ["cross_matrix", "pose_gradients", "pose_jacobian", "posed", "rotation_vector"]

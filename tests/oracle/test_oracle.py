@@ -6,8 +6,9 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from oracle import (Whitted, camera_rays, nearest_triangle, phong, phong_terms, pinhole, pixel_directions,
-                    ray_directions, ray_plane, ray_sphere_distance, ray_triangle, rotation, vertex_normals)
+from oracle import (Whitted, camera_rays, nearest_triangle, phong, phong_terms, pinhole, pixel_directions, pose_jacobian,
+                    posed, ray_directions, ray_plane, ray_sphere_distance, ray_triangle, rotation, rotation_vector,
+                    vertex_normals)
 from scenekit import make_scene
 from warprt.scene import Camera, shapes
 
@@ -79,6 +80,28 @@ def test_rotation_is_a_rotation():
     R = rotation([23.0, -141.0, 67.5])
     np.testing.assert_allclose(R @ R.T, np.eye(3), atol=1e-15)
     assert np.linalg.det(R) == pytest.approx(1.0)
+
+
+def test_a_rotation_vector_turns_by_its_length_about_itself():
+    """A quarter turn about z takes x to y; scipy's Rotation.from_rotvec (the convention r.params names) agrees."""
+    from scipy.spatial.transform import Rotation
+
+    np.testing.assert_allclose(rotation_vector([0.0, 0.0, np.pi / 2]) @ [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], atol=1e-15)
+    w = np.array([0.3, -1.1, 0.7])
+    np.testing.assert_allclose(rotation_vector(w), Rotation.from_rotvec(w).as_matrix(), atol=1e-15)
+    assert np.array_equal(rotation_vector(np.zeros(3)), np.eye(3))
+
+
+@pytest.mark.parametrize("w", [[0.0, 0.0, 0.0], [1e-3, -2e-3, 5e-4], [0.3, -1.1, 0.7], [2.0, 1.5, -2.5]])
+def test_the_pose_jacobian_is_the_poses_central_differences(w):
+    """Gallego and Yezzi's formula against float64 central differences of posed(), at w = 0 (the cross
+    product's matrix) and away from it; the control, the same points rotated about the origin, is not it."""
+    rng = np.random.default_rng(4)
+    rest, centre, t = rng.normal(size=(5, 3)), np.array([0.4, -0.2, 1.0]), np.array([0.1, 0.2, 0.3])
+    w, h = np.asarray(w, np.float64), 1e-6
+    fd = np.stack([(posed(rest, centre, t, w + h * e) - posed(rest, centre, t, w - h * e)) / (2 * h) for e in np.eye(3)], -1)
+    np.testing.assert_allclose(pose_jacobian(rest, centre, w), fd, atol=1e-8)
+    assert np.abs(pose_jacobian(rest, np.zeros(3), w) - fd).max() > 0.1
 
 
 def test_phong_at_the_mirror_direction_and_behind():

@@ -128,7 +128,8 @@ def test_every_name_of_the_module_table_is_covered(tmp_path):
     names = set(warprt.Renderer(load(tmp_path, doc())).params)
     kinds = {n for n in names if not n.startswith("objects.")}
     assert {n.rsplit(".", 1)[1] for n in kinds} == {n.rsplit(".", 1)[1] for n in CASES}
-    assert {n for n in names if n.startswith("objects.")} == {f"objects.{o}.vertices" for o in ("floor", "ball", "block", "wall")}
+    assert {n for n in names if n.startswith("objects.")} == {f"objects.{o}.{k}" for o in ("floor", "ball", "block", "wall")
+                                                               for k in ("vertices", "translation", "rotation")}
 
 
 def moved(vertices: np.ndarray) -> np.ndarray:
@@ -246,8 +247,9 @@ def test_vertex_colours_set_render_as_a_fresh_load_the_bvh_kept(tmp_path):
     r = warprt.Renderer(load(tmp_path, d), primary_query="raytrace")
     before = r.render()
     mesh = r.geometry.mesh
-    assert [n for n in r.params if n.startswith("objects.")] == [f"objects.{o}.vertices" for o in
-                                                                  ("floor", "ball", "block", "wall", "fan")] + ["objects.fan.colors"]
+    objects = ("floor", "ball", "block", "wall", "fan")
+    assert [n for n in r.params if n.startswith("objects.")] == [f"objects.{o}.vertices" for o in objects] + [
+        f"objects.{o}.{k}" for o in objects for k in ("translation", "rotation")] + ["objects.fan.colors"]
     r.params["objects.fan.colors"] = NEW_COLORS
     after = r.render()
     assert after.stats.geometry["bvh"] == "reused" and r.geometry.mesh is mesh
@@ -286,6 +288,98 @@ def test_an_area_lights_centre_set_renders_as_a_fresh_load(tmp_path, shape):
     assert_same_frame(after, warprt.render(fresh_scene, primary_query="raytrace"))
     assert not np.array_equal(after.image, before.image)
     assert "lights.0.center" not in r.params  # a point light has none
+
+
+# --- An object's pose: objects.<name>.translation and rotation -------------------------------------------
+
+POSE = {"objects.block.translation": [0.15, 0.05, -0.2], "objects.block.rotation": [0.2, 0.5, -0.1]}
+
+
+def oracle_posed(rest: np.ndarray, t, w) -> np.ndarray:
+    """The rest vertices turned by scipy's rotation vector about their bounding box's centre, then moved."""
+    from scipy.spatial.transform import Rotation
+
+    centre = (rest.min(0) + rest.max(0)) / 2
+    return Rotation.from_rotvec(w).apply(rest - centre) + centre + np.asarray(t, np.float64)
+
+
+def test_a_pose_is_zero_at_load_and_moves_the_vertices_about_their_centre(tmp_path):
+    """translation and rotation read 0 at load; set, the vertices read R(w) (v - c) + c + t (c the rest
+    vertices' bounding box centre, w a rotation vector as scipy's from_rotvec)."""
+    r = warprt.Renderer(load(tmp_path, doc()))
+    rest = r.params["objects.block.vertices"]
+    assert np.array_equal(r.params["objects.block.translation"], np.zeros(3))
+    assert np.array_equal(r.params["objects.block.rotation"], np.zeros(3))
+    r.params.update(POSE)
+    np.testing.assert_allclose(r.params["objects.block.vertices"],
+                               oracle_posed(rest, POSE["objects.block.translation"], POSE["objects.block.rotation"]),
+                               atol=1e-15)
+    assert np.array_equal(r.params["objects.block.rotation"], POSE["objects.block.rotation"])
+
+
+def test_a_pose_renders_as_a_fresh_load_of_its_posed_vertices(tmp_path):
+    """The glass block posed: the BVH refit, the frame a fresh load's (the block as explicit triangles at the
+    posed vertices) to the bit."""
+    d = doc()
+    r = warprt.Renderer(load(tmp_path, d), primary_query="raytrace")
+    before = r.render()
+    r.params.update(POSE)
+    after = r.render()
+    assert after.stats.geometry["bvh"] == "refit"
+    edited = copy.deepcopy(d)
+    edited["objects"][2] = {"name": "block", "shape": "triangles", "vertices": r.params["objects.block.vertices"].tolist(),
+                            "faces": r.scene.objects[2].faces.tolist(), "material": "glass"}
+    fresh = warprt.render(warprt.load_dict(edited, base=tmp_path), primary_query="raytrace")
+    assert_same_frame(after, fresh)
+    assert not np.array_equal(after.image, before.image)
+
+
+def test_a_pose_is_absolute_and_keeps_the_rest_shape(tmp_path):
+    """Each set replaces its part of the pose, about the same rest shape; a pose of 0 gives the rest vertices
+    back to the bit."""
+    r = warprt.Renderer(load(tmp_path, doc()))
+    rest = r.params["objects.block.vertices"]
+    r.params["objects.block.rotation"] = [0.0, 0.3, 0.0]
+    r.params["objects.block.rotation"] = [0.0, 0.5, 0.0]  # not 0.8: absolute
+    r.params["objects.block.translation"] = [0.0, 0.1, 0.0]
+    np.testing.assert_allclose(r.params["objects.block.vertices"], oracle_posed(rest, [0.0, 0.1, 0.0], [0.0, 0.5, 0.0]),
+                               atol=1e-15)
+    r.params.update({"objects.block.translation": np.zeros(3), "objects.block.rotation": np.zeros(3)})
+    assert np.array_equal(r.params["objects.block.vertices"], rest)
+
+
+def test_setting_the_vertices_resets_the_pose(tmp_path):
+    """Vertices set are the new rest shape, the pose 0 (a later pose turns about their centre); a pose set in
+    the same update applies to them."""
+    r = warprt.Renderer(load(tmp_path, doc()))
+    r.params.update(POSE)
+    given = r.params["objects.block.vertices"] * [1.0, 1.5, 1.0]
+    r.params["objects.block.vertices"] = given
+    assert np.array_equal(r.params["objects.block.vertices"], given)
+    assert not r.params["objects.block.translation"].any() and not r.params["objects.block.rotation"].any()
+    r.params["objects.block.rotation"] = [0.4, 0.0, 0.0]
+    np.testing.assert_allclose(r.params["objects.block.vertices"], oracle_posed(given, np.zeros(3), [0.4, 0.0, 0.0]),
+                               atol=1e-15)
+    other = given + [0.0, 0.2, 0.0]
+    r.params.update({"objects.block.vertices": other, "objects.block.translation": [0.1, 0.0, 0.0]})
+    np.testing.assert_allclose(r.params["objects.block.vertices"], other + [0.1, 0.0, 0.0], atol=1e-15)
+    assert not r.params["objects.block.rotation"].any()
+
+
+def test_a_new_scene_starts_at_pose_zero_and_a_bad_pose_changes_nothing(tmp_path):
+    """set_scene's objects have their own vertices: their poses read 0. A pose of the wrong shape is one
+    SceneError naming it, the scene and the pose left as they were."""
+    scene = load(tmp_path, doc())
+    r = warprt.Renderer(scene)
+    r.params.update(POSE)
+    posed = r.scene
+    with pytest.raises(warprt.SceneError, match="objects.block.rotation") as e:
+        r.params.update({"objects.block.translation": [0.0, 0.0, 0.0], "objects.block.rotation": [1.0, 2.0]})
+    assert "expected shape (3,), got (2,)" in str(e.value) and r.scene is posed
+    assert np.array_equal(r.params["objects.block.translation"], POSE["objects.block.translation"])
+    r.set_scene(scene)
+    assert not r.params["objects.block.translation"].any() and not r.params["objects.block.rotation"].any()
+    assert np.array_equal(r.params["objects.block.vertices"], scene.objects[2].vertices)
 
 
 @pytest.mark.parametrize("name, value, message", [

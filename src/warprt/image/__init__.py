@@ -9,19 +9,19 @@ parameters (grad_params.py), and its replay and backward() (grad.py).
 from ..options import RenderOptions
 from .aovs import AOVS, check_aovs
 from .caches import FrameCaches, LightHistory
-from .grad import ReplayLaunch, replay_image, replay_launch
+from .grad import ReplayLaunch, pose_points, replay_image, replay_launch
 from .grad_record import FirstHits, TreeHits, record_first_hits
 from .film import aov_paths, partial_files, read_aovs, read_image, to_srgb8, write_image
 from .launch import bands_of, default_threads, launch_bands
 from .mirrors import MirrorFrame
-from .params import SceneParameters
+from .params import Pose, SceneParameters, object_poses
 from .plan import mirrors_from_rasters, raster_is_cheaper, shadows_from_grid
 from .renderer import Renderer, check_finite, render, render_zbuffer
 from .stats import RenderResult, RenderStats
 from .zbuffer import ZBuffer, eye_on_surface
 
-__all__ = ["AOVS", "FirstHits", "ReplayLaunch", "TreeHits", "FrameCaches", "LightHistory", "MirrorFrame", "RenderOptions", "RenderResult", "RenderStats",
+__all__ = ["AOVS", "FirstHits", "ReplayLaunch", "TreeHits", "FrameCaches", "LightHistory", "MirrorFrame", "Pose", "RenderOptions", "RenderResult", "RenderStats",
            "Renderer", "SceneParameters", "ZBuffer", "aov_paths", "bands_of", "check_aovs", "check_finite",
-           "default_threads", "eye_on_surface", "launch_bands", "mirrors_from_rasters", "partial_files",
+           "default_threads", "eye_on_surface", "launch_bands", "mirrors_from_rasters", "object_poses", "partial_files", "pose_points",
            "raster_is_cheaper", "read_aovs", "read_image", "record_first_hits", "render", "replay_image", "replay_launch", "render_zbuffer", "shadows_from_grid",
            "to_srgb8", "write_image"]

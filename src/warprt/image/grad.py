@@ -14,11 +14,13 @@ lookup written over a wp.array: kernels.bilinear), of the objects' vertices (the
 moved face, through the mirror rays too, each leaving the moved hit along the direction reflected about the
 moved normal; a smooth object's vertex normals made again from the moving points as the forward's Geometry
 makes them, angle-weighted, kernels.vertex_normal_sums and smooth_vertex_normals, where the scene does not
-give them: moving_normals), of the camera's eye, center, up and fovy (the camera rays made again in Warp,
-kernels.camera_rays, and the hit recomputed on the recorded face from the moved ray, through the mirror
-rays too), of the area lights' radiance (an area light's, an emitting material's emission): their
-sample points' terms at each hit (the record's bit per point seen; kernels.area_replay, one thread per level
-and point) and the emitter's front met by a ray, of a rectangle, disk or sphere light's centre (its sample
+give them: moving_normals), of the objects' poses (objects.<name>.translation and rotation: the points the
+replay reads made from each object's rest points and (t, w) by kernels.posed_points ahead of the normals,
+pose_points, the forward's points to the bit at the frame's pose), of the camera's eye, center, up and fovy
+(the camera rays made again in Warp, kernels.camera_rays, and the hit recomputed on the recorded face from
+the moved ray, through the mirror rays too), of the area lights' radiance (an area light's, an emitting
+material's emission): their sample points' terms at each hit (the record's bit per point seen;
+kernels.area_replay, one thread per level and point) and the emitter's front met by a ray, of a rectangle, disk or sphere light's centre (its sample
 points translated by the centre's move, kernels.translate_samples, their normals and areas unchanged; an
 object light's points, its shape and its emitting object's vertices held fixed), and of the vertex colours
 (ka and kd times the colour interpolated at the hit's barycentrics, the moving ones where the hit moves;
@@ -58,13 +60,14 @@ import numpy as np
 from .._warp import wp
 from ..errors import ArgumentError
 from ..kernels.grad import (TEXTURE_CHECKER, TEXTURE_CLAMP, TEXTURE_IMAGE, TEXTURE_MIRROR, TEXTURE_NONE, TEXTURE_WRAP,
-                            area_replay, camera_rays, make_area_combine, make_grad_shade_kernel, sample_mean,
-                            smooth_vertex_normals, translate_samples, vertex_normal_sums)
+                            area_replay, camera_rays, make_area_combine, make_grad_shade_kernel, posed_points,
+                            sample_mean, smooth_vertex_normals, translate_samples, vertex_normal_sums)
 from ..kernels.grad_tree import make_tree_replay_kernel, tree_area_combine
 from ..geometry import LightShape, light_shape
 from ..scene import drawn_objects, position_ids
 from .grad_params import checked_names, gradients_by_name
 from .grad_record import FirstHits, TreeHits
+from .params import object_poses
 
 
 @dataclass
@@ -73,8 +76,9 @@ class ReplayLaunch:
     over ``dim`` camera rays with ``inputs``, writing each ray's colour to ``rays``; ``arrays`` the
     inputs it differentiates, by key: ka, kd, ks, shininess, reflectivity per material slot, color,
     position and direction per Whitted light, radiance per area light, with vertices the geometry's
-    points, with vertex colours their per-vertex colors, with centres each area light's center (its shift). With area lights, the shade kernel writes each level's state (its ``rays`` a stand-in) and
-    ``then`` holds the launches after it, (kernel, dim, inputs, outputs): the area lights' samples
+    points, with poses each object's translation and rotation, with vertex colours their per-vertex colors,
+    with centres each area light's center (its shift). With area lights, the shade kernel writes each
+    level's state (its ``rays`` a stand-in) and ``then`` holds the launches after it, (kernel, dim, inputs, outputs): the area lights' samples
     (kernels.area_replay) and the levels' sum into ``rays`` (make_area_combine)."""
 
     kernel: object
@@ -85,17 +89,17 @@ class ReplayLaunch:
     images: dict  # TextureTable.images: where each textured colour's texels lie in arrays["texels"]
     then: list = None
     shaded: wp.array = None  # the shade kernel's output: ``rays`` without area lights
-    before: list = None  # launches before the shade kernel's (with the camera: camera_rays)
+    before: list = None  # launches before the shade kernel's (camera_rays with the camera, posed_points with poses)
 
 
 def replay(scene, geom, hits: FirstHits, device: str, vertices: bool = False, camera: bool = False,
-           centres: bool = False) -> ReplayLaunch:
+           centres: bool = False, poses: list | None = None) -> ReplayLaunch:
     """replay_launch's kernels launched, on the current wp.Tape if there is one: its ``rays`` hold each
     camera ray's colour (one per pixel and sample)."""
     if isinstance(hits, TreeHits):
-        r = replay_tree_launch(scene, geom, hits, device, vertices, camera, centres)
+        r = replay_tree_launch(scene, geom, hits, device, vertices, camera, centres, poses)
     else:
-        r = replay_launch(scene, geom, hits, device, vertices, camera, centres)
+        r = replay_launch(scene, geom, hits, device, vertices, camera, centres, poses)
     for kernel, dim, inputs, outputs in r.before or ():
         wp.launch(kernel, dim=dim, inputs=inputs, outputs=outputs, device=device)
     if r.kernel is not None:  # a tree's levels are all in ``then``
@@ -134,10 +138,12 @@ def replay_arrays(scene, geom, mats, device: str) -> tuple:
 @dataclass
 class ReplayScene:
     """What the chain's and the tree's replays read besides the record: replay_arrays' materials and lights,
-    the points (differentiable with vertices) and vertex normals (moving_normals where they move), the
-    camera (eye, center and up relative to the frame origin; fovy) and the camera rays' directions (the
-    recorded ones, or made again by camera_rays with the camera), the texture table, the uvs and the
-    vertex colours (vertex_colours); ``before`` the launches that make the directions and normals."""
+    the points (differentiable with vertices; with poses made by posed_points) and vertex normals
+    (moving_normals where they move), the camera (eye, center and up relative to the frame origin; fovy) and
+    the camera rays' directions (the recorded ones, or made again by camera_rays with the camera), the texture
+    table, the uvs and the vertex colours (vertex_colours); ``pose`` the objects' translations and rotations
+    by ReplayLaunch.arrays' keys, with poses; ``before`` the launches that make the directions, points and
+    normals."""
 
     ka: wp.array
     kd: wp.array
@@ -160,6 +166,7 @@ class ReplayScene:
     uvs: wp.array
     colors: wp.array
     before: list
+    pose: dict
 
     def inputs(self, scene, geom, dielectric: tuple = ()) -> list:
         """The replay kernels' leading inputs, in their order: the geometry, the materials (with
@@ -179,16 +186,19 @@ class ReplayScene:
             out["colors"] = self.colors
         if vertices:
             out["points"] = self.points
+        out.update(self.pose)
         if camera:
             out["camera"], out["fovy"] = self.eye, self.fovy
         return out
 
 
 def replay_scene(scene, geom, hits, device: str, vertices: bool, camera: bool, dirs: wp.array,
-                 levels: int) -> ReplayScene:
+                 levels: int, poses: list | None = None) -> ReplayScene:
     """The ReplayScene of a recorded frame: ``dirs`` the camera rays' recorded directions; with ``camera``,
     made again instead, differentiable in the camera, by camera_rays (the first launch in ``before``),
-    written every ``levels`` entries (the chain's record has ``levels`` a ray, the tree's first level one)."""
+    written every ``levels`` entries (the chain's record has ``levels`` a ray, the tree's first level one);
+    with ``poses`` (params.Pose per scene object; with ``vertices``), the points made from them by
+    posed_points (pose_points, in ``before`` ahead of the normals made from the points)."""
     mats = geom.slot_materials(scene)
     cam = scene.camera
     eye = _vec3([geom.eye_offset(cam.eye), geom.eye_offset(cam.center), cam.up], device)  # eye[0]: the rays' origin
@@ -198,7 +208,12 @@ def replay_scene(scene, geom, hits, device: str, vertices: bool, camera: bool, d
         dirs = wp.zeros(n * levels, dtype=wp.vec3, device=device, requires_grad=True)
         before.append((camera_rays, n, [eye, fovy, float(cam.near), hits.width, hits.height,
                                         math.isqrt(hits.samples), levels], [dirs]))
-    points = wp.array(geom.points_np, dtype=wp.vec3, device=device, requires_grad=True) if vertices else geom.points
+    points, pose = geom.points, {}
+    if poses is not None:  # the points made from the objects' poses, ahead of the normals made from them
+        points, pose, launch = pose_points(scene, geom, poses, device)
+        before.append(launch)
+    elif vertices:
+        points = wp.array(geom.points_np, dtype=wp.vec3, device=device, requires_grad=True)
     normals = geom.normals
     if vertices and hits.smooth:  # a smooth object's vertex normals, computed from the moving points
         normals, launches = moving_normals(scene, geom, points, device)
@@ -206,7 +221,31 @@ def replay_scene(scene, geom, hits, device: str, vertices: bool, camera: bool, d
     uvs = geom.uv_array() if hits.texture else wp.zeros(1, dtype=wp.vec2, device=device)
     return ReplayScene(*replay_arrays(scene, geom, mats, device), mats=mats, points=points, normals=normals, eye=eye,
                        fovy=fovy, dirs=dirs, table=texture_table(mats, device), uvs=uvs,
-                       colors=vertex_colours(geom, hits, device), before=before)
+                       colors=vertex_colours(geom, hits, device), before=before, pose=pose)
+
+
+def pose_points(scene, geom, poses: list, device: str) -> tuple:
+    """(points, arrays, launch): the replay's points made by posed_points from the forward's, each scene
+    object's rest vertices and centre (params.Pose: relative to the frame origin in float64, then float32)
+    and its pose (t0, w0; and t, w, differentiable: ``arrays``' translation and rotation, one row per object),
+    the launch that makes them. ``points`` keeps its adjoint as the pose's is taken from it (retain_grad:
+    Warp clears an array's adjoint once read backwards), the objects' vertices' gradient."""
+    n = len(geom.points_np)
+    owner = np.full(n, -1, np.int32)  # the area lights' own shapes (drawn_objects after the scene's) unposed
+    rest = np.zeros((n, 3))
+    base = 0
+    for i, pose in enumerate(poses):
+        owner[base:base + len(pose.rest)] = i
+        rest[base:base + len(pose.rest)] = pose.rest - geom.origin
+        base += len(pose.rest)
+    rows = lambda key: np.asarray([getattr(x, key) for x in poses] or [np.zeros(3)], np.float64)  # noqa: E731
+    vec = lambda a, grad=False: wp.array(np.asarray(a, np.float32).reshape(-1, 3), dtype=wp.vec3, device=device,  # noqa: E731
+                                         requires_grad=grad)
+    t, w = vec(rows("translation"), True), vec(rows("rotation"), True)
+    points = wp.zeros(n, dtype=wp.vec3, device=device, requires_grad=True, retain_grad=True)
+    inputs = [vec(geom.points_np), vec(rest), wp.array(owner, dtype=int, device=device),
+              vec(rows("centre") - geom.origin), vec(rows("translation")), vec(rows("rotation")), t, w]
+    return points, {"translation": t, "rotation": w}, (posed_points, n, inputs, [points])
 
 
 @dataclass
@@ -248,15 +287,17 @@ def area_sample_table(scene, area, device: str, centres: bool) -> AreaSampleTabl
 
 
 def replay_launch(scene, geom, hits: FirstHits, device: str, vertices: bool = False,
-                  camera: bool = False, centres: bool = False) -> ReplayLaunch:
+                  camera: bool = False, centres: bool = False, poses: list | None = None) -> ReplayLaunch:
     """The replay of ``hits`` (a frame of ``scene`` on ``geom``) with its differentiable arrays made from
     the scene's values; with ``vertices``, the points too (the hits recomputed on the moved faces); with
     ``camera``, the camera too: its eye, center and up (``arrays["camera"]``, the eye and
     center relative to the frame origin) and fovy, the camera rays' directions made from them (camera_rays,
     in ``before``) and the hits recomputed from the moved rays on the recorded faces; with ``centres`` (and area
     lights), the area lights' sample points translated by their centres' moves (``arrays["center"]``, 0:
-    translate_samples, in ``before``), which the area lights' replay then reads."""
-    sc = replay_scene(scene, geom, hits, device, vertices, camera, hits.dirs, hits.levels)
+    translate_samples, in ``before``), which the area lights' replay then reads; with ``poses`` (params.Pose
+    per scene object, with ``vertices``), the points posed by the objects' translations and rotations
+    (``arrays["translation"]``, ``arrays["rotation"]``: pose_points, in ``before``)."""
+    sc = replay_scene(scene, geom, hits, device, vertices, camera, hits.dirs, hits.levels, poses)
     n, moving, area = hits.width * hits.height * hits.samples, vertices or camera, hits.words > 0
     kernel = make_grad_shade_kernel(hits.lights, hits.levels, hits.smooth, moving, hits.light_model, hits.texture,
                                     area, hits.vertex_color)
@@ -368,31 +409,38 @@ def texture_table(mats, device: str) -> TextureTable:
     return TextureTable(arrays, images)
 
 
-def replay_image(scene, geom, hits: FirstHits, device: str, camera: bool = False, centres: bool = False) -> np.ndarray:
+def replay_image(scene, geom, hits: FirstHits, device: str, camera: bool = False, centres: bool = False,
+                 poses: list | None = None) -> np.ndarray:
     """The image the replay makes of a recorded frame, (height, width, 3): the forward's, to float32
     rounding, where the replay models what the forward traced (what the tests check); with ``camera``, the
     replay camera gradients run (the rays made again from the camera, the hits re-intersected); with ``centres``,
-    the area lights' sample points translated (by 0) as the replay of their centres' gradients does."""
-    rays = replay(scene, geom, hits, device, camera=camera, centres=centres).rays
+    the area lights' sample points translated (by 0) as the replay of their centres' gradients does; with
+    ``poses`` (params.Pose per scene object), the points posed as the replay of the poses' gradients poses them."""
+    rays = replay(scene, geom, hits, device, vertices=poses is not None, camera=camera, centres=centres,
+                  poses=poses).rays
     image = wp.empty(hits.width * hits.height, dtype=wp.vec3, device=device)
     wp.launch(sample_mean, dim=hits.width * hits.height, inputs=[rays, hits.samples], outputs=[image], device=device)
     return image.numpy().reshape(hits.height, hits.width, 3)
 
 
-def backward(scene, geom, hits: FirstHits, d_image, wrt, device: str) -> dict:
+def backward(scene, geom, hits: FirstHits, d_image, wrt, device: str, poses: list | None = None) -> dict:
     """{name: d(sum(d_image * image)) / d(param)} for each name in ``wrt`` (parameter_names), each shaped
-    as the parameter: (3,) for colours and positions, () for an exponent."""
+    as the parameter: (3,) for colours, positions and poses, () for an exponent. ``poses``: params.Pose per
+    scene object (the Renderer's, object_poses), read where ``wrt`` names a translation or rotation."""
     wrt = checked_names(scene, geom, hits, wrt)
     d = np.asarray(d_image.numpy() if isinstance(d_image, wp.array) else d_image, np.float32)
     if d.shape != (hits.height, hits.width, 3) or not np.all(np.isfinite(d)):
         raise ArgumentError("backward", "d_image", f"expected finite values of shape {(hits.height, hits.width, 3)}, "
                                                    f"got {d.shape}")
-    moving = any(name.startswith("objects.") and name.endswith(".vertices") for name in wrt)
+    posing = any(name.startswith("objects.") and name.endswith((".translation", ".rotation")) for name in wrt)
+    moving = posing or any(name.startswith("objects.") and name.endswith(".vertices") for name in wrt)
     camera = any(name.startswith("camera.") for name in wrt)
     centres = any(name.startswith("lights.") and name.endswith(".center") for name in wrt)
+    if posing and poses is None:
+        poses = object_poses(scene, {})
     tape = wp.Tape()
     with tape:
-        launched = replay(scene, geom, hits, device, moving, camera, centres)
+        launched = replay(scene, geom, hits, device, moving, camera, centres, poses if posing else None)
     # The image is the mean of each pixel's rays (sample_mean): its adjoint, d_image / samples to each ray.
     d_rays = np.repeat(d.reshape(-1, 3), hits.samples, axis=0) / np.float32(hits.samples)
     tape.backward(grads={launched.rays: wp.array(d_rays, dtype=wp.vec3, device=device)})
@@ -404,14 +452,15 @@ def backward(scene, geom, hits: FirstHits, d_image, wrt, device: str) -> dict:
 # --- Glass: Whitted's full ray tree (kernels/grad_tree.py) --------------------------------------------------
 
 def replay_tree_launch(scene, geom, hits: TreeHits, device: str, vertices: bool = False,
-                       camera: bool = False, centres: bool = False) -> ReplayLaunch:
+                       camera: bool = False, centres: bool = False, poses: list | None = None) -> ReplayLaunch:
     """replay_launch for a recorded tree: the same differentiable arrays (materials, lights, textures,
-    with ``vertices`` the points, with ``camera`` the camera and its rays made again in ``before``, with
-    ``centres`` the area lights' sample points translated by their centres' moves, in ``before``) and a
+    with ``vertices`` the points, with ``poses`` made from the objects' poses, with ``camera`` the camera and
+    its rays made again in ``before``, with ``centres`` the area lights' sample points translated by their
+    centres' moves, in ``before``) and a
     dielectric's ior, transmittance and absorption per material slot; ``then`` holds one launch of
     grad_tree's replay kernel per recorded level, each reading the rays its parent level wrote into their
     own arrays and adding its rays' colours to their camera rays' in ``rays``."""
-    sc = replay_scene(scene, geom, hits, device, vertices, camera, hits.tree[0].dirs, 1)
+    sc = replay_scene(scene, geom, hits, device, vertices, camera, hits.tree[0].dirs, 1, poses)
     ior = wp.array(np.asarray([m.ior or 0.0 for m in sc.mats] or [0.0], np.float32), dtype=float, device=device,
                    requires_grad=True)
     kt = _vec3([m.transmittance for m in sc.mats] or [[1, 1, 1]], device)

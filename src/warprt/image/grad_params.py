@@ -8,7 +8,7 @@ from ..errors import ArgumentError
 from ..kernels.grad import MAX_GRAD_LIGHTS
 from ..scene import scene_effects
 from .grad_record import FirstHits, TreeHits
-from .params import object_names
+from .params import POSE_KEYS, object_names
 
 SOURCE = "Renderer.backward"
 MATERIAL_KEYS = ("ka", "kd", "ks", "shininess", "reflectivity")
@@ -59,11 +59,11 @@ def mirrored_materials(scene, named, switched=None) -> tuple:
 
 
 def parameter_names(scene) -> list[str]:
-    """The r.params names backward() can differentiate with respect to: the objects' vertices too (a smooth
-    object's computed vertex normals moving with them), but not an area light's own object's (its sample
-    points are held fixed), and their vertex colours where they have them; an area light's radiance and an
-    emitting material's emission, a rectangle, disk or sphere light's center; the camera's eye, center, up
-    and fovy."""
+    """The r.params names backward() can differentiate with respect to: the objects' vertices and poses
+    (translation, rotation) too (a smooth object's computed vertex normals moving with them), but not an area
+    light's own object's (its sample points are held fixed), and their vertex colours where they have them;
+    an area light's radiance and an emitting material's emission, a rectangle, disk or sphere light's center;
+    the camera's eye, center, up and fovy."""
     names = [f"materials.{m}.{k}" for m in scene.materials for k in MATERIAL_KEYS]
     names += [f"materials.{name}.{k}" for name, m in scene.materials.items() if m.dielectric for k in DIELECTRIC_KEYS]
     names += [f"materials.{name}.{k}" for name, m in scene.materials.items() for k in TEXTURE_KEYS
@@ -76,6 +76,8 @@ def parameter_names(scene) -> list[str]:
     emitters = _emitter_objects(scene)
     names += [f"objects.{name}.vertices" for name, i in object_names(scene).items()
               if scene.objects[i].name not in emitters]
+    names += [f"objects.{name}.{k}" for name, i in object_names(scene).items()
+              if scene.objects[i].name not in emitters for k in POSE_KEYS]
     names += [f"objects.{name}.colors" for name, i in object_names(scene).items()
               if scene.objects[i].colors is not None]
     names += [f"camera.{k}" for k in CAMERA_KEYS]
@@ -162,8 +164,8 @@ def checked_names(scene, geom, hits, wrt) -> list[str]:
                 "not a parameter backward() differentiates yet (materials.<name>.ka | kd | ks | shininess | "
                 "reflectivity | ka_texture | kd_texture | ks_texture | emission, a dielectric's ior | "
                 "transmittance | absorption, lights.<i>.color | position | direction | radiance | center (an "
-                "area light's of its own shape), objects.<name>.vertices | colors (vertex colours), "
-                "camera.eye | center | up | fovy)")
+                "area light's of its own shape), objects.<name>.vertices | translation | rotation | colors (vertex "
+                "colours), camera.eye | center | up | fovy)")
             raise ArgumentError("backward", str(name), why)
         why = _frame_refusal(scene, geom, hits, name)
         if why is not None:
@@ -174,9 +176,9 @@ def checked_names(scene, geom, hits, wrt) -> list[str]:
 def gradients_by_name(scene, geom, launched, wrt) -> dict:
     """{name: gradient} for each r.params name in ``wrt``, from the adjoints a wp.Tape left in the replay's
     differentiable arrays (``launched``: grad.py's ReplayLaunch, its ``arrays`` by key and its ``images``),
-    each shaped as the parameter, float64: per material slot, light, area light, vertex and camera row the
-    one the name stands for, summed where r.params ties two together (ka following kd) and projected where
-    the scene keeps a unit vector (a light's direction)."""
+    each shaped as the parameter, float64: per material slot, light, area light, vertex, object (a pose) and
+    camera row the one the name stands for, summed where r.params ties two together (ka following kd) and
+    projected where the scene keeps a unit vector (a light's direction)."""
     arrays = launched.arrays
     slot = {name: i for i, name in enumerate(geom.material_names)}
     whitted = [i for i, light in enumerate(scene.lights) if not light.area]
@@ -197,6 +199,9 @@ def gradients_by_name(scene, geom, launched, wrt) -> dict:
             i = object_names(scene)[owner]
             if key == "colors":  # the colours likewise, one per vertex
                 out[name] = grads["colors"][starts[i]:starts[i + 1]].astype(np.float64)
+                continue
+            if key in POSE_KEYS:  # one row per object (grad.pose_points)
+                out[name] = grads[key][i].astype(np.float64)
                 continue
             out[name] = point_grads[starts[i]:starts[i + 1]]
         elif section == "camera":  # eye and center less the frame origin (a shift: the same derivative), up

@@ -8,6 +8,7 @@ frame may change without loading the scene again, each read and written as NumPy
     lights.<i>.position | color | direction | radiance (an area light's)         (3,)
     lights.<i>.center        (3,), an area light's of its own shape (rectangle, disk, sphere) given one
     objects.<name>.vertices                                                     (N, 3), world space
+    objects.<name>.translation | rotation          (3,), the object's pose (Pose), 0 at load
     objects.<name>.colors                      (N, 3) linear RGB, where the object has vertex colours
     camera.eye | center | up                                                    (3,)
     camera.fovy                                                                 ()
@@ -17,12 +18,20 @@ same would: the new scene is checked as a loaded one is, and the Renderer keeps 
 valid (moved vertices refit the BVH; new vertex colours are written over the kept ones). ior, transmittance
 and absorption are a dielectric's, a texture's texels an image texture's; a material whose ka follows kd
 (a file that leaves ka out) keeps following it.
+
+An object's pose (Pose) is two parameters: the vertices are R(rotation) (v_rest - c) + c + translation, the
+rotation vector's axis times its angle in radians (Rodrigues' formula: scipy's Rotation.from_rotvec, Mitsuba's
+convention), c the centre of the rest vertices' bounding box, in float64. The pose is absolute (each set
+replaces its part, the rest shape kept) and lives in the Renderer (Renderer.poses), not in the scene: reading
+objects.<name>.vertices gives the posed vertices, which the scene holds; setting them makes them the rest
+shape with the pose 0 (so does anything else that gives the object other vertices, set_scene among them);
+a pose set in the same update as the vertices is then applied to them.
 """
 
 from __future__ import annotations
 
 from collections.abc import MutableMapping
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -33,6 +42,7 @@ DIELECTRIC_COLOURS = ("transmittance", "absorption")
 TEXTURES = ("ka_texture", "kd_texture", "ks_texture")
 LIGHT_VECTORS = ("position", "color", "direction", "radiance", "center")
 CAMERA_VECTORS = ("eye", "center", "up")
+POSE_KEYS = ("translation", "rotation")
 SOURCE = "Renderer.params"
 
 
@@ -50,6 +60,7 @@ def _names(scene) -> list[str]:
         out += [f"lights.{i}.{k}" for k in LIGHT_VECTORS if getattr(light, k) is not None
                 and not (light.area and k == "color")]  # an area light's light is its radiance
     out += [f"objects.{name}.vertices" for name in object_names(scene)]
+    out += [f"objects.{name}.{k}" for name in object_names(scene) for k in POSE_KEYS]
     out += [f"objects.{name}.colors" for name, i in object_names(scene).items() if scene.objects[i].colors is not None]
     out += [f"camera.{k}" for k in CAMERA_VECTORS + ("fovy",)]
     return out
@@ -95,6 +106,8 @@ class SceneParameters(MutableMapping):
         if section == "lights":
             return np.array(getattr(scene.lights[owner], key), np.float64)
         if section == "objects":
+            if key in POSE_KEYS:
+                return np.array(getattr(object_pose(scene, self._renderer.poses, owner), key), np.float64)
             return np.array(getattr(scene.objects[owner], key), np.float64)
         return np.array(getattr(scene.camera, key), np.float64)
 
@@ -110,9 +123,12 @@ class SceneParameters(MutableMapping):
         scene = self._renderer.scene
         materials, lights, objects = dict(scene.materials), list(scene.lights), list(scene.objects)
         camera = scene.camera
+        moves: dict = {}  # object index -> {translation | rotation: value}
         for name, value in values.items():
             section, owner, key = _split(name, scene)
-            if section == "materials":
+            if section == "objects" and key in POSE_KEYS:
+                moves.setdefault(owner, {})[key] = _vector(name, value, (3,))
+            elif section == "materials":
                 materials[owner] = _set_material(materials[owner], key, name, value)
             elif section == "lights":
                 lights[owner] = replace(lights[owner], **{key: tuple(_vector(name, value, (3,)))})
@@ -123,8 +139,13 @@ class SceneParameters(MutableMapping):
                 camera = replace(camera, fovy=float(_vector(name, value, ())))
             else:
                 camera = replace(camera, **{key: tuple(_vector(name, value, (3,)))})
+        poses = {}
+        for i, move in moves.items():  # on the rest shape kept, or on vertices set in this update
+            poses[i] = object_pose(scene, self._renderer.poses, i, objects[i].vertices).moved(**move)
+            objects[i] = replace(objects[i], vertices=poses[i].posed)
         changed = replace(scene, camera=camera, lights=lights, materials=materials, objects=objects)
-        self._renderer.set_scene(changed)
+        self._renderer.set_scene(changed)  # checked first: a SceneError leaves the poses as they were
+        self._renderer.poses.update(poses)
 
     def __repr__(self) -> str:
         return f"SceneParameters({', '.join(self)})"
@@ -183,3 +204,64 @@ def _set_material(m, key: str, name: str, value):
     if m.ka_texture_follows_kd and key != "ka_texture":
         new["ka_texture"] = None
     return replace(m, **new)
+
+
+@dataclass(frozen=True, eq=False)
+class Pose:
+    """An object's pose (the module's docstring): its rest vertices (N, 3) and their bounding box's centre c
+    (float64, world), its translation t and rotation vector w (3,), and ``posed``, the vertices
+    R(w) (v_rest - c) + c + t they make (posed_vertices): the array the scene's object holds while this is
+    its pose (object_pose tells by identity)."""
+
+    rest: np.ndarray
+    centre: np.ndarray
+    translation: np.ndarray
+    rotation: np.ndarray
+    posed: np.ndarray
+
+    @classmethod
+    def at_rest(cls, vertices: np.ndarray) -> "Pose":
+        """The pose 0 of an object with ``vertices``: those its rest shape, t = w = 0."""
+        v = np.asarray(vertices, np.float64)
+        centre = (v.min(0) + v.max(0)) / 2.0 if len(v) else np.zeros(3)
+        return cls(v, centre, np.zeros(3), np.zeros(3), v)
+
+    def moved(self, translation=None, rotation=None) -> "Pose":
+        """This pose with its translation or rotation replaced (a pose is absolute: the rest shape is kept)."""
+        t = self.translation if translation is None else np.asarray(translation, np.float64)
+        w = self.rotation if rotation is None else np.asarray(rotation, np.float64)
+        return Pose(self.rest, self.centre, t, w, posed_vertices(self.rest, self.centre, t, w))
+
+
+def rotation_minus_identity(w) -> np.ndarray:
+    """R(w) - I (3, 3), float64, R(w) the rotation by |w| radians about w / |w| (Rodrigues' formula,
+    R = I + sin(a)/a K + (1 - cos a)/a^2 K^2, K the cross-product matrix of w; 1 - cos a taken as
+    2 sin^2(a/2), without its cancellation): exactly 0 at w = 0."""
+    w = np.asarray(w, np.float64)
+    a = float(np.linalg.norm(w))
+    if a == 0.0:
+        return np.zeros((3, 3))
+    K = np.array([[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]])
+    return np.sin(a) / a * K + 2.0 * np.sin(a / 2.0) ** 2 / a ** 2 * (K @ K)
+
+
+def posed_vertices(rest, centre, t, w) -> np.ndarray:
+    """R(w) (rest - centre) + centre + t, float64, written rest + t + (R(w) - I)(rest - centre): at w = 0 the
+    rest vertices plus t, and at t = w = 0 the rest vertices themselves (a copy), to the bit."""
+    rest = np.asarray(rest, np.float64)
+    if not np.any(w) and not np.any(t):
+        return rest.copy()
+    return rest + np.asarray(t, np.float64) + (rest - centre) @ rotation_minus_identity(w).T
+
+
+def object_pose(scene, poses: dict, i: int, vertices=None) -> Pose:
+    """The pose of ``scene``'s object i: ``poses[i]`` (a Renderer's poses) while the object's vertices (or
+    ``vertices``, those it is about to have) are the array that pose made, else the pose 0 of them."""
+    v = scene.objects[i].vertices if vertices is None else vertices
+    kept = poses.get(i)
+    return kept if kept is not None and kept.posed is v else Pose.at_rest(v)
+
+
+def object_poses(scene, poses: dict) -> list:
+    """object_pose of each of ``scene``'s objects, in order."""
+    return [object_pose(scene, poses, i) for i in range(len(scene.objects))]

@@ -28,6 +28,7 @@ from .grad_record import check_record_memory, record_arrays, record_tree, record
 from .launch import band_pool, bands_of, launch_bands, launch_plan
 from .memory import check_frame_memory, frame_estimate, frame_memory
 from .mirrors import MirrorFrame, empty_mirrors, mirror_frame
+from .params import SceneParameters, object_poses
 from .plan import FramePlan, Shortcuts, choose_shortcuts, plan_frame
 from .samples import sample_grid
 from .stats import RenderResult, RenderStats
@@ -147,6 +148,9 @@ class Renderer:
         self._first_hits = None  # (scene, Geometry, FirstHits) of the last grad=True frame, for backward()
         self._record = None  # that frame's GradRecord: its arrays taken again by the next grad frame of its size
         self._pool_threads = 0
+        # The objects' poses set through params (params.Pose), by index in scene.objects: each one that
+        # object's while its vertices are the array the pose made (set_scene lets the others go).
+        self.poses: dict = {}
         self.set_scene(scene)
 
     def close(self):
@@ -190,8 +194,6 @@ class Renderer:
     def params(self):
         """The scene's parameters by name, as NumPy values: set one and the next frame renders the changed
         scene (image/params.py lists the names)."""
-        from .params import SceneParameters
-
         return SceneParameters(self)
 
     def set_scene(self, scene, checked: bool = False):
@@ -206,6 +208,8 @@ class Renderer:
             else:
                 self._checked, self._checked_for = validate_scene(scene), content
         self._scene = scene
+        self.poses = {i: p for i, p in self.poses.items()
+                      if i < len(scene.objects) and scene.objects[i].vertices is p.posed}
 
     def _same_content(self, content) -> bool:
         lights, materials, objects = self._checked_for
@@ -290,7 +294,8 @@ class Renderer:
         ``wrt`` (r.params names: materials.<name>.ka | kd | ks | shininess | reflectivity | ka_texture |
         kd_texture | ks_texture (image textures' texels) | emission, a dielectric's ior | transmittance |
         absorption (through the ray tree), lights.<i>.color | position | direction | radiance | center (an area
-        light's of its own shape), objects.<name>.vertices | colors (vertex colours), camera.eye | center | up | fovy;
+        light's of its own shape), objects.<name>.vertices | translation | rotation (its pose) | colors (vertex
+        colours), camera.eye | center | up | fovy;
         all of them by default, less a reflectivity of 0 the frame did not record): a dict of float64 NumPy
         arrays shaped as the parameters; kd's carries ka's where ka follows kd (as r.params keeps it following).
         A reflectivity of 0 named here is refused unless the frame was rendered with grad=[that name] (its
@@ -303,7 +308,7 @@ class Renderer:
         scene, geom, hits = self._first_hits
         if scene is not self._scene:
             raise ArgumentError("backward", "render", "the scene changed since render(grad=True): render it again")
-        out = grad_backward(scene, geom, hits, d_image, wrt, self.options.device)
+        out = grad_backward(scene, geom, hits, d_image, wrt, self.options.device, object_poses(scene, self.poses))
         if arrays:  # computed on the device, read back per parameter (its slices and the texture's flip)
             out = {name: wp.array(np.asarray(g, np.float32).reshape(np.shape(g) or (1,)), dtype=float,
                                   device=self.options.device) for name, g in out.items()}

@@ -20,7 +20,7 @@ from .grad import (MAX_GRAD_LIGHTS, TEXTURE_CLAMP, TEXTURE_MIRROR, TEXTURE_WRAP,
                    camera_direction, camera_rays, corner_angle, light_factor, make_area_combine, make_grad_shade_kernel, sample_mean,
                    smooth_vertex_normals, spot_cone, texture_factor, vertex_normal_sums)
 from .grad_tree import make_tree_record_kernel, make_tree_replay_kernel, tree_area_combine, tree_camera_rays
-from .grad import translate_samples, vertex_colour
+from .grad import POSE_TAYLOR, posed_point, posed_points, rodrigues_coefficients, translate_samples, vertex_colour
 from .hybrid import MARGIN_PX, uncertain, uncertain_np
 from .interaction import OFFSET_SCALE, make_surface, offset_ray_origin, reflect
 from .mirror import MARGIN_PX as MIRROR_MARGIN_PX, MAX_BOUNCES, Mirrors, gather_kernel, mirror_chain, mirror_hit, probe_kernel, total_kernel
@@ -42,6 +42,7 @@ __all__ = ["CLIP_SCALE", "CameraData", "Fragments", "MARGIN_PX", "MAX_GRAD_LIGHT
            "raster_camera", "raster_kernel", "raster_pixel_kernel", "reflect", "refract", "sample_mean", "sample_offset", "spot_cone", "stack_size", "texture_factor", "tile_order_pixel",
            "triangle", "uncertain", "uncertain_np", "unit_normal", "woop_hit", "wp"]
 __all__ += ["translate_samples", "vertex_colour"]  # the gradient's vertex colours and area lights' centres
+__all__ += ["POSE_TAYLOR", "posed_point", "posed_points", "rodrigues_coefficients"]  # and objects' poses
 from .record import NO_RAY, GradRecord, empty_record  # noqa: E402 (what a grad=True frame's trace writes)
 
 __all__ += ["NO_RAY", "GradRecord", "empty_record"]

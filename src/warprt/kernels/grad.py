@@ -14,10 +14,12 @@ Area lights' sample points, up to 4096 a light, are no loop: area_replay runs on
 point and adds the point's term (area_sample_term, shading.area_light's) with wp.atomic_add, differentiable;
 make_area_combine then sums the levels with the emitted radiance, as the tracer does. The points it reads are
 the forward's translated by their light's centre's move (translate_samples, 0 in the replay: a light's
-lights.<i>.center gradient). Vertex colours multiply ka and kd as the forward's coefficients do, interpolated
-by vertex_colour at the (moving) barycentrics from a differentiable per-vertex array. A scene with glass
-has a ray tree, not a chain of levels: its record and replay are grad_tree.py's, one launch per level; the
-hit and local colour both replays shade are make_replay_surface's and make_replay_local's.
+lights.<i>.center gradient). An object's pose (objects.<name>.translation, rotation) moves the points the
+replay reads: posed_points, posed_point's Rodrigues formula, ahead of the normals made from them. Vertex
+colours multiply ka and kd as the forward's coefficients do, interpolated by vertex_colour at the (moving)
+barycentrics from a differentiable per-vertex array. A scene with glass has a ray tree, not a chain of
+levels: its record and replay are grad_tree.py's, one launch per level; the hit and local colour both
+replays shade are make_replay_surface's and make_replay_local's.
 """
 
 from __future__ import annotations
@@ -489,6 +491,52 @@ def translate_samples(points0: wp.array(dtype=wp.vec3), sample_light: wp.array(d
     points are the forward's to the bit."""
     q = wp.tid()
     points[q] = points0[q] + shift[sample_light[q]]
+
+
+POSE_TAYLOR = 1.0e-4  # |w|^2 (radians^2) below which rodrigues_coefficients are their Taylor series
+
+
+@wp.func
+def rodrigues_coefficients(theta2: float) -> wp.vec2:
+    """(sin(a) / a, (1 - cos(a)) / a^2) of the angle a = sqrt(theta2), Rodrigues' formula's coefficients:
+    below POSE_TAYLOR (a < 0.01) their Taylor series in theta2 to theta2^2 (the next terms below 1e-16), so
+    that at a = 0 both and their derivatives are finite (sqrt has none there) and R's Jacobian is the
+    cross product's; above, 1 - cos(a) as 2 sin^2(a / 2), without its cancellation."""
+    if theta2 < wp.static(POSE_TAYLOR):
+        return wp.vec2(1.0 - theta2 / 6.0 + theta2 * theta2 / 120.0, 0.5 - theta2 / 24.0 + theta2 * theta2 / 720.0)
+    a = wp.sqrt(theta2)
+    half = wp.sin(0.5 * a)
+    return wp.vec2(wp.sin(a) / a, 2.0 * half * half / theta2)
+
+
+@wp.func
+def posed_point(v_rest: wp.vec3, c: wp.vec3, t: wp.vec3, w: wp.vec3) -> wp.vec3:
+    """R(w) (v_rest - c) + c + t, R(w) the rotation by |w| radians about w / |w| (Rodrigues: R q = q +
+    sin(a)/a w x q + (1 - cos(a))/a^2 w x (w x q)), written v_rest + t + (R(w) - I)(v_rest - c) as
+    params.posed_vertices writes it: differentiable in t and w, its Jacobian in w at w = 0 the cross product's
+    (d/dw at 0 of w x q), finite there (rodrigues_coefficients)."""
+    q = v_rest - c
+    k = rodrigues_coefficients(wp.dot(w, w))
+    wq = wp.cross(w, q)
+    return v_rest + t + k[0] * wq + k[1] * wp.cross(w, wq)
+
+
+@wp.kernel(module="unique")
+def posed_points(forward: wp.array(dtype=wp.vec3), rest: wp.array(dtype=wp.vec3), owner: wp.array(dtype=int),
+                 centre: wp.array(dtype=wp.vec3), t0: wp.array(dtype=wp.vec3), w0: wp.array(dtype=wp.vec3),
+                 t: wp.array(dtype=wp.vec3), w: wp.array(dtype=wp.vec3), points: wp.array(dtype=wp.vec3)):
+    """The replay's points from the objects' poses: vertex i of object owner[i] (-1: none of the scene's, an
+    area light's own shape, left as it is) is the forward's point plus its pose's change, posed_point of its
+    rest point at (t, w) less at the frame's (t0, w0): at the frame's pose the forward's point to the bit (two
+    equal values' difference is 0) and differentiable in t and w as posed_point is (the forward poses in
+    float64 on the host and rounds; the replay's rest points and centres, relative to the frame origin, are
+    float32, which only the derivative reads)."""
+    i = wp.tid()
+    o = owner[i]
+    p = forward[i]
+    if o >= 0:
+        p = p + (posed_point(rest[i], centre[o], t[o], w[o]) - posed_point(rest[i], centre[o], t0[o], w0[o]))
+    points[i] = p
 
 
 @functools.cache
