@@ -10,10 +10,13 @@ export DRJIT_LIBLLVM_PATH ?= $(LLVM)
 install:
 	$(PYTHON) -m pip install -q -e .
 
-# The test extra (Mitsuba, pytest, matplotlib) and the Ray extra: the batch tests run on a real local Ray
-# instance and a simulated 2-node cluster.
+# The test extra (Mitsuba, pytest, matplotlib), the Ray extra (the batch tests run on a real local Ray instance
+# and a simulated 2-node cluster) and the torch extra (tests/pytorch). torch is pinned first: on this project's
+# machines that is the CPU wheel pip finds in /opt/wheels (28 s into a fresh environment, 2 s once there), where
+# the extra's range alone may take a newer, multi-GB CUDA build from PyPI.
 install-extras:
-	$(PYTHON) -m pip install -q -e '.[test,ray]'
+	$(PYTHON) -m pip install -q "torch==2.13.0"
+	$(PYTHON) -m pip install -q -e '.[test,ray,torch]'
 
 # Mitsuba's llvm_ad_rgb variant needs a libLLVM that Dr.Jit can use; Debian 12's libLLVM 15 is not one.
 llvm:

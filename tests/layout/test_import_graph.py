@@ -11,8 +11,9 @@ import pytest
 ROOT = Path(__file__).resolve().parents[2]
 PACKAGE = ROOT / "src" / "warprt"
 LAYERS = ("scene", "geometry", "kernels", "image", "dataset")  # the data flow, upstream first
-# warprt.options is a face too: the options schema the CLI and the Python API are both built from.
-FACES = {"warprt", "warprt.cli", "warprt.options", *(f"warprt.{layer}" for layer in LAYERS)}
+# warprt.options is a face too: the options schema the CLI and the Python API are both built from; and
+# warprt.torch, the frames as PyTorch tensors (imported only by who asks for it).
+FACES = {"warprt", "warprt.cli", "warprt.options", "warprt.torch", *(f"warprt.{layer}" for layer in LAYERS)}
 
 
 def module_files(package: Path) -> dict[str, Path]:

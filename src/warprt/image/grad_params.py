@@ -129,6 +129,19 @@ def _name_refusal(scene, name: str) -> str | None:
     return None
 
 
+def not_differentiated(scene, name, known=None) -> str | None:
+    """Why backward() refuses ``name`` in every frame of ``scene``, in the words it refuses it with (None: a name
+    it differentiates, parameter_names; ``known``: those names, where the caller has them)."""
+    if name in (parameter_names(scene) if known is None else known):
+        return None
+    return _name_refusal(scene, str(name)) or (
+        "not a parameter backward() differentiates yet (materials.<name>.ka | kd | ks | shininess | "
+        "reflectivity | ka_texture | kd_texture | ks_texture | emission, a dielectric's ior | "
+        "transmittance | absorption, lights.<i>.color | position | direction | radiance | center (an "
+        "area light's of its own shape), objects.<name>.vertices | translation | rotation | colors (vertex "
+        "colours), camera.eye | center | up | fovy)")
+
+
 def _unrecorded(scene, geom, hits: FirstHits, name: str) -> bool:
     """Whether ``name`` is a reflectivity of 0 (every component) of a material the frame's objects use, whose
     mirror rays the frame did not record though it could reflect: its derivative, the mirrored colour, is
@@ -159,13 +172,8 @@ def checked_names(scene, geom, hits, wrt) -> list[str]:
         wrt = [n for n in known if _frame_refusal(scene, geom, hits, n) is None]
     wrt = list(wrt)
     for name in wrt:
-        if name not in known:
-            why = _name_refusal(scene, str(name)) or (
-                "not a parameter backward() differentiates yet (materials.<name>.ka | kd | ks | shininess | "
-                "reflectivity | ka_texture | kd_texture | ks_texture | emission, a dielectric's ior | "
-                "transmittance | absorption, lights.<i>.color | position | direction | radiance | center (an "
-                "area light's of its own shape), objects.<name>.vertices | translation | rotation | colors (vertex "
-                "colours), camera.eye | center | up | fovy)")
+        why = not_differentiated(scene, name, known)
+        if why is not None:
             raise ArgumentError("backward", str(name), why)
         why = _frame_refusal(scene, geom, hits, name)
         if why is not None:

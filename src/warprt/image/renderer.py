@@ -147,6 +147,7 @@ class Renderer:
         self._pool: ThreadPoolExecutor | None = None  # the frames' band threads, from the first that needs them
         self._first_hits = None  # (scene, Geometry, FirstHits) of the last grad=True frame, for backward()
         self._record = None  # that frame's GradRecord: its arrays taken again by the next grad frame of its size
+        self._grad_frames = 0  # the grad=True frames rendered: grad_frame's number
         self._pool_threads = 0
         # The objects' poses set through params (params.Pose), by index in scene.objects: each one that
         # object's while its vertices are the array the pose made (set_scene lets the others go).
@@ -189,6 +190,13 @@ class Renderer:
     def geometry(self) -> Geometry | None:
         """The Geometry of the last frame (None before the first)."""
         return self._given if self._given is not None else self._geometry
+
+    @property
+    def grad_frame(self) -> int | None:
+        """The number of the grad=True frame backward() differentiates now, which every later frame changes (None:
+        none to differentiate, after a plain frame or close()): who holds an image of a grad frame compares it
+        before backward(), whose record a later frame replaces (warprt.torch)."""
+        return self._grad_frames if self._first_hits is not None else None
 
     @property
     def params(self):
@@ -285,6 +293,7 @@ class Renderer:
                                        mirrored)
             if grad:
                 self._first_hits = (scene, geom, hits)
+                self._grad_frames += 1
         stats = _frame_stats(scene, o, plan, shortcuts, variant, geom, geometry_info, grid, mirrors, zb, frame, times)
         stats.memory["estimate"] = estimate
         return RenderResult(result[0], stats, result[1])
