@@ -61,6 +61,7 @@ from ..kernels.grad import (TEXTURE_CHECKER, TEXTURE_CLAMP, TEXTURE_IMAGE, TEXTU
 from ..kernels.grad_tree import make_tree_replay_kernel, tree_area_combine
 from ..geometry import LightShape, light_shape
 from ..scene import drawn_objects, position_ids
+from .grad_edges import EdgeFrame, check_edges, edge_gradients
 from .grad_params import checked_names, gradients_by_name
 from .grad_record import FirstHits, TreeHits
 
@@ -377,10 +378,15 @@ def replay_image(scene, geom, hits: FirstHits, device: str, camera: bool = False
     return image.numpy().reshape(hits.height, hits.width, 3)
 
 
-def backward(scene, geom, hits: FirstHits, d_image, wrt, device: str) -> dict:
+def backward(scene, geom, hits: FirstHits, d_image, wrt, device: str, edges: bool = False,
+             frame: EdgeFrame | None = None) -> dict:
     """{name: d(sum(d_image * image)) / d(param)} for each name in ``wrt`` (parameter_names), each shaped
-    as the parameter: (3,) for colours and positions, () for an exponent."""
+    as the parameter: (3,) for colours and positions, () for an exponent. With ``edges``, the boundary term
+    of the edges camera rays see added (grad_edges.py; ``frame``: the frame's EdgeFrame), where those are all
+    the edges the parameters move (else one ArgumentError naming ``edges``: check_edges)."""
     wrt = checked_names(scene, geom, hits, wrt)
+    if edges:
+        check_edges(scene, geom, frame, hits, wrt)
     d = np.asarray(d_image.numpy() if isinstance(d_image, wp.array) else d_image, np.float32)
     if d.shape != (hits.height, hits.width, 3) or not np.all(np.isfinite(d)):
         raise ArgumentError("backward", "d_image", f"expected finite values of shape {(hits.height, hits.width, 3)}, "
@@ -396,6 +402,9 @@ def backward(scene, geom, hits: FirstHits, d_image, wrt, device: str) -> dict:
     tape.backward(grads={launched.rays: wp.array(d_rays, dtype=wp.vec3, device=device)})
     out = gradients_by_name(scene, geom, launched, wrt)
     tape.zero()
+    if edges:
+        for name, g in edge_gradients(scene, geom, frame, d, wrt, device).items():
+            out[name] = out[name] + g
     return out
 
 
