@@ -192,11 +192,11 @@ def _pieces(a: np.ndarray, c: np.ndarray, t0: float, t1: float) -> np.ndarray:
     return np.unique(np.clip(np.concatenate(ts), t0, t1))
 
 
-def edge_points(edges: np.ndarray, points: np.ndarray, eye: np.ndarray, cam) -> EdgePoints:
-    """The EdgePoints of ``edges`` (vertex indices into ``points``, relative to the frame origin, as ``eye``)."""
-    b = camera_basis(cam)
-    gauss, gauss_w = np.polynomial.legendre.leggauss(GAUSS_POINTS)
-    edge, at, weight, pixel, normal = [], [], [], [], np.zeros((len(edges), 2))
+def _segments(edges: np.ndarray, points: np.ndarray, eye: np.ndarray, b) -> tuple:
+    """Per edge its image's unit normal (towards g > 0), and for the edges in view their rows, their images'
+    end points (a, c: the parts in front of the eye, projected) and the span (t0, t1) of a + t (c - a) in the
+    frame."""
+    normal, rows, ends, spans = np.zeros((len(edges), 2)), [], [], []
     for e, (i, k) in enumerate(edges):
         q0, q1 = points[i] - eye, points[k] - eye
         n = np.cross(q0, q1)
@@ -209,9 +209,39 @@ def edge_points(edges: np.ndarray, points: np.ndarray, eye: np.ndarray, cam) -> 
             continue
         a, c = _project(clipped[0], b), _project(clipped[1], b)
         span = _frame_clip(a, c, b.width, b.height)
-        if span is None:
-            continue
-        ts = _pieces(a, c, *span)
+        if span is not None:
+            rows.append(e)
+            ends.append((a, c))
+            spans.append(span)
+    return normal, np.asarray(rows, np.int64), np.asarray(ends).reshape(-1, 2, 2), np.asarray(spans).reshape(-1, 2)
+
+
+def _crossings(ends: np.ndarray, spans: np.ndarray, e: int) -> np.ndarray:
+    """Where segment e's image crosses the others' (its parameters t): where what lies in front of it or
+    behind it may change, so that the Gauss points integrate a smooth integrand between them."""
+    a, c = ends[e]
+    d, a_f, d_f = c - a, ends[:, 0], ends[:, 1] - ends[:, 0]
+    det = d[0] * (-d_f[:, 1]) + d_f[:, 0] * d[1]  # a + t d = a_f + s d_f, by Cramer's rule
+    r = a_f - a
+    ok = np.abs(det) > 1e-12 * (np.linalg.norm(d) * np.linalg.norm(d_f, axis=1) + 1e-300)
+    safe = np.where(ok, det, 1.0)
+    t = (r[:, 0] * (-d_f[:, 1]) + d_f[:, 0] * r[:, 1]) / safe
+    s = (d[0] * r[:, 1] - d[1] * r[:, 0]) / safe
+    ok &= (s >= spans[:, 0]) & (s <= spans[:, 1]) & (t > spans[e, 0]) & (t < spans[e, 1])
+    return t[ok]
+
+
+def edge_points(edges: np.ndarray, points: np.ndarray, eye: np.ndarray, cam) -> EdgePoints:
+    """The EdgePoints of ``edges`` (vertex indices into ``points``, relative to the frame origin, as ``eye``):
+    each edge's image cut where it crosses the pixels' borders and the other edges' images, GAUSS_POINTS a
+    piece."""
+    b = camera_basis(cam)
+    gauss, gauss_w = np.polynomial.legendre.leggauss(GAUSS_POINTS)
+    normal, rows, ends, spans = _segments(edges, points, eye, b)
+    edge, at, weight, pixel = [], [], [], []
+    for j, e in enumerate(rows):
+        a, c = ends[j]
+        ts = np.unique(np.concatenate([_pieces(a, c, *spans[j]), _crossings(ends, spans, j)]))
         length = np.linalg.norm(c - a)
         for s0, s1 in zip(ts[:-1], ts[1:]):
             if s1 <= s0:
