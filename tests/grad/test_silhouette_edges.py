@@ -15,10 +15,9 @@ import warp as wp
 import warp.autograd
 
 import warprt
-from warprt.errors import ArgumentError
-from warprt.image.grad_edges import EdgeFrame, camera_edges, edge_points, edge_sides
-from warprt.kernels.edges import edge_distances
-from warprt.scene import resolve_effects
+from warprt.image import EdgeFrame, camera_edges, edge_points, edge_sides
+from warprt.kernels import edge_distances
+from warprt.scene import camera_basis, resolve_effects
 
 WIDTH, HEIGHT = 24, 18
 SPP = 256  # the gradient frame's: 16 x 16 strata
@@ -175,7 +174,6 @@ def test_the_edge_speed_is_the_closed_form():
     """On the edge, d distance / d v0 = ((v1 - eye) x d) / |grad_x g| for g = det(v0 - eye, v1 - eye, d(x))
     (NumPy, float64, the camera's own basis): Reynolds' v . n = d_theta g / |grad_x g|; its negative, the
     control, is not."""
-    from warprt.scene import camera_basis
     v0, v1, camera, fovy, at, cam = _distance_inputs(6)
     n = len(v0)
     vec = lambda a: wp.array(a.astype(np.float32), dtype=wp.vec3, requires_grad=True)  # noqa: E731
@@ -215,7 +213,7 @@ def test_edges_are_refused_where_other_edges_move(weights, render, why):
     s = box_scene(**render, **({"wall_kr": (0.5, 0.5, 0.5)} if "max_depth" in render else {}))
     r = warprt.Renderer(s)
     r.render(grad=True)
-    with pytest.raises(ArgumentError, match="edges") as e:
+    with pytest.raises(warprt.SceneError, match="edges") as e:  # an ArgumentError
         r.backward(weights, wrt=["objects.crate.vertices"], edges=True)
     assert why in str(e.value)
     r.backward(weights, wrt=["materials.crate.kd"], edges=True)

@@ -9,8 +9,7 @@ import numpy as np
 
 from .._warp import wp
 from ..errors import ArgumentError
-from ..kernels import empty_aov_buffers, empty_record
-from ..kernels.edges import edge_distances, make_edge_sides_kernel
+from ..kernels import edge_distances, empty_aov_buffers, empty_record, make_edge_sides_kernel
 from ..scene import camera_basis, drawn_objects, position_ids
 from .mirrors import empty_mirrors
 from .params import object_names
