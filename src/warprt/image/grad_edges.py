@@ -230,28 +230,40 @@ def _crossings(ends: np.ndarray, spans: np.ndarray, e: int) -> np.ndarray:
     return t[ok]
 
 
+def _pixels_of(a: np.ndarray, c: np.ndarray, ts: np.ndarray, b) -> np.ndarray:
+    """The pixel (row major, row 0 at the top) of each piece between consecutive cuts ``ts`` of a + t (c - a)."""
+    mid = a[None] + 0.5 * (ts[:-1] + ts[1:])[:, None] * (c - a)[None]
+    x = np.minimum(mid[:, 0].astype(np.int64), b.width - 1)
+    y = np.minimum(mid[:, 1].astype(np.int64), b.height - 1)
+    return (b.height - 1 - y) * b.width + x
+
+
 def edge_points(edges: np.ndarray, points: np.ndarray, eye: np.ndarray, cam) -> EdgePoints:
     """The EdgePoints of ``edges`` (vertex indices into ``points``, relative to the frame origin, as ``eye``):
-    each edge's image cut where it crosses the pixels' borders and the other edges' images, GAUSS_POINTS a
-    piece."""
+    each edge's image cut where it crosses the pixels' borders and the images of the other edges in those
+    pixels, GAUSS_POINTS a piece."""
     b = camera_basis(cam)
     gauss, gauss_w = np.polynomial.legendre.leggauss(GAUSS_POINTS)
     normal, rows, ends, spans = _segments(edges, points, eye, b)
+    cuts = [_pieces(a, c, *span) for (a, c), span in zip(ends, spans)]
+    by_pixel: dict = {}  # the edges in view whose image passes through each pixel, in their order
+    for j, ts in enumerate(cuts):
+        for p in np.unique(_pixels_of(*ends[j], ts, b)):
+            by_pixel.setdefault(int(p), []).append(j)
     edge, at, weight, pixel = [], [], [], []
     for j, e in enumerate(rows):
         a, c = ends[j]
-        ts = np.unique(np.concatenate([_pieces(a, c, *spans[j]), _crossings(ends, spans, j)]))
-        length = np.linalg.norm(c - a)
-        for s0, s1 in zip(ts[:-1], ts[1:]):
-            if s1 <= s0:
-                continue
-            mid = a + 0.5 * (s0 + s1) * (c - a)
-            x, y = min(int(mid[0]), b.width - 1), min(int(mid[1]), b.height - 1)
-            t = s0 + (s1 - s0) * 0.5 * (gauss + 1.0)
-            at.append(a[None] + t[:, None] * (c - a)[None])
-            weight.append(gauss_w * 0.5 * (s1 - s0) * length)
-            edge.append(np.full(GAUSS_POINTS, e))
-            pixel.append(np.full(GAUSS_POINTS, (b.height - 1 - y) * b.width + x))
+        near = sorted({k for p in np.unique(_pixels_of(a, c, cuts[j], b)) for k in by_pixel[int(p)] if k != j})
+        ts = cuts[j]
+        if near:
+            near = np.asarray([j] + near)
+            ts = np.unique(np.concatenate([ts, _crossings(ends[near], spans[near], 0)]))
+        s0, s1 = ts[:-1], ts[1:]  # ts is increasing (np.unique): no piece is empty
+        t = s0[:, None] + (s1 - s0)[:, None] * 0.5 * (gauss + 1.0)[None]  # (pieces, GAUSS_POINTS)
+        at.append(a[None] + t.reshape(-1, 1) * (c - a)[None])
+        weight.append((gauss_w[None] * 0.5 * (s1 - s0)[:, None] * np.linalg.norm(c - a)).reshape(-1))
+        edge.append(np.full(t.size, e))
+        pixel.append(np.repeat(_pixels_of(a, c, ts, b), GAUSS_POINTS))
     cat = lambda parts, shape: np.concatenate(parts) if parts else np.zeros(shape)  # noqa: E731
     return EdgePoints(edges, cat(edge, (0,)).astype(np.int64), cat(at, (0, 2)), cat(weight, (0,)),
                       cat(pixel, (0,)).astype(np.int64), normal)
