@@ -82,9 +82,10 @@ def weights():
 
 
 def step(scene, name: str, seed: int) -> np.ndarray:
-    """A random direction for one parameter (vertices: one step per vertex; the box's corners are shared)."""
+    """A random direction for one parameter (vertices: one step per vertex; the box's corners are shared), of
+    0.3 a component (fovy: 3 degrees)."""
     shape = np.shape(warprt.Renderer(scene).params[name])
-    return np.random.default_rng(seed).standard_normal(shape) * 0.3
+    return np.random.default_rng(seed).standard_normal(shape) * (3.0 if name == "camera.fovy" else 0.3)
 
 
 def differences(make, name: str, u: np.ndarray, weights, h: float = 4e-2, steps: int = 17) -> float:
@@ -122,7 +123,8 @@ def gradient(make, names, weights, edges: bool, **options) -> dict:
 CASES = [(triangle_scene, "objects.tri.vertices", 4), (triangle_scene, "objects.tri.vertices", 12),
          (triangle_scene, "camera.eye", 5), (box_scene, "objects.crate.vertices", 6),
          (box_scene, "objects.crate.vertices", 10), (box_scene, "objects.back.vertices", 8),
-         (box_scene, "camera.eye", 9), (ball_scene, "objects.ball.vertices", 13), (ball_scene, "camera.eye", 19)]
+         (box_scene, "camera.eye", 9), (ball_scene, "objects.ball.vertices", 13), (ball_scene, "camera.eye", 19), (box_scene, "camera.center", 22),
+         (triangle_scene, "camera.fovy", 23)]
 
 
 @pytest.mark.parametrize("make, name, seed", CASES,
