@@ -42,6 +42,10 @@ The record's layout and making are grad_record.py's, the parameters' names, refu
 grad_params.py's; this module replays a record on a wp.Tape (replay_launch, replay_tree_launch) and runs
 backward().
 
+With edges=True (the camera's silhouettes, occlusion edges and creases moving with the vertices and the
+camera), backward adds the boundary term of the box-filtered pixel integral (grad_edges.py), where those are
+all the edges the named parameters move (else refused naming ``edges``).
+
 Covered for now: any render.spp and light_samples, camera and mirror rays, glass, image and checker
 textures, vertex colours, area lights; any other scene is refused in one line naming
 what is not yet differentiated, so a gradient is never silently partial.
