@@ -1,6 +1,7 @@
 """The edges seen by camera rays, for the gradient's boundary term (image/grad_edges.py launches them): an
 edge's signed distance in the image as a differentiable function of its vertices and the camera
-(edge_distance, edge_distances), and the radiance either side of it by the forward's own walk (make_edge_sides_kernel)."""
+(edge_distance, edge_distances), and the radiance either side of it by the forward's own walk
+(make_edge_sides_kernel)."""
 
 import functools  # no "from __future__ import annotations": a kernel factory's types are its locals
 
