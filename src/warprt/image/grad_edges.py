@@ -142,42 +142,41 @@ class EdgePoints:
     normal: np.ndarray
 
 
-def _clip(q0: np.ndarray, q1: np.ndarray, z_e: np.ndarray) -> tuple | None:
-    """The part of the segment q0 q1 (relative to the eye) in front of the eye: depth -q . z_e at least a
-    millionth of its distance (the image of a point at the eye's depth lies at infinity); None: none."""
+def _clip(q0: np.ndarray, q1: np.ndarray, z_e: np.ndarray) -> tuple:
+    """Per segment q0 q1 (rows, relative to the eye) its part in front of the eye, depth -q . z_e at least a
+    millionth of its distance (the image of a point at the eye's depth lies at infinity), and whether it has
+    one."""
     z0, z1 = -(q0 @ z_e), -(q1 @ z_e)
-    z_min = 1e-6 * max(np.linalg.norm(q0), np.linalg.norm(q1))
-    if z0 < z_min and z1 < z_min:
-        return None
-    if z0 < z_min:
-        q0 = q0 + (q1 - q0) * ((z_min - z0) / (z1 - z0))
-    elif z1 < z_min:
-        q1 = q1 + (q0 - q1) * ((z_min - z1) / (z0 - z1))
-    return q0, q1
+    z_min = 1e-6 * np.maximum(np.linalg.norm(q0, axis=1), np.linalg.norm(q1, axis=1))
+    front = (z0 >= z_min) | (z1 >= z_min)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t0 = np.where(z0 < z_min, (z_min - z0) / (z1 - z0), 0.0)
+        t1 = np.where(z1 < z_min, (z_min - z1) / (z0 - z1), 0.0)
+    t0, t1 = np.where(front, t0, 0.0), np.where(front, t1, 0.0)
+    return q0 + (q1 - q0) * t0[:, None], q1 + (q0 - q1) * t1[:, None], front
 
 
 def _project(q: np.ndarray, b) -> np.ndarray:
-    """Where the point q (relative to the eye, in front of it) lies in the image, in pixels from its lower-left
-    corner: camera.camera_ray's d = -d_f z_e + h (y / H - 1/2) y_e + w (x / W - 1/2) x_e solved for (x, y)."""
+    """Where the points q (rows, relative to the eye, in front of it) lie in the image, in pixels from its
+    lower-left corner: camera.camera_ray's d = -d_f z_e + h (y / H - 1/2) y_e + w (x / W - 1/2) x_e solved for
+    (x, y)."""
     z = -(q @ b.z_e)
-    return np.array([b.width * (0.5 + b.d_f * (q @ b.x_e) / (z * b.w)),
-                     b.height * (0.5 + b.d_f * (q @ b.y_e) / (z * b.h))])
+    return np.stack([b.width * (0.5 + b.d_f * (q @ b.x_e) / (z * b.w)),
+                     b.height * (0.5 + b.d_f * (q @ b.y_e) / (z * b.h))], axis=1)
 
 
-def _frame_clip(a: np.ndarray, c: np.ndarray, width: int, height: int) -> tuple[float, float] | None:
-    """The parameters (t0, t1) of the segment a + t (c - a) inside the frame [0, W] x [0, H] (Liang-Barsky)."""
-    t0, t1, d = 0.0, 1.0, c - a
-    for p, q in ((-d[0], a[0]), (d[0], width - a[0]), (-d[1], a[1]), (d[1], height - a[1])):
-        if p == 0.0:
-            if q < 0.0:
-                return None
-            continue
-        t = q / p
-        if p < 0.0:
-            t0 = max(t0, t)
-        else:
-            t1 = min(t1, t)
-    return (t0, t1) if t0 < t1 else None
+def _frame_clip(a: np.ndarray, c: np.ndarray, width: int, height: int) -> tuple:
+    """Per segment a + t (c - a) (rows) the parameters (t0, t1) of its part inside the frame [0, W] x [0, H]
+    (Liang-Barsky), and whether it has one."""
+    t0, t1, d = np.zeros(len(a)), np.ones(len(a)), c - a
+    inside = np.ones(len(a), bool)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        for p, q in ((-d[:, 0], a[:, 0]), (d[:, 0], width - a[:, 0]), (-d[:, 1], a[:, 1]), (d[:, 1], height - a[:, 1])):
+            inside &= (p != 0.0) | (q >= 0.0)
+            t = q / p
+            t0 = np.where(p < 0.0, np.maximum(t0, t), t0)
+            t1 = np.where(p > 0.0, np.minimum(t1, t), t1)
+    return t0, t1, inside & (t0 < t1)
 
 
 def _pieces(a: np.ndarray, c: np.ndarray, t0: float, t1: float) -> np.ndarray:
@@ -195,24 +194,18 @@ def _segments(edges: np.ndarray, points: np.ndarray, eye: np.ndarray, b) -> tupl
     """Per edge its image's unit normal (towards g > 0), and for the edges in view their rows, their images'
     end points (a, c: the parts in front of the eye, projected) and the span (t0, t1) of a + t (c - a) in the
     frame."""
-    normal, rows, ends, spans = np.zeros((len(edges), 2)), [], [], []
-    for e, (i, k) in enumerate(edges):
-        q0, q1 = points[i] - eye, points[k] - eye
-        n = np.cross(q0, q1)
-        grad = np.array([(n @ b.x_e) * b.w / b.width, (n @ b.y_e) * b.h / b.height])  # grad_x g
-        if np.linalg.norm(grad) <= 1e-12 * np.linalg.norm(q0) * np.linalg.norm(q1):  # seen end on
-            continue
-        normal[e] = grad / np.linalg.norm(grad)
-        clipped = _clip(q0, q1, b.z_e)
-        if clipped is None:
-            continue
-        a, c = _project(clipped[0], b), _project(clipped[1], b)
-        span = _frame_clip(a, c, b.width, b.height)
-        if span is not None:
-            rows.append(e)
-            ends.append((a, c))
-            spans.append(span)
-    return normal, np.asarray(rows, np.int64), np.asarray(ends).reshape(-1, 2, 2), np.asarray(spans).reshape(-1, 2)
+    q0, q1 = points[edges[:, 0]] - eye, points[edges[:, 1]] - eye
+    n = np.cross(q0, q1)
+    grad = np.stack([(n @ b.x_e) * b.w / b.width, (n @ b.y_e) * b.h / b.height], axis=1)  # grad_x g
+    size = np.linalg.norm(grad, axis=1)
+    seen = size > 1e-12 * np.linalg.norm(q0, axis=1) * np.linalg.norm(q1, axis=1)  # not seen end on
+    normal = np.where(seen[:, None], grad / np.where(seen, size, 1.0)[:, None], 0.0)
+    c0, c1, front = _clip(q0, q1, b.z_e)
+    keep = seen & front
+    a, c = _project(c0[keep], b), _project(c1[keep], b)
+    t0, t1, inside = _frame_clip(a, c, b.width, b.height)
+    rows = np.flatnonzero(keep)[inside]
+    return normal, rows, np.stack([a[inside], c[inside]], axis=1), np.stack([t0[inside], t1[inside]], axis=1)
 
 
 def _crossings(ends: np.ndarray, spans: np.ndarray, e: int) -> np.ndarray:
