@@ -42,17 +42,18 @@ def triangle_scene(spp: int = SPP, **render):
                      "material": "red"}]})
 
 
-def box_scene(spp: int = SPP, wall_kr=(0.0, 0.0, 0.0), **render):
+def box_scene(spp: int = SPP, wall_kr=(0.0, 0.0, 0.0), lights=None, crate=None, **render):
     """A turned flat-shaded box (silhouette and creases in view) in front of a quad whose edges it hides in
     part, the quad's other edges against the background; ``wall_kr``: the quad's reflectivity. Turned about
     each axis, so that no edge's image lies along the pixels' strata (a staircase of a row of samples at once
-    the differences would not resolve); both lights on the camera's side, no visible face near its terminator."""
+    the differences would not resolve); both lights on the camera's side, no visible face near its terminator.
+    ``lights``, ``crate``: other lights, the crate's material's other fields."""
     return warprt.load_dict({
         "camera": {"eye": [0.5, 1.0, 4.0], "center": [0.0, 0.0, 0.0], "width": WIDTH, "height": HEIGHT, "fovy": 45.0},
         "render": {"ambient": [0.2] * 3, "max_depth": 1, "shadows": False, "spp": spp,
                    "background": [0.1, 0.2, 0.3], **render},
-        "lights": [LIGHT, {"position": [-1.5, 2.0, 4.5], "color": [0.3, 0.4, 0.5]}],
-        "materials": {"crate": {"kd": [0.6, 0.3, 0.1], "ks": [0.4] * 3, "shininess": 30.0},
+        "lights": lights or [LIGHT, {"position": [-1.5, 2.0, 4.5], "color": [0.3, 0.4, 0.5]}],
+        "materials": {"crate": {"kd": [0.6, 0.3, 0.1], "ks": [0.4] * 3, "shininess": 30.0, **(crate or {})},
                       "wall": {"kd": [0.2, 0.5, 0.6], "ks": [0.1] * 3, "shininess": 8.0,
                                "reflectivity": list(wall_kr)}},
         "objects": [{"shape": "box", "name": "crate", "size": [1.2, 1.0, 1.0], "rotate": [25.0, 35.0, 25.0],
@@ -230,17 +231,35 @@ def test_the_edges_gradient_is_the_same_on_every_run_and_thread_count(weights):
             assert np.array_equal(runs[0][name], other[name]), name
 
 
-@pytest.mark.parametrize("render, why", [({"shadows": True}, "shadows"), ({"max_depth": 3}, "mirrors")],
-                         ids=["shadows", "mirror rays"])
-def test_edges_are_refused_where_other_edges_move(weights, render, why):
+HARD_SPOT = {"type": "spot", "position": [1.0, 3.0, 3.0], "target": [0.0, 0.0, 0.0], "cutoff_angle": 20.0,
+             "beam_width": 20.0, "color": [1.0, 1.0, 1.0]}
+REFUSED = {"shadows": ({"shadows": True}, "shadows"),
+           "mirror rays": ({"max_depth": 3, "wall_kr": (0.5,) * 3}, "mirrors"),
+           "checker": ({"crate": {"kd_texture": {"checker": [[1, 1, 1], [0.2, 0.2, 0.2]], "scale": 4.0}}}, "checker"),
+           "hard spot": ({"lights": [HARD_SPOT]}, "spot")}
+
+
+@pytest.mark.parametrize("case", list(REFUSED))
+def test_edges_are_refused_where_other_edges_move(weights, case):
     """A scene whose named parameters also move edges this derivative does not cover: one line naming
     ``edges``; a parameter that moves no edge (a colour) is not refused, and edges=False never is."""
-    s = box_scene(**render, **({"wall_kr": (0.5, 0.5, 0.5)} if "max_depth" in render else {}))
-    r = warprt.Renderer(s)
+    kwargs, why = REFUSED[case]
+    r = warprt.Renderer(box_scene(**kwargs))
     r.render(grad=True)
     with pytest.raises(warprt.SceneError, match="edges") as e:  # an ArgumentError
         r.backward(weights, wrt=["objects.crate.vertices"], edges=True)
     assert why in str(e.value)
     r.backward(weights, wrt=["materials.crate.kd"], edges=True)
     r.backward(weights, wrt=["objects.crate.vertices"])
+    r.close()
+
+
+def test_a_light_moves_no_camera_edge_without_shadows(weights):
+    """With shadows off and one ray level, a point light's position moves no edge: edges=True is the interior
+    derivative, to the bit."""
+    r = warprt.Renderer(box_scene())
+    r.render(grad=True)
+    names = ["lights.0.position", "materials.crate.kd"]
+    a, b = r.backward(weights, wrt=names, edges=True), r.backward(weights, wrt=names)
+    assert all(np.array_equal(a[n], b[n]) for n in names)
     r.close()
