@@ -46,6 +46,10 @@ The record's layout and making are grad_record.py's, the parameters' names, refu
 grad_params.py's; this module replays a record on a wp.Tape (replay_launch, replay_tree_launch) and runs
 backward().
 
+With edges=True (the camera's silhouettes, occlusion edges and creases moving with the vertices and the
+camera), backward adds the boundary term of the box-filtered pixel integral (grad_edges.py), where those are
+all the edges the named parameters move (else refused naming ``edges``).
+
 Covered for now: any render.spp and light_samples, camera and mirror rays, glass, image and checker
 textures, vertex colours, area lights; any other scene is refused in one line naming
 what is not yet differentiated, so a gradient is never silently partial.
@@ -65,9 +69,10 @@ from ..kernels.grad import (TEXTURE_CHECKER, TEXTURE_CLAMP, TEXTURE_IMAGE, TEXTU
 from ..kernels.grad_tree import make_tree_replay_kernel, tree_area_combine
 from ..geometry import LightShape, light_shape
 from ..scene import drawn_objects, position_ids
+from .grad_edges import EdgeFrame, check_edges, edge_gradients
 from .grad_params import checked_names, gradients_by_name
 from .grad_record import FirstHits, TreeHits
-from .params import object_poses
+from .params import object_names, object_poses
 
 
 @dataclass
@@ -423,11 +428,17 @@ def replay_image(scene, geom, hits: FirstHits, device: str, camera: bool = False
     return image.numpy().reshape(hits.height, hits.width, 3)
 
 
-def backward(scene, geom, hits: FirstHits, d_image, wrt, device: str, poses: list | None = None) -> dict:
+def backward(scene, geom, hits: FirstHits, d_image, wrt, device: str, poses: list | None = None,
+             edges: bool = False, frame: EdgeFrame | None = None) -> dict:
     """{name: d(sum(d_image * image)) / d(param)} for each name in ``wrt`` (parameter_names), each shaped
     as the parameter: (3,) for colours, positions and poses, () for an exponent. ``poses``: params.Pose per
-    scene object (the Renderer's, object_poses), read where ``wrt`` names a translation or rotation."""
+    scene object (the Renderer's, object_poses), read where ``wrt`` names a translation or rotation. With
+    ``edges``, the boundary term of the edges camera rays see added (grad_edges.py; ``frame``: the frame's
+    EdgeFrame; a pose's through its vertices' and the pose's Jacobian, pose_edge_gradients), where those are
+    all the edges the parameters move (else one ArgumentError naming ``edges``: check_edges)."""
     wrt = checked_names(scene, geom, hits, wrt)
+    if edges:
+        check_edges(scene, geom, frame, hits, wrt)
     d = np.asarray(d_image.numpy() if isinstance(d_image, wp.array) else d_image, np.float32)
     if d.shape != (hits.height, hits.width, 3) or not np.all(np.isfinite(d)):
         raise ArgumentError("backward", "d_image", f"expected finite values of shape {(hits.height, hits.width, 3)}, "
@@ -445,6 +456,35 @@ def backward(scene, geom, hits: FirstHits, d_image, wrt, device: str, poses: lis
     d_rays = np.repeat(d.reshape(-1, 3), hits.samples, axis=0) / np.float32(hits.samples)
     tape.backward(grads={launched.rays: wp.array(d_rays, dtype=wp.vec3, device=device)})
     out = gradients_by_name(scene, geom, launched, wrt)
+    tape.zero()
+    if edges:
+        for name, g in edge_gradients(scene, geom, frame, d, wrt, device).items():
+            out[name] = out[name] + g
+        if posing:
+            for name, g in pose_edge_gradients(scene, geom, frame, d, wrt, device, poses).items():
+                out[name] = out[name] + g
+    return out
+
+
+def pose_edge_gradients(scene, geom, frame, d: np.ndarray, wrt, device: str, poses: list) -> dict:
+    """The edges' term of each translation and rotation in ``wrt``: the edge term of its object's vertices
+    (grad_edges.edge_gradients) taken back through the pose (pose_points' posed_points, on a tape of its own,
+    its adjoint the vertices' edge term), as the interior term is."""
+    posed = [n for n in wrt if n.startswith("objects.") and n.endswith((".translation", ".rotation"))]
+    index = object_names(scene)
+    owners = sorted({n.split(".")[1] for n in posed})
+    vertex_terms = edge_gradients(scene, geom, frame, d, [f"objects.{o}.vertices" for o in owners], device)
+    adjoint = np.zeros((len(geom.points_np), 3), np.float32)
+    starts = np.cumsum([0] + [len(o.vertices) for o in scene.objects])
+    for o in owners:
+        i = index[o]
+        adjoint[starts[i]:starts[i + 1]] = vertex_terms[f"objects.{o}.vertices"]
+    points, arrays, (kernel, dim, inputs, outputs) = pose_points(scene, geom, poses, device)
+    tape = wp.Tape()
+    with tape:
+        wp.launch(kernel, dim=dim, inputs=inputs, outputs=outputs, device=device)
+    tape.backward(grads={points: wp.array(adjoint, dtype=wp.vec3, device=device)})
+    out = {n: arrays[n.split(".")[2]].grad.numpy()[index[n.split(".")[1]]].astype(np.float64) for n in posed}
     tape.zero()
     return out
 

@@ -23,6 +23,7 @@ from ..timing import timed
 from .aovs import finish_aovs
 from .caches import SHADOW_GRIDS_KEPT, FrameCaches
 from .grad import backward as grad_backward
+from .grad_edges import EdgeFrame
 from .grad_params import mirrored_materials, named_parameters, refusal as grad_refusal
 from .grad_record import check_record_memory, record_arrays, record_tree, recording_plan, records_in_trace
 from .launch import band_pool, bands_of, launch_bands, launch_plan
@@ -148,6 +149,7 @@ class Renderer:
         self._first_hits = None  # (scene, Geometry, FirstHits) of the last grad=True frame, for backward()
         self._record = None  # that frame's GradRecord: its arrays taken again by the next grad frame of its size
         self._grad_frames = 0  # the grad=True frames rendered: grad_frame's number
+        self._edge_frame = None  # its EdgeFrame (the plain frame's effects, stack, levels), for backward(edges=True)
         self._pool_threads = 0
         # The objects' poses set through params (params.Pose), by index in scene.objects: each one that
         # object's while its vertices are the array the pose made (set_scene lets the others go).
@@ -255,6 +257,7 @@ class Renderer:
             if grad:
                 check_record_memory(scene, plan.fx, o.device, mirrored)
             in_trace = grad and records_in_trace(plan.fx)  # the trace writes the record as it goes
+            edge_frame = EdgeFrame(plan.fx, plan.stack, plan.max_depth)
             if in_trace:
                 plan = recording_plan(scene, plan, switched, mirrored)
             pool = self._bands_pool(plan.threads)
@@ -294,11 +297,12 @@ class Renderer:
             if grad:
                 self._first_hits = (scene, geom, hits)
                 self._grad_frames += 1
+                self._edge_frame = edge_frame
         stats = _frame_stats(scene, o, plan, shortcuts, variant, geom, geometry_info, grid, mirrors, zb, frame, times)
         stats.memory["estimate"] = estimate
         return RenderResult(result[0], stats, result[1])
 
-    def backward(self, d_image, wrt=None, *, arrays: bool = False) -> dict:
+    def backward(self, d_image, wrt=None, *, arrays: bool = False, edges: bool = False) -> dict:
         """d(sum(d_image * image)) / d(param) at the last frame, rendered with grad=True, for each name in
         ``wrt`` (r.params names: materials.<name>.ka | kd | ks | shininess | reflectivity | ka_texture |
         kd_texture | ks_texture (image textures' texels) | emission, a dielectric's ior | transmittance |
@@ -311,13 +315,22 @@ class Renderer:
         mirror rays recorded). ``d_image``: the derivative of a loss with respect to the image,
         (height, width, 3), a NumPy or Warp array. With ``arrays``, each gradient a float32 wp.array on the
         renderer's device (a () parameter's of shape (1,)), to hand to a wp.Tape's backward(grads={...}) in
-        the Warp program that made the parameter (docs/gradients.md)."""
+        the Warp program that made the parameter (docs/gradients.md).
+
+        The derivative holds each ray's face and each shadow ray's answer fixed (an interior derivative); with
+        ``edges``, that of the box-filtered pixel integral, the boundary term of the edges camera rays see
+        added (silhouettes, occlusion edges and flat creases moving with objects.<name>.vertices and the
+        camera: image/grad_edges.py). Only those edges are covered so far, so ``edges=True`` is refused in
+        one line naming ``edges`` where the named parameters move others: with shadows traced
+        (render.shadows), mirror rays or glass (render.max_depth > 1), a checker texture, a spot light's hard
+        cone or an area light's centre."""
         if self._first_hits is None:
             raise ArgumentError("backward", "render", "no frame was rendered with grad=True since the last change")
         scene, geom, hits = self._first_hits
         if scene is not self._scene:
             raise ArgumentError("backward", "render", "the scene changed since render(grad=True): render it again")
-        out = grad_backward(scene, geom, hits, d_image, wrt, self.options.device, object_poses(scene, self.poses))
+        out = grad_backward(scene, geom, hits, d_image, wrt, self.options.device, object_poses(scene, self.poses),
+                            edges, self._edge_frame)
         if arrays:  # computed on the device, read back per parameter (its slices and the texture's flip)
             out = {name: wp.array(np.asarray(g, np.float32).reshape(np.shape(g) or (1,)), dtype=float,
                                   device=self.options.device) for name, g in out.items()}

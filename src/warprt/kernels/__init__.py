@@ -5,7 +5,8 @@
     reflect), texture.py (a material colour's texture at a hit), shading.py (Phong), shadow.py (whether a
     shadow ray is blocked: the BVH's any-hit query or the light-space grid), dielectric.py (Fresnel, Snell,
     Beer), trace.py (the Whitted kernel and its ray tree), grad.py and grad_tree.py (the gradient's record
-    and differentiable replay: camera and mirror rays; the ray tree with glass), aov.py (what a first hit records besides
+    and differentiable replay: camera and mirror rays; the ray tree with glass), edges.py (the edges camera rays see:
+    their signed distance in the image and the radiance either side), aov.py (what a first hit records besides
     colour), clip.py and raster.py (the Z-buffer: Fragments), hybrid.py (where the Z-buffer's first hit is
     the tracer's), mirror.py (a reflection ray's first hit from a planar mirror's virtual camera),
     zbuffer_shade.py.
@@ -46,3 +47,6 @@ __all__ += ["POSE_TAYLOR", "posed_point", "posed_points", "rodrigues_coefficient
 from .record import NO_RAY, GradRecord, empty_record  # noqa: E402 (what a grad=True frame's trace writes)
 
 __all__ += ["NO_RAY", "GradRecord", "empty_record"]
+from .edges import edge_distance, edge_distances, make_edge_sides_kernel  # noqa: E402 (backward(edges=True))
+
+__all__ += ["edge_distance", "edge_distances", "make_edge_sides_kernel"]

@@ -200,21 +200,28 @@ def make_whitted_light(light_model: bool):
 
 
 @wp.func
-def camera_direction(eye: wp.vec3, center: wp.vec3, up: wp.vec3, fovy: float, near: float, aspect: float,
-                     px: float, py: float) -> wp.vec3:
-    """The unit direction of the camera ray through the point (px, py) of the image plane (0 to 1 from its
-    lower-left corner: ((x + sx) / width, (y + sy) / height)), as a differentiable function of the camera:
+def image_plane_point(eye: wp.vec3, center: wp.vec3, up: wp.vec3, fovy: float, near: float, aspect: float,
+                      px: float, py: float) -> wp.vec3:
+    """The point of the image plane at (px, py) (0 to 1 from its lower-left corner: ((x + sx) / width,
+    (y + sy) / height)) relative to the eye, as a differentiable function of the camera:
     scene.camera_basis's basis (z_e = (eye - center) / |eye - center|, x_e = (up x z_e) / |up x z_e|,
     y_e = z_e x x_e, h = 2 near tan(fovy / 2), fovy in degrees, w = h aspect) and camera.camera_ray's
-    d = -near z_e + h (py - 1/2) y_e + w (px - 1/2) x_e, normalised; float32, where the forward builds the
-    basis in float64 on the host."""
+    d = -near z_e + h (py - 1/2) y_e + w (px - 1/2) x_e, not normalised; affine in (px, py). float32, where
+    the forward builds the basis in float64 on the host."""
     z_e = wp.normalize(eye - center)
     x_e = wp.normalize(wp.cross(up, z_e))
     y_e = wp.cross(z_e, x_e)
     h = 2.0 * near * wp.tan(wp.radians(fovy) * 0.5)
     w = h * aspect
-    d = (-near) * z_e + h * (py - 0.5) * y_e + w * (px - 0.5) * x_e
-    return wp.normalize(d)
+    return (-near) * z_e + h * (py - 0.5) * y_e + w * (px - 0.5) * x_e
+
+
+@wp.func
+def camera_direction(eye: wp.vec3, center: wp.vec3, up: wp.vec3, fovy: float, near: float, aspect: float,
+                     px: float, py: float) -> wp.vec3:
+    """The unit direction of the camera ray through the point (px, py) of the image plane:
+    image_plane_point, normalised."""
+    return wp.normalize(image_plane_point(eye, center, up, fovy, near, aspect, px, py))
 
 
 @wp.kernel(module="unique")
