@@ -458,22 +458,26 @@ def backward(scene, geom, hits: FirstHits, d_image, wrt, device: str, poses: lis
     out = gradients_by_name(scene, geom, launched, wrt)
     tape.zero()
     if edges:
-        for name, g in edge_gradients(scene, geom, frame, d, wrt, device).items():
-            out[name] = out[name] + g
+        # One pass over the edges for every name: a pose's term is its vertices' taken back through the pose.
+        posed = sorted({n.split(".")[1] for n in wrt if n.startswith("objects.") and n.endswith((".translation",
+                                                                                                  ".rotation"))})
+        terms = edge_gradients(scene, geom, frame, d, list(dict.fromkeys(
+            list(wrt) + [f"objects.{o}.vertices" for o in posed])), device)
         if posing:
-            for name, g in pose_edge_gradients(scene, geom, frame, d, wrt, device, poses).items():
-                out[name] = out[name] + g
+            terms.update(pose_edge_gradients(scene, geom, terms, wrt, device, poses))
+        for name in wrt:
+            if name in terms:
+                out[name] = out[name] + terms[name]
     return out
 
 
-def pose_edge_gradients(scene, geom, frame, d: np.ndarray, wrt, device: str, poses: list) -> dict:
+def pose_edge_gradients(scene, geom, vertex_terms: dict, wrt, device: str, poses: list) -> dict:
     """The edges' term of each translation and rotation in ``wrt``: the edge term of its object's vertices
-    (grad_edges.edge_gradients) taken back through the pose (pose_points' posed_points, on a tape of its own,
-    its adjoint the vertices' edge term), as the interior term is."""
+    (``vertex_terms``, grad_edges.edge_gradients' by name) taken back through the pose (pose_points'
+    posed_points, on a tape of its own, its adjoint the vertices' edge term), as the interior term is."""
     posed = [n for n in wrt if n.startswith("objects.") and n.endswith((".translation", ".rotation"))]
     index = object_names(scene)
     owners = sorted({n.split(".")[1] for n in posed})
-    vertex_terms = edge_gradients(scene, geom, frame, d, [f"objects.{o}.vertices" for o in owners], device)
     adjoint = np.zeros((len(geom.points_np), 3), np.float32)
     starts = np.cumsum([0] + [len(o.vertices) for o in scene.objects])
     for o in owners:
