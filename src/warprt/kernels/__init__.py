@@ -17,7 +17,9 @@ from .aov import aov_buffers, aov_bytes, aov_sums, empty_aov_buffers
 from .camera import CameraData, camera_data, camera_ray, raster_camera, sample_offset
 from .clip import CLIP_SCALE
 from .dielectric import beer, beer_forever, fresnel_dielectric, refract
-from .grad import (MAX_GRAD_LIGHTS, TEXTURE_CLAMP, TEXTURE_MIRROR, TEXTURE_WRAP, area_replay, area_sample_term, bilinear,
+from .texture import bilinear, texel
+from ..geometry import TEXTURE_CLAMP, TEXTURE_MIRROR, TEXTURE_WRAP
+from .grad import (MAX_GRAD_LIGHTS, area_replay, area_sample_term,
                    camera_direction, camera_rays, corner_angle, light_factor, make_area_combine, make_grad_shade_kernel, sample_mean,
                    smooth_vertex_normals, spot_cone, texture_factor, vertex_normal_sums)
 from .grad_tree import make_tree_record_kernel, make_tree_replay_kernel, tree_area_combine, tree_camera_rays

@@ -27,10 +27,11 @@ from __future__ import annotations
 import functools
 
 from .._warp import wp
-from ..geometry import LIGHT_DIRECTIONAL, LIGHT_SPOT, SceneData
+from ..geometry import LIGHT_DIRECTIONAL, LIGHT_SPOT, TEXTURE_CLAMP, TEXTURE_MIRROR, TEXTURE_WRAP, SceneData
 from ..geometry.bvh import face_vertices
 from .camera import sample_offset
 from .interaction import Surface, hit_point_error, offset_ray_origin, reflect
+from .texture import bilinear
 from .shading import emitter_met, make_area_sample_test, phong_diffuse, phong_specular
 
 MAX_GRAD_LIGHTS = 16  # Warp's max_unroll: a longer static loop would silently turn dynamic
@@ -61,71 +62,7 @@ def light_factor(kind: int, cone: wp.vec4, inverse_square: int, axis: wp.vec3, t
     return w
 
 
-TEXTURE_WRAP, TEXTURE_CLAMP, TEXTURE_MIRROR = 0, 1, 2  # Warp's TextureAddressMode (WRAP, CLAMP, MIRROR)
 TEXTURE_NONE, TEXTURE_IMAGE, TEXTURE_CHECKER = 0, 1, -1  # a colour's texture in the replay's table
-
-
-@wp.func
-def texture_coord(c: float, mode: int) -> float:
-    """Warp's CPU sampler's reduction of a normalised coordinate (cpu_texture_normalized_coord, Warp 1.19
-    native/texture.h): fmodf by the period (1; 2 mirrored), made positive; clamped coordinates as given."""
-    if mode == wp.static(TEXTURE_WRAP) or mode == wp.static(TEXTURE_MIRROR):
-        period = 1.0
-        if mode == wp.static(TEXTURE_MIRROR):
-            period = 2.0
-        c = wp.mod(c, period)
-        if c < 0.0:
-            c = c + period
-    return c
-
-
-@wp.func
-def texel_index(i: int, size: int, mode: int) -> int:
-    """Warp's CPU sampler's texel index for an axis of ``size`` texels (cpu_apply_address_mode_index):
-    repeated, clamped, or mirrored with period 2 size."""
-    if mode == wp.static(TEXTURE_CLAMP):
-        return wp.clamp(i, 0, size - 1)
-    if mode == wp.static(TEXTURE_MIRROR):
-        m = i % (2 * size)
-        if m < 0:
-            m = m + 2 * size
-        if m >= size:
-            m = 2 * size - m - 1
-        return m
-    m = i % size
-    if m < 0:
-        m = m + size
-    return m
-
-
-@wp.func
-def bilinear(texels: wp.array(dtype=wp.vec3), offset: int, width: int, height: int, wrap_u: int, wrap_v: int,
-             q: wp.vec2) -> wp.vec3:
-    """The bilinear texel at normalised coordinates q of a width x height RGB image stored row by row
-    (row 0 at v = 0) from ``offset`` in ``texels``: Warp's CPU wp.texture_sample of a LINEAR Texture2D
-    (cpu_sample_2d_channel_at_level), its arithmetic in the same order, differentiable in the texels and
-    in q (wp.texture_sample gives texels no adjoint)."""
-    tx = texture_coord(q[0], wrap_u) * float(width) - 0.5
-    ty = texture_coord(q[1], wrap_v) * float(height) - 0.5
-    if wrap_u == wp.static(TEXTURE_CLAMP):
-        tx = wp.max(0.0, wp.min(tx, float(width - 1)))
-    if wrap_v == wp.static(TEXTURE_CLAMP):
-        ty = wp.max(0.0, wp.min(ty, float(height - 1)))
-    x0 = int(wp.floor(tx))
-    y0 = int(wp.floor(ty))
-    fx = tx - float(x0)
-    fy = ty - float(y0)
-    xa = texel_index(x0, width, wrap_u)
-    xb = texel_index(x0 + 1, width, wrap_u)
-    ya = texel_index(y0, height, wrap_v)
-    yb = texel_index(y0 + 1, height, wrap_v)
-    v00 = texels[offset + ya * width + xa]
-    v10 = texels[offset + ya * width + xb]
-    v01 = texels[offset + yb * width + xa]
-    v11 = texels[offset + yb * width + xb]
-    v0 = v00 * (1.0 - fx) + v10 * fx
-    v1 = v01 * (1.0 - fx) + v11 * fx
-    return v0 * (1.0 - fy) + v1 * fy
 
 
 @wp.func

@@ -121,9 +121,9 @@ def make_coefficients(TEXTURE: bool, VERTEX_COLOR: bool):
         c.kd = s.kd[m]
         c.ks = s.ks[m]
         if wp.static(TEXTURE):
-            c.ka = wp.cw_mul(c.ka, texel(s.textures, s.ka_map[m], hit.uv))
-            c.kd = wp.cw_mul(c.kd, texel(s.textures, s.kd_map[m], hit.uv))
-            c.ks = wp.cw_mul(c.ks, texel(s.textures, s.ks_map[m], hit.uv))
+            c.ka = wp.cw_mul(c.ka, texel(s.texels, s.ka_map[m], hit.uv))
+            c.kd = wp.cw_mul(c.kd, texel(s.texels, s.kd_map[m], hit.uv))
+            c.ks = wp.cw_mul(c.ks, texel(s.texels, s.ks_map[m], hit.uv))
         if wp.static(VERTEX_COLOR):
             c.ka = wp.cw_mul(c.ka, hit.color)
             c.kd = wp.cw_mul(c.kd, hit.color)
