@@ -5,7 +5,7 @@ eye along the moved direction (the differentiable Moller-Trumbore test the verte
 
 Checked here:
 - the replayed image with the camera path on is the forward's to float32 rounding;
-- warp.autograd.gradcheck of camera_rays (camera_direction) against Warp's own finite differences;
+- warp.autograd.gradcheck of camera_rays (camera_of, camera_ray) against Warp's own finite differences;
 - per component (eye, center, up: 3 each, fovy) and along a random direction of all ten, central
   differences of the forward (tests/grad/directional.py): a moving camera moves every edge (silhouettes,
   the shadows' edges in the image), and the pixels where the differences at h and h/2 disagree, where the
@@ -33,7 +33,7 @@ import warp as wp
 import warp.autograd
 
 import warprt
-from warprt.kernels import camera_direction, camera_rays
+from warprt.kernels import CameraData, camera_of, camera_ray, camera_rays
 from warprt.scene import resolve_effects
 
 from .directional import backward_masked, directional, random_direction
@@ -183,10 +183,10 @@ def _vertical_only(camera: wp.array(dtype=wp.vec3), fovy: wp.array(dtype=float),
     ray = wp.tid()
     x = ray % width
     row = ray / width
-    held = wp.tan(wp.radians(fovy0) * 0.5) / wp.tan(wp.radians(fovy[0]) * 0.5)
-    dirs[ray * levels] = camera_direction(camera[0], camera[1], camera[2], fovy[0], near,
-                                          float(width) / float(height) * held, (float(x) + 0.5) / float(width),
-                                          (float(height - 1 - row) + 0.5) / float(height))
+    c = camera_of(camera[0], camera[1], camera[2], fovy[0], near, width, height)
+    w = c.w * wp.tan(wp.radians(fovy0) * 0.5) / wp.tan(wp.radians(fovy[0]) * 0.5)
+    dirs[ray * levels] = camera_ray(CameraData(c.eye, c.x_e, c.y_e, c.z_e, c.d_f, c.h, w, c.width, c.height), x, row,
+                                    0.5, 0.5)
 
 
 def test_fovy_from_the_vertical_axis_alone_is_not_the_differences(weights):
@@ -204,7 +204,7 @@ def test_fovy_from_the_vertical_axis_alone_is_not_the_differences(weights):
 
 
 def test_camera_rays_pass_warps_gradcheck():
-    """camera_rays' (camera_direction's) adjoints for the eye, center, up and fovy against Warp's own finite
+    """camera_rays' (camera_of's and camera_ray's) adjoints for the eye, center, up and fovy against Warp's own finite
     differences, at 2 x 2 supersampled pixels of a 4 x 3 image."""
     camera = wp.array(np.asarray([[0.6, 2.2, 4.5], [0.1, 0.5, 0.0], [0.1, 1.0, 0.05]], np.float32), dtype=wp.vec3,
                       requires_grad=True)

@@ -14,13 +14,13 @@
 
 from .._warp import init_warp, wp
 from .aov import aov_buffers, aov_bytes, aov_sums, empty_aov_buffers
-from .camera import CameraData, camera_data, camera_ray, raster_camera, sample_offset
+from .camera import CameraData, camera_data, camera_of, camera_ray, image_plane_point, raster_camera, sample_offset
 from .clip import CLIP_SCALE
 from .dielectric import beer, beer_forever, fresnel_dielectric, refract
 from .texture import bilinear, texel
 from ..geometry import TEXTURE_CLAMP, TEXTURE_MIRROR, TEXTURE_WRAP
 from .grad import (MAX_GRAD_LIGHTS, area_replay, area_sample_term,
-                   camera_direction, camera_rays, corner_angle, light_factor, make_area_combine, make_grad_shade_kernel, sample_mean,
+                   camera_rays, corner_angle, light_factor, make_area_combine, make_grad_shade_kernel, sample_mean,
                    smooth_vertex_normals, spot_cone, texture_factor, vertex_normal_sums)
 from .grad_tree import make_tree_record_kernel, make_tree_replay_kernel, tree_area_combine, tree_camera_rays
 from .grad import POSE_TAYLOR, posed_point, posed_points, rodrigues_coefficients, translate_samples, vertex_colour
@@ -36,9 +36,9 @@ from .zbuffer_shade import make_shade_kernel
 
 # What image/ launches and reads, and what tests and benchmarks compose into kernels of their own.
 __all__ = ["CLIP_SCALE", "CameraData", "Fragments", "MARGIN_PX", "MAX_GRAD_LIGHTS", "TEXTURE_CLAMP", "TEXTURE_MIRROR", "TEXTURE_WRAP", "bilinear",
-           "area_replay", "area_sample_term", "camera_direction", "camera_rays", "corner_angle", "smooth_vertex_normals", "vertex_normal_sums", "make_area_combine",
+           "area_replay", "area_sample_term", "camera_rays", "corner_angle", "smooth_vertex_normals", "vertex_normal_sums", "make_area_combine",
            "make_grad_shade_kernel", "make_tree_record_kernel", "make_tree_replay_kernel", "tree_area_combine", "tree_camera_rays", "MAX_BOUNCES", "MAX_TREE_DEPTH", "MIRROR_MARGIN_PX",
-           "Mirrors", "OFFSET_SCALE", "aov_buffers", "aov_bytes", "aov_sums", "camera_data", "camera_ray",
+           "Mirrors", "OFFSET_SCALE", "aov_buffers", "aov_bytes", "aov_sums", "camera_data", "camera_of", "camera_ray", "image_plane_point",
            "beer", "beer_forever", "count_kernel", "empty_aov_buffers", "fill_kernel", "fresnel_dielectric", "gather_kernel", "grid_occluded",
            "init_warp", "light_factor", "make_shade_kernel", "make_surface", "make_trace_kernel", "mirror_chain", "mirror_hit",
            "offset_ray_origin", "phong_diffuse", "phong_specular", "probe_kernel", "project_kernel", "total_kernel", "query_normal",

@@ -8,7 +8,7 @@ import functools  # no "from __future__ import annotations": a kernel factory's 
 from .._warp import wp
 from ..geometry import SceneData
 from .aov import AovBuffers
-from .grad import image_plane_point
+from .camera import camera_of, image_plane_point
 from .interaction import Ray
 from .mirror import FROM_CAMERA, Mirrors
 from .raster import Fragments
@@ -24,14 +24,12 @@ def edge_distance(v0: wp.vec3, v1: wp.vec3, eye: wp.vec3, center: wp.vec3, up: w
     (d: image_plane_point, affine in x, so its axes are differences of its points), positive where g is.
     On the edge (g = 0) its derivative in any parameter is d_theta g / |grad_x g|: the edge's speed along its
     normal, the boundary term's v . n (docs/gradients.md)."""
-    aspect = float(width) / float(height)
+    c = camera_of(eye, center, up, fovy, near, width, height)
     px = x / float(width)
     py = y / float(height)
-    d = image_plane_point(eye, center, up, fovy, near, aspect, px, py)
-    d_x = (image_plane_point(eye, center, up, fovy, near, aspect, 1.0, py)
-           - image_plane_point(eye, center, up, fovy, near, aspect, 0.0, py)) / float(width)
-    d_y = (image_plane_point(eye, center, up, fovy, near, aspect, px, 1.0)
-           - image_plane_point(eye, center, up, fovy, near, aspect, px, 0.0)) / float(height)
+    d = image_plane_point(c, px, py)
+    d_x = (image_plane_point(c, 1.0, py) - image_plane_point(c, 0.0, py)) / float(width)
+    d_y = (image_plane_point(c, px, 1.0) - image_plane_point(c, px, 0.0)) / float(height)
     n = wp.cross(v0 - eye, v1 - eye)
     g_x = wp.dot(n, d_x)
     g_y = wp.dot(n, d_y)

@@ -29,7 +29,7 @@ import functools
 from .._warp import wp
 from ..geometry import LIGHT_DIRECTIONAL, LIGHT_SPOT, TEXTURE_CLAMP, TEXTURE_MIRROR, TEXTURE_WRAP, SceneData
 from ..geometry.bvh import face_vertices
-from .camera import sample_offset
+from .camera import camera_of, camera_ray, sample_offset
 from .interaction import Surface, hit_point_error, offset_ray_origin, reflect
 from .texture import bilinear
 from .shading import emitter_met, make_area_sample_test, phong_diffuse, phong_specular
@@ -136,47 +136,18 @@ def make_whitted_light(light_model: bool):
     return whitted_light
 
 
-@wp.func
-def image_plane_point(eye: wp.vec3, center: wp.vec3, up: wp.vec3, fovy: float, near: float, aspect: float,
-                      px: float, py: float) -> wp.vec3:
-    """The point of the image plane at (px, py) (0 to 1 from its lower-left corner: ((x + sx) / width,
-    (y + sy) / height)) relative to the eye, as a differentiable function of the camera:
-    scene.camera_basis's basis (z_e = (eye - center) / |eye - center|, x_e = (up x z_e) / |up x z_e|,
-    y_e = z_e x x_e, h = 2 near tan(fovy / 2), fovy in degrees, w = h aspect) and camera.camera_ray's
-    d = -near z_e + h (py - 1/2) y_e + w (px - 1/2) x_e, not normalised; affine in (px, py). float32, where
-    the forward builds the basis in float64 on the host."""
-    z_e = wp.normalize(eye - center)
-    x_e = wp.normalize(wp.cross(up, z_e))
-    y_e = wp.cross(z_e, x_e)
-    h = 2.0 * near * wp.tan(wp.radians(fovy) * 0.5)
-    w = h * aspect
-    return (-near) * z_e + h * (py - 0.5) * y_e + w * (px - 0.5) * x_e
-
-
-@wp.func
-def camera_direction(eye: wp.vec3, center: wp.vec3, up: wp.vec3, fovy: float, near: float, aspect: float,
-                     px: float, py: float) -> wp.vec3:
-    """The unit direction of the camera ray through the point (px, py) of the image plane:
-    image_plane_point, normalised."""
-    return wp.normalize(image_plane_point(eye, center, up, fovy, near, aspect, px, py))
-
-
 @wp.kernel(module="unique")
 def camera_rays(camera: wp.array(dtype=wp.vec3), fovy: wp.array(dtype=float), near: float, width: int, height: int,
                 k: int, levels: int, dirs: wp.array(dtype=wp.vec3)):
     """Each camera ray's direction (ray pixel * k^2 + sample, as the record numbers them: the pixel's
     stratum centre, camera.sample_offset; written at ray * levels, the record's first level of the ray) from the camera (``camera``: eye and center relative to the frame
-    origin, up; ``fovy`` in degrees), differentiable in both: camera_direction at the point the trace kernel
-    aims the ray at."""
+    origin, up; ``fovy`` in degrees), differentiable in both: the forward's camera_ray, its basis made in Warp
+    (camera_of)."""
     ray = wp.tid()
     pixel = ray / (k * k)
-    x = pixel % width
-    row = pixel / width
     offset = sample_offset(ray % (k * k), k)
-    y = float(height - 1 - row)
-    dirs[ray * levels] = camera_direction(camera[0], camera[1], camera[2], fovy[0], near,
-                                          float(width) / float(height), (float(x) + offset[0]) / float(width),
-                                          (y + offset[1]) / float(height))
+    c = camera_of(camera[0], camera[1], camera[2], fovy[0], near, width, height)
+    dirs[ray * levels] = camera_ray(c, pixel % width, pixel / width, offset[0], offset[1])
 
 
 @functools.cache
