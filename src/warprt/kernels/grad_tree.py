@@ -27,11 +27,11 @@ import functools
 from .._warp import wp
 from ..geometry import SceneData
 from .camera import CameraData, camera_ray, sample_offset
-from .dielectric import beer, beer_forever, dielectric_children, fresnel_dielectric, refract
+from .dielectric import absorbed, beer, beer_forever, dielectric_children, fresnel_dielectric, refract
 from .grad import keep_for_area, make_area_record, make_replay_local, make_replay_surface
 from .interaction import Surface, make_surface, offset_ray_origin, reflect, spawn_ray
 from .shading import make_light_test
-from .trace import absorbed, culled, past
+from .trace import culled, past
 
 
 CHILD_NONE, CHILD_MIRROR, CHILD_DIELECTRIC = 0, 1, 2  # what a recorded ray spawns

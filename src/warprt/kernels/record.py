@@ -47,6 +47,13 @@ def record_hit(rec: GradRecord, camera_ray: int, depth: int, face: int, u: float
     return j
 
 
+@wp.func(inline=True)
+def record_area_point(rec: GradRecord, j: int, q: int):
+    """Mark area-light sample point q seen from the hit of entry j: bit q % 32 of its word q / 32."""
+    word = j * rec.words + q / 32
+    rec.area_bits[word] = rec.area_bits[word] | (1 << (q % 32))
+
+
 @functools.cache
 def make_follows_mirror(RECORD: bool):
     """follows_mirror(kr, rec, m): whether a hit of material slot m with reflectivity kr spawns a mirror ray:

@@ -13,9 +13,9 @@ from ..errors import SceneError
 from ..geometry import SceneData
 from .aov import AovBuffers, make_record_first_hit
 from .camera import CameraData, camera_ray, sample_offset
-from .dielectric import beer, beer_forever, dielectric_children
+from .dielectric import absorbed, absorbed_forever, dielectric_children
 from .hybrid import uncertain
-from .interaction import Ray, Surface, hit_point_error, make_surface, offset_ray_origin, reflect, spawn_ray
+from .interaction import Ray, hit_point_error, make_surface, mirror_ray, offset_ray_origin, spawn_ray
 from .mirror import FROM_CAMERA, NO_CHAIN, Mirrors, mirror_chain, mirror_hit
 from .raster import Fragments
 from .record import GradRecord, make_follows_mirror, record_hit
@@ -67,22 +67,6 @@ class TreeRay:
     medium: int
     chain: int
     src: int
-
-
-@wp.func
-def absorbed(s: SceneData, weight: wp.vec3, medium: int, start: wp.vec3, hit: Surface) -> wp.vec3:
-    """The weight of a ray that went from start to the hit through medium (-1: air, which absorbs nothing)."""
-    if medium >= 0:
-        weight = beer(weight, s.absorption[medium], wp.length(hit.p - start))
-    return weight
-
-
-@wp.func
-def absorbed_forever(s: SceneData, weight: wp.vec3, medium: int) -> wp.vec3:
-    """The weight of a ray that leaves through medium (-1: air) and meets nothing: Beer's law to infinity."""
-    if medium >= 0:
-        weight = beer_forever(weight, s.absorption[medium])
-    return weight
 
 
 @wp.struct
@@ -262,8 +246,8 @@ def make_path(fx, raster_primary: bool, stack: int, report_truncated: bool, aovs
                         if wp.static(MIRRORS):
                             chain = mirror_chain(mir, r.chain, h.face)
                         # a mirror's ray stays in the medium it came through
-                        r = TreeRay(spawn_ray(hit, wp.normalize(reflect(r.ray.d, hit.n))), wp.cw_mul(r.weight, kr),
-                                    hit.p, level, r.medium, chain, h.face)
+                        r = TreeRay(mirror_ray(hit, r.ray.d), wp.cw_mul(r.weight, kr), hit.p, level, r.medium, chain,
+                                    h.face)
                         rays[2] += 1
                         continue
                     if wp.static(TRUNCATED):
