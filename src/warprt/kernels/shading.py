@@ -253,14 +253,13 @@ class AreaTest:
 
 
 @wp.func
-def area_arrival(s: SceneData, hit: Surface, q: int) -> AreaTest:
-    """How the area lights' sample point q arrives at the hit: L, r^2, n.L and cos_q (AreaTest's; no shadow
-    ray, lit 0), a differentiable function of the hit and the point (the gradient's replay)."""
-    a = s.area
+def point_arrival(point: wp.vec3, normal: wp.vec3, hit: Surface) -> AreaTest:
+    """How a point of an emitter (its unit normal on the emitting side) arrives at the hit: L, r^2, n.L and
+    cos_q (AreaTest's; no shadow ray, lit 0), a differentiable function of the hit and the point."""
     out = AreaTest()
     out.shadow_ray = 0
     out.lit = 0
-    to_q = a.points[q] - hit.p
+    to_q = point - hit.p
     r2 = wp.dot(to_q, to_q)
     out.r2 = r2
     if not (r2 > 0.0):
@@ -268,8 +267,15 @@ def area_arrival(s: SceneData, hit: Surface, q: int) -> AreaTest:
     L = to_q / wp.sqrt(r2)
     out.L = L
     out.n_dot_l = wp.dot(hit.n, L)
-    out.cos_q = -wp.dot(a.normals[q], L)
+    out.cos_q = -wp.dot(normal, L)
     return out
+
+
+@wp.func
+def area_arrival(s: SceneData, hit: Surface, q: int) -> AreaTest:
+    """How the area lights' sample point q arrives at the hit (point_arrival): what the gradient's replay
+    differentiates, the shadow ray's answer being the record's."""
+    return point_arrival(s.area.points[q], s.area.normals[q], hit)
 
 
 @functools.cache
