@@ -47,11 +47,11 @@ import numpy as np
 from .._warp import wp
 from ..errors import ArgumentError
 from ..geometry import AreaLights, SceneData, TextureSlot, texel_array, texture_slots
-from ..kernels import (ReplayCamera, ReplayHits, ReplayRays, make_replay_level, posed_points, replay_area,
-                       replay_combine, sample_mean, smooth_vertex_normals, translate_samples, vertex_normal_sums)
+from ..kernels import (ReplayCamera, ReplayHits, ReplayRays, camera_data, make_replay_combine, make_replay_level,
+                       posed_points, replay_area, sample_mean, smooth_vertex_normals, translate_samples, vertex_normal_sums)
 from ..kernels.interaction import Surface
 from ..kernels.shading import Coefficients
-from ..scene import drawn_objects, position_ids
+from ..scene import camera_basis, drawn_objects, position_ids
 from .grad_edges import EdgeFrame, check_edges, edge_gradients
 from .grad_params import checked_names, gradients_by_name
 from .grad_record import Record
@@ -103,8 +103,8 @@ class Replay:
             if h.words:
                 wp.launch(self.area_kernel, dim=(count, int(self.sample_light.shape[0])),
                           inputs=[self.data, h.rec, first, self.sample_light, self.area], device=device)
-                wp.launch(replay_combine, dim=count, inputs=[h.rec, first, self.area], outputs=[self.colour],
-                          device=device)
+                wp.launch(make_replay_combine(h.tree), dim=count, inputs=[h.rec, first, self.area],
+                          outputs=[self.colour], device=device)
 
 
 def _vec3(rows, device: str, grad: bool = True) -> wp.array:
@@ -177,22 +177,23 @@ def replay_camera(scene, geom, hits: Record, device: str) -> ReplayCamera:
     camera rays' origin: ``origin`` is that array) and up, and fovy, differentiable."""
     cam = scene.camera
     c = ReplayCamera()
+    c.frame = camera_data(camera_basis(cam), geom.eye_offset(cam.eye))
     c.camera = _vec3([geom.eye_offset(cam.eye), geom.eye_offset(cam.center), cam.up], device)
     c.origin = c.camera
     c.fovy = wp.array([cam.fovy], dtype=float, device=device, requires_grad=True)
-    c.near, c.width, c.height, c.k = float(cam.near), hits.width, hits.height, int(round(np.sqrt(hits.samples)))
+    c.near, c.k = float(cam.near), int(round(np.sqrt(hits.samples)))
     return c
 
 
 def replay_rays(hits: Record, moving: bool, device: str) -> ReplayRays:
-    """The arrays a level's launch hands the next (ReplayRays): a child's weight (two a ray with glass), with
-    ``moving`` (the hits move, or glass) its origin and direction, with Beer's law where each ray began;
-    stand-ins for what is not read."""
+    """The arrays a level's launch hands the next (ReplayRays): a child's weight and direction (two a ray with
+    glass), with ``moving`` (the hits move, or glass) its origin, with Beer's law where each ray began; stand-ins
+    for what is not read."""
     n = hits.entries * (2 if hits.fx.refraction else 1) if hits.levels > 1 else 1
     zeros = lambda size: wp.zeros(max(size, 1), dtype=wp.vec3, device=device, requires_grad=True)  # noqa: E731
     r = ReplayRays()
-    r.weight = zeros(n)
-    r.origin, r.direction = zeros(n if moving else 1), zeros(n if moving else 1)
+    r.weight, r.direction = zeros(n), zeros(n)
+    r.origin = zeros(n if moving else 1)
     r.start = zeros(hits.entries if hits.absorption and hits.levels > 1 else 1)
     return r
 

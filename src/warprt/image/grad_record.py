@@ -18,12 +18,12 @@ from .memory import available_memory, human
 from .mirrors import empty_mirrors
 from .zbuffer import empty_fragments
 
-# Bytes of an entry of the record (face, barycentrics, direction, parent, camera ray, medium: 4 + 8 + 12 + 12),
-# 4 a light; with area lights the emitter met (4) and a bit per sample point (in 4-byte words). And of the replay
-# (kernels/replay.py), each with its adjoint: a child's weight (2 x 12 a branch; its origin and direction too
-# where the hits move, 2 x 24), where it began (2 x 12); with area lights the hit, its colours, its weight and
+# Bytes of an entry of the record (face, barycentrics, the lights seen: 4 + 8 + 4; with glass its parent, camera ray
+# and medium, 12); with area lights the emitter met (4) and a bit per sample point (in 4-byte words). And of the
+# replay (kernels/replay.py), each with its adjoint: a child's weight and direction (2 x 24 a branch; its origin
+# too where the hits move, 2 x 12), where it began (2 x 12); with area lights the hit, its colours, its weight and
 # local colour (2 x 132).
-RECORD_BYTES_PER_ENTRY, RECORD_BYTES_PER_LIGHT, REPLAY_BYTES_PER_ENTRY = 36, 4, 24 + 48 + 24
+RECORD_BYTES_PER_ENTRY, TREE_BYTES_PER_ENTRY, REPLAY_BYTES_PER_ENTRY = 16, 12, 48 + 24 + 24
 AREA_RECORD_BYTES_PER_ENTRY, AREA_REPLAY_BYTES_PER_ENTRY = 4, 264
 GROWTH = 1.25  # a glass frame's regions, made again from the rays a frame used: room for the next frame's
 FIRST_CAPACITY = 2  # a glass frame's region in each deeper level, per camera ray, when no frame has said more
@@ -47,7 +47,7 @@ def ray_levels(scene, fx, mirrored=()) -> int:
 
 def entry_bytes(scene, fx) -> int:
     """What an entry of a frame's record and its replay hold, in bytes."""
-    per = RECORD_BYTES_PER_ENTRY + RECORD_BYTES_PER_LIGHT * len(scene.whitted_lights) + REPLAY_BYTES_PER_ENTRY
+    per = RECORD_BYTES_PER_ENTRY + REPLAY_BYTES_PER_ENTRY + (TREE_BYTES_PER_ENTRY if fx.refraction else 0)
     if fx.area_lights:
         per += AREA_RECORD_BYTES_PER_ENTRY + 4 * _words(area_samples(scene)) + AREA_REPLAY_BYTES_PER_ENTRY
     return per
@@ -200,15 +200,13 @@ def record_arrays(scene, geom, data, fx, levels: int, device: str, bands: list, 
         level_size = np.full(D, n, np.int64)
     level_start = np.concatenate([[0], np.cumsum(level_size)]).astype(np.int64)
     total = int(level_start[-1])
-    sizes = (total + 1, (total + 1) * max(L, 1), (total + 1) if words else 1, (total + 1) * words or 1)
+    sizes = (total + 1, (total + 1) if tree else 1, (total + 1) if words else 1, (total + 1) * words or 1)
     r = reuse.rec if reuse is not None and _fits(reuse, sizes, device) else None
     if r is None:
         r = GradRecord()
-        r.face = wp.empty(sizes[0], dtype=int, device=device)
+        r.face, r.visible = (wp.empty(sizes[0], dtype=int, device=device) for _ in range(2))
         r.bary = wp.empty(sizes[0], dtype=wp.vec2, device=device)
-        r.dirs = wp.empty(sizes[0], dtype=wp.vec3, device=device)
-        r.parent, r.ray_of, r.medium = (wp.empty(sizes[0], dtype=int, device=device) for _ in range(3))
-        r.visible = wp.empty(sizes[1], dtype=int, device=device)
+        r.parent, r.ray_of, r.medium = (wp.empty(sizes[1], dtype=int, device=device) for _ in range(3))
         r.emit = wp.empty(sizes[2], dtype=int, device=device)
         r.area_bits = wp.zeros(sizes[3], dtype=int, device=device)
     r.face.fill_(NO_RAY)
@@ -229,7 +227,7 @@ def record_arrays(scene, geom, data, fx, levels: int, device: str, bands: list, 
 
 def _fits(old: Record, sizes: tuple, device: str) -> bool:
     r = old.rec
-    return (r.face.shape[0], r.visible.shape[0], r.emit.shape[0], r.area_bits.shape[0]) == sizes and \
+    return (r.face.shape[0], r.parent.shape[0], r.emit.shape[0], r.area_bits.shape[0]) == sizes and \
         r.face.device == wp.get_device(device)
 
 

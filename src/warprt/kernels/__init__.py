@@ -22,7 +22,7 @@ from .dielectric import beer, beer_forever, fresnel_dielectric, refract
 from .texture import bilinear, texel
 from .pose import POSE_TAYLOR, posed_point, posed_points, rodrigues_coefficients
 from .replay import (MAX_GRAD_LIGHTS, ReplayCamera, ReplayHits, ReplayRays, barycentrics_on, make_replay_level,
-                     replay_area, replay_combine, sample_mean, translate_samples)
+                     make_replay_combine, replay_area, sample_mean, translate_samples)
 from .vertex_normals import corner_angle, smooth_vertex_normals, vertex_normal_sums
 from .hybrid import MARGIN_PX, uncertain, uncertain_np
 from .interaction import OFFSET_SCALE, make_surface, offset_ray_origin, reflect
@@ -48,16 +48,16 @@ __all__ = ["CLIP_SCALE", "CameraData", "Fragments", "MARGIN_PX", "MAX_BOUNCES", 
            "total_kernel", "triangle", "uncertain", "uncertain_np", "unit_normal", "woop_hit", "wp"]
 # The gradient: its replay, and what moves the points, normals and area lights' samples it reads.
 __all__ += ["MAX_GRAD_LIGHTS", "ReplayCamera", "ReplayHits", "ReplayRays", "barycentrics_on", "make_replay_level",
-            "replay_area", "replay_combine", "sample_mean", "translate_samples", "corner_angle",
+            "replay_area", "make_replay_combine", "sample_mean", "translate_samples", "corner_angle",
             "smooth_vertex_normals", "vertex_normal_sums", "POSE_TAYLOR", "posed_point", "posed_points",
             "rodrigues_coefficients"]
 # The forward's functions the replay differentiates (tests gradcheck them one by one).
 __all__ += ["AreaTest", "Coefficients", "LightArrival", "Surface", "absorbed", "absorbed_forever", "area_arrival",
             "dielectric_children", "light_weight", "make_coefficients", "make_light_arrival", "make_light_terms",
             "mirror_ray", "point_arrival", "spawn_ray", "spot_profile"]
-from .record import NO_PARENT, NO_RAY, GradRecord, empty_record  # noqa: E402 (what a grad=True frame's trace writes)
+from .record import NO_PARENT, NO_RAY, GradRecord, empty_record, make_entry  # noqa: E402 (what a grad=True frame's trace writes)
 
-__all__ += ["NO_PARENT", "NO_RAY", "GradRecord", "empty_record"]
+__all__ += ["NO_PARENT", "NO_RAY", "GradRecord", "empty_record", "make_entry"]
 from .edges import edge_distance, edge_distances, make_edge_sides_kernel  # noqa: E402 (backward(edges=True))
 
 __all__ += ["edge_distance", "edge_distances", "make_edge_sides_kernel"]

@@ -12,8 +12,10 @@ at most one ray a level per camera ray, at the same place in each level. Glass's
 children a ray, and a level's rays are counted as they come: each band of pixels (one launch) takes entries
 from a region of its own per level (``region``, ``capacity``), ``used`` counting what it took, past the
 capacity too (the host then makes the regions larger and traces the frame again: image/grad_record.py).
-Each entry names its parent (2 parent + branch: 0 the reflected or a mirror's ray, 1 the transmitted one), its
-camera ray and its medium, so the replay runs one launch a level with no host pass between.
+A tree's entry names its parent (2 parent + branch: 0 the reflected or a mirror's ray, 1 the transmitted one), its
+camera ray and its medium, so the replay runs one launch a level with no host pass between; a chain's follow from
+its place (make_entry). No direction is kept: the replay makes each ray again, the camera's from the camera and
+a child from its parent's hit, with the very functions and values the forward used.
 """
 
 from __future__ import annotations
@@ -32,18 +34,17 @@ NO_PARENT = -1  # a camera ray's parent
 @wp.struct
 class GradRecord:
     """The record's entries (see the module docstring): per entry the face hit (-1: none, NO_RAY: no ray),
-    Warp's barycentrics, the ray's direction, per Whitted light (``lights`` an entry) whether the hit sees it,
-    the area light whose emitting side the ray met (-1: none) and a bit per area-light sample point the hit
-    sees (``words`` int32s an entry), its parent (2 entry + branch, NO_PARENT for a camera ray), its camera ray
-    and the medium it travels in (-1: air). ``level_start``: where each of the ``levels`` levels begins
-    (levels + 1 values). With glass, per (band, level) the band's region in its level, its capacity and the
+    Warp's barycentrics, a bit per Whitted light (``lights`` of them, 16 at most: the replay's limit) the hit
+    sees, the area light whose emitting side the ray met (-1: none) and a bit per area-light sample point the
+    hit sees (``words`` int32s an entry); with glass its parent (2 entry + branch, NO_PARENT for a camera ray),
+    its camera ray and the medium it travels in (-1: air). ``level_start``: where each of the ``levels``
+    levels begins (levels + 1 values). With glass, per (band, level) the band's region in its level, its capacity and the
     entries it used; ``band``: the band a launch traces (a copy of the record per band). ``scratch``: the entry
     written where a region is full, never read. ``mirrored``: per material slot, 1 where the mirror rays are
     followed whatever its k_r (a named reflectivity of 0: their weight is 0, the image the same)."""
 
     face: wp.array(dtype=int)
     bary: wp.array(dtype=wp.vec2)
-    dirs: wp.array(dtype=wp.vec3)
     visible: wp.array(dtype=int)
     emit: wp.array(dtype=int)
     area_bits: wp.array(dtype=int)
@@ -64,15 +65,16 @@ class GradRecord:
 
 @functools.cache
 def make_record_hit(TREE: bool):
-    """record_hit(rec, depth, camera_ray, parent, medium, face, u, v, d) -> j: the entry of a ray at ray level
-    ``depth`` of camera ray ``camera_ray`` (its parent and medium as given), with its nearest hit (face, Warp's
-    barycentrics) and direction written; shade() then writes what the hit sees at j. A camera ray's entry, and
-    without TREE (a chain) every ray's, is its camera ray's place in its level; with TREE a deeper ray takes
-    the next entry of its band's region (rec.scratch where that is full, ``used`` counting it all the same)."""
+    """record_hit(rec, depth, camera_ray, parent, medium, face, u, v) -> j: the entry of a ray at ray level
+    ``depth`` of camera ray ``camera_ray``, with its nearest hit (face, Warp's barycentrics) written; shade()
+    then writes what the hit sees at j. A camera ray's entry, and without TREE (a chain) every ray's, is its
+    camera ray's place in its level; with TREE a deeper ray takes the next entry of its band's region
+    (rec.scratch where that is full, ``used`` counting it all the same), and its parent and medium are written
+    too (a chain's follow from its place: make_entry)."""
 
     @wp.func(inline=True)
     def record_hit(rec: GradRecord, depth: int, camera_ray: int, parent: int, medium: int, face: int, u: float,
-                   v: float, d: wp.vec3) -> int:
+                   v: float) -> int:
         j = rec.level_start[depth] + camera_ray
         if wp.static(TREE):
             if depth > 0:
@@ -81,15 +83,42 @@ def make_record_hit(TREE: bool):
                 j = rec.scratch
                 if slot < rec.capacity[cell]:
                     j = rec.level_start[depth] + rec.region[cell] + slot
+            rec.parent[j] = parent
+            rec.ray_of[j] = camera_ray
+            rec.medium[j] = medium
         rec.face[j] = face
-        rec.dirs[j] = d
         rec.bary[j] = wp.vec2(u, v)
-        rec.parent[j] = parent
-        rec.ray_of[j] = camera_ray
-        rec.medium[j] = medium
         return j
 
     return record_hit
+
+
+@functools.cache
+def make_entry(TREE: bool):
+    """(entry_parent, entry_ray, entry_medium): of a record's entry j (not a camera ray's, for its parent), its
+    parent's code (2 entry + branch), its camera ray and its medium: with TREE as written; a chain's from its
+    place (level k holds camera ray r at level_start[k] + r, every level the camera rays' count; its parent the
+    same camera ray's entry a level up, branch 0; every ray in the eye's medium: a mirror's ray stays in its)."""
+
+    @wp.func
+    def entry_parent(rec: GradRecord, j: int) -> int:
+        if wp.static(TREE):
+            return rec.parent[j]
+        return 2 * (j - rec.level_start[1])
+
+    @wp.func
+    def entry_ray(rec: GradRecord, j: int) -> int:
+        if wp.static(TREE):
+            return rec.ray_of[j]
+        return j % rec.level_start[1]
+
+    @wp.func
+    def entry_medium(rec: GradRecord, s: SceneData, j: int) -> int:
+        if wp.static(TREE):
+            return rec.medium[j]
+        return s.eye_medium
+
+    return entry_parent, entry_ray, entry_medium
 
 
 @wp.func(inline=True)
@@ -139,7 +168,6 @@ def empty_record(device: str) -> GradRecord:
     for name in ints:
         setattr(r, name, wp.zeros(1, dtype=int, device=device))
     r.bary = wp.zeros(1, dtype=wp.vec2, device=device)
-    r.dirs = wp.zeros(1, dtype=wp.vec3, device=device)
     r.band, r.scratch, r.levels, r.lights, r.words = 0, 0, 1, 0, 0
     return r
 

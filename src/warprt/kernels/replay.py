@@ -20,10 +20,10 @@ import functools
 
 from .._warp import wp
 from ..geometry import SceneData
-from .camera import camera_of, camera_ray, sample_offset
+from .camera import CameraData, camera_of, camera_ray, sample_offset
 from .dielectric import absorbed, absorbed_forever, dielectric_children
 from .interaction import Ray, Surface, make_surface, mirror_ray, spawn_ray
-from .record import NO_RAY, GradRecord, make_follows_mirror
+from .record import NO_RAY, GradRecord, make_entry, make_follows_mirror
 from .shading import Coefficients, area_arrival, make_coefficients, make_light_arrival, make_light_terms
 from .triangle import query_normal, triangle
 
@@ -32,10 +32,12 @@ MAX_GRAD_LIGHTS = 16  # Warp's max_unroll: the replay's lights loop, longer, wou
 
 @wp.struct
 class ReplayCamera:
-    """The camera the replay's camera rays start from: ``camera`` its eye and center (relative to the frame
-    origin) and up, ``fovy`` in degrees, differentiable; the rays' ``origin``, the eye (``camera`` itself: its
-    first row); the image and its ``k`` x ``k`` samples a pixel."""
+    """The camera the replay's camera rays start from: ``frame`` the forward's (its basis as the host made it, the
+    rays the same to the bit); ``camera`` its eye and center (relative to the frame origin) and up, ``fovy`` in
+    degrees, differentiable, which make the rays where the camera is differentiated; the rays' ``origin``, the
+    eye (``camera`` itself: its first row); the image and its ``k`` x ``k`` samples a pixel."""
 
+    frame: CameraData
     camera: wp.array(dtype=wp.vec3)
     origin: wp.array(dtype=wp.vec3)
     fovy: wp.array(dtype=float)
@@ -47,8 +49,8 @@ class ReplayCamera:
 
 @wp.struct
 class ReplayRays:
-    """What a level's launch hands the next: per child (entry x branches + branch) its weight, and where the hits
-    move its origin and direction; per entry its hit point, where its children's segments begin (Beer)."""
+    """What a level's launch hands the next: per child (entry x branches + branch) its weight and direction, and
+    where the hits move its origin; per entry its hit point, where its children's segments begin (Beer)."""
 
     weight: wp.array(dtype=wp.vec3)
     origin: wp.array(dtype=wp.vec3)
@@ -84,32 +86,34 @@ def barycentrics_on(p0: wp.vec3, p1: wp.vec3, p2: wp.vec3, o: wp.vec3, d: wp.vec
 
 
 @functools.cache
-def make_replay_ray(BRANCHES: int, FIRST: bool, MOVING: bool, CAMERA: bool, ABSORB: bool):
+def make_replay_ray(TREE: bool, FIRST: bool, MOVING: bool, CAMERA: bool, ABSORB: bool):
     """replay_ray(cam, rec, rays, j) -> (o, d, weight, start): entry j's ray as its level's launch makes it
-    again: a camera ray (FIRST; with CAMERA aimed by the differentiable camera, else along the recorded
-    direction), else its parent's child (the weight, and with MOVING its origin and direction, from ``rays``);
-    ``start`` where its segment began (ABSORB). The direction is the recorded one where nothing moves."""
+    again: a camera ray (FIRST: the forward's camera_ray, or with CAMERA the differentiable camera's), else its
+    parent's child (its weight and direction, and with MOVING its origin, from ``rays``: make_entry says which);
+    ``start`` where its segment began (ABSORB)."""
+    entry_parent, _, _ = make_entry(TREE)
+    BRANCHES = 2 if TREE else 1
 
     @wp.func
     def replay_ray(cam: ReplayCamera, rec: GradRecord, rays: ReplayRays, j: int):
-        d = rec.dirs[j]
         o = cam.origin[0]
         w = wp.vec3(1.0)
         start = o
-        if wp.static(FIRST):
+        if wp.static(FIRST):  # a camera ray: entry j is camera ray j
+            offset = sample_offset(j % (cam.k * cam.k), cam.k)
+            pixel = j / (cam.k * cam.k)
+            c = cam.frame
             if wp.static(CAMERA):
-                ray = rec.ray_of[j]
-                offset = sample_offset(ray % (cam.k * cam.k), cam.k)
-                pixel = ray / (cam.k * cam.k)
-                c = camera_of(cam.camera[0], cam.camera[1], cam.camera[2], cam.fovy[0], cam.near, cam.width, cam.height)
-                d = camera_ray(c, pixel % cam.width, pixel / cam.width, offset[0], offset[1])
+                c = camera_of(cam.camera[0], cam.camera[1], cam.camera[2], cam.fovy[0], cam.near, cam.frame.width,
+                              cam.frame.height)
+            d = camera_ray(c, pixel % c.width, pixel / c.width, offset[0], offset[1])
         else:
-            code = rec.parent[j]
+            code = entry_parent(rec, j)
             child = (code / 2) * wp.static(BRANCHES) + code % 2
             w = rays.weight[child]
+            d = rays.direction[child]
             if wp.static(MOVING):
                 o = rays.origin[child]
-                d = rays.direction[child]
             if wp.static(ABSORB):
                 start = rays.start[code / 2]
         return o, d, w, start
@@ -121,17 +125,17 @@ def make_replay_ray(BRANCHES: int, FIRST: bool, MOVING: bool, CAMERA: bool, ABSO
 def make_replay_children(MOVING: bool, MIRROR: bool, GLASS: bool):
     """replay_children(s, rec, rays, j, f, hit, d, w): the children entry j's hit spawns, as the forward spawns
     them (a mirror's bounce where follows_mirror, else a dielectric's two rays), left in ``rays`` at
-    2 j + branch (with GLASS; j without) for the next level's launch; every one the forward could spawn, the
-    record saying which were traced."""
+    2 j + branch (with GLASS; j without) for the next level's launch, their origins with MOVING; every one the
+    forward could spawn, the record saying which were traced."""
     follows_mirror = make_follows_mirror(True)
     BRANCHES = 2 if GLASS else 1
 
     @wp.func
     def put(rays: ReplayRays, child: int, ray: Ray, weight: wp.vec3):
         rays.weight[child] = weight
+        rays.direction[child] = ray.d
         if wp.static(MOVING):
             rays.origin[child] = ray.o
-            rays.direction[child] = ray.d
 
     @wp.func
     def replay_children(s: SceneData, rec: GradRecord, rays: ReplayRays, j: int, f: int, hit: Surface, d: wp.vec3,
@@ -178,7 +182,8 @@ def make_replay_level(fx, lights: int, first: bool, moving: bool, camera: bool, 
     coefficients = make_coefficients(fx.texture, fx.vertex_color)
     light_arrival = make_light_arrival(fx.light_model)
     whitted_term, _ = make_light_terms(True, True)
-    replay_ray = make_replay_ray(2 if fx.refraction else 1, first, moving, camera, absorption)
+    replay_ray = make_replay_ray(bool(fx.refraction), first, moving, camera, absorption)
+    _, entry_ray, entry_medium = make_entry(bool(fx.refraction))
     replay_children = make_replay_children(moving or fx.refraction, fx.reflection, fx.refraction)
     L, AREA, MOVING, ABSORB = lights, fx.area_lights, moving, absorption
     STARTS = absorption and (fx.reflection or fx.refraction)
@@ -193,8 +198,8 @@ def make_replay_level(fx, lights: int, first: bool, moving: bool, camera: bool, 
         o, d, w, start = replay_ray(cam, rec, rays, j)
         if f == -1:  # ---- met nothing ----
             if wp.static(ABSORB):
-                w = absorbed_forever(s, w, rec.medium[j])
-            wp.atomic_add(colour, rec.ray_of[j], wp.cw_mul(w, s.background))
+                w = absorbed_forever(s, w, entry_medium(rec, s, j))
+            wp.atomic_add(colour, entry_ray(rec, j), wp.cw_mul(w, s.background))
         else:
             p0, p1, p2 = triangle(s, f)
             uv = rec.bary[j]
@@ -202,22 +207,23 @@ def make_replay_level(fx, lights: int, first: bool, moving: bool, camera: bool, 
                 uv = barycentrics_on(p0, p1, p2, o, d)
             hit = surface(s, f, uv[0], uv[1], query_normal(p0, p1, p2), d)
             if wp.static(ABSORB):
-                w = absorbed(s, w, rec.medium[j], start, hit)
+                w = absorbed(s, w, entry_medium(rec, s, j), start, hit)
             # ---- emitted: an area light's own surface, as recorded ----
             if wp.static(AREA):
                 e = rec.emit[j]
                 if e >= 0:
-                    wp.atomic_add(colour, rec.ray_of[j], wp.cw_mul(w, s.area.radiance[e]))
+                    wp.atomic_add(colour, entry_ray(rec, j), wp.cw_mul(w, s.area.radiance[e]))
             # ---- local shading, the lights seen as recorded ----
             k = coefficients(s, hit)
             local = wp.cw_mul(s.ambient, k.ka)
+            seen = rec.visible[j]
             for l in range(wp.static(L)):
-                if rec.visible[j * wp.static(L) + l] != 0:
+                if (seen >> l) & 1 != 0:
                     local = local + whitted_term(light_arrival(s, hit, l), k, s.shininess[hit.material], hit.n, -d)
             if wp.static(AREA):  # the area lights' sample points next (replay_area), then replay_combine
                 keep_for_area(hits, j, hit, k, d, w, local)
             else:
-                wp.atomic_add(colour, rec.ray_of[j], wp.cw_mul(w, local))
+                wp.atomic_add(colour, entry_ray(rec, j), wp.cw_mul(w, local))
             # ---- its children ----
             if wp.static(STARTS):
                 rays.start[j] = hit.p
@@ -247,13 +253,20 @@ def replay_area(s: SceneData, rec: GradRecord, first_entry: int, sample_light: w
             wp.atomic_add(hits.local, j, term)
 
 
-@wp.kernel(module="unique")
-def replay_combine(rec: GradRecord, first_entry: int, hits: ReplayHits, colour: wp.array(dtype=wp.vec3)):
-    """With area lights, each hit of a level's local colour (the area lights' points added) times its weight,
-    added to its camera ray's after its emitted radiance, as the tracer adds them."""
-    j = first_entry + wp.tid()
-    if rec.face[j] >= 0:
-        wp.atomic_add(colour, rec.ray_of[j], wp.cw_mul(hits.weight[j], hits.local[j]))
+@functools.cache
+def make_replay_combine(TREE: bool):
+    """replay_combine(rec, first_entry, hits, colour): with area lights, each hit of a level's local colour (the
+    area lights' points added) times its weight, added to its camera ray's after its emitted radiance, as the
+    tracer adds them."""
+    _, entry_ray, _ = make_entry(TREE)
+
+    @wp.kernel(module="unique")
+    def replay_combine(rec: GradRecord, first_entry: int, hits: ReplayHits, colour: wp.array(dtype=wp.vec3)):
+        j = first_entry + wp.tid()
+        if rec.face[j] >= 0:
+            wp.atomic_add(colour, entry_ray(rec, j), wp.cw_mul(hits.weight[j], hits.local[j]))
+
+    return replay_combine
 
 
 @wp.kernel(module="unique")

@@ -137,7 +137,7 @@ def make_shade(fx, shadow_grid: bool = False, record: bool = False):
     switches, and how ka, kd and ks are read): ambient + the lit terms of every light, with shadow
     rays when fx.shadows, answered by the BVH or, with ``shadow_grid``, by the light-space grid (the
     same answers: kernels/shadow.py). shade(s, hit, v, rec, j): with ``record``, also which lights and
-    area-light sample points the hit sees, written into the GradRecord ``rec`` at ray level ``j``
+    area-light sample points the hit sees, written into the GradRecord ``rec`` at its entry ``j``
     (kernels/record.py); without, ``rec`` is never read. Inlined: its arguments are not copied."""
     return _make_shade(fx.ambient, fx.diffuse, fx.specular, fx.shadows, fx.texture, fx.vertex_color,
                        fx.shadows and shadow_grid, fx.light_model, fx.area_lights, record)
@@ -390,13 +390,17 @@ def _make_shade(AMBIENT: bool, DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool, TEX
         if wp.static(AMBIENT):
             out.color = wp.cw_mul(s.ambient, k.ka)
         if wp.static(DIFFUSE or SPECULAR):
+            if wp.static(RECORD):
+                seen = int(0)  # a bit per light the hit sees
             for l in range(s.num_lights):
                 t = light_test(s, hit, l)
                 out.shadow_rays += t.shadow_ray
                 if wp.static(RECORD):
-                    rec.visible[j * rec.lights + l] = t.lit
+                    seen = seen | (t.lit << l)
                 if t.lit != 0:
                     out.color = out.color + whitted_term(t.arrival, k, s.shininess[m], n, v)
+            if wp.static(RECORD):
+                rec.visible[j] = seen
         if wp.static(AREA and (DIFFUSE or SPECULAR)):
             out = area_light(s, hit, k, v, out, rec, j)
         return out

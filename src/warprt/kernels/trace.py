@@ -299,7 +299,7 @@ def make_path(fx, raster_primary: bool, stack: int, report_truncated: bool, aovs
             # ---- nearest hit ----
             h = first_hit(s, frags, mir, r, i, pixel * samples + sample, x, row, sample)
             if wp.static(RECORD):
-                j = record_hit(rec, r.depth, pixel * samples + sample, parent, r.medium, h.face, h.u, h.v, r.ray.d)
+                j = record_hit(rec, r.depth, pixel * samples + sample, parent, r.medium, h.face, h.u, h.v)
             if h.face < 0:
                 color = color + wp.cw_mul(escaped(s, r.weight, r.medium), s.background)
             else:
