@@ -50,3 +50,6 @@ __all__ += ["NO_RAY", "GradRecord", "empty_record"]
 from .edges import edge_distance, edge_distances, make_edge_sides_kernel  # noqa: E402 (backward(edges=True))
 
 __all__ += ["edge_distance", "edge_distances", "make_edge_sides_kernel"]
+from .edges import plane_distance  # noqa: E402
+
+__all__ += ["plane_distance"]
