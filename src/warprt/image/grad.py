@@ -47,8 +47,9 @@ grad_params.py's; this module replays a record on a wp.Tape (replay_launch, repl
 backward().
 
 With edges=True (the camera's silhouettes, occlusion edges and creases moving with the vertices and the
-camera), backward adds the boundary term of the box-filtered pixel integral (grad_edges.py), where those are
-all the edges the named parameters move (else refused naming ``edges``).
+camera; with shadows, hard shadows' edges moving with them and with the lights), backward adds the boundary
+term of the box-filtered pixel integral (grad_edges.py), where those are all the edges the named parameters
+move (else refused naming ``edges``).
 
 Covered for now: any render.spp and light_samples, camera and mirror rays, glass, image and checker
 textures, vertex colours, area lights; any other scene is refused in one line naming

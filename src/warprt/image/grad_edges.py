@@ -1,6 +1,7 @@
-"""The gradient's boundary term for the edges camera rays see (backward(edges=True); docs/gradients.md): the
-silhouettes and creases of the meshes, enumerated from the eye, projected and cut at the pixels, each piece
-integrated at fixed Gauss-Legendre points with the radiance traced either side (kernels/edges.py)."""
+"""The gradient's boundary term (backward(edges=True); docs/gradients.md): the edges camera rays see (the
+meshes' silhouettes and creases; with shadows, where a smooth mesh's shading is cut by its own shadow), with
+shadows the hard shadows' edges (grad_shadow_edges.py), all cut at the pixels together (grad_edge_points.py),
+each piece integrated at fixed Gauss-Legendre points with the radiance traced either side (kernels/edges.py)."""
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -10,8 +11,11 @@ import numpy as np
 from .._warp import wp
 from ..errors import ArgumentError
 from ..kernels import edge_distances, empty_aov_buffers, empty_record, make_edge_sides_kernel
-from .grad_edge_points import EdgePoints, boundary_term, camera_adjoints, camera_copies, edge_points, side_directions
+from ..scene import drawn_objects
+from .grad_edge_points import (BoundaryTerm, EdgePoints, boundary_term, camera_adjoints, camera_copies,
+                               segment_points, side_directions)
 from .grad_mesh_edges import MeshEdges, face_normals, facing, mesh_edges
+from .grad_shadow_edges import ShadowSources, shadow_segments, shadow_sources, shadow_term
 from .mirrors import empty_mirrors
 from .params import object_names
 from .zbuffer import empty_fragments
@@ -40,17 +44,14 @@ def moves_edges(name: str) -> bool:
 
 def edge_refusal(scene, geom, fx, hits, wrt) -> str | None:
     """Why backward(edges=True) would leave out an edge that the parameters ``wrt`` move (None: the camera
-    rays' edges are all of them): shadows, mirror or glass rays, a checker's squares, a spot's hard cone, an
-    area light's outline."""
+    rays' edges and the hard shadows' are all of them): mirror or glass rays, a checker's squares, a spot's
+    hard cone."""
     moving = [n for n in wrt if moves_edges(n)]
     if not moving:
         return None
-    if fx.shadows:
-        return (f"{moving[0]} moves shadows' edges, not differentiated yet: only the edges camera rays see "
-                f"(render.shadows off)")
     if scene.render.max_depth > 1 and (fx.reflection or fx.refraction or hits.mirrored):
         return (f"{moving[0]} moves the edges seen in mirrors or through glass, not differentiated yet: only the "
-                f"edges camera rays see (render.max_depth 1)")
+                f"edges camera rays see and their shadows (render.max_depth 1)")
     for m in geom.slot_materials(scene):
         if any(getattr(m, k) is not None and getattr(m, k).checker is not None for k in
                ("ka_texture", "kd_texture", "ks_texture")):
@@ -58,9 +59,6 @@ def edge_refusal(scene, geom, fx, hits, wrt) -> str | None:
     for light in scene.whitted_lights:
         if light.type == "spot" and light.beam >= light.cutoff_angle:
             return f"{moving[0]} moves a spot light's hard cone edge, not differentiated yet"
-    lit = [n for n in moving if n.startswith("lights.") and n.endswith(".center")]
-    if lit:
-        return f"{lit[0]} moves the area light's own outline, not differentiated yet"
     return None
 
 
@@ -69,13 +67,14 @@ def _same(a: np.ndarray, i: np.ndarray, k: np.ndarray) -> np.ndarray:
     return np.all(a[i] == a[k], axis=-1)
 
 
-def camera_edges(scene, geom, fx, eye, m: MeshEdges | None = None) -> np.ndarray:
+def camera_edges(scene, geom, fx, eye, sources: ShadowSources | None = None, m: MeshEdges | None = None) -> np.ndarray:
     """(E, 2) vertex indices of the edges whose image can jump, sorted by (object, position): of each mesh's
     edges (grad_mesh_edges.mesh_edges, or ``m``), those that are open (one face), silhouettes from ``eye``
     (two faces facing opposite ways from it), shared by more than two faces, or creases where the shading
     jumps (two faces of other materials, a flat pair not coplanar, a smooth pair whose normals, uvs or
-    colours differ at the edge); each by its face facing the eye (the edge the visible side shows), else its
-    first."""
+    colours differ at the edge, or with shadows (``sources``) a smooth pair one of whose faces faces a source
+    and the other does not: there the mesh shadows itself); each by its face facing the eye (the edge the
+    visible side shows), else its first."""
     if geom.triangle_count == 0:
         return np.zeros((0, 2), np.int64)
     m = mesh_edges(scene, geom) if m is None else m
@@ -92,6 +91,9 @@ def camera_edges(scene, geom, fx, eye, m: MeshEdges | None = None) -> np.ndarray
     jump |= ~(smooth | flat) | (flat & crease) | (smooth & smooth_jump)
     for table in ([geom.uv_array().numpy()] if fx.texture else []) + ([geom.colors.numpy()] if fx.vertex_color else []):
         jump |= ~(_same(table, i0, a2) & _same(table, i1, b2))
+    for at, directional in zip(sources.at, sources.directional) if sources is not None else ():
+        lit = facing(normal, p[faces[:, 0]], at, directional)
+        jump |= smooth & (lit[f1] != lit[f2])
     keep = ~m.pair | jump
     use_second = m.pair & ~front[f1] & front[f2]
     return np.where(use_second[:, None], m.v2, m.v)[keep]
@@ -136,40 +138,94 @@ def edge_speeds(scene, geom, pts: EdgePoints, device: str) -> dict:
     return out
 
 
+def covered(name: str) -> bool:
+    """Whether edge_gradients gives ``name`` a term: the camera, objects' vertices (their poses through them:
+    grad.pose_edge_gradients), a Whitted light's position or direction, an area light's centre."""
+    parts = name.split(".")
+    return (parts[0] == "camera" or (parts[0] == "objects" and parts[-1] == "vertices")
+            or (parts[0] == "lights" and parts[-1] in ("position", "direction", "center")))
+
+
+@dataclass
+class Boundary:
+    """A frame's boundary segments, cut at the pixels together (grad_edge_points.segment_points): the
+    camera's edges (``edges``, their points ``camera``) and with shadows the shadows' (``segments`` from
+    ``sources``, their points ``shadows``)."""
+
+    edges: np.ndarray
+    camera: EdgePoints
+    sources: ShadowSources | None = None
+    segments: object = None
+    shadows: EdgePoints | None = None
+
+
+def boundary(scene, geom, fx, eye: np.ndarray) -> Boundary:
+    """The Boundary of a frame seen from ``eye`` (relative to the frame origin): with shadows (fx.shadows),
+    the sources (shadow_sources), the camera's edges and the shadows' (shadow_segments), each one's image cut
+    where it crosses the others'."""
+    m = mesh_edges(scene, geom) if geom.triangle_count else None
+    sources = shadow_sources(scene, geom) if fx.shadows and m is not None else None
+    edges = camera_edges(scene, geom, fx, eye, sources, m)
+    p = geom.points_np.astype(np.float64)
+    q0, q1 = p[edges[:, 0]] - eye, p[edges[:, 1]] - eye
+    if sources is None:
+        return Boundary(edges, segment_points(q0, q1, np.cross(q0, q1), scene.camera, edges))
+    segments = shadow_segments(scene, geom, m, sources, eye)
+    pts = segment_points(np.concatenate([q0, segments.q0 - eye]), np.concatenate([q1, segments.q1 - eye]),
+                         np.concatenate([np.cross(q0, q1), segments.plane]), scene.camera)
+    n = len(edges)
+    return Boundary(edges, pts.part(0, n, edges), sources, segments, pts.part(n, n + len(segments.face)))
+
+
 def edge_gradients(scene, geom, frame: EdgeFrame, d: np.ndarray, wrt, device: str) -> dict:
-    """The boundary term of d(sum(d * image)) / d(param) for each name in ``wrt`` the camera rays' edges move
-    (objects' vertices, the camera), float64, shaped as the parameter: per edge point, d at its pixel dotted with
-    f_+ - f_- (edge_sides), times its weight and its edge's speed (edge_speeds), summed in the points' order
-    (np.add.at: in order, one at a time), so the sum is the same on every run and thread count."""
-    wrt = [n for n in wrt if n.startswith("camera.") or (n.startswith("objects.") and n.endswith(".vertices"))]
+    """The boundary term of d(sum(d * image)) / d(param) for each name in ``wrt`` the frame's edges move
+    (covered: objects' vertices, the camera, lights' positions, directions and centres), float64, shaped as
+    the parameter: per edge point, d at its pixel dotted with f_+ - f_- (edge_sides; a shadow's: its source's
+    light alone, grad_shadow_edges.light_sides), times its weight and its edge's speed (edge_speeds,
+    shadow_speeds), summed in the points' order (np.add.at: in order, one at a time), so the sum is the same
+    on every run and thread count."""
+    wrt = [n for n in wrt if covered(n)]
     if not wrt:
         return {}
     eye = geom.eye_offset(scene.camera.eye).astype(np.float64)
-    edges = camera_edges(scene, geom, frame.fx, eye)
-    pts = edge_points(edges, geom.points_np.astype(np.float64), eye, scene.camera)
-    if len(pts.edge) == 0:
-        return {name: np.zeros_like(np.asarray(_value(scene, name), np.float64)) for name in wrt}
-    term = boundary_term(pts, edge_sides(scene, geom, frame, pts, device), d.reshape(-1, 3).astype(np.float64),
-                         edge_speeds(scene, geom, pts, device), {"v0": edges[pts.edge, 0], "v1": edges[pts.edge, 1]},
-                         len(geom.points_np))
-    starts = np.cumsum([0] + [len(o.vertices) for o in scene.objects])
-    out = {}
-    for name in wrt:
-        section, owner = name.split(".")[:2]
-        if section == "camera":
-            out[name] = term.camera[owner].reshape(np.shape(_value(scene, name)))
-        else:
-            i = object_names(scene)[owner]
-            out[name] = term.points[starts[i]:starts[i + 1]]
-    return out
+    b = boundary(scene, geom, frame.fx, eye)
+    d3 = d.reshape(-1, 3).astype(np.float64)
+    term = BoundaryTerm(np.zeros((len(geom.points_np), 3)), {k: 0.0 for k in ("eye", "center", "up", "fovy")})
+    if len(b.camera.edge):
+        term = boundary_term(b.camera, edge_sides(scene, geom, frame, b.camera, device), d3,
+                             edge_speeds(scene, geom, b.camera, device),
+                             {"v0": b.edges[b.camera.edge, 0], "v1": b.edges[b.camera.edge, 1]}, len(geom.points_np))
+    if b.shadows is not None and len(b.shadows.edge):
+        shadow = shadow_term(scene, geom, frame.fx, b.sources, b.segments, b.shadows, d3, device)
+        term = BoundaryTerm(term.points + shadow.points, {k: term.camera[k] + shadow.camera[k] for k in term.camera},
+                            shadow.sources)
+    return {name: g for name in wrt if (g := _by_name(scene, b.sources, term, name)) is not None}
 
 
-def _value(scene, name: str):
-    """A camera or vertex parameter's value, for its shape."""
-    section, owner = name.split(".")[:2]
+def _by_name(scene, sources: ShadowSources | None, term: BoundaryTerm, name: str):
+    """``name``'s share of ``term`` (None: the term has none): a camera parameter's sum, an object's
+    vertices' rows, a light's sources' sum (a direction's projected as Light keeps it unit: (I - u u^T)), an
+    area light's centre that of its sample points and of its own triangles' points (its outline, the
+    shadows they cast), which move with it."""
+    section, owner, key = (name.split(".") + [""])[:3]
     if section == "camera":
-        return getattr(scene.camera, owner)
-    return scene.objects[object_names(scene)[owner]].vertices
+        return np.asarray(term.camera[owner], np.float64).reshape(np.shape(getattr(scene.camera, owner)))
+    starts = np.cumsum([0] + [len(o.vertices) for o in drawn_objects(scene)])
+    if section == "objects":
+        i = object_names(scene)[owner]
+        return term.points[starts[i]:starts[i + 1]]
+    g = None
+    if sources is not None and term.sources is not None:
+        rows = [s for s, n in enumerate(sources.name) if n == name]
+        g = np.add.reduce(term.sources[rows], axis=0) if rows else np.zeros(3)
+    if key == "direction" and g is not None:
+        unit = np.asarray(scene.lights[int(owner)].direction, np.float64)
+        g = g - unit * (unit @ g)
+    if key == "center":
+        shapes = [l for l in scene.area_lights if l.shape is not None]
+        i = len(scene.objects) + next(k for k, l in enumerate(shapes) if l is scene.lights[int(owner)])
+        g = (0.0 if g is None else g) + np.add.reduce(term.points[starts[i]:starts[i + 1]], axis=0)
+    return g
 
 
 def check_edges(scene, geom, frame: EdgeFrame | None, hits, wrt):

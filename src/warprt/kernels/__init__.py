@@ -6,7 +6,8 @@
     shadow ray is blocked: the BVH's any-hit query or the light-space grid), dielectric.py (Fresnel, Snell,
     Beer), trace.py (the Whitted kernel and its ray tree), grad.py and grad_tree.py (the gradient's record
     and differentiable replay: camera and mirror rays; the ray tree with glass), edges.py (the edges camera rays see:
-    their signed distance in the image and the radiance either side), aov.py (what a first hit records besides
+    their signed distance in the image and the radiance either side), shadow_edges.py (hard shadows' edges:
+    their signed distance in the image and one light's term either side), aov.py (what a first hit records besides
     colour), clip.py and raster.py (the Z-buffer: Fragments), hybrid.py (where the Z-buffer's first hit is
     the tracer's), mirror.py (a reflection ray's first hit from a planar mirror's virtual camera),
     zbuffer_shade.py.
@@ -51,5 +52,8 @@ from .edges import edge_distance, edge_distances, make_edge_sides_kernel  # noqa
 
 __all__ += ["edge_distance", "edge_distances", "make_edge_sides_kernel"]
 from .edges import plane_distance  # noqa: E402
+from .shadow_edges import (SOURCE_LIGHT, SOURCE_SAMPLE, make_light_sides_kernel, shadow_edge_distances,  # noqa: E402
+                           shadow_plane)
 
-__all__ += ["plane_distance"]
+__all__ += ["plane_distance", "SOURCE_LIGHT", "SOURCE_SAMPLE", "make_light_sides_kernel", "shadow_edge_distances",
+            "shadow_plane"]  # and hard shadows' edges
