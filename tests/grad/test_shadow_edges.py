@@ -27,8 +27,8 @@ from .converged import differences, gradient
 
 WIDTH, HEIGHT = 24, 18
 SPP = 256  # the gradient frame's: 16 x 16 strata (the differences': converged.FD_SPP)
-TOL = 0.02  # measured: see CASES
-CONTROL = 0.1  # the interior derivative alone is off by more than this share of the differences
+TOL = 0.02  # measured: 0.01% to 1.5% of the differences (CASES' comments)
+CONTROL = 0.3  # the interior derivative alone is off by more than this share of them (measured: 68% to 270%)
 FLOOR = [[-2.5, 0.0, -2.0], [2.5, 0.0, -2.2], [2.4, 0.0, 2.3], [-2.6, 0.0, 2.1]]
 TRIANGLE = [[-0.7, 0.9, -0.4], [0.8, 1.0, -0.2], [0.0, 1.1, 0.7]]
 CAMERA = {"eye": [0.5, 4.0, 3.5], "center": [0.0, 0.2, 0.0], "width": WIDTH, "height": HEIGHT, "fovy": 45.0}
@@ -125,7 +125,10 @@ def step(make, name: str, seed) -> np.ndarray:
     return np.random.default_rng(seed).standard_normal(shape) * 0.3
 
 
-# (scene, name, seed or direction, step h, the differences' k: 64 k x 64 k samples a pixel)
+# (scene, name, seed or direction, step h, the differences' k: 64 k x 64 k samples a pixel); measured
+# |edges=True - fd| / |fd| (and the interior's): 0.6% (95%), 0.5% (93%), 1.2% (70%), 0.9% (98%); 0.2% (94%),
+# 0.1% (100%), 0.01% (100%); 0.1% (103%); 1.3% (269%); 1.5% (123%); 1.1% (68%), 0.4% (92%), 1.0% (91%);
+# 0.4% (185%); 0.07% (99%)
 CASES = [(triangle_scene, "objects.occ.vertices", 4, 4e-2, 2), (triangle_scene, "objects.floor.vertices", 6, 4e-2, 2),
          (triangle_scene, "lights.0.position", 5, 4e-2, 2), (triangle_scene, "camera.eye", 7, 4e-2, 2),
          (box_scene, "objects.occ.vertices", 8, 4e-2, 2), (box_scene, "objects.occ.translation", 18, 2e-2, 2),
@@ -135,6 +138,7 @@ CASES = [(triangle_scene, "objects.occ.vertices", 4, 4e-2, 2), (triangle_scene, 
          (directional_scene, "lights.0.direction", [0.0, 0.0, 0.3], 1e-1, 2),
          (spot_scene, "lights.0.position", 11, 4e-2, 2), (ball_scene, "objects.occ.translation", 19, 2e-2, 2),
          (area_scene, "lights.0.center", 21, 4e-2, 2), (area_scene, "objects.occ.vertices", 13, 4e-2, 2),
+         (area_scene, "objects.floor.vertices", 22, 4e-2, 2),  # its shadows' edges move with the receiver too
          (aligned_area_scene, "objects.occ.vertices", 14, 2e-2, 2),
          # the outline's slope needs 256 x 256 samples a pixel: at 128 x 128 the differences at h and h / 2
          # scatter by 3% about it
@@ -233,7 +237,7 @@ def test_the_shadow_edge_speed_is_the_projections(make):
                              for key in inputs])
         got = np.array([speed[key][j] for key in inputs])
         sign = np.sign(np.sum(got * expected))
-        np.testing.assert_allclose(got, sign * expected, rtol=0, atol=2e-3 * np.abs(expected).max())
+        np.testing.assert_allclose(got, sign * expected, rtol=0, atol=1e-4 * np.abs(expected).max())  # measured: 3e-6
         own = np.array([(line_distance(pts.at[j], image_point(s.camera, inputs["v0"] + dv),
                                        image_point(s.camera, inputs["v1"])) -
                          line_distance(pts.at[j], image_point(s.camera, inputs["v0"] - dv),
