@@ -22,8 +22,8 @@ import warprt
 from benchmarks.image_hashes import PATHS, cases
 from benchmarks.output import save
 
-# Not to the bit: NVRTC contracts multiply-adds (fuse_fp) and CUDA's bilinear filter weighs texels in 8 bits,
-# so a hit or shadow test at an edge may go the other way and a texture lookup move by 1/256 of a texel step.
+# Not to the bit: NVRTC contracts multiply-adds (fuse_fp), so a hit or shadow test at an edge may go the other way
+# and a texel's weights move in their last bits (the bilinear lookup is warprt's own, float-weighted on both devices).
 PIXEL_TOLERANCE = 1e-3  # a pixel agrees when each of its channels is within this of the CPU's
 MAX_DIFFERING = 1e-3  # an image agrees when at most this share of its pixels do not ...
 MIN_SSIM = 0.999  # ... or its SSIM against the CPU's (linear, clipped to [0, 1]) is at least this

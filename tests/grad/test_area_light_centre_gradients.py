@@ -1,7 +1,7 @@
 """Gradients with respect to an area light's position (issue 30 over issue 32's lights): lights.<i>.center of a
 rectangle, disk or sphere light. Its sample points are its centre plus offsets the centre does not move, so
 the replay translates the forward's points by the centre's move (kernels.translate_samples, on the tape before
-kernels.area_replay), their normals and areas unchanged; which points each hit sees, and the emitter's face
+kernels.replay_area), their normals and areas unchanged; which points each hit sees, and the emitter's face
 met by a ray (its radiance, seen directly, a constant), are held fixed, as visibility is. Checked:
 
 - the replayed image is the forward's, to the bit (the points moved by 0);
@@ -81,7 +81,7 @@ def test_the_centre_equals_central_differences(weights, shape):
 
 def test_the_points_held_are_not_the_differences(weights):
     """The control: the replay with the sample points held where the forward put them (translate_samples left
-    out, area_replay reading the forward's points) gives the centre no derivative; unedited, the hand-launched
+    out, replay_area reading the forward's points) gives the centre no derivative; unedited, the hand-launched
     replay is backward()'s."""
     s = lit()
     d = centre_differences(s, weights, seed=3)
@@ -91,22 +91,18 @@ def test_the_points_held_are_not_the_differences(weights):
         r.render()
         geom = r.geometry
         hits = warprt.image.record_first_hits(s, geom, geom.scene_data(s), resolve_effects(s), "cpu")
-        launch = warprt.image.replay_launch(s, geom, hits, "cpu", centres=True)
-        before, then = list(launch.before), list(launch.then)
+        replay = warprt.image.build_replay(s, geom, hits, "cpu", centres=True)
         if held:
-            kernel, dim, inputs, outputs = then[0]
-            then[0] = (kernel, dim, inputs[:10] + [hits.area.points] + inputs[11:], outputs)
-            before = [b for b in before if b[0] is not translate_samples]
+            replay.before = [b for b in replay.before if b[0] is not translate_samples]
+            area = replay.data.area
+            area.points = hits.data.area.points
+            replay.data.area = area  # a nested Warp struct is held by value: set again
         tape = wp.Tape()
         with tape:
-            for kernel, dim, inputs, outputs in before:
-                wp.launch(kernel, dim=dim, inputs=inputs, outputs=outputs)
-            wp.launch(launch.kernel, dim=launch.dim, inputs=launch.inputs, outputs=[launch.shaded])
-            for kernel, dim, inputs, outputs in then:
-                wp.launch(kernel, dim=dim, inputs=inputs, outputs=outputs)
-        tape.backward(grads={launch.rays: wp.array((weights * d.mask).reshape(-1, 3), dtype=wp.vec3)})
+            replay.launch()
+        tape.backward(grads={replay.colour: wp.array((weights * d.mask).reshape(-1, 3), dtype=wp.vec3)})
         r.close()
-        return launch.arrays["center"].grad.numpy()[0].astype(np.float64)
+        return replay.arrays["center"].grad.numpy()[0].astype(np.float64)
 
     right = taped(held=False)
     np.testing.assert_allclose(right, backward_masked(s, weights, d)["lights.0.center"], rtol=1e-6, atol=1e-6)

@@ -1,15 +1,15 @@
 """Gradients under area lights (issue 30 over issue 32's lights): lights.<i>.radiance, an emitting material's
 materials.<name>.emission, and the materials, a texture and a flat object's vertices under them. The record
 keeps per ray level the emitter whose front the ray meets and a bit per sample point the hit sees; the replay
-adds each seen sample's term (kernels.area_replay, one thread per level and sample, wp.atomic_add) and the
-emitted radiance (make_area_combine). The sample points are held fixed, as visibility is. Checked:
+adds each seen sample's term (kernels.replay_area, one thread per entry and sample, wp.atomic_add) and the
+emitted radiance (the forward's area_arrival and area_term). The sample points are held fixed, as visibility is. Checked:
 
 - the replayed image is the forward's, to the bit, at 16 and 64 samples, with an emitting material, and in
   Mitsuba's Cornell box (scenes/cornell_box.xml at 24 x 24);
 - per component central finite differences of the forward (no mask: none of these parameters moves an edge;
   the image is linear in all but shininess, so h = 1e-2 of the value's scale), and along random directions
   for a texture's texels and the floor's vertices (edges masked, tests/grad/directional.py);
-- warp.autograd.gradcheck of kernels.area_sample_term;
+- warp.autograd.gradcheck of the sample term (shading.point_arrival, area_term);
 - controls that fail: visibility ignored (shadows off), the emitter's cosine dropped, each sample weighted
   as the first sample point, the emitter seen directly left out, the gradient read along another direction.
 
@@ -28,10 +28,14 @@ import warp as wp
 import warp.autograd
 
 import warprt
-from warprt.kernels import area_sample_term, make_area_combine
+from warprt.geometry import SceneData
+from warprt.kernels import (Coefficients, GradRecord, ReplayHits, Surface, area_arrival, make_light_terms,
+                            point_arrival)
 from warprt.scene import Texture, resolve_effects
 
 from .directional import backward_masked, directional, random_direction
+
+AREA_TERM = make_light_terms(True, True)[1]  # what one area-light sample point the hit sees adds
 
 WIDTH, HEIGHT = 24, 18
 REL = 1e-3
@@ -123,7 +127,7 @@ def test_the_replayed_image_is_the_forward_image(key):
     forward = r.render().image
     geom = r.geometry
     hits = warprt.image.record_first_hits(s, geom, geom.scene_data(s), resolve_effects(s), "cpu")
-    assert hits.words > 0 and np.asarray(hits.area_bits.numpy()).any()
+    assert hits.words > 0 and np.asarray(hits.rec.area_bits.numpy()).any()
     assert np.array_equal(warprt.image.replay_image(s, geom, hits, "cpu"), forward)
 
 
@@ -228,65 +232,56 @@ def test_a_dark_light_with_shadows_switched_off_has_the_unshadowed_gradient():
 # --- Controls by a changed replay: the same record and launches with one kernel swapped ----------------------
 
 @wp.kernel
-def _no_cosine(words: int, face: wp.array(dtype=int), dirs: wp.array(dtype=wp.vec3), area_bits: wp.array(dtype=int),
-               tri_material: wp.array(dtype=int), shininess: wp.array(dtype=float), hit_p: wp.array(dtype=wp.vec3),
-               hit_n: wp.array(dtype=wp.vec3), hit_kd: wp.array(dtype=wp.vec3), hit_ks: wp.array(dtype=wp.vec3),
-               points: wp.array(dtype=wp.vec3), normals: wp.array(dtype=wp.vec3), dA: wp.array(dtype=float),
-               sample_light: wp.array(dtype=int), radiance: wp.array(dtype=wp.vec3), acc: wp.array(dtype=wp.vec3)):
-    """area_replay with the emitter's cosine dropped: the sample's normal taken along the light's direction."""
-    k, q = wp.tid()
-    f = face[k]
-    if f >= 0:
-        if (area_bits[k * words + q / 32] >> (q % 32)) & 1 != 0:
-            towards = -wp.normalize(points[q] - hit_p[k])
-            wp.atomic_add(acc, k, area_sample_term(hit_p[k], hit_n[k], -dirs[k], hit_kd[k], hit_ks[k],
-                                                   shininess[tri_material[f]], points[q], towards, dA[q],
-                                                   radiance[sample_light[q]]))
+def _no_cosine(s: SceneData, rec: GradRecord, first_entry: int, sample_light: wp.array(dtype=int), hits: ReplayHits):
+    """replay_area with the emitter's cosine dropped: the sample's normal taken along the light's direction."""
+    t, q = wp.tid()
+    j = first_entry + t
+    if rec.face[j] >= 0:
+        if (rec.area_bits[j * rec.words + q / 32] >> (q % 32)) & 1 != 0:
+            hit = hits.hit[j]
+            a = area_arrival(s, hit, q)
+            a.cos_q = 1.0
+            wp.atomic_add(hits.local, j, AREA_TERM(a, s.area.radiance[sample_light[q]], s.area.dA[q], hits.k[j],
+                                                   s.shininess[hit.material], hit.n, -hits.direction[j]))
 
 
 @wp.kernel
-def _first_sample(words: int, face: wp.array(dtype=int), dirs: wp.array(dtype=wp.vec3), area_bits: wp.array(dtype=int),
-                 tri_material: wp.array(dtype=int), shininess: wp.array(dtype=float), hit_p: wp.array(dtype=wp.vec3),
-                 hit_n: wp.array(dtype=wp.vec3), hit_kd: wp.array(dtype=wp.vec3), hit_ks: wp.array(dtype=wp.vec3),
-                 points: wp.array(dtype=wp.vec3), normals: wp.array(dtype=wp.vec3), dA: wp.array(dtype=float),
-                 sample_light: wp.array(dtype=int), radiance: wp.array(dtype=wp.vec3), acc: wp.array(dtype=wp.vec3)):
-    """area_replay with each seen sample weighted as the light's first sample point would be (the wrong
+def _first_sample(s: SceneData, rec: GradRecord, first_entry: int, sample_light: wp.array(dtype=int),
+                  hits: ReplayHits):
+    """replay_area with each seen sample weighted as the light's first sample point would be (the wrong
     sample's weight: a shifted or permuted index is no control, each hit seeing nearly the same sum)."""
-    k, q = wp.tid()
-    f = face[k]
-    if f >= 0:
-        if (area_bits[k * words + q / 32] >> (q % 32)) & 1 != 0:
-            o = int(0)
-            wp.atomic_add(acc, k, area_sample_term(hit_p[k], hit_n[k], -dirs[k], hit_kd[k], hit_ks[k],
-                                                   shininess[tri_material[f]], points[o], normals[o], dA[o],
-                                                   radiance[sample_light[q]]))
+    t, q = wp.tid()
+    j = first_entry + t
+    if rec.face[j] >= 0:
+        if (rec.area_bits[j * rec.words + q / 32] >> (q % 32)) & 1 != 0:
+            hit = hits.hit[j]
+            wp.atomic_add(hits.local, j, AREA_TERM(area_arrival(s, hit, 0), s.area.radiance[sample_light[q]],
+                                                   s.area.dA[0], hits.k[j], s.shininess[hit.material], hit.n,
+                                                   -hits.direction[j]))
 
 
 def replayed_gradient(s, weights, name: str, area_kernel=None, no_emission: bool = False) -> np.ndarray:
     """d(sum(weights * image)) / d(param) for ``name``, ``s``'s only area light's radiance or a material's kd,
-    by the public replay's launches on a wp.Tape, with ``area_kernel`` in place of kernels.area_replay and,
-    with ``no_emission``, the emitter seen directly left out (the record's emit all -1)."""
+    by the public replay (warprt.image.build_replay) launched on a wp.Tape, with ``area_kernel`` in place of
+    kernels.replay_area and, with ``no_emission``, the emitter seen directly left out (the record's emit all -1)."""
     r = warprt.Renderer(s)
     r.render()
     geom = r.geometry
     hits = warprt.image.record_first_hits(s, geom, geom.scene_data(s), resolve_effects(s), "cpu")
     if no_emission:
-        hits = replace(hits, emit=wp.full(hits.emit.shape[0], -1, dtype=int))
-    launch = warprt.image.replay_launch(s, geom, hits, "cpu")
-    (area, dim, inputs, outputs), combine = launch.then
+        hits.rec.emit.fill_(-1)
+    replay = warprt.image.build_replay(s, geom, hits, "cpu")
+    if area_kernel is not None:
+        replay.area_kernel = area_kernel
     tape = wp.Tape()
     with tape:
-        wp.launch(launch.kernel, dim=launch.dim, inputs=launch.inputs, outputs=[launch.shaded])
-        wp.launch(area_kernel or area, dim=dim, inputs=inputs, outputs=outputs)
-        if no_emission:
-            combine = (make_area_combine(hits.levels), combine[1], [hits.face, hits.emit, *combine[2][2:]], combine[3])
-        wp.launch(combine[0], dim=combine[1], inputs=combine[2], outputs=combine[3])
-    tape.backward(grads={launch.rays: wp.array(weights.reshape(-1, 3), dtype=wp.vec3)})
+        replay.launch()
+    tape.backward(grads={replay.colour: wp.array(weights.reshape(-1, 3), dtype=wp.vec3)})
     _, owner, key = name.split(".")
     row = geom.material_names.index(owner) if key == "kd" else 0
-    out = launch.arrays["radiance" if key != "kd" else "kd"].grad.numpy()[row].astype(np.float64)
+    out = replay.arrays["radiance" if key != "kd" else "kd"].grad.numpy()[row].astype(np.float64)
     if key == "kd" and s.materials[owner].ka_follows_kd:  # as backward() and r.params: ka is kd there
-        out = out + launch.arrays["ka"].grad.numpy()[row]
+        out = out + replay.arrays["ka"].grad.numpy()[row]
     r.close()
     return out
 
@@ -314,13 +309,20 @@ def _terms(p: wp.array(dtype=wp.vec3), n: wp.array(dtype=wp.vec3), kd: wp.array(
            ks: wp.array(dtype=wp.vec3), shininess: wp.array(dtype=float), point: wp.array(dtype=wp.vec3),
            normal: wp.array(dtype=wp.vec3), L_e: wp.array(dtype=wp.vec3), out: wp.array(dtype=wp.vec3)):
     i = wp.tid()
-    out[i] = area_sample_term(p[i], wp.normalize(n[i]), wp.vec3(0.0, 0.6, 0.8), kd[i], ks[i], shininess[i], point[i],
-                              wp.normalize(normal[i]), 0.05, L_e[i])
+    hit = Surface()
+    hit.p = p[i]
+    hit.n = wp.normalize(n[i])
+    k = Coefficients()
+    k.kd = kd[i]
+    k.ks = ks[i]
+    out[i] = AREA_TERM(point_arrival(point[i], wp.normalize(normal[i]), hit), L_e[i], 0.05, k, shininess[i], hit.n,
+                       wp.vec3(0.0, 0.6, 0.8))
 
 
 def test_the_sample_term_passes_warps_gradcheck():
-    """area_sample_term's adjoints (the hit, its normal, colours, exponent, the sample's point and normal, L_e)
-    against Warp's own finite differences, at hits lit from in front with a specular highlight and without."""
+    """The forward's area-light sample term as the replay differentiates it (shading.point_arrival, then
+    make_light_terms' area_term): its adjoints (the hit, its normal, colours, exponent, the sample's point and
+    normal, L_e) against Warp's own finite differences, at hits lit from in front with a highlight and without."""
     rng = np.random.default_rng(1)
     arr = lambda a, grad=True: wp.array(np.asarray(a, np.float32), dtype=wp.vec3 if np.ndim(a) == 2 else float,  # noqa: E731
                                         requires_grad=grad)

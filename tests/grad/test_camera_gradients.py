@@ -1,11 +1,12 @@
 """Camera gradients (issue 30): d(image)/d(camera.eye, center, up, fovy) with each camera ray's face and each
-light's visibility held fixed. The replay makes the camera rays again from the camera (kernels.camera_rays:
-scene.camera_basis and camera.camera_ray in Warp, float32) and re-intersects each recorded face from the moved
-eye along the moved direction (the differentiable Moller-Trumbore test the vertex gradients use), then shades.
+light's visibility held fixed. The replay makes the camera rays again from the camera (the forward's
+camera_ray from a basis made in Warp by camera_of, float32, as scene.camera_basis makes it) and re-intersects
+each recorded face from the moved eye along the moved direction (the differentiable Moller-Trumbore test the
+vertex gradients use), then shades.
 
 Checked here:
 - the replayed image with the camera path on is the forward's to float32 rounding;
-- warp.autograd.gradcheck of camera_rays (camera_direction) against Warp's own finite differences;
+- warp.autograd.gradcheck of the camera rays (camera_of, camera_ray) against Warp's own finite differences;
 - per component (eye, center, up: 3 each, fovy) and along a random direction of all ten, central
   differences of the forward (tests/grad/directional.py): a moving camera moves every edge (silhouettes,
   the shadows' edges in the image), and the pixels where the differences at h and h/2 disagree, where the
@@ -33,7 +34,7 @@ import warp as wp
 import warp.autograd
 
 import warprt
-from warprt.kernels import camera_direction, camera_rays
+from warprt.kernels import camera_of, camera_ray, sample_offset
 from warprt.scene import resolve_effects
 
 from .directional import backward_masked, directional, random_direction
@@ -130,24 +131,22 @@ def test_under_area_lights_a_random_direction_equals_central_differences(which, 
 
 
 def _taped(s, weights, mask, edit=None) -> dict:
-    """The camera's adjoints from the replay launched by hand (warprt.image.replay_launch with the camera),
-    ``edit(launch)`` changing it first: the controls' way to drop one term."""
+    """The camera's adjoints from the replay launched by hand (warprt.image.build_replay with the camera),
+    ``edit(replay)`` changing it first: the controls' way to drop one term."""
     r = warprt.Renderer(s)
     r.render()
     geom = r.geometry
     hits = warprt.image.record_first_hits(s, geom, geom.scene_data(s), resolve_effects(s), "cpu")
-    launch = warprt.image.replay_launch(s, geom, hits, "cpu", camera=True)
+    replay = warprt.image.build_replay(s, geom, hits, "cpu", camera=True)
     if edit is not None:
-        edit(launch)
+        edit(replay)
     tape = wp.Tape()
     with tape:
-        for kernel, dim, inputs, outputs in launch.before:
-            wp.launch(kernel, dim=dim, inputs=inputs, outputs=outputs)
-        wp.launch(launch.kernel, dim=launch.dim, inputs=launch.inputs, outputs=[launch.shaded])
-    tape.backward(grads={launch.rays: wp.array((weights * mask).reshape(-1, 3), dtype=wp.vec3)})
-    cam = launch.arrays["camera"].grad.numpy().astype(np.float64)
+        replay.launch()
+    tape.backward(grads={replay.colour: wp.array((weights * mask).reshape(-1, 3), dtype=wp.vec3)})
+    cam = replay.arrays["camera"].grad.numpy().astype(np.float64)
     return {"camera.eye": cam[0], "camera.center": cam[1], "camera.up": cam[2],
-            "camera.fovy": np.float64(launch.arrays["fovy"].grad.numpy()[0])}
+            "camera.fovy": np.float64(replay.arrays["fovy"].grad.numpy()[0])}
 
 
 def test_the_hand_launched_replay_is_backwards(weights):
@@ -168,49 +167,48 @@ def test_the_eye_with_the_rays_origin_held_fixed_is_not_the_differences(weights)
     s = scene()
     d = directional(s, unit("camera.eye", 2), weights, h=4e-3)
 
-    def hold_origin(launch):
-        launch.inputs[0] = wp.array(launch.arrays["camera"].numpy(), dtype=wp.vec3)  # no adjoint: held
+    def hold_origin(replay):
+        replay.camera.origin = wp.array(replay.arrays["camera"].numpy(), dtype=wp.vec3)  # no adjoint: held
 
     wrong = _taped(s, weights, d.mask, hold_origin)
     assert d.error(wrong) > 0.1
 
 
-@wp.kernel
-def _vertical_only(camera: wp.array(dtype=wp.vec3), fovy: wp.array(dtype=float), fovy0: float, near: float,
-                   width: int, height: int, k: int, levels: int, dirs: wp.array(dtype=wp.vec3)):
-    """camera_rays with the image plane's width held at fovy0's (the aspect scaled back so its value is the
-    same): fovy's derivative from the vertical axis alone, the control's wrong model."""
-    ray = wp.tid()
-    x = ray % width
-    row = ray / width
-    held = wp.tan(wp.radians(fovy0) * 0.5) / wp.tan(wp.radians(fovy[0]) * 0.5)
-    dirs[ray * levels] = camera_direction(camera[0], camera[1], camera[2], fovy[0], near,
-                                          float(width) / float(height) * held, (float(x) + 0.5) / float(width),
-                                          (float(height - 1 - row) + 0.5) / float(height))
-
-
-def test_fovy_from_the_vertical_axis_alone_is_not_the_differences(weights):
+def test_fovy_with_the_hits_held_is_not_the_differences(weights):
+    """The control: the camera rays turning with fovy but each hit held where the forward found it (not
+    recomputed from the moving ray on its face) misses the hits' slide; unedited, the differences."""
     s = scene()
     d = directional(s, unit("camera.fovy", None), weights, h=4e-2)
 
-    def vertical(launch):
-        kernel, dim, inputs, outputs = launch.before[0]
-        launch.before[0] = (_vertical_only, dim, [inputs[0], inputs[1], float(s.camera.fovy), *inputs[2:]], outputs)
+    def held(replay):
+        replay.moving = False
 
     right = _taped(s, weights, d.mask)
-    wrong = _taped(s, weights, d.mask, vertical)
+    wrong = _taped(s, weights, d.mask, held)
     assert d.error(right) <= TOL
     assert d.error(wrong) > 0.1
 
 
+@wp.kernel
+def camera_rays(camera: wp.array(dtype=wp.vec3), fovy: wp.array(dtype=float), near: float, width: int, height: int,
+                k: int, dirs: wp.array(dtype=wp.vec3)):
+    """The camera rays as the replay makes them (replay.make_replay_ray): the forward's camera_ray from a basis
+    made in Warp by camera_of, at each pixel's stratum centres."""
+    ray = wp.tid()
+    pixel = ray / (k * k)
+    offset = sample_offset(ray % (k * k), k)
+    c = camera_of(camera[0], camera[1], camera[2], fovy[0], near, width, height)
+    dirs[ray] = camera_ray(c, pixel % width, pixel / width, offset[0], offset[1])
+
+
 def test_camera_rays_pass_warps_gradcheck():
-    """camera_rays' (camera_direction's) adjoints for the eye, center, up and fovy against Warp's own finite
+    """camera_rays' (camera_of's and camera_ray's) adjoints for the eye, center, up and fovy against Warp's own finite
     differences, at 2 x 2 supersampled pixels of a 4 x 3 image."""
     camera = wp.array(np.asarray([[0.6, 2.2, 4.5], [0.1, 0.5, 0.0], [0.1, 1.0, 0.05]], np.float32), dtype=wp.vec3,
                       requires_grad=True)
     fovy = wp.array([50.0], dtype=float, requires_grad=True)
     dirs = wp.zeros(4 * 3 * 4, dtype=wp.vec3, requires_grad=True)
-    assert warp.autograd.gradcheck(camera_rays, dim=len(dirs), inputs=[camera, fovy, 1.0, 4, 3, 2, 1], outputs=[dirs],
+    assert warp.autograd.gradcheck(camera_rays, dim=len(dirs), inputs=[camera, fovy, 1.0, 4, 3, 2], outputs=[dirs],
                                    eps=1e-3, atol=2e-3, rtol=2e-3, show_summary=False, raise_exception=False)
 
 

@@ -3,7 +3,8 @@ grad=True) then Renderer.backward(d_image, wrt) against three independent answer
 control:
 
 - central finite differences of warprt's own forward render (the loss sum(w * image), w fixed random);
-- warp.autograd.gradcheck of the differentiable shading kernel (its Jacobian against Warp's own FD);
+- warp.autograd.gradcheck of the shading the replay differentiates (light_arrival, whitted_term):
+  tests/grad/test_light_gradients.py;
 - Mitsuba's AD of the reference's own local Phong model (reference/mitsuba_whitted.py's material() and
   local() at Mitsuba's first hits, shadows by Mitsuba's ray_test), dr.backward of the same loss.
 
@@ -15,11 +16,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-import warp.autograd
 
 import warprt
 from warprt import SceneError
-from warprt.scene import resolve_effects
 
 WIDTH, HEIGHT = 48, 36
 MATERIALS = {"floor": {"kd": [0.4, 0.35, 0.3], "ks": [0.2] * 3, "shininess": 16.0},
@@ -98,20 +97,6 @@ def test_gradients_without_the_recorded_shadows_do_not(weights):
     for name in wrong:
         fd = finite_differences(name, weights)
         assert np.abs(wrong[name] - fd).max() > 20 * REL * np.abs(fd).max(), name
-
-
-def test_the_shading_kernel_passes_warps_gradcheck():
-    """warp.autograd.gradcheck of the differentiable kernel on a frame's recorded hits: its adjoints for
-    the material and light arrays against Warp's own finite differences of the kernel."""
-    s = scene({}, shadows=True).with_camera(width=12, height=9)
-    r = warprt.Renderer(s)
-    r.render()
-    geom = r.geometry
-    hits = warprt.image.record_first_hits(s, geom, geom.scene_data(s), resolve_effects(s), "cpu")
-    launch = warprt.image.replay_launch(s, geom, hits, "cpu")
-    assert warp.autograd.gradcheck(launch.kernel, dim=launch.dim, inputs=launch.inputs, outputs=[launch.rays], eps=1e-3,
-                                   atol=2e-2, rtol=2e-2, show_summary=False, raise_exception=False,
-                                   input_output_mask=[(k, "image") for k in ("ka", "kd", "ks", "light_color")])
 
 
 def test_a_gradient_of_another_image_is_refused_in_one_line(weights):

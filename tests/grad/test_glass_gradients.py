@@ -1,8 +1,9 @@
 """Gradients through Whitted's full ray tree with glass (issue 30): a dielectric's ior, transmittance and
 absorption (materials.<name>.ior | transmittance | absorption), and the material colours, texels and lights
 seen through it, through Fresnel (kernels.fresnel_dielectric), Snell (kernels.refract) and Beer (kernels.beer,
-beer_forever). The record follows the forward's tree level by level; the replay runs one differentiable
-launch per level (kernels/grad_tree.py). Held fixed: each ray's face, each shadow ray's visibility, the tree's
+beer_forever), each called by the forward's dielectric_children and absorbed, which the replay differentiates.
+The record is the forward's tree, written by its trace; the replay runs one differentiable launch per level
+(kernels/replay.py). Held fixed: each ray's face, each shadow ray's visibility, the tree's
 structure (which children exist, total internal reflection) and each ray's medium. Checked:
 
 - the replayed image is the forward's to float32 rounding (the levels summed in another order), on a glass
@@ -34,7 +35,7 @@ import warp.autograd
 
 import warprt
 from warprt import SceneError
-from warprt.kernels import beer, fresnel_dielectric, make_tree_replay_kernel, refract
+from warprt.kernels import NO_RAY, beer, fresnel_dielectric, make_replay_level, refract
 from warprt.scene import Texture, resolve_effects
 
 from .directional import backward_masked, directional, random_direction
@@ -111,6 +112,12 @@ def weights():
     return np.random.default_rng(5).random((HEIGHT, WIDTH, 3)).astype(np.float32)
 
 
+def _span(hits, k: int) -> tuple:
+    """(first, last) entries of ray level k of a record."""
+    first, count = hits.level(k)
+    return first, first + count
+
+
 def replayed(s):
     r = warprt.Renderer(s)
     forward = r.render().image
@@ -126,9 +133,11 @@ def replayed(s):
 def test_the_replayed_tree_is_the_forward_image(name, spp):
     s = SCENES[name]() if spp == 1 else sphere(spp)
     forward, image, hits = replayed(s)
-    assert isinstance(hits, warprt.image.TreeHits)
-    both = [(level.child.numpy()[:level.count] >= 0).all(axis=1).sum() for level in hits.tree]
-    assert len(hits.tree) >= 4 and sum(both) > 0  # a tree, not a chain: rays with both children
+    assert hits.tree
+    face, first = hits.rec.face.numpy(), hits.level(1)[0]
+    parent = hits.rec.parent.numpy()[np.flatnonzero(face[first:hits.entries] != NO_RAY) + first]
+    levels = [k for k in range(hits.levels) if (face[slice(*_span(hits, k))] != NO_RAY).any()]
+    assert len(levels) >= 4 and (np.unique(parent // 2, return_counts=True)[1] == 2).any()  # rays with both children
     assert np.abs(image - forward).max() <= 1e-5 * np.abs(forward).max()
 
 
@@ -287,17 +296,18 @@ def test_the_gradient_of_a_shallower_tree_does_not(checks, weights):
 
 @pytest.fixture
 def held(monkeypatch):
-    """Replay kernels built with a function's adjoint dropped (``held(name)``: kernels.grad_tree's
-    fresnel_dielectric or beer replaced by the held copy), the kernels' cache emptied before and after."""
-    make_tree_replay_kernel.cache_clear()
+    """Replay kernels built with a function's adjoint dropped (``held(name)``: the forward's fresnel_dielectric
+    or beer, which its dielectric_children and absorbed call, replaced by the held copy, the same value), the
+    replay's kernels' cache emptied before and after."""
+    make_replay_level.cache_clear()
 
     def hold(name: str):
-        monkeypatch.setattr(f"warprt.kernels.grad_tree.{name}", {"fresnel_dielectric": _fresnel_held,
-                                                                  "beer": _beer_held}[name])
+        monkeypatch.setattr(f"warprt.kernels.dielectric.{name}", {"fresnel_dielectric": _fresnel_held,
+                                                                   "beer": _beer_held}[name])
 
     yield hold
     monkeypatch.undo()
-    make_tree_replay_kernel.cache_clear()
+    make_replay_level.cache_clear()
 
 
 @pytest.mark.parametrize("function, scene_name, name", [("fresnel_dielectric", "sphere", "materials.glass.ior"),
@@ -363,7 +373,9 @@ def test_a_tree_too_big_for_memory_is_refused_in_one_line(monkeypatch):
 def test_the_area_lights_front_is_met_through_the_glass():
     """The area-light scene's tree: rays that meet the emitter's front, seen directly and through the ball."""
     _, _, hits = replayed(area_lit())
-    met = [int((level.emit.numpy()[:level.count] >= 0).sum()) for level in hits.tree]
+    emit, face = hits.rec.emit.numpy(), hits.rec.face.numpy()
+    met = [int(((emit[slice(*_span(hits, k))] >= 0) & (face[slice(*_span(hits, k))] >= 0)).sum())
+           for k in range(hits.levels)]
     assert hits.words > 0 and met[0] > 0 and sum(met[1:]) > 0
 
 

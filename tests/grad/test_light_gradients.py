@@ -20,7 +20,8 @@ import warp as wp
 import warp.autograd
 
 import warprt
-from warprt.kernels import light_factor, spot_cone
+from warprt.geometry import LightShape, SceneData, light_shape
+from warprt.kernels import Coefficients, Surface, light_weight, make_light_arrival, make_light_terms
 from warprt.scene import resolve_effects
 
 from .directional import backward_masked, directional, random_direction
@@ -108,34 +109,72 @@ def test_a_direction_gradient_along_another_direction_does_not(checks, name):
     assert abs((grads[name] * other).sum() - d.fd) > 0.1 * abs(d.fd)
 
 
-@wp.kernel
-def _cone(cone: wp.array(dtype=wp.vec4), cos_theta: wp.array(dtype=float), out: wp.array(dtype=float)):
-    i = wp.tid()
-    out[i] = spot_cone(cone[0], cos_theta[i])
+@wp.func
+def light_shape_of(kind: int, direction: wp.vec3, inverse_square: int) -> LightShape:
+    """A LightShape as geometry.light_shape makes one: a spot's 35-degree cone with a 15-degree beam (CONE)."""
+    shape = LightShape()
+    shape.kind = kind
+    shape.direction = direction
+    shape.cos_cutoff = wp.static(float(np.cos(np.radians(35.0))))
+    shape.cos_beam = wp.static(float(np.cos(np.radians(15.0))))
+    shape.cutoff = wp.static(float(np.radians(35.0)))
+    shape.inv_ramp = wp.static(float(1.0 / np.radians(20.0)))
+    shape.inverse_square = inverse_square
+    return shape
 
 
 @wp.kernel
-def _factor(kind: wp.array(dtype=int), cone: wp.array(dtype=wp.vec4), inverse_square: wp.array(dtype=int),
-            axis: wp.array(dtype=wp.vec3), to_light: wp.array(dtype=wp.vec3), out: wp.array(dtype=float)):
+def _weight(kind: wp.array(dtype=int), inverse_square: wp.array(dtype=int), axis: wp.array(dtype=wp.vec3),
+            to_light: wp.array(dtype=wp.vec3), out: wp.array(dtype=float)):
+    """shading.light_weight (a spot's profile, spot_profile, and 1 / r^2) of the shape made from the inputs."""
     i = wp.tid()
-    out[i] = light_factor(kind[i], cone[i], inverse_square[i], axis[i], to_light[i], wp.normalize(to_light[i]))
+    shape = light_shape_of(kind[i], wp.normalize(axis[i]), inverse_square[i])
+    out[i] = light_weight(shape, to_light[i], wp.normalize(to_light[i]))
 
 
-def cone(cutoff: float = 35.0, beam: float = 15.0) -> list:
-    c, b = np.radians(cutoff), np.radians(beam)
-    return [np.cos(c), np.cos(b), c, 1.0 / (c - b)]
+LIGHT_ARRIVAL = make_light_arrival(True)
+WHITTED_TERM = make_light_terms(True, True)[0]
 
 
-def test_the_cone_and_light_factor_pass_warps_gradcheck():
-    """spot_cone in its ramp and on both sides of it (away from the kinks), and light_factor for a spot
-    (ramp, with and without 1 / r^2), a directional light and a point light with falloff."""
-    cos_theta = wp.array([0.5, 0.85, 0.9, 0.94, 0.99], dtype=float, requires_grad=True)
-    assert warp.autograd.gradcheck(_cone, dim=5, inputs=[wp.array([cone()], dtype=wp.vec4), cos_theta],
-                                   outputs=[wp.zeros(5, dtype=float, requires_grad=True)], eps=1e-4, atol=1e-3,
-                                   rtol=1e-3, show_summary=False, raise_exception=False)
+@wp.kernel
+def _lit(light_pos: wp.array(dtype=wp.vec3), light_color: wp.array(dtype=wp.vec3), shapes: wp.array(dtype=LightShape),
+         p: wp.array(dtype=wp.vec3), n: wp.array(dtype=wp.vec3), kd: wp.array(dtype=wp.vec3),
+         ks: wp.array(dtype=wp.vec3), out: wp.array(dtype=wp.vec3)):
+    """What the replay adds for a light a hit sees: whitted_term of light_arrival (the general light model)."""
+    i = wp.tid()
+    s = SceneData()
+    s.light_pos = light_pos
+    s.light_color = light_color
+    s.light_shape = shapes
+    hit = Surface()
+    hit.p = p[i]
+    hit.n = wp.normalize(n[i])
+    k = Coefficients()
+    k.kd = kd[i]
+    k.ks = ks[i]
+    out[i] = WHITTED_TERM(LIGHT_ARRIVAL(s, hit, i % 3), k, 20.0, hit.n, wp.vec3(0.0, 0.6, 0.8))
+
+
+def test_the_light_model_passes_warps_gradcheck():
+    """The forward's light model as the replay differentiates it: light_weight for a spot (ramp, with and
+    without 1 / r^2), a directional light and a point light with falloff, in the spot's axis and the offset
+    to the light; and light_arrival then whitted_term, in the lights' positions and colours, the hit and its
+    colours, for a spot in its ramp, a point light and a sun."""
     axis = np.array([[0.0, -1.0, 0.0], [0.0, -1.0, 0.0], [0.6, -0.8, 0.0], [0.0, 0.0, -1.0]])
     to_light = [[0.3, 1.5, 0.2], [-0.4, 2.0, 0.1], [-0.6, 0.8, 0.0], [1.0, 2.0, 0.5]]
-    inputs = [wp.array([1, 1, 2, 0], dtype=int), wp.array([cone()] * 4, dtype=wp.vec4), wp.array([1, 0, 0, 1], dtype=int),
+    inputs = [wp.array([1, 1, 2, 0], dtype=int), wp.array([1, 0, 0, 1], dtype=int),
               wp.array(axis, dtype=wp.vec3, requires_grad=True), wp.array(to_light, dtype=wp.vec3, requires_grad=True)]
-    assert warp.autograd.gradcheck(_factor, dim=4, inputs=inputs, outputs=[wp.zeros(4, dtype=float, requires_grad=True)],
+    assert warp.autograd.gradcheck(_weight, dim=4, inputs=inputs, outputs=[wp.zeros(4, dtype=float, requires_grad=True)],
                                    eps=1e-4, atol=1e-3, rtol=1e-3, show_summary=False, raise_exception=False)
+    shapes = [light_shape(warprt.Light(type="spot", position=(0.4, 2.0, 0.3), direction=(-0.2, -1.0, -0.1),
+                                       cutoff_angle=35.0, beam_width=15.0, falloff="inverse_square")),
+              light_shape(warprt.Light(position=(0.0, 1.0, 0.0), falloff="inverse_square")),
+              light_shape(warprt.Light(type="directional", direction=(0.3, -1.0, -0.2)))]
+    vec = lambda rows: wp.array(np.asarray(rows, np.float32), dtype=wp.vec3, requires_grad=True)  # noqa: E731
+    inputs = [vec([[0.4, 2.0, 0.3], [-0.3, 1.2, 0.4], [0.0, 0.0, 0.0]]), vec([[5.0, 4.0, 3.0], [2.0, 2.0, 1.0],
+                                                                               [0.5, 0.6, 0.7]]),
+              wp.array(shapes, dtype=LightShape), vec([[0.1, 0.0, 0.2], [0.3, 0.0, -0.2], [-0.1, 0.0, 0.1]]),
+              vec([[0.0, 1.0, 0.1], [0.1, 1.0, 0.0], [0.0, 1.0, -0.2]]), vec([[0.5, 0.4, 0.3]] * 3),
+              vec([[0.3, 0.3, 0.3]] * 3)]
+    assert warp.autograd.gradcheck(_lit, dim=3, inputs=inputs, outputs=[wp.zeros(3, dtype=wp.vec3, requires_grad=True)],
+                                   eps=1e-4, atol=2e-3, rtol=2e-3, show_summary=False, raise_exception=False)

@@ -96,12 +96,12 @@ def test_an_unrecorded_reflectivity_of_0_is_refused_in_one_line(weights, reflect
     assert REFLECTIVITY not in r.backward(weights)
     geom = r.geometry
     hits = warprt.image.record_first_hits(s, geom, geom.scene_data(s), resolve_effects(s), "cpu")
-    launch = warprt.image.replay_launch(s, geom, hits, "cpu")
+    replay = warprt.image.build_replay(s, geom, hits, "cpu")
     tape = wp.Tape()
     with tape:
-        wp.launch(launch.kernel, dim=launch.dim, inputs=launch.inputs, outputs=[launch.shaded])
-    tape.backward(grads={launch.rays: wp.array(weights.reshape(-1, 3), dtype=wp.vec3)})
-    old = launch.arrays["reflectivity"].grad.numpy()[geom.material_names.index("floor")]
+        replay.launch()
+    tape.backward(grads={replay.colour: wp.array(weights.reshape(-1, 3), dtype=wp.vec3)})
+    old = replay.arrays["reflectivity"].grad.numpy()[geom.material_names.index("floor")]
     assert np.all(old == 0.0) and relative(old, reflectivity_differences) == 1.0
 
 

@@ -26,7 +26,8 @@ import warp as wp
 import warp.autograd
 
 import warprt
-from warprt.kernels import TEXTURE_CLAMP, TEXTURE_MIRROR, TEXTURE_WRAP, bilinear
+from warprt.geometry import TEXTURE_CLAMP, TEXTURE_MIRROR, TEXTURE_WRAP
+from warprt.kernels import bilinear
 from warprt.scene import Material, Texture, resolve_effects
 
 from .directional import backward_masked, directional, random_direction

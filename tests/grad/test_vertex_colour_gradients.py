@@ -1,14 +1,15 @@
 """Gradients of a scene with vertex colours (issue 30): the colours multiply ka and kd at the hit,
-interpolated at its barycentrics (shading.make_coefficients, interaction.make_surface); the replay does the
-same (kernels.vertex_colour over a differentiable per-vertex array), so such scenes are differentiated for
-every parameter, and objects.<name>.colors is one more. Checked:
+interpolated at its barycentrics (shading.make_coefficients, interaction.make_surface); the replay calls those
+very functions over a differentiable per-vertex array, so such scenes are differentiated for every parameter,
+and objects.<name>.colors is one more. Checked:
 
 - the replayed image is the forward's (camera rays and a mirror's level; the camera replay too);
 - directional derivatives along random directions equal central finite differences of the forward
   (tests/grad/directional.py, edges masked): the colours alone, the colours with a material, a light's
   position and colour, and the coloured object's vertices with the camera's eye (the hits slide, the colours
   read at the moved barycentrics);
-- warp.autograd.gradcheck of kernels.vertex_colour (colours and barycentrics);
+- warp.autograd.gradcheck of the hit record's colour (make_surface) in the colours and the moving ray's
+  barycentrics: tests/grad/test_replay_functions.py;
 - controls that fail: the colours ignored in the replay (kd's gradient then misses them), the colours'
   gradient read along another direction.
 Mitsuba's AD of the same colours (its Attributes BSDF's vertex_color attribute):
@@ -23,7 +24,6 @@ import warp as wp
 import warp.autograd
 
 import warprt
-from warprt.kernels import vertex_colour
 from warprt.scene import resolve_effects
 
 from .directional import backward_masked, directional, random_direction
@@ -109,22 +109,22 @@ def test_the_coloured_objects_vertices_and_the_camera_equal_central_differences(
 
 
 def _taped_kd(s, weights, mask, white: bool) -> np.ndarray:
-    """The paint's kd adjoint from the replay launched by hand (warprt.image.replay_launch); with ``white``,
-    its colours (the shade kernel's last input) replaced by white: the control's replay that ignores them."""
+    """The paint's kd adjoint from the replay launched by hand (warprt.image.build_replay); with ``white``,
+    its vertex colours (the replay's SceneData's) replaced by white: the control's replay that ignores them."""
     r = warprt.Renderer(s)
     r.render()
     geom = r.geometry
     hits = warprt.image.record_first_hits(s, geom, geom.scene_data(s), resolve_effects(s), "cpu")
-    launch = warprt.image.replay_launch(s, geom, hits, "cpu")
+    replay = warprt.image.build_replay(s, geom, hits, "cpu")
     if white:
-        launch.inputs[-1] = wp.array(np.ones((len(geom.points_np), 3), np.float32), dtype=wp.vec3)
+        replay.data.colors = wp.array(np.ones((len(geom.points_np), 3), np.float32), dtype=wp.vec3)
     tape = wp.Tape()
     with tape:
-        wp.launch(launch.kernel, dim=launch.dim, inputs=launch.inputs, outputs=[launch.shaded])
-    tape.backward(grads={launch.rays: wp.array((weights * mask).reshape(-1, 3), dtype=wp.vec3)})
+        replay.launch()
+    tape.backward(grads={replay.colour: wp.array((weights * mask).reshape(-1, 3), dtype=wp.vec3)})
     r.close()
     slot = geom.material_names.index("paint")  # its ka follows kd: r.params' kd carries ka's gradient too
-    return (launch.arrays["kd"].grad.numpy()[slot] + launch.arrays["ka"].grad.numpy()[slot]).astype(np.float64)
+    return (replay.arrays["kd"].grad.numpy()[slot] + replay.arrays["ka"].grad.numpy()[slot]).astype(np.float64)
 
 
 def test_the_colours_ignored_are_not_the_differences(weights):
@@ -136,24 +136,6 @@ def test_the_colours_ignored_are_not_the_differences(weights):
     np.testing.assert_allclose(right, backward_masked(s, weights, d)["materials.paint.kd"], rtol=1e-6, atol=1e-6)
     assert d.error({"materials.paint.kd": right}) <= TOL
     assert d.error({"materials.paint.kd": _taped_kd(s, weights, d.mask, white=True)}) > 0.1
-
-
-@wp.kernel
-def _colour_at(colors: wp.array(dtype=wp.vec3), bary: wp.array(dtype=wp.vec2), out: wp.array(dtype=wp.vec3)):
-    i = wp.tid()
-    u = bary[i][0]
-    v = bary[i][1]
-    out[i] = vertex_colour(colors, i % 5, (i + 2) % 5, (i + 4) % 5, u, v, 1.0 - u - v)
-
-
-def test_vertex_colour_passes_warps_gradcheck():
-    """Adjoints of the colours and of the barycentrics (w = 1 - u - v), against Warp's finite differences."""
-    rng = np.random.default_rng(3)
-    colors = wp.array(rng.uniform(0.1, 1.0, (5, 3)).astype(np.float32), dtype=wp.vec3, requires_grad=True)
-    bary = wp.array(rng.uniform(0.05, 0.45, (7, 2)).astype(np.float32), dtype=wp.vec2, requires_grad=True)
-    out = wp.zeros(7, dtype=wp.vec3, requires_grad=True)
-    assert warp.autograd.gradcheck(_colour_at, dim=7, inputs=[colors, bary], outputs=[out], eps=1e-3, atol=2e-3,
-                                   rtol=2e-3, show_summary=False, raise_exception=False)
 
 
 def test_colours_are_parameters_where_an_object_has_them():

@@ -131,24 +131,22 @@ def test_a_smooth_objects_vertices_equal_central_differences(weights, smooth):
 
 
 def _taped_vertices(s, weights, mask, hold_normals: bool) -> np.ndarray:
-    """The sphere's vertex adjoints from the replay launched by hand (warprt.image.replay_launch with the
+    """The sphere's vertex adjoints from the replay launched by hand (warprt.image.build_replay with the
     vertices); with ``hold_normals``, the launches that make the normals from the points dropped and the
     forward's normals given instead: the control's wrong model."""
     r = warprt.Renderer(s)
     r.render()
     geom = r.geometry
     hits = warprt.image.record_first_hits(s, geom, geom.scene_data(s), resolve_effects(s), "cpu")
-    launch = warprt.image.replay_launch(s, geom, hits, "cpu", vertices=True)
+    replay = warprt.image.build_replay(s, geom, hits, "cpu", vertices=True)
     if hold_normals:
-        launch.before, launch.inputs[3] = [], geom.normals
+        replay.before, replay.data.normals = [], geom.normals
     tape = wp.Tape()
     with tape:
-        for kernel, dim, inputs, outputs in launch.before:
-            wp.launch(kernel, dim=dim, inputs=inputs, outputs=outputs)
-        wp.launch(launch.kernel, dim=launch.dim, inputs=launch.inputs, outputs=[launch.shaded])
-    tape.backward(grads={launch.rays: wp.array((weights * mask).reshape(-1, 3), dtype=wp.vec3)})
+        replay.launch()
+    tape.backward(grads={replay.colour: wp.array((weights * mask).reshape(-1, 3), dtype=wp.vec3)})
     r.close()
-    return launch.arrays["points"].grad.numpy().astype(np.float64)[len(s.objects[0].vertices):]
+    return replay.arrays["points"].grad.numpy().astype(np.float64)[len(s.objects[0].vertices):]
 
 
 def test_the_normals_held_are_not_the_differences(weights):
@@ -176,12 +174,12 @@ def test_the_replayed_normals_are_the_forwards():
     r.render()
     geom = r.geometry
     hits = warprt.image.record_first_hits(s, geom, geom.scene_data(s), resolve_effects(s), "cpu")
-    launch = warprt.image.replay_launch(s, geom, hits, "cpu", vertices=True)
-    for kernel, dim, inputs, outputs in launch.before:
+    replay = warprt.image.build_replay(s, geom, hits, "cpu", vertices=True)
+    for kernel, dim, inputs, outputs in replay.before:
         wp.launch(kernel, dim=dim, inputs=inputs, outputs=outputs)
     expected = np.concatenate([vertex_normals(o.vertices, o.faces) if o.smooth else np.zeros_like(o.vertices)
                                for o in s.objects])
-    np.testing.assert_allclose(launch.inputs[3].numpy(), expected, atol=2e-6)
+    np.testing.assert_allclose(replay.data.normals.numpy(), expected, atol=2e-6)
     r.close()
 
 

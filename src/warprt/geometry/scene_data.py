@@ -19,19 +19,25 @@ from ..scene import (EMITTER_MATERIAL, EMITTER_MATERIAL_NAME, drawn_objects, emi
 from .bvh import build_mesh, eye_reach, frame_origin, objects_center, refit_mesh
 from .shadow_grid import ShadowGrid, empty_grid
 
-_REPEAT = ("repeat", "repeat")
-_ADDRESS = {"repeat": wp.TextureAddressMode.WRAP, "clamp": wp.TextureAddressMode.CLAMP,
-            "mirror": wp.TextureAddressMode.MIRROR}  # scene.Texture.wrap -> Warp's address modes
-CHECKER = -1  # TextureSlot.image: the procedural checker instead of an image
+# How a texture's coordinate outside [0, 1] is read, per axis (scene.Texture.wrap): Warp's address modes'
+# numbers (wp.TextureAddressMode WRAP, CLAMP, MIRROR), whose CPU sampler kernels.texture.bilinear follows.
+TEXTURE_WRAP, TEXTURE_CLAMP, TEXTURE_MIRROR = 0, 1, 2
+WRAP_MODES = {"repeat": TEXTURE_WRAP, "clamp": TEXTURE_CLAMP, "mirror": TEXTURE_MIRROR}
+UNTEXTURED, IMAGE, CHECKER = 0, 1, -1  # TextureSlot.image: the colour as it is, an image's texels, the checker
 
 
 @wp.struct
 class TextureSlot:
-    """How one material colour (ka, kd or ks) is textured: ``image`` indexes SceneData.textures (0:
-    untextured, the colour as it is; CHECKER: c0 and c1 on alternate unit squares), and the uv map
-    u' = u_map . (u, v, 1), v' = v_map . (u, v, 1)."""
+    """How one material colour (ka, kd or ks) is textured: ``image`` says how (UNTEXTURED: the colour as it
+    is; IMAGE: the bilinear texel of the width x height image stored row by row, row 0 at v = 0, from
+    ``offset`` in SceneData.texels, read per axis as ``wrap`` says; CHECKER: c0 and c1 on alternate unit
+    squares), and the uv map u' = u_map . (u, v, 1), v' = v_map . (u, v, 1)."""
 
     image: int
+    offset: int
+    width: int
+    height: int
+    wrap: wp.vec2i
     u_map: wp.vec3
     v_map: wp.vec3
     c0: wp.vec3
@@ -70,6 +76,49 @@ def light_shape(light) -> LightShape:
     return shape
 
 
+def texture_slots(materials, per_use: bool = False) -> tuple:
+    """(slots, images, placed): per colour ("ka", "kd", "ks") the TextureSlot of each material in
+    ``materials``; the images their texels hold, in order (texel_array: a 1 x 1 white one first, so that no
+    slot's offset is 0); and where each image colour lies, {(material index, colour): (offset, height,
+    width)}. An image several colours share is held once, or with ``per_use`` once per colour (the
+    gradient's replay: each its own adjoint)."""
+    images, offsets, placed = [np.ones((1, 1, 3), np.float32)], {}, {}
+    slots = {"ka": [], "kd": [], "ks": []}
+    offset = 1
+    for i, mat in enumerate(materials or [None]):
+        for key, rows in slots.items():
+            t = getattr(mat, f"{key}_texture", None) if mat is not None else None
+            slot = TextureSlot()
+            slot.image, slot.offset, slot.width, slot.height = UNTEXTURED, 0, 1, 1
+            slot.wrap = wp.vec2i(TEXTURE_WRAP, TEXTURE_WRAP)
+            slot.u_map, slot.v_map = wp.vec3(1.0, 0.0, 0.0), wp.vec3(0.0, 1.0, 0.0)
+            slot.c0, slot.c1 = wp.vec3(1.0), wp.vec3(1.0)
+            if t is not None:
+                a = t.uv_transform
+                slot.u_map, slot.v_map = wp.vec3(*a[:3]), wp.vec3(*a[3:])
+                if t.checker is not None:
+                    slot.image, slot.c0, slot.c1 = CHECKER, wp.vec3(*t.checker[0]), wp.vec3(*t.checker[1])
+                else:
+                    h, w = t.image.shape[:2]
+                    name = (i, key) if per_use else id(t.image)
+                    if name not in offsets:
+                        offsets[name] = offset
+                        images.append(t.image)
+                        offset += h * w
+                    # Per axis: glTF's wrapS and wrapT, USD's, MTL's -clamp; repeat unless the file says otherwise.
+                    slot.image, slot.offset, slot.width, slot.height = IMAGE, offsets[name], w, h
+                    slot.wrap = wp.vec2i(WRAP_MODES[t.wrap[0]], WRAP_MODES[t.wrap[1]])
+                    placed[(i, key)] = (offsets[name], h, w)
+            rows.append(slot)
+    return slots, images, placed
+
+
+def texel_array(images, device, requires_grad: bool = False) -> wp.array:
+    """The images' texels (RGB; an image's channels beyond three left out), one after another, row by row."""
+    rows = [np.asarray(a, np.float32)[..., :3].reshape(-1, 3) for a in images]
+    return wp.array(np.concatenate(rows), dtype=wp.vec3, device=device, requires_grad=requires_grad)
+
+
 @wp.struct
 class AreaLights:
     """The area lights (scene.area), read only where a scene has some (EffectSet.area_lights): per light its
@@ -104,7 +153,7 @@ class SceneData:
     ka_map: wp.array(dtype=TextureSlot)  # per material
     kd_map: wp.array(dtype=TextureSlot)
     ks_map: wp.array(dtype=TextureSlot)
-    textures: wp.array(dtype=wp.Texture2D)  # bilinear, each with its wrap per axis; slot 0 a 1x1 white one
+    texels: wp.array(dtype=wp.vec3)  # the images' texels, linear RGB, one image after another (TextureSlot)
     ior: wp.array(dtype=float)  # eta of a dielectric, 0 for an opaque material
     transmittance: wp.array(dtype=wp.vec3)  # k_t
     absorption: wp.array(dtype=wp.vec3)  # sigma per scene unit
@@ -146,7 +195,7 @@ class Geometry:
         self._no_grid = None  # the ShadowGrid of no grid
         self._no_area = None  # the AreaLights of no area lights
         self._no_uvs = None  # the uv array of a frame without textures
-        self._texture_cache: dict = {}  # (id(image), wrap) -> (image, wp.Texture2D): an image uploaded once
+        self._texture_cache: dict = {}  # the last frame's images (and their ids) and their texels: uploaded once
         # A triangle's material is a slot: the objects' material names in order of first use, so the
         # triangle arrays depend on the objects alone and a frame with other materials only swaps tables.
         self.material_names = list(dict.fromkeys(obj.material for obj in objects))
@@ -321,7 +370,7 @@ class Geometry:
             self._no_grid = empty_grid(d)
         s.shadow_grid = shadow_grid if shadow_grid is not None else self._no_grid
         s.area = self._area_lights(scene, area)
-        self._tables = (key, s, shadow_grid, textures)  # the grid and textures kept alive with their ids
+        self._tables = (key, s, shadow_grid, textures)  # the grid and images kept alive with their ids
         return s
 
     def _area_lights(self, scene, area: list) -> AreaLights:
@@ -360,10 +409,10 @@ class Geometry:
             self._uv_array = wp.array(np.concatenate(uv).astype(np.float32), dtype=wp.vec2, device=self.device)
         return self._uv_array
 
-    def _textures(self, s: SceneData, materials) -> list:
-        """A frame's uvs, texture slots and textures; one-element stand-ins where it has none (the kernels
-        read them only under the texture switch). Returns the Texture2D objects, which must outlive
-        ``s``. An image is uploaded once while consecutive frames keep using it."""
+    def _textures(self, s: SceneData, materials) -> tuple:
+        """A frame's uvs, texture slots and texels; one-element stand-ins where it has none (the kernels
+        read them only under the texture switch). Returns what must outlive ``s``: its images (whose ids key
+        the texels kept for the next frames, so that an image is uploaded once while frames keep using it)."""
         device = self.device
         textured = any(mat.textures for mat in materials)
         if textured:
@@ -372,44 +421,14 @@ class Geometry:
             if self._no_uvs is None:
                 self._no_uvs = wp.zeros(1, dtype=wp.vec2, device=device)
             s.uvs = self._no_uvs
-        images, index = [(np.ones((1, 1, 3), np.float32), _REPEAT)], {}  # slot 0: white
-        slots = {"ka": [], "kd": [], "ks": []}
-        for mat in materials or [None]:
-            for key, rows in slots.items():
-                t = getattr(mat, f"{key}_texture", None) if mat is not None else None
-                slot = TextureSlot()
-                slot.image, slot.u_map, slot.v_map = 0, wp.vec3(1.0, 0.0, 0.0), wp.vec3(0.0, 1.0, 0.0)
-                slot.c0, slot.c1 = wp.vec3(1.0), wp.vec3(1.0)
-                if t is not None:
-                    a = t.uv_transform
-                    slot.u_map, slot.v_map = wp.vec3(*a[:3]), wp.vec3(*a[3:])
-                    if t.checker is not None:
-                        slot.image, slot.c0, slot.c1 = CHECKER, wp.vec3(*t.checker[0]), wp.vec3(*t.checker[1])
-                    else:
-                        key = (id(t.image), t.wrap)  # an image several materials share (same wrap) is held once
-                        if key not in index:
-                            index[key] = len(images)
-                            images.append((t.image, t.wrap))
-                        slot.image = index[key]
-                rows.append(slot)
+        slots, images, _ = texture_slots(materials)
         s.ka_map, s.kd_map, s.ks_map = (wp.array(slots[k], dtype=TextureSlot, device=device) for k in ("ka", "kd", "ks"))
-        # Warp's textures hold 1, 2 or 4 channels: RGB is padded to RGBA. The cache holds the image
-        # itself with its texture, so its id cannot be reused by another image while it is a key.
-        cache = self._texture_cache
-        objects = []
-        for a, wrap in images:
-            if (id(a), wrap) not in cache:
-                rgba = np.ascontiguousarray(np.concatenate([a, np.ones(a.shape[:2] + (1,), np.float32)], -1))
-                # Per axis: glTF's wrapS and wrapT, USD's, MTL's -clamp; repeat unless the file says otherwise.
-                cache[(id(a), wrap)] = (a, wp.Texture2D(rgba, filter_mode=wp.TextureFilterMode.LINEAR,
-                                                        address_mode_u=_ADDRESS[wrap[0]], address_mode_v=_ADDRESS[wrap[1]],
-                                                        normalized_coords=True, device=device))
-            objects.append(cache[(id(a), wrap)][1])
-        for key in [k for k in cache if k not in {(id(a), w) for a, w in images}]:  # images no longer in use
-            del cache[key]
-        s.textures = wp.array(objects, dtype=wp.Texture2D, device=device)
-        self.texture_bytes = int(sum(a.shape[0] * a.shape[1] * 16 for a, _ in images))
-        return objects
+        key = tuple(id(a) for a in images)  # the images themselves are held with it: no id is reused meanwhile
+        if self._texture_cache.get("key") != key:
+            self._texture_cache = {"key": key, "images": images, "texels": texel_array(images, device)}
+        s.texels = self._texture_cache["texels"]
+        self.texture_bytes = int(sum(a.shape[0] * a.shape[1] * 12 for a in images))
+        return images
 
     def object_tables(self):
         """Per triangle, its object's index in scene.objects, and per object its first triangle: what

@@ -11,12 +11,12 @@ image; grad_mesh_edges.py: the meshes' edges and silhouettes).
 from ..options import RenderOptions
 from .aovs import AOVS, check_aovs
 from .caches import FrameCaches, LightHistory
-from .grad import ReplayLaunch, pose_points, replay_image, replay_launch
+from .grad import Replay, build_replay, pose_points, replay_image
 from .grad_edge_points import EdgePoints, edge_points, segment_points
 from .grad_edges import Boundary, EdgeFrame, boundary, camera_edges, edge_sides, edge_speeds
 from .grad_mesh_edges import MeshEdges, mesh_edges
 from .grad_shadow_edges import ShadowSegments, ShadowSources, light_sides, shadow_segments, shadow_sources, shadow_speeds
-from .grad_record import FirstHits, TreeHits, record_first_hits
+from .grad_record import Record, record_first_hits
 from .film import aov_paths, partial_files, read_aovs, read_image, to_srgb8, write_image
 from .launch import bands_of, default_threads, launch_bands
 from .mirrors import MirrorFrame
@@ -26,10 +26,10 @@ from .renderer import Renderer, check_finite, render, render_zbuffer
 from .stats import RenderResult, RenderStats
 from .zbuffer import ZBuffer, eye_on_surface
 
-__all__ = ["AOVS", "FirstHits", "ReplayLaunch", "TreeHits", "FrameCaches", "LightHistory", "MirrorFrame", "Pose", "RenderOptions", "RenderResult", "RenderStats",
+__all__ = ["AOVS", "Record", "Replay", "build_replay", "FrameCaches", "LightHistory", "MirrorFrame", "Pose", "RenderOptions", "RenderResult", "RenderStats",
            "Renderer", "SceneParameters", "ZBuffer", "aov_paths", "bands_of", "check_aovs", "check_finite",
            "default_threads", "eye_on_surface", "launch_bands", "mirrors_from_rasters", "object_poses", "partial_files", "pose_points",
-           "raster_is_cheaper", "read_aovs", "read_image", "record_first_hits", "render", "replay_image", "replay_launch", "render_zbuffer", "shadows_from_grid",
+           "raster_is_cheaper", "read_aovs", "read_image", "record_first_hits", "render", "replay_image", "render_zbuffer", "shadows_from_grid",
            "to_srgb8", "write_image"]
 __all__ += ["EdgeFrame", "EdgePoints", "camera_edges", "edge_points", "edge_sides", "edge_speeds"]  # backward(edges=True)
 __all__ += ["Boundary", "MeshEdges", "ShadowSegments", "ShadowSources", "boundary", "light_sides", "mesh_edges",

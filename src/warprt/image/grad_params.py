@@ -5,14 +5,14 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import ArgumentError
-from ..kernels.grad import MAX_GRAD_LIGHTS
+from ..kernels import MAX_GRAD_LIGHTS
 from ..scene import scene_effects
-from .grad_record import FirstHits, TreeHits
+from .grad_record import Record
 from .params import POSE_KEYS, object_names
 
 SOURCE = "Renderer.backward"
 MATERIAL_KEYS = ("ka", "kd", "ks", "shininess", "reflectivity")
-DIELECTRIC_KEYS = ("ior", "transmittance", "absorption")  # a dielectric's, through the ray tree (record_tree)
+DIELECTRIC_KEYS = ("ior", "transmittance", "absorption")  # a dielectric's, through the ray tree
 TEXTURE_KEYS = ("ka_texture", "kd_texture", "ks_texture")  # an image texture's texels, as r.params has them
 MAX_GRAD_DEPTH = 16  # ray levels, unrolled as the lights are
 LIGHT_KEYS = ("color", "position", "direction")
@@ -142,7 +142,7 @@ def not_differentiated(scene, name, known=None) -> str | None:
         "colours), camera.eye | center | up | fovy)")
 
 
-def _unrecorded(scene, geom, hits: FirstHits, name: str) -> bool:
+def _unrecorded(scene, geom, hits: Record, name: str) -> bool:
     """Whether ``name`` is a reflectivity of 0 (every component) of a material the frame's objects use, whose
     mirror rays the frame did not record though it could reflect: its derivative, the mirrored colour, is
     not in the record (render(grad=[name]) records it)."""
@@ -150,7 +150,7 @@ def _unrecorded(scene, geom, hits: FirstHits, name: str) -> bool:
     if section != "materials" or key != "reflectivity" or owner not in geom.material_names:
         return False
     m = scene.materials[owner]
-    if isinstance(hits, TreeHits) and m.dielectric:  # a k_r > 0 makes glass a mirror: a jump, not a slope
+    if hits.fx.refraction and m.dielectric:  # a k_r > 0 makes glass a mirror: a jump, not a slope
         return False
     return hits.reflects and owner not in hits.mirrored and max(m.reflectivity) <= 0.0
 
@@ -183,14 +183,15 @@ def checked_names(scene, geom, hits, wrt) -> list[str]:
 
 def gradients_by_name(scene, geom, launched, wrt) -> dict:
     """{name: gradient} for each r.params name in ``wrt``, from the adjoints a wp.Tape left in the replay's
-    differentiable arrays (``launched``: grad.py's ReplayLaunch, its ``arrays`` by key and its ``images``),
+    differentiable arrays (``launched``: grad.py's Replay, its ``arrays`` by key and its ``images``),
     each shaped as the parameter, float64: per material slot, light, area light, vertex, object (a pose) and
     camera row the one the name stands for, summed where r.params ties two together (ka following kd) and
     projected where the scene keeps a unit vector (a light's direction)."""
     arrays = launched.arrays
     slot = {name: i for i, name in enumerate(geom.material_names)}
     whitted = [i for i, light in enumerate(scene.lights) if not light.area]
-    grads = {k: a.grad.numpy() for k, a in arrays.items() if k != "points"}
+    grads = {k: a.grad.numpy() for k, a in arrays.items() if k != "points" and a.grad is not None}
+    grads["direction"] = grads["direction"]["direction"]  # the lights' LightShape rows' direction field
     camera_rows = {key: i for i, key in enumerate(CAMERA_KEYS[:3])}
 
     def texels(slot: int, key: str) -> np.ndarray:  # a texture's adjoint, (H, W, 3) with row 0 at the top

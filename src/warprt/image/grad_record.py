@@ -1,117 +1,155 @@
-"""The gradient's record of a grad=True frame (grad.py says what is differentiated): its layout (FirstHits,
-TreeHits), its size and the memory check, and how it is made: by the frame's own trace (recording_plan,
-record_arrays: kernels/record.py's GradRecord), and for glass's ray tree level by level (record_tree)."""
+"""The gradient's record of a grad=True frame (grad.py says what is differentiated): its layout (Record: the
+entries level by level, kernels/record.py), its size and the memory check, and how the frame's own trace
+makes it (recording_plan, record_arrays, regrown where glass's regions were too small; record_first_hits for
+tools and tests)."""
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from .._warp import wp
 from ..errors import ArgumentError
-from ..kernels import NO_RAY, GradRecord, camera_data, empty_aov_buffers, make_trace_kernel
-from ..kernels.grad_tree import make_tree_record_kernel, tree_camera_rays
+from ..kernels import NO_RAY, GradRecord, camera_data, empty_aov_buffers, make_trace_kernel, stack_size
 from ..scene import camera_basis, scene_effects
-from .launch import launch_bands
+from .launch import bands_of, launch_bands
 from .memory import available_memory, human
 from .mirrors import empty_mirrors
 from .zbuffer import empty_fragments
 
-
-# Bytes per camera ray and level of the record (face, barycentrics, direction: 4 + 8 + 12, then 4 a light),
-# and per camera ray of the replay (its colour and adjoint, the adjoint handed to the tape, and for camera
-# gradients its direction made again and that one's adjoint: 5 x 12). With area
-# lights, per camera ray and level: the emitter met (4) and a bit per sample point (in 4-byte words), and the
-# replay's state (hit point, normal, kd, ks, weight, local colour, each with its adjoint: 2 x 6 x 12).
-RECORD_BYTES_PER_LEVEL, RECORD_BYTES_PER_LIGHT, REPLAY_BYTES_PER_RAY = 24, 4, 60
-AREA_RECORD_BYTES_PER_LEVEL, AREA_REPLAY_BYTES_PER_LEVEL = 4, 144
+# Bytes of an entry of the record (face, barycentrics, the lights seen: 4 + 8 + 4; with glass its parent, camera ray
+# and medium, 12); with area lights the emitter met (4) and a bit per sample point (in 4-byte words). And of the
+# replay (kernels/replay.py), each with its adjoint: a child's weight and direction (2 x 24 a branch; its origin
+# too where the hits move, 2 x 12), where it began (2 x 12); with area lights the hit, its colours, its weight and
+# local colour (2 x 132).
+RECORD_BYTES_PER_ENTRY, TREE_BYTES_PER_ENTRY, REPLAY_BYTES_PER_ENTRY = 16, 12, 48 + 24 + 24
+AREA_RECORD_BYTES_PER_ENTRY, AREA_REPLAY_BYTES_PER_ENTRY = 4, 264
+GROWTH = 1.25  # a glass frame's regions, made again from the rays a frame used: room for the next frame's
+FIRST_CAPACITY = 2  # a glass frame's region in each deeper level, per camera ray, when no frame has said more
 
 
 def area_samples(scene) -> int:
-    """The area lights' sample points in all (render.light_samples each): the record's bits per ray level."""
+    """The area lights' sample points in all (render.light_samples each): the record's bits an entry."""
     return len(scene.area_lights) * scene.render.light_samples
-
-
-def ray_levels(scene, fx, mirrored=()) -> int:
-    """The ray levels a grad frame records: render.max_depth where the tracer spawns mirror rays (some
-    k_r > 0) or the caller named a reflectivity to differentiate (``mirrored``), else the camera ray's."""
-    return scene.render.max_depth if fx.reflection or fx.refraction or mirrored else 1
-
-
-def record_bytes(scene, fx, mirrored=()) -> int:
-    """What render(grad=True) and backward() hold for a frame's record and replay, in bytes: per camera
-    ray (width x height x spp) and ray level."""
-    cam, r = scene.camera, scene.render
-    rays = cam.width * cam.height * (r.spp if fx.supersampling else 1)
-    levels = ray_levels(scene, fx, mirrored)  # with glass, the least: a chain (record_tree checks the tree as
-    # it grows)
-    per_level = RECORD_BYTES_PER_LEVEL + RECORD_BYTES_PER_LIGHT * len(scene.whitted_lights)
-    if fx.area_lights:
-        per_level += AREA_RECORD_BYTES_PER_LEVEL + 4 * _words(area_samples(scene)) + AREA_REPLAY_BYTES_PER_LEVEL
-    return rays * (levels * per_level + REPLAY_BYTES_PER_RAY)
 
 
 def _words(samples: int) -> int:
     return max(1, -(-samples // 32))
 
 
+def ray_levels(scene, fx, mirrored=()) -> int:
+    """The ray levels a grad frame records: render.max_depth where the tracer spawns mirror or glass rays (some
+    k_r > 0, a dielectric) or the caller named a reflectivity to differentiate (``mirrored``), else the camera
+    ray's."""
+    return scene.render.max_depth if fx.reflection or fx.refraction or mirrored else 1
+
+
+def entry_bytes(scene, fx) -> int:
+    """What an entry of a frame's record and its replay hold, in bytes."""
+    per = RECORD_BYTES_PER_ENTRY + REPLAY_BYTES_PER_ENTRY + (TREE_BYTES_PER_ENTRY if fx.refraction else 0)
+    if fx.area_lights:
+        per += AREA_RECORD_BYTES_PER_ENTRY + 4 * _words(area_samples(scene)) + AREA_REPLAY_BYTES_PER_ENTRY
+    return per
+
+
+def record_bytes(scene, fx, mirrored=()) -> int:
+    """What render(grad=True) and backward() hold for a frame's record and replay, in bytes, at the least: an
+    entry per camera ray (width x height x spp) and ray level (glass's tree may take more: checked as the
+    frame's regions grow, check_tree_memory)."""
+    cam, r = scene.camera, scene.render
+    rays = cam.width * cam.height * (r.spp if fx.supersampling else 1)
+    return rays * ray_levels(scene, fx, mirrored) * entry_bytes(scene, fx)
+
+
+def _too_big(need: int, device: str, fx, what: str):
+    available, where = available_memory(device)
+    if available is not None and need > available:
+        samples = ", render.light_samples" if fx.area_lights else ""  # a bit per area-light sample and entry
+        raise ArgumentError("render", "grad", f"the gradient's record of this frame{what} needs about {human(need)} "
+                            f"(per ray and ray level), more than the {human(available)} {where}: lower render.spp, "
+                            f"render.max_depth{samples} or camera.width and camera.height")
+
+
 def check_record_memory(scene, fx, device: str, mirrored=()):
     """Refuse, in one line naming the budget and the settings that reduce it, a grad=True frame whose
     record would not fit in the memory this process can still take (before the frame allocates anything)."""
-    need = record_bytes(scene, fx, mirrored)
-    available, what = available_memory(device)
-    if available is not None and need > available:
-        samples = ", render.light_samples" if fx.area_lights else ""  # a bit per area-light sample and level
-        raise ArgumentError("render", "grad", f"the gradient's record of this frame needs about {human(need)} "
-                            f"(per camera ray and ray level), more than the {human(available)} {what}: lower "
-                            f"render.spp, render.max_depth{samples} or camera.width and camera.height")
+    _too_big(record_bytes(scene, fx, mirrored), device, fx, "")
 
 
 @dataclass
-class FirstHits:
-    """What a grad=True frame recorded: per camera ray (``samples`` per pixel, ray pixel * samples +
-    sample, the tracer's strata) and ray level (``levels``: the camera ray, then the mirror rays) the
-    hit's face (-1: none, NO_RAY: no ray at that level), barycentrics and ray direction, and per light
-    whether the hit saw it; with area lights (``words`` > 0), the area light whose emitting side the ray met
-    (``emit``, -1: none) and a bit per area-light sample point the hit sees (``area_bits``, ``words`` int32s
-    a level)."""
+class Record:
+    """What a grad=True frame recorded, as backward() reads it: ``rec``, the entries (kernels/record.py's
+    GradRecord: per ray of the frame's tree its hit, parent, camera ray and medium, the lights and area-light
+    points it sees, level by level from ``level_start``), and how to read them: the camera rays (``samples``
+    a pixel, ray pixel * samples + sample, the tracer's strata), the ray levels, the Whitted lights and the
+    area-light words an entry, the frame's tables (``data``, its SceneData) and the effects the replay models
+    (``fx``, the recording frame's: recording_effects; ``absorption``: whether the replay applies Beer's law,
+    unless switched off also where every absorption is 0 in a frame with glass, its derivative not being 0).
+    ``tree``: glass's, whose deeper levels are per-band regions (``bands``, launch_bands' ranges).
+    ``mirrored``: the materials whose mirror rays were recorded whatever their k_r; ``reflects``: whether the
+    frame could reflect at all."""
 
-    face: wp.array
-    bary: wp.array
-    dirs: wp.array
-    visible: wp.array
+    rec: GradRecord
+    level_start: np.ndarray
     width: int
     height: int
-    lights: int
+    samples: int
     levels: int
-    smooth: bool
-    samples: int = 1
-    light_model: bool = False  # shading's general light model (spot, directional, falloff), as the frame's
-    texture: bool = False  # textured colours, as the frame's
-    emit: wp.array | None = None
-    area_bits: wp.array | None = None
-    words: int = 0  # 0: no area lights
-    area: object = None  # the frame's AreaLights table (its sample points, normals and areas), as recorded
-    mirrored: tuple = ()  # the materials whose mirror rays were recorded whatever their k_r (mirrored_materials)
-    reflects: bool = False  # whether the frame could reflect (render.max_depth > 1, reflection not switched off)
-    vertex_color: bool = False  # ka and kd times the vertex colours, as the frame's
+    lights: int
+    words: int
+    tree: bool
+    fx: object
+    data: object
+    absorption: bool
+    mirrored: tuple = ()
+    reflects: bool = False
+    bands: list = field(default_factory=list)
+    capacity: np.ndarray | None = None  # glass: per (band, level) the region's size
+
+    @property
+    def camera_rays(self) -> int:
+        return self.width * self.height * self.samples
+
+    @property
+    def entries(self) -> int:
+        return int(self.level_start[-1])
+
+    def level(self, k: int) -> tuple[int, int]:
+        """(first entry, count) of ray level k."""
+        return int(self.level_start[k]), int(self.level_start[k + 1] - self.level_start[k])
+
+    def for_band(self, first: int) -> GradRecord:
+        """The GradRecord a launch of the band starting at pixel ``first`` writes through (its regions' row)."""
+        if not self.tree:
+            return self.rec
+        r = _copy(self.rec)
+        r.band = [f for f, _ in self.bands].index(first)
+        return r
+
+    def used(self) -> np.ndarray:
+        """Glass: per (band, level) the entries the frame's rays took (past the capacity too)."""
+        return self.rec.used.numpy().reshape(len(self.bands), self.levels)
+
+    def overflowed(self) -> bool:
+        """Whether some band's region was too small (glass): the frame must be traced again, regrown."""
+        return self.tree and bool((self.used() > self.capacity).any())
 
 
-def records_in_trace(fx) -> bool:
-    """Whether a grad=True frame's record is its trace's: a chain of rays (no glass: the ray tree is
-    recorded level by level, record_tree)."""
-    return not fx.refraction
+def _copy(rec: GradRecord) -> GradRecord:
+    out = GradRecord()
+    for name in GradRecord.vars:
+        setattr(out, name, getattr(rec, name))
+    return out
 
 
 def recording_effects(scene, fx, switched=None, mirrored=()):
-    """The effects of a grad=True frame that records as it traces: ``fx`` with those the record needs though
-    the scene's values leave them out, each adding exactly 0 to the image (so it is the plain frame's to the
-    bit): shadow rays where the scene asks for shadows but no light or colour would dim (a light of colour
-    0: its derivative is the shadowed one's), the light loop where there are lights (a kd and ks of 0
-    everywhere: their derivative is not 0), and the mirror code where a reflectivity of 0 is named
-    (``mirrored``: its rays followed with weight 0). Effects switched off (``switched``, the caller's
-    options' effects.switched_on) stay off."""
+    """The effects of a grad=True frame: ``fx`` with those the record needs though the scene's values leave
+    them out, each adding exactly 0 to the image (so it is the plain frame's to the bit): shadow rays where the
+    scene asks for shadows but no light or colour would dim (a light of colour 0: its derivative is the
+    shadowed one's), the light loop where there are lights (a kd and ks of 0 everywhere: their derivative is
+    not 0), and the mirror code where a reflectivity of 0 is named (``mirrored``: its rays followed with weight
+    0). Effects switched off (``switched``, the caller's options' effects.switched_on) stay off."""
     called = scene_effects(scene)
     wanted = switched is None or "shadows" in switched
     unlit = bool(scene.lights) and not (fx.diffuse or fx.specular)  # no light loop to record its tests in
@@ -120,218 +158,109 @@ def recording_effects(scene, fx, switched=None, mirrored=()):
 
 
 def recording_plan(scene, plan, switched=None, mirrored=()):
-    """The FramePlan of a grad=True frame that records as it traces: ``plan`` with recording_effects' effect
-    set, over the ray levels the record holds (render.max_depth where mirror rays are followed)."""
+    """The FramePlan of a grad=True frame: ``plan`` with recording_effects' effect set, over the ray levels
+    the record holds (render.max_depth where mirror or glass rays are followed)."""
     fx = recording_effects(scene, plan.fx, switched, mirrored)
     return replace(plan, fx=fx, max_depth=ray_levels(scene, fx, mirrored))
 
 
-def record_arrays(scene, geom, data, fx, levels: int, device: str, mirrored=(), switched=None,
-                  reuse: GradRecord | None = None) -> tuple[GradRecord, FirstHits]:
-    """The record's arrays for a recording frame, as the trace kernel writes them (GradRecord) and as
-    backward() reads them (FirstHits, the same arrays): per camera ray and level, the face (NO_RAY until a ray
-    reaches that level), barycentrics, direction, each Whitted light's visibility, the emitter met and the
-    area-light points seen (all but the faces and the points seen are written at every hit and read only
-    there: not filled). ``fx`` and ``levels``: the recording frame's effects (recording_effects) and ray
-    levels. ``reuse``: the last grad frame's record, whose arrays are taken again where their sizes are this
-    frame's (its FirstHits is then stale: the Renderer drops it when a frame starts)."""
+def _capacity(n_bands: int, levels: int, band_rays: np.ndarray, used: np.ndarray | None) -> np.ndarray:
+    """Per (band, level) the size of glass's region: the camera rays at level 0 (not read: their entries are
+    fixed), then FIRST_CAPACITY a camera ray, or GROWTH times what a frame used."""
+    cap = np.repeat((FIRST_CAPACITY * band_rays)[:, None], levels, axis=1).astype(np.int64)
+    if used is not None and used.shape == cap.shape:  # a frame of these bands and levels
+        cap = np.ceil(used * GROWTH).astype(np.int64) + 16
+    cap[:, 0] = band_rays
+    return cap
+
+
+def record_arrays(scene, geom, data, fx, levels: int, device: str, bands: list, mirrored=(), switched=None,
+                  reuse: Record | None = None, used: np.ndarray | None = None) -> Record:
+    """The Record of a grad frame about to be traced: its arrays as the trace kernel's recording variant writes
+    them, every entry's face NO_RAY and every area-light bit 0 until a ray writes it (the rest is written at
+    every ray and read only there: not filled). ``fx`` and ``levels``: the recording frame's effects
+    (recording_effects) and ray levels; ``bands``: its bands (launch.bands_of), whose regions glass's deeper
+    levels are; ``used``: with glass, what a frame used per (band, level) (the regions made from it, else a
+    first guess). ``reuse``: the last grad frame's Record, whose arrays are taken again where their sizes are
+    this frame's."""
     cam = scene.camera
     k = math.isqrt(scene.render.spp) if fx.supersampling else 1
     n, L, D = cam.width * cam.height * k * k, len(scene.whitted_lights), levels
     words = _words(area_samples(scene)) if fx.area_lights else 0
-    sizes = (n * D, max(n * D * L, 1), max(n * D, 1) if words else 1, max(n * D * words, 1))
-    if reuse is not None and (reuse.face.shape[0], reuse.visible.shape[0], reuse.emit.shape[0],
-                              reuse.area_bits.shape[0]) == sizes and reuse.face.device == wp.get_device(device):
-        r = reuse
-        r.face.fill_(NO_RAY)
-        if words:
-            r.area_bits.zero_()
+    tree = bool(fx.refraction)
+    capacity = None
+    if tree:
+        band_rays = np.asarray([count * k * k for _, count in bands], np.int64)
+        capacity = _capacity(len(bands), D, band_rays, used)
+        region = np.zeros_like(capacity)
+        region[:, 1:] = np.cumsum(capacity[:, 1:], axis=0) - capacity[:, 1:]
+        level_size = np.concatenate([[n], capacity[:, 1:].sum(0)])
+        check_tree_memory(scene, fx, int(level_size.sum()), device)
     else:
+        level_size = np.full(D, n, np.int64)
+    level_start = np.concatenate([[0], np.cumsum(level_size)]).astype(np.int64)
+    total = int(level_start[-1])
+    sizes = (total + 1, (total + 1) if tree else 1, (total + 1) if words else 1, (total + 1) * words or 1)
+    r = reuse.rec if reuse is not None and _fits(reuse, sizes, device) else None
+    if r is None:
         r = GradRecord()
-        r.face = wp.full(sizes[0], NO_RAY, dtype=int, device=device)
+        r.face, r.visible = (wp.empty(sizes[0], dtype=int, device=device) for _ in range(2))
         r.bary = wp.empty(sizes[0], dtype=wp.vec2, device=device)
-        r.dirs = wp.empty(sizes[0], dtype=wp.vec3, device=device)
-        r.visible = wp.empty(sizes[1], dtype=int, device=device)
+        r.parent, r.ray_of, r.medium = (wp.empty(sizes[1], dtype=int, device=device) for _ in range(3))
         r.emit = wp.empty(sizes[2], dtype=int, device=device)
         r.area_bits = wp.zeros(sizes[3], dtype=int, device=device)
-    r.mirrored = wp.array(np.asarray([int(m in mirrored) for m in geom.material_names] or [0], np.int32),
-                          dtype=int, device=device)
-    r.levels, r.lights, r.words = D, L, words
+    r.face.fill_(NO_RAY)
+    if words:
+        r.area_bits.zero_()
+    ints = lambda a: wp.array(np.asarray(a, np.int32).ravel(), dtype=int, device=device)  # noqa: E731
+    r.level_start = ints(level_start)
+    r.region, r.capacity = (ints(region), ints(capacity)) if tree else (ints([0]), ints([0]))
+    r.used = wp.zeros(len(bands) * D if tree else 1, dtype=int, device=device)
+    r.mirrored = ints([int(m in mirrored) for m in geom.material_names] or [0])
+    r.band, r.scratch, r.levels, r.lights, r.words = 0, total, D, L, words
     reflects = scene.render.max_depth > 1 and (switched is None or "reflection" in switched)
-    hits = FirstHits(r.face, r.bary, r.dirs, r.visible, cam.width, cam.height, L, D, fx.smooth, k * k,
-                     fx.light_model, fx.texture, r.emit, r.area_bits, words, data.area if words else None,
-                     tuple(mirrored), reflects, fx.vertex_color)
-    return r, hits
+    absorb = fx.absorption or ((switched is None or "absorption" in switched) and not scene_effects(scene).absorption
+                               and tree)
+    return Record(r, level_start, cam.width, cam.height, k * k, D, L, words, tree, fx, data, absorb, tuple(mirrored),
+                  reflects, list(bands), capacity)
+
+
+def _fits(old: Record, sizes: tuple, device: str) -> bool:
+    r = old.rec
+    return (r.face.shape[0], r.parent.shape[0], r.emit.shape[0], r.area_bits.shape[0]) == sizes and \
+        r.face.device == wp.get_device(device)
+
+
+def check_tree_memory(scene, fx, entries: int, device: str):
+    """The one error for a glass frame whose record would not fit (its regions as laid out), naming the settings
+    that make it smaller."""
+    _too_big(entries * entry_bytes(scene, fx), device, fx, "'s ray tree (glass; each level may double the rays)")
 
 
 def record_first_hits(scene, geom, data, fx, device: str, threads: int = 1, bands: int = 1, pool=None,
-                      switched=None, mirrored=()):
+                      switched=None, mirrored=()) -> Record:
     """The record of a frame of ``scene`` on ``geom`` (its tables ``data``) without its image: the trace
     kernel's recording variant over every camera ray (render.spp a pixel, the tracer's strata), every query
-    the BVH's, in ``bands`` bands on ``threads`` threads (``pool``: the Renderer's); with glass, the ray tree
-    level by level (record_tree). What Renderer.render(grad=True) records, for tests and tools that replay a
-    frame by hand. ``switched``: the effects the caller's options leave on (None: every one); ``mirrored``:
-    the materials whose mirror rays are recorded whatever their k_r (grad.mirrored_materials)."""
-    if not records_in_trace(fx):
-        return record_tree(scene, geom, data, fx, device, threads, bands, pool, switched, mirrored)
+    the BVH's, in ``bands`` bands on ``threads`` threads (``pool``: the Renderer's), traced again where glass's
+    regions were too small. What Renderer.render(grad=True) records, for tests and tools that replay a frame by
+    hand. ``switched``: the effects the caller's options leave on (None: every one); ``mirrored``: the
+    materials whose mirror rays are recorded whatever their k_r (grad_params.mirrored_materials)."""
     fx = recording_effects(scene, fx, switched, mirrored)
     levels = ray_levels(scene, fx, mirrored)
-    rec, hits = record_arrays(scene, geom, data, fx, levels, device, mirrored, switched)
     cam = scene.camera
     pixels = cam.width * cam.height
-    image = wp.empty(pixels, dtype=wp.vec3, device=device)
-    counts = wp.empty(pixels, dtype=wp.vec3i, device=device)
-    kernel = make_trace_kernel(fx, record=True)
+    ranges = bands_of(pixels, bands)
+    kernel = make_trace_kernel(fx, stack=stack_size(scene.render.max_depth) if fx.refraction else 0, record=True)
     c = camera_data(camera_basis(cam), geom.eye_offset(cam.eye))
     frags, mirrors, aovs = empty_fragments(device), empty_mirrors(device), empty_aov_buffers(device)
-    launch_bands(kernel, lambda first: [data, c, levels, math.isqrt(hits.samples), first, cam.width, 1, frags,
-                                        mirrors, aovs, rec, image, counts], pixels, threads, bands, device, pool=pool)
-    return hits
-
-
-# --- Glass: Whitted's full ray tree (kernels/grad_tree.py) --------------------------------------------------
-
-# Bytes per ray of the recorded tree (any level): the record's face, medium, camera ray, child kind and the
-# children's places (4 + 4 + 4 + 4 + 8), 4 a light; the replay's origin, direction, weight and segment start,
-# each with its adjoint (2 x 4 x 12); and while recording, the level's rays and children and their reaches
-# (12 x 12 + 12 + 8).
-# With area lights, per ray: the emitter met (4) and a bit per sample point (in 4-byte words), and the
-# replay's state (hit point, normal, kd, ks, weight, local colour, direction, each with its adjoint: 2 x 7 x 12).
-TREE_BYTES_PER_RAY, TREE_RECORD_BYTES_PER_RAY, TREE_AREA_BYTES_PER_RAY = 24 + 96, 164, 4 + 168
-
-
-@dataclass
-class TreeLevel:
-    """One level of a recorded ray tree: per ray of its list (``count``), the hit's face (-1: none), which
-    lights it sees (``lights`` ints a ray), its medium (-1: air), its camera ray, what it spawns
-    (grad_tree.CHILD_*) and its children's places in the next level's list (reflected, transmitted; -1:
-    none); the first level's directions too (the camera rays', as the forward traced them); with area
-    lights, the emitter each ray met (-1: none) and a bit per sample point its hit sees (TreeHits.words
-    int32s a ray)."""
-
-    face: wp.array
-    visible: wp.array
-    medium: wp.array
-    ray_of: wp.array
-    kind: wp.array
-    child: wp.array
-    count: int
-    dirs: wp.array | None = None
-    emit: wp.array | None = None
-    area_bits: wp.array | None = None
-
-
-@dataclass
-class TreeHits:
-    """What a grad=True frame with glass recorded: the forward's ray tree per camera ray, level by level
-    (``tree``, TreeLevels: the camera rays, then each level's children in their parents' order), the
-    counterpart of FirstHits for replay() and backward(). ``absorption``: whether the replay applies
-    Beer's law (unless switched off, also where every absorption is 0: its derivative is not)."""
-
-    tree: list
-    width: int
-    height: int
-    lights: int
-    levels: int  # render.max_depth
-    smooth: bool
-    samples: int = 1
-    light_model: bool = False
-    texture: bool = False
-    absorption: bool = True
-    words: int = 0  # 0: no area lights
-    area: object = None  # the frame's AreaLights table, as recorded
-    mirrored: tuple = ()  # the opaque materials whose mirror rays were recorded whatever their k_r
-    vertex_color: bool = False  # ka and kd times the vertex colours, as the frame's
-    reflects: bool = True  # its levels could hold mirror rays
-
-    @property
-    def rays(self) -> int:
-        """The rays the tree holds, all levels."""
-        return sum(level.count for level in self.tree)
-
-
-def _tree_too_big(scene, need: int, device: str):
-    """The one error for a tree whose record would not fit, naming the settings that make it smaller."""
-    available, what = available_memory(device)
-    if available is not None and need > available:
-        samples = ", render.light_samples" if scene.area_lights else ""
-        raise ArgumentError("render", "grad", f"the gradient's record of this frame's ray tree (glass) needs about "
-                            f"{human(need)} or more, more than the {human(available)} {what}: lower render.max_depth "
-                            f"(each level may double the rays), render.spp{samples} or camera.width and camera.height")
-
-
-def record_tree(scene, geom, data, fx, device: str, threads: int = 1, bands: int = 1, pool=None,
-                switched=None, mirrored=()) -> TreeHits:
-    """record_first_hits for a scene with glass: the forward's ray tree, one launch of grad_tree's record
-    kernel a level (in ``bands`` bands on ``threads`` threads), the children of each level compacted on the
-    host into the next level's list (the reflected before the transmitted, parents in order); the rays'
-    origins, directions, weights and media are the forward's to the bit (the same functions make them). Where
-    a dielectric's transmittance is 0 the tree also holds the refracted rays the forward leaves out (weight
-    0: the image is the same), whose radiance is that transmittance's derivative.
-    The memory the tree takes is checked as it grows (_tree_too_big)."""
-    cam, L, D = scene.camera, len(scene.whitted_lights), scene.render.max_depth
-    k = math.isqrt(scene.render.spp) if fx.supersampling else 1
-    n = cam.width * cam.height * k * k
-    wanted = switched is None or "shadows" in switched
-    shadows = fx.shadows or (scene.render.shadows and wanted and not scene_effects(scene).shadows)
-    absorb = fx.absorption or ((switched is None or "absorption" in switched) and not scene_effects(scene).absorption)
-    c = camera_data(camera_basis(cam), geom.eye_offset(cam.eye))
-    v3 = lambda m: wp.zeros(max(m, 1), dtype=wp.vec3, device=device)  # noqa: E731
-    i1 = lambda m: wp.zeros(max(m, 1), dtype=int, device=device)  # noqa: E731
-    orig, dirs, weight, start, medium = v3(n), v3(n), v3(n), v3(n), i1(n)
-    launch_bands(tree_camera_rays, lambda first: [data, c, k, first, orig, dirs, weight, start, medium], n, threads,
-                 bands, device, pool=pool)
-    reach = wp.array(np.ones((max(n, 1), 3), np.float32), dtype=wp.vec3, device=device)  # the camera rays': 1
-    words = _words(area_samples(scene)) if fx.area_lights else 0
-    # The opaque materials named by render(grad=[...reflectivity]): their mirror rays recorded whatever their k_r
-    # (a dielectric's k_r > 0 makes it a mirror: a jump, not a slope).
-    mirrored = tuple(m for m in mirrored if not scene.materials[m].dielectric)
-    anyway = wp.array(np.asarray([int(m in mirrored) for m in geom.material_names] or [0], np.int32), dtype=int,
-                      device=device)
-    kernel = make_tree_record_kernel(L, fx.smooth, shadows, fx.culling, fx.light_model, fx.reflection or bool(mirrored),
-                                     fx.absorption, bool(words))
-    per_ray = TREE_BYTES_PER_RAY + 4 * L + (TREE_AREA_BYTES_PER_RAY + 4 * words if words else 0)
-    ray_of, levels, held = np.arange(n, dtype=np.int32), [], 0
-    for level in range(D):
-        m = len(ray_of)
-        held += m
-        _tree_too_big(scene, held * per_ray + m * TREE_RECORD_BYTES_PER_RAY, device)
-        face, kind, visible = i1(m), i1(m), wp.zeros(max(m * L, 1), dtype=int, device=device)
-        has = wp.zeros(max(m, 1), dtype=wp.vec2i, device=device)
-        hit_p, o_r, d_r, w_r, o_t, d_t, w_t, x_r, x_t = (v3(m) for _ in range(9))
-        med_r, med_t = i1(m), i1(m)
-        emit = wp.full(max(m, 1) if words else 1, -1, dtype=int, device=device)
-        area_bits = wp.zeros(max(m * words, 1), dtype=int, device=device)
-        launch_bands(kernel, lambda first: [data, D, level, first, orig, dirs, weight, start, medium, face,
-                                            visible, kind, has, hit_p, o_r, d_r, w_r, med_r, o_t, d_t, w_t, med_t,
-                                            emit, area_bits, words, reach, x_r, x_t, anyway],
-                     m, threads, bands, device, pool=pool)
-        h = has.numpy()[:m]
-        hr, ht = h[:, 0] != 0, h[:, 1] != 0
-        per = hr.astype(np.int32) + ht
-        base = np.cumsum(per, dtype=np.int64) - per
-        child = np.stack([np.where(hr, base, -1), np.where(ht, base + hr, -1)], 1).astype(np.int32)
-        levels.append(TreeLevel(face, visible, medium, wp.array(ray_of if m else np.zeros(1, np.int32), dtype=int,
-                                                               device=device),
-                                kind, wp.array(child if m else np.zeros((1, 2), np.int32), dtype=wp.vec2i,
-                                               device=device), m, dirs if level == 0 else None, emit, area_bits))
-        total = int(per.sum())
-        if total == 0 or level + 1 == D:
-            break
-
-        def gather(a_r, a_t, dtype):  # the next level's list: each child at its place
-            r, t = a_r.numpy()[:m], a_t.numpy()[:m]
-            out = np.empty((total,) + r.shape[1:], r.dtype)
-            out[child[hr, 0]] = r[hr]
-            out[child[ht, 1]] = t[ht]
-            return wp.array(out, dtype=dtype, device=device)
-
-        orig, dirs, weight = gather(o_r, o_t, wp.vec3), gather(d_r, d_t, wp.vec3), gather(w_r, w_t, wp.vec3)
-        reach = gather(x_r, x_t, wp.vec3)
-        start, medium = gather(hit_p, hit_p, wp.vec3), gather(med_r, med_t, int)
-        nxt = np.empty(total, np.int32)
-        nxt[child[hr, 0]] = ray_of[hr]
-        nxt[child[ht, 1]] = ray_of[ht]
-        ray_of = nxt
-    return TreeHits(levels, cam.width, cam.height, L, D, fx.smooth, k * k, fx.light_model, fx.texture, absorb, words,
-                    data.area if words else None, mirrored=mirrored, vertex_color=fx.vertex_color)
+    image = wp.empty(pixels, dtype=wp.vec3, device=device)
+    counts = wp.empty(pixels, dtype=wp.vec4i if fx.refraction else wp.vec3i, device=device)
+    used = None
+    while True:
+        hits = record_arrays(scene, geom, data, fx, levels, device, ranges, mirrored, switched, used=used)
+        launch_bands(kernel, lambda first: [data, c, levels, math.isqrt(hits.samples), first, cam.width, 1, frags,
+                                            mirrors, aovs, hits.for_band(first), image, counts],
+                     pixels, threads, bands, device, pool=pool)
+        if not hits.overflowed():
+            return hits
+        used = hits.used()

@@ -25,7 +25,7 @@ from .caches import SHADOW_GRIDS_KEPT, FrameCaches
 from .grad import backward as grad_backward
 from .grad_edges import EdgeFrame
 from .grad_params import mirrored_materials, named_parameters, refusal as grad_refusal
-from .grad_record import check_record_memory, record_arrays, record_tree, recording_plan, records_in_trace
+from .grad_record import check_record_memory, record_arrays, recording_plan
 from .launch import band_pool, bands_of, launch_bands, launch_plan
 from .memory import check_frame_memory, frame_estimate, frame_memory
 from .mirrors import MirrorFrame, empty_mirrors, mirror_frame
@@ -146,8 +146,9 @@ class Renderer:
         self._built_from: list = []  # _object_keys of the objects self._geometry holds
         self._scene, self._checked, self._checked_for = None, None, None
         self._pool: ThreadPoolExecutor | None = None  # the frames' band threads, from the first that needs them
-        self._first_hits = None  # (scene, Geometry, FirstHits) of the last grad=True frame, for backward()
-        self._record = None  # that frame's GradRecord: its arrays taken again by the next grad frame of its size
+        self._first_hits = None  # (scene, Geometry, grad_record.Record) of the last grad=True frame, for backward()
+        self._record = None  # that frame's Record: its arrays taken again by the next grad frame of their size
+        self._record_used = None  # glass: the entries its rays used per (band, level), for the next frame's regions
         self._grad_frames = 0  # the grad=True frames rendered: grad_frame's number
         self._edge_frame = None  # its EdgeFrame (the plain frame's effects, stack, levels), for backward(edges=True)
         self._pool_threads = 0
@@ -160,7 +161,7 @@ class Renderer:
         """Stop the threads the frames' bands ran on (a next frame starts them again) and let the last grad
         frame's record go (backward() then needs a new one). ``with warprt.Renderer(scene) as r:`` closes at
         the end; a Renderer let go closes when collected."""
-        self._first_hits = self._record = None
+        self._first_hits = self._record = self._record_used = None
         if self._pool is not None:
             self._pool.shutdown(wait=True)  # idle threads: they end at once
             self._pool = None
@@ -256,9 +257,8 @@ class Renderer:
                 raise ArgumentError("render", "grad", why)
             if grad:
                 check_record_memory(scene, plan.fx, o.device, mirrored)
-            in_trace = grad and records_in_trace(plan.fx)  # the trace writes the record as it goes
             edge_frame = EdgeFrame(plan.fx, plan.stack, plan.max_depth)
-            if in_trace:
+            if grad:  # the trace writes the record as it goes
                 plan = recording_plan(scene, plan, switched, mirrored)
             pool = self._bands_pool(plan.threads)
             estimate = frame_estimate(scene, plan.grid.per_pixel, plan.raster)
@@ -271,7 +271,7 @@ class Renderer:
             mirrors = self._virtual_cameras(scene, plan, geom, data, shortcuts, times, pool)
             used = mirrors if mirrors is not None and mirrors.mirrors is not None else None  # None: no chain rasterized
             variant = TraceVariant(plan.fx, shortcuts.raster, plan.stack, o.report_truncated, o.aovs,
-                                   grid is not None and grid.grid is not None, used is not None, in_trace)
+                                   grid is not None and grid.grid is not None, used is not None, grad)
             with timed(times, "compile"):
                 kernel = variant.kernel()
                 wp.load_module(kernel.module, device=o.device)
@@ -282,19 +282,23 @@ class Renderer:
                 with timed(times, "raster"):
                     zb = ZBuffer(scene, geom, replace(plan.fx, shadows=False, reflection=False), device=o.device)
                     zb.rasterize(plan.threads, plan.bands, pool=pool)
-            rec, hits = None, None
-            if in_trace:
-                rec, hits = record_arrays(scene, geom, data, plan.fx, plan.max_depth, o.device, mirrored, switched,
-                                          self._record)
-                self._record = rec
-            with timed(times, "trace"):
-                frame = _trace(scene, o, plan, geom, data, kernel, zb, used, progress, pool, rec)
-            result = _finish(scene, o, plan, geom, frame)
-            if grad and not in_trace:  # glass: the ray tree, recorded level by level
-                with timed(times, "grad_record"):
-                    hits = record_tree(scene, geom, data, plan.fx, o.device, plan.threads, plan.bands, pool, switched,
-                                       mirrored)
+            hits = None
             if grad:
+                hits = record_arrays(scene, geom, data, plan.fx, plan.max_depth, o.device,
+                                     bands_of(plan.n_pixels, plan.bands), mirrored, switched, self._record,
+                                     self._record_used)
+            with timed(times, "trace"):
+                frame = _trace(scene, o, plan, geom, data, kernel, zb, used, progress, pool, hits)
+                while hits is not None and hits.overflowed():  # glass's regions too small: made larger, again
+                    self._record_used = hits.used()
+                    hits = record_arrays(scene, geom, data, plan.fx, plan.max_depth, o.device, hits.bands, mirrored,
+                                         switched, hits, self._record_used)
+                    frame = _trace(scene, o, plan, geom, data, kernel, zb, used, progress, pool, hits)
+            result = _finish(scene, o, plan, geom, frame)
+            if grad:
+                self._record = hits
+                if hits.tree:
+                    self._record_used = hits.used()
                 self._first_hits = (scene, geom, hits)
                 self._grad_frames += 1
                 self._edge_frame = edge_frame
@@ -436,7 +440,7 @@ def given_geometry(geom: Geometry, eye) -> dict:
 def _trace(scene, o: RenderOptions, plan: FramePlan, geom: Geometry, data, kernel, zb, mirror_frame,
            progress, pool, rec=None) -> TracedFrame:
     """Launch the kernel over the image: the image, the truncated weights after it (report_truncated),
-    each pixel's ray counts and the AOV buffers; with ``rec`` (a GradRecord), the gradient's record too."""
+    each pixel's ray counts and the AOV buffers; with ``rec`` (grad_record.Record), the gradient's record too."""
     cam, device = scene.camera, o.device
     # With report_truncated the kernel writes the truncated weights after the image.
     image = wp.empty(plan.n_pixels * (2 if o.report_truncated else 1), dtype=wp.vec3, device=device)
@@ -447,7 +451,7 @@ def _trace(scene, o: RenderOptions, plan: FramePlan, geom: Geometry, data, kerne
     mirrors = mirror_frame.mirrors if mirror_frame is not None else empty_mirrors(device)
     tile_w, tile_h = o.pixel_tile or PIXEL_TILE
     inputs = lambda first: [data, c, plan.max_depth, plan.grid.k, first, tile_w, tile_h, frags, mirrors,  # noqa: E731
-                            buffers, rec if rec is not None else empty_record(device), image, counts]
+                            buffers, rec.for_band(first) if rec is not None else empty_record(device), image, counts]
     _launch_with_progress(kernel, inputs, plan.n_pixels, plan.threads, plan.bands, device, counts, progress, pool)
     pixels = image.numpy().reshape(-1, cam.height, cam.width, 3)
     return TracedFrame(image=pixels[0].copy(), truncated=pixels[1].copy() if o.report_truncated else None,

@@ -33,13 +33,31 @@ def camera_data(basis, eye=(0.0, 0.0, 0.0)) -> CameraData:
 
 
 @wp.func
+def camera_of(eye: wp.vec3, center: wp.vec3, up: wp.vec3, fovy: float, near: float, width: int,
+              height: int) -> CameraData:
+    """The CameraData of a camera, made in Warp (float32, differentiable in eye, center, up and fovy, in
+    degrees) as scene.camera_basis makes it on the host in float64: z_e = (eye - center) / |eye - center|,
+    x_e = (up x z_e) / |up x z_e|, y_e = z_e x x_e, d_f = near, h = 2 near tan(fovy / 2), w = h width /
+    height. The gradient's camera: its rays and edges move with it."""
+    z_e = wp.normalize(eye - center)
+    x_e = wp.normalize(wp.cross(up, z_e))
+    h = 2.0 * near * wp.tan(wp.radians(fovy) * 0.5)
+    return CameraData(eye, x_e, wp.cross(z_e, x_e), z_e, near, h, h * float(width) / float(height), width, height)
+
+
+@wp.func
+def image_plane_point(c: CameraData, px: float, py: float) -> wp.vec3:
+    """The point (px, py) of the image plane (0 to 1 from its lower-left corner) relative to the eye:
+    -d_f z_e + h (py - 1/2) y_e + w (px - 1/2) x_e, affine in (px, py): what a camera ray aims at."""
+    return (-c.d_f) * c.z_e + c.h * (py - 0.5) * c.y_e + c.w * (px - 0.5) * c.x_e
+
+
+@wp.func
 def camera_ray(c: CameraData, x: int, row: int, sx: float, sy: float) -> wp.vec3:
-    """Unit direction d = -d_f z_e + h((y+sy)/h_p - 1/2) y_e + w((x+sx)/w_p - 1/2) x_e,
+    """Unit direction d = -d_f z_e + h((y+sy)/h_p - 1/2) y_e + w((x+sx)/w_p - 1/2) x_e (image_plane_point),
     y = h_p - 1 - row counted from the bottom, so row 0 of the image is the top."""
     y = float(c.height - 1 - row)
-    d = (-c.d_f) * c.z_e + c.h * ((y + sy) / float(c.height) - 0.5) * c.y_e \
-        + c.w * ((float(x) + sx) / float(c.width) - 0.5) * c.x_e
-    return wp.normalize(d)
+    return wp.normalize(image_plane_point(c, (float(x) + sx) / float(c.width), (y + sy) / float(c.height)))
 
 
 @wp.func

@@ -110,3 +110,19 @@ def beer_forever(weight: wp.vec3, sigma: wp.vec3) -> wp.vec3:
     every channel that absorbs at all."""
     return wp.vec3(wp.where(sigma[0] > 0.0, 0.0, weight[0]), wp.where(sigma[1] > 0.0, 0.0, weight[1]),
                    wp.where(sigma[2] > 0.0, 0.0, weight[2]))
+
+
+@wp.func
+def absorbed(s: SceneData, weight: wp.vec3, medium: int, start: wp.vec3, hit: Surface) -> wp.vec3:
+    """The weight of a ray that went from start to the hit through medium (-1: air, which absorbs nothing)."""
+    if medium >= 0:
+        weight = beer(weight, s.absorption[medium], wp.length(hit.p - start))
+    return weight
+
+
+@wp.func
+def absorbed_forever(s: SceneData, weight: wp.vec3, medium: int) -> wp.vec3:
+    """The weight of a ray that leaves through medium (-1: air) and meets nothing: Beer's law to infinity."""
+    if medium >= 0:
+        weight = beer_forever(weight, s.absorption[medium])
+    return weight

@@ -8,7 +8,7 @@ import functools  # no "from __future__ import annotations": a kernel factory's 
 from .._warp import wp
 from ..geometry import SceneData
 from .aov import AovBuffers
-from .grad import image_plane_point
+from .camera import camera_of, image_plane_point
 from .interaction import Ray
 from .mirror import FROM_CAMERA, Mirrors
 from .raster import Fragments
@@ -24,14 +24,12 @@ def plane_distance(n: wp.vec3, eye: wp.vec3, center: wp.vec3, up: wp.vec3, fovy:
     function g(x) = n . d(x) (d: image_plane_point, affine in x, so its axes are differences of its points),
     positive where g is. On the line (g = 0) its derivative in any parameter is d_theta g / |grad_x g|: the
     line's speed along its normal, the boundary term's v . n (docs/gradients.md)."""
-    aspect = float(width) / float(height)
+    c = camera_of(eye, center, up, fovy, near, width, height)
     px = x / float(width)
     py = y / float(height)
-    d = image_plane_point(eye, center, up, fovy, near, aspect, px, py)
-    d_x = (image_plane_point(eye, center, up, fovy, near, aspect, 1.0, py)
-           - image_plane_point(eye, center, up, fovy, near, aspect, 0.0, py)) / float(width)
-    d_y = (image_plane_point(eye, center, up, fovy, near, aspect, px, 1.0)
-           - image_plane_point(eye, center, up, fovy, near, aspect, px, 0.0)) / float(height)
+    d = image_plane_point(c, px, py)
+    d_x = (image_plane_point(c, 1.0, py) - image_plane_point(c, 0.0, py)) / float(width)
+    d_y = (image_plane_point(c, px, 1.0) - image_plane_point(c, px, 0.0)) / float(height)
     g_x = wp.dot(n, d_x)
     g_y = wp.dot(n, d_y)
     return wp.dot(n, d) / wp.sqrt(g_x * g_x + g_y * g_y)

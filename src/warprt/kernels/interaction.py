@@ -85,6 +85,12 @@ def reflect(d: wp.vec3, n: wp.vec3) -> wp.vec3:
     return d - 2.0 * wp.dot(d, n) * n
 
 
+@wp.func
+def mirror_ray(hit: Surface, d: wp.vec3) -> Ray:
+    """A mirror's bounce: the ray arriving along d reflected about the hit's shading normal, spawned off it."""
+    return spawn_ray(hit, wp.normalize(reflect(d, hit.n)))
+
+
 @functools.cache
 def make_surface(smooth: bool, texture: bool = False, vertex_color: bool = False):
     """The hit record for face f at barycentrics (u, v), seen along direction d; with ``smooth``,

@@ -22,7 +22,7 @@ import functools
 from .._warp import wp
 from ..geometry import LIGHT_DIRECTIONAL, LIGHT_SPOT, LightShape, SceneData
 from .interaction import Surface, reflect, spawn_ray
-from .record import GradRecord
+from .record import GradRecord, record_area_point
 from .shadow import make_occluded
 from .texture import texel
 from .triangle import triangle, unit_normal
@@ -121,9 +121,9 @@ def make_coefficients(TEXTURE: bool, VERTEX_COLOR: bool):
         c.kd = s.kd[m]
         c.ks = s.ks[m]
         if wp.static(TEXTURE):
-            c.ka = wp.cw_mul(c.ka, texel(s.textures, s.ka_map[m], hit.uv))
-            c.kd = wp.cw_mul(c.kd, texel(s.textures, s.kd_map[m], hit.uv))
-            c.ks = wp.cw_mul(c.ks, texel(s.textures, s.ks_map[m], hit.uv))
+            c.ka = wp.cw_mul(c.ka, texel(s.texels, s.ka_map[m], hit.uv))
+            c.kd = wp.cw_mul(c.kd, texel(s.texels, s.kd_map[m], hit.uv))
+            c.ks = wp.cw_mul(c.ks, texel(s.texels, s.ks_map[m], hit.uv))
         if wp.static(VERTEX_COLOR):
             c.ka = wp.cw_mul(c.ka, hit.color)
             c.kd = wp.cw_mul(c.kd, hit.color)
@@ -137,69 +137,96 @@ def make_shade(fx, shadow_grid: bool = False, record: bool = False):
     switches, and how ka, kd and ks are read): ambient + the lit terms of every light, with shadow
     rays when fx.shadows, answered by the BVH or, with ``shadow_grid``, by the light-space grid (the
     same answers: kernels/shadow.py). shade(s, hit, v, rec, j): with ``record``, also which lights and
-    area-light sample points the hit sees, written into the GradRecord ``rec`` at ray level ``j``
+    area-light sample points the hit sees, written into the GradRecord ``rec`` at its entry ``j``
     (kernels/record.py); without, ``rec`` is never read. Inlined: its arguments are not copied."""
     return _make_shade(fx.ambient, fx.diffuse, fx.specular, fx.shadows, fx.texture, fx.vertex_color,
                        fx.shadows and shadow_grid, fx.light_model, fx.area_lights, record)
 
 
 @wp.struct
-class LightTest:
-    """What one Whitted light gives a hit (make_light_test): the unit direction L to it, n.L, its colour
-    times its weight (a spot's cone, 1 / r^2 falloff), whether a shadow ray was traced (1: the light
-    faces the point) and whether the light is seen (lit: in its cone, n.L > 0 and no shadow ray blocked)."""
+class LightArrival:
+    """How one Whitted light arrives at a hit (make_light_arrival): the unit direction L to it, n.L, its colour
+    times its weight (a spot's cone, 1 / r^2 falloff) and whether it reaches the point at all (0: outside a
+    spot's cone). A differentiable function of the hit and the light: what the gradient's replay shades with
+    (kernels/replay.py), the shadow ray's answer being the record's."""
 
     L: wp.vec3
     n_dot_l: float
     C: wp.vec3
+    reaches: int
+
+
+@functools.cache
+def make_light_arrival(LIGHT_MODEL: bool):
+    """light_arrival(s, hit, l): how light l arrives at the hit (LightArrival). With LIGHT_MODEL, the general
+    light model: a directional light lies along -direction, a spot outside its cone gives nothing; without,
+    the seed's point lights."""
+
+    @wp.func(inline=True)
+    def light_arrival(s: SceneData, hit: Surface, l: int) -> LightArrival:
+        out = LightArrival()
+        out.reaches = 1
+        C_l = s.light_color[l]
+        p = hit.p
+        if wp.static(LIGHT_MODEL):
+            shape = s.light_shape[l]
+            to_light = -shape.direction
+            if shape.kind != wp.static(LIGHT_DIRECTIONAL):
+                to_light = s.light_pos[l] - p
+            L = wp.normalize(to_light)
+            weight = light_weight(shape, to_light, L)
+            if weight <= 0.0:  # outside a spot's cone: no light, so no shadow ray
+                out.reaches = 0
+                return out
+            C_l = C_l * weight
+        else:
+            to_light = s.light_pos[l] - p
+            L = wp.normalize(to_light)
+        out.L = L
+        out.n_dot_l = wp.dot(hit.n, L)
+        out.C = C_l
+        return out
+
+    return light_arrival
+
+
+@wp.struct
+class LightTest:
+    """What one Whitted light gives a hit (make_light_test): how it arrives (LightArrival), whether a shadow ray
+    was traced (1: the light faces the point) and whether the light is seen (lit: in its cone, n.L > 0 and no
+    shadow ray blocked)."""
+
+    arrival: LightArrival
     shadow_ray: int
     lit: int
 
 
 @functools.cache
 def make_light_test(LIGHT_MODEL: bool, SHADOWS: bool, GRID: bool = False):
-    """light_test(s, hit, l): whether light l lights the hit, and with what (LightTest): the one test the
-    forward's shade and the gradient's record (kernels/grad.py) both make, so that they cannot disagree.
-    With LIGHT_MODEL, the general light model: a directional light lies along -direction (its shadow ray
-    unbounded), a spot outside its cone gives nothing (and no shadow ray); without, the seed's point lights.
-    The shadow ray (SHADOWS) leaves spawn_ray's origin for the light, answered by the BVH or the grid (GRID)."""
+    """light_test(s, hit, l): whether light l lights the hit, and with what (LightTest): its arrival
+    (make_light_arrival) and, where it reaches the point from the front, the shadow ray (SHADOWS), which
+    leaves spawn_ray's origin for the light (a directional light's unbounded), answered by the BVH or the grid
+    (GRID). The one test the forward's shade makes, and with it writes the gradient's record."""
     occluded = make_occluded(GRID)
+    light_arrival = make_light_arrival(LIGHT_MODEL)
 
     @wp.func(inline=True)
     def light_test(s: SceneData, hit: Surface, l: int) -> LightTest:
         out = LightTest()
         out.shadow_ray = 0
         out.lit = 0
-        C_l = s.light_color[l]
-        p = hit.p
-        if wp.static(LIGHT_MODEL):
-            shape = s.light_shape[l]
-            directional = shape.kind == LIGHT_DIRECTIONAL
-            to_light = -shape.direction
-            if not directional:
-                to_light = s.light_pos[l] - p
-            L = wp.normalize(to_light)
-            weight = light_weight(shape, to_light, L)
-            if weight <= 0.0:  # outside a spot's cone: no light, so no shadow ray
-                return out
-            C_l = C_l * weight
-        else:
-            to_light = s.light_pos[l] - p
-            L = wp.normalize(to_light)
-        n_dot_l = wp.dot(hit.n, L)
-        out.L = L
-        out.n_dot_l = n_dot_l
-        out.C = C_l
-        if n_dot_l > 0.0:
+        a = light_arrival(s, hit, l)
+        out.arrival = a
+        if a.reaches != 0 and a.n_dot_l > 0.0:
             visible = True
             if wp.static(SHADOWS):
-                o = spawn_ray(hit, L).o  # towards the light, from its origin
+                o = spawn_ray(hit, a.L).o  # towards the light, from its origin
                 to_light_o = s.light_pos[l] - o
                 dist = wp.length(to_light_o)
                 d = to_light_o / dist
                 if wp.static(LIGHT_MODEL):
-                    if directional:  # its position is NaN: the ray above is replaced
-                        d = L
+                    if s.light_shape[l].kind == wp.static(LIGHT_DIRECTIONAL):  # its position is NaN: replaced
+                        d = a.L
                         dist = FAR
                 out.shadow_ray = 1
                 visible = not occluded(s, l, o, d, dist)
@@ -212,9 +239,10 @@ def make_light_test(LIGHT_MODEL: bool, SHADOWS: bool, GRID: bool = False):
 
 @wp.struct
 class AreaTest:
-    """What one area-light sample point gives a hit (make_area_sample_test): the unit direction L to it,
-    r^2, n.L, the emitter's cosine cos_q there, whether a shadow ray was traced (1: the point and the hit
-    face each other) and whether the point is seen (lit: r^2 > 0, n.L > 0, cos_q > 0, shadow ray unblocked)."""
+    """What one area-light sample point gives a hit: how it arrives (make_area_sample_test's area_arrival: the
+    unit direction L to it, r^2, n.L, the emitter's cosine cos_q there), whether a shadow ray was traced (1:
+    the point and the hit face each other) and whether the point is seen (lit: r^2 > 0, n.L > 0, cos_q > 0,
+    shadow ray unblocked)."""
 
     L: wp.vec3
     r2: float
@@ -224,35 +252,47 @@ class AreaTest:
     lit: int
 
 
+@wp.func
+def point_arrival(point: wp.vec3, normal: wp.vec3, hit: Surface) -> AreaTest:
+    """How a point of an emitter (its unit normal on the emitting side) arrives at the hit: L, r^2, n.L and
+    cos_q (AreaTest's; no shadow ray, lit 0), a differentiable function of the hit and the point."""
+    out = AreaTest()
+    out.shadow_ray = 0
+    out.lit = 0
+    to_q = point - hit.p
+    r2 = wp.dot(to_q, to_q)
+    out.r2 = r2
+    if not (r2 > 0.0):
+        return out
+    L = to_q / wp.sqrt(r2)
+    out.L = L
+    out.n_dot_l = wp.dot(hit.n, L)
+    out.cos_q = -wp.dot(normal, L)
+    return out
+
+
+@wp.func
+def area_arrival(s: SceneData, hit: Surface, q: int) -> AreaTest:
+    """How the area lights' sample point q arrives at the hit (point_arrival): what the gradient's replay
+    differentiates, the shadow ray's answer being the record's."""
+    return point_arrival(s.area.points[q], s.area.normals[q], hit)
+
+
 @functools.cache
 def make_area_sample_test(SHADOWS: bool):
-    """area_sample_test(s, hit, q): whether the area lights' sample point q lights the hit (AreaTest), the
-    one test the forward's area_light and the gradient's record both make. The shadow ray (SHADOWS, the
-    BVH's any-hit query) stops SHADOW_EPSILON of the way short of the point."""
+    """area_sample_test(s, hit, q): whether the area lights' sample point q lights the hit (AreaTest): its
+    arrival and, where the point and the hit face each other, the shadow ray (SHADOWS, the BVH's any-hit
+    query), stopping SHADOW_EPSILON of the way short of the point."""
     occluded = make_occluded(False)
 
     @wp.func
     def area_sample_test(s: SceneData, hit: Surface, q: int) -> AreaTest:
-        a = s.area
-        out = AreaTest()
-        out.shadow_ray = 0
-        out.lit = 0
-        to_q = a.points[q] - hit.p
-        r2 = wp.dot(to_q, to_q)
-        out.r2 = r2
-        if not (r2 > 0.0):
-            return out
-        L = to_q / wp.sqrt(r2)
-        n_dot_l = wp.dot(hit.n, L)
-        cos_q = -wp.dot(a.normals[q], L)
-        out.L = L
-        out.n_dot_l = n_dot_l
-        out.cos_q = cos_q
-        if n_dot_l > 0.0 and cos_q > 0.0:
+        out = area_arrival(s, hit, q)
+        if out.r2 > 0.0 and out.n_dot_l > 0.0 and out.cos_q > 0.0:
             visible = True
             if wp.static(SHADOWS):
-                o = spawn_ray(hit, L).o
-                to_q_o = a.points[q] - o
+                o = spawn_ray(hit, out.L).o
+                to_q_o = s.area.points[q] - o
                 dist = wp.length(to_q_o)
                 out.shadow_ray = 1
                 visible = not occluded(s, -1, o, to_q_o / dist, dist * wp.static(1.0 - SHADOW_EPSILON))
@@ -281,12 +321,33 @@ def make_phong_lit(DIFFUSE: bool, SPECULAR: bool):
 
 
 @functools.cache
+def make_light_terms(DIFFUSE: bool, SPECULAR: bool):
+    """(whitted_term, area_term): what a light the hit sees adds, per its switches (phong_lit).
+    whitted_term(a, k, shininess, n, v): C_l (kd n.L + ks max(0, r.v)^n) of a Whitted light's LightArrival a;
+    area_term(t, L_e, dA, k, shininess, n, v): L_e (kd n.L + ks max(0, r.v)^n) cos_q dA / r^2 of an area-light
+    sample point's AreaTest t. The forward's shade and the gradient's replay both add them."""
+    phong_lit = make_phong_lit(DIFFUSE, SPECULAR)
+
+    @wp.func
+    def whitted_term(a: LightArrival, k: Coefficients, shininess: float, n: wp.vec3, v: wp.vec3) -> wp.vec3:
+        return wp.cw_mul(a.C, phong_lit(k, shininess, n, a.L, v, a.n_dot_l))
+
+    @wp.func
+    def area_term(t: AreaTest, L_e: wp.vec3, dA: float, k: Coefficients, shininess: float, n: wp.vec3,
+                  v: wp.vec3) -> wp.vec3:
+        lit = phong_lit(k, shininess, n, t.L, v, t.n_dot_l)
+        return wp.cw_mul(L_e, lit) * (t.cos_q * dA / t.r2)
+
+    return whitted_term, area_term
+
+
+@functools.cache
 def make_area_light(DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool, RECORD: bool = False):
     """area_light(s, hit, k, v, out, rec, j): ``out`` plus the light of every area light at the hit, over
     its sample points, one shadow ray (the BVH's any-hit query) each where the point faces both ways
-    (make_area_sample_test); with RECORD, a bit per point seen set in ``rec`` at level j."""
+    (make_area_sample_test); with RECORD, a bit per point seen set in ``rec``'s entry j (record_area_point)."""
     area_sample_test = make_area_sample_test(SHADOWS)
-    phong_lit = make_phong_lit(DIFFUSE, SPECULAR)
+    _, area_term = make_light_terms(DIFFUSE, SPECULAR)
 
     @wp.func(inline=True)
     def area_light(s: SceneData, hit: Surface, k: Coefficients, v: wp.vec3, out: ShadeResult, rec: GradRecord,
@@ -300,11 +361,9 @@ def make_area_light(DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool, RECORD: bool =
                 out.shadow_rays += t.shadow_ray
                 if wp.static(RECORD):
                     if t.lit != 0:
-                        word = j * rec.words + q / 32
-                        rec.area_bits[word] = rec.area_bits[word] | (1 << (q % 32))
+                        record_area_point(rec, j, q)
                 if t.lit != 0:
-                    lit = phong_lit(k, s.shininess[hit.material], n, t.L, v, t.n_dot_l)
-                    out.color = out.color + wp.cw_mul(L_e, lit) * (t.cos_q * a.dA[q] / t.r2)
+                    out.color = out.color + area_term(t, L_e, a.dA[q], k, s.shininess[hit.material], n, v)
         return out
 
     return area_light
@@ -317,7 +376,7 @@ def _make_shade(AMBIENT: bool, DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool, TEX
 
     # Disabled terms are absent from the generated code (wp.static).
     light_test = make_light_test(LIGHT_MODEL, SHADOWS, GRID)
-    phong_lit = make_phong_lit(DIFFUSE, SPECULAR)
+    whitted_term, _ = make_light_terms(DIFFUSE, SPECULAR)
     area_light = make_area_light(DIFFUSE, SPECULAR, SHADOWS, RECORD)
 
     @wp.func(inline=True)
@@ -331,13 +390,17 @@ def _make_shade(AMBIENT: bool, DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool, TEX
         if wp.static(AMBIENT):
             out.color = wp.cw_mul(s.ambient, k.ka)
         if wp.static(DIFFUSE or SPECULAR):
+            if wp.static(RECORD):
+                seen = int(0)  # a bit per light the hit sees
             for l in range(s.num_lights):
                 t = light_test(s, hit, l)
                 out.shadow_rays += t.shadow_ray
                 if wp.static(RECORD):
-                    rec.visible[j * rec.lights + l] = t.lit
+                    seen = seen | (t.lit << l)
                 if t.lit != 0:
-                    out.color = out.color + wp.cw_mul(t.C, phong_lit(k, s.shininess[m], n, t.L, v, t.n_dot_l))
+                    out.color = out.color + whitted_term(t.arrival, k, s.shininess[m], n, v)
+            if wp.static(RECORD):
+                rec.visible[j] = seen
         if wp.static(AREA and (DIFFUSE or SPECULAR)):
             out = area_light(s, hit, k, v, out, rec, j)
         return out

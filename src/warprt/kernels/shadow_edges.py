@@ -7,12 +7,13 @@ import functools  # no "from __future__ import annotations": a kernel factory's 
 
 from .._warp import wp
 from ..geometry import SceneData
+from .dielectric import absorbed
 from .edges import plane_distance
 from .interaction import Ray, make_surface
 from .mirror import FROM_CAMERA, Mirrors
 from .raster import Fragments
-from .shading import make_area_sample_test, make_coefficients, make_light_test, make_phong_lit
-from .trace import TreeRay, absorbed, make_first_hit
+from .shading import make_area_sample_test, make_coefficients, make_light_terms, make_light_test
+from .trace import TreeRay, make_first_hit
 
 SOURCE_LIGHT = 0  # a light sides kernel's source: a Whitted light l (shading's light_test)
 SOURCE_SAMPLE = 1  # an area light e's sample point q (shading's area_sample_test)
@@ -57,16 +58,16 @@ def shadow_edge_distances(geometry: wp.array(dtype=wp.vec3), directional: wp.arr
 def make_light_sides_kernel(fx):
     """The kernel that traces camera rays along given directions (``dirs``, unit) to their nearest hit (the
     forward's first_hit on the BVH) and writes what one light source gives there (``source``: (SOURCE_LIGHT,
-    l, -1) a Whitted light, (SOURCE_SAMPLE, q, e) area light e's sample point q), by shading's own tests
-    (light_test, area_sample_test: its shadow ray included) and Phong terms, as shade adds it: the jump of
-    that source's light alone across its shadow's edge. The camera rays see their first hit only: the
-    frames it serves have no mirror or glass rays (grad_edges.edge_refusal)."""
+    l, -1) a Whitted light, (SOURCE_SAMPLE, q, e) area light e's sample point q), by shading's own test and
+    term (light_test and whitted_term, area_sample_test and area_term: its shadow ray included), as shade adds
+    it: the jump of that source's light alone across its shadow's edge. The camera rays see their first hit
+    only: the frames it serves have no mirror or glass rays (grad_edges.edge_refusal)."""
     first_hit = make_first_hit(False, False, fx.culling)
     surface = make_surface(fx.smooth, fx.texture, fx.vertex_color)
     coefficients = make_coefficients(fx.texture, fx.vertex_color)
     light_test = make_light_test(fx.light_model, True)
     area_sample_test = make_area_sample_test(True)
-    phong_lit = make_phong_lit(fx.diffuse, fx.specular)
+    whitted_term, area_term = make_light_terms(fx.diffuse, fx.specular)
     ABSORPTION = fx.absorption
 
     @wp.kernel(module="unique", enable_backward=False)
@@ -80,16 +81,16 @@ def make_light_sides_kernel(fx):
         if h.face >= 0:
             hit = surface(s, h.face, h.u, h.v, h.normal, d)
             k = coefficients(s, hit)
+            shininess = s.shininess[hit.material]
             src = source[j]
             if src[0] == wp.static(SOURCE_LIGHT):
                 t = light_test(s, hit, src[1])
                 if t.lit != 0:
-                    c = wp.cw_mul(t.C, phong_lit(k, s.shininess[hit.material], hit.n, t.L, -d, t.n_dot_l))
+                    c = whitted_term(t.arrival, k, shininess, hit.n, -d)
             else:
                 a = area_sample_test(s, hit, src[1])
                 if a.lit != 0:
-                    lit = phong_lit(k, s.shininess[hit.material], hit.n, a.L, -d, a.n_dot_l)
-                    c = wp.cw_mul(s.area.radiance[src[2]], lit) * (a.cos_q * s.area.dA[src[1]] / a.r2)
+                    c = area_term(a, s.area.radiance[src[2]], s.area.dA[src[1]], k, shininess, hit.n, -d)
             if wp.static(ABSORPTION):
                 c = absorbed(s, c, s.eye_medium, eye, hit)
         color[j] = c

@@ -13,12 +13,13 @@ from ..errors import SceneError
 from ..geometry import SceneData
 from .aov import AovBuffers, make_record_first_hit
 from .camera import CameraData, camera_ray, sample_offset
-from .dielectric import beer, beer_forever, dielectric_children
+from .dielectric import absorbed, absorbed_forever, dielectric_children
 from .hybrid import uncertain
-from .interaction import Ray, Surface, hit_point_error, make_surface, offset_ray_origin, reflect, spawn_ray
+from .interaction import Ray, Surface, hit_point_error, make_surface, mirror_ray, offset_ray_origin, spawn_ray
 from .mirror import FROM_CAMERA, NO_CHAIN, Mirrors, mirror_chain, mirror_hit
 from .raster import Fragments
-from .record import GradRecord, make_follows_mirror, record_hit
+from .record import (NO_PARENT, GradRecord, Reaches, dielectric_reaches, make_follows_mirror, make_record_hit,
+                     make_record_stack, mirror_reach)
 from .shading import emitted, emitter_met, make_shade
 from .triangle import query_normal, triangle, unit_normal, woop_hit
 
@@ -67,22 +68,6 @@ class TreeRay:
     medium: int
     chain: int
     src: int
-
-
-@wp.func
-def absorbed(s: SceneData, weight: wp.vec3, medium: int, start: wp.vec3, hit: Surface) -> wp.vec3:
-    """The weight of a ray that went from start to the hit through medium (-1: air, which absorbs nothing)."""
-    if medium >= 0:
-        weight = beer(weight, s.absorption[medium], wp.length(hit.p - start))
-    return weight
-
-
-@wp.func
-def absorbed_forever(s: SceneData, weight: wp.vec3, medium: int) -> wp.vec3:
-    """The weight of a ray that leaves through medium (-1: air) and meets nothing: Beer's law to infinity."""
-    if medium >= 0:
-        weight = beer_forever(weight, s.absorption[medium])
-    return weight
 
 
 @wp.struct
@@ -191,6 +176,81 @@ def make_ray_stack(size: int):
 
 
 @functools.cache
+def make_next_chain(MIRRORS: bool):
+    """next_chain(mir, chain, face): the chain of planar mirrors a mirror ray leaving ``face`` bounces along
+    (kernels/mirror.py), with MIRRORS (the virtual cameras' shortcut); else NO_CHAIN."""
+
+    @wp.func(inline=True)
+    def next_chain(mir: Mirrors, chain: int, face: int) -> int:
+        if wp.static(MIRRORS):
+            return mirror_chain(mir, chain, face)
+        return int(NO_CHAIN)
+
+    return next_chain
+
+
+@functools.cache
+def make_escaped(ABSORPTION: bool):
+    """escaped(s, weight, medium): the weight of a ray that meets nothing: with ABSORPTION, through its medium
+    to infinity (absorbed_forever); else as it is."""
+
+    @wp.func(inline=True)
+    def escaped(s: SceneData, weight: wp.vec3, medium: int) -> wp.vec3:
+        if wp.static(ABSORPTION):
+            return absorbed_forever(s, weight, medium)
+        return weight
+
+    return escaped
+
+
+@functools.cache
+def make_children(TREE: bool):
+    """children(s, f, hit, d, weight, reach, eta) -> (Children, Reaches): a dielectric hit's reflected and
+    refracted rays (dielectric_children); with TREE (glass's record) also those it leaves out for carrying
+    nothing that the derivative follows, by their reach (record.dielectric_reaches), which is then theirs."""
+
+    @wp.func(inline=True)
+    def children(s: SceneData, f: int, hit: Surface, d: wp.vec3, weight: wp.vec3, reach: wp.vec3, eta: float):
+        ch = dielectric_children(s, f, hit, d, weight, eta)
+        kids = Reaches()
+        if wp.static(TREE):
+            kids = dielectric_reaches(s, f, hit, d, reach, eta)
+            ch.has_r = ch.has_r or wp.max(kids.r) > 0.0
+            ch.has_t = ch.has_t or wp.max(kids.t) > 0.0
+        return ch, kids
+
+    return children
+
+
+@functools.cache
+def make_local(fx, shadow_grid: bool, aovs: tuple, record: bool):
+    """local(s, aov, rec, j, r, h, hit, pixel, sample, color) -> (color, shadow rays): what a ray ``r`` sees at
+    its hit ``h`` (its hit record ``hit``), added to ``color``: with the AOVs a camera ray's first hit recorded,
+    an area light's own emitting surface (emitted) and the local shading with its shadow rays (make_shade),
+    each times the ray's weight; with ``record``, what the hit sees written at entry j."""
+    shade = make_shade(fx, shadow_grid, record)
+    record_first_hit = make_record_first_hit(tuple(aovs), fx.texture, fx.vertex_color)
+    AOVS, AREA, RECORD = bool(aovs), fx.area_lights, record
+
+    @wp.func(inline=True)
+    def local(s: SceneData, aov: AovBuffers, rec: GradRecord, j: int, r: TreeRay, h: Hit, hit: Surface, pixel: int,
+              sample: int, color: wp.vec3):
+        if wp.static(AOVS):
+            if r.depth == 0:
+                record_first_hit(aov, s, pixel, sample, h.face, h.u, h.v, hit, r.ray.o)
+        # ---- emitted: an area light's own surface ----
+        if wp.static(AREA):
+            if wp.static(RECORD):
+                rec.emit[j] = emitter_met(s, h.face, r.ray.d)
+            color = color + wp.cw_mul(r.weight, emitted(s, h.face, r.ray.d))
+        # ---- local shading ----
+        lit = shade(s, hit, -r.ray.d, rec, j)
+        return color + wp.cw_mul(r.weight, lit.color), lit.shadow_rays
+
+    return local
+
+
+@functools.cache
 def make_path(fx, raster_primary: bool, stack: int, report_truncated: bool, aovs: tuple, shadow_grid: bool,
               mirrors: bool, record: bool = False):
     """The walk of one camera ray's tree, make_trace_kernel's inner loop: ``path(s, frags, mir, aov, rec, r,
@@ -198,22 +258,26 @@ def make_path(fx, raster_primary: bool, stack: int, report_truncated: bool, aovs
     the rays it spawns to max_depth levels and returns (its colour, ``truncated`` plus the weight it cut
     off, ``rays`` plus the rays it cast). ``truncated`` and ``rays`` go in and out, not a sum per sample,
     so the kernel adds them in the order a single loop does: the image is the same to the bit. With
-    ``record`` (a chain: no refraction), each level's hit, the lights and area-light points it sees and
-    the emitter it meets are written into ``rec`` (kernels/record.py) as they are found, and the mirror
-    rays of the materials ``rec.mirrored`` flags are followed whatever their k_r (weight 0: the image the
-    same). Inlined into the kernel: Warp passes structs by value, and the walk's five would be copied
-    once a sample (1.2x the atrium's warm frame, issue 37)."""
-    if record and fx.refraction:
-        raise ValueError("the trace kernel records chains of rays; glass's ray tree is recorded level by level")
-    shade = make_shade(fx, shadow_grid, record)
+    ``record``, each ray's entry (its hit, where it came from, the lights and area-light points it sees, the
+    emitter it meets) is written into ``rec`` as it is found (kernels/record.py), and the rays the image
+    does not need but its derivative does are followed too, with weight 0 (the image the same): the mirror
+    rays of the materials ``rec.mirrored`` flags, and with glass the children a transmittance of 0 leaves
+    out (followed by their reach: the weight with such transmittances taken as 1). Inlined into the kernel:
+    Warp passes structs by value, and the walk's five would be copied once a sample (1.2x the atrium's warm
+    frame, issue 37)."""
+    local = make_local(fx, shadow_grid, tuple(aovs), record)
     surface = make_surface(fx.smooth, fx.texture, fx.vertex_color)
-    record_first_hit = make_record_first_hit(tuple(aovs), fx.texture, fx.vertex_color)
     MIRRORS = fx.reflection and mirrors
     first_hit = make_first_hit(raster_primary, MIRRORS, fx.culling)
-    REFLECTION, AOVS, AREA = fx.reflection, bool(aovs), fx.area_lights
-    REFRACTION, ABSORPTION, TRUNCATED, RECORD = fx.refraction, fx.absorption, report_truncated, record
+    REFLECTION, REFRACTION, ABSORPTION, TRUNCATED = fx.reflection, fx.refraction, fx.absorption, report_truncated
+    RECORD, TREE = record, record and fx.refraction
     RayRows, waiting, resumed = make_ray_stack(max(stack, 1))
+    ParentRows, ReachRows = make_record_stack(max(stack, 1))
     follows_mirror = make_follows_mirror(RECORD)
+    record_hit = make_record_hit(TREE)
+    children = make_children(TREE)
+    escaped = make_escaped(ABSORPTION)
+    next_chain = make_next_chain(MIRRORS)
     COUNTS_T = wp.vec4i if REFRACTION else wp.vec3i
 
     @wp.func(inline=True)
@@ -225,45 +289,38 @@ def make_path(fx, raster_primary: bool, stack: int, report_truncated: bool, aovs
         rays = rays_in
         color = wp.vec3(0.0)
         top = int(0)  # rays waiting on the stack
-        j = int(0)  # with the record: this ray's entry (camera ray, level)
+        j, parent = int(0), int(NO_PARENT)  # with the record: this ray's entry, its parent's (2 entry + branch)
         if wp.static(REFRACTION):
             stack = RayRows()
+        reach = wp.vec3(1.0)  # with glass's record: this ray's weight with a transmittance of 0 taken as 1
+        if wp.static(TREE):
+            parents, reaches = ParentRows(), ReachRows()  # the waiting rays'
         while r.depth < max_depth:
             # ---- nearest hit ----
             h = first_hit(s, frags, mir, r, i, pixel * samples + sample, x, row, sample)
             if wp.static(RECORD):
-                j = record_hit(rec, pixel * samples + sample, r.depth, h.face, h.u, h.v, r.ray.d)
+                j = record_hit(rec, r.depth, pixel * samples + sample, parent, r.medium, h.face, h.u, h.v)
             if h.face < 0:
-                if wp.static(ABSORPTION):
-                    r.weight = absorbed_forever(s, r.weight, r.medium)
-                color = color + wp.cw_mul(r.weight, s.background)
+                color = color + wp.cw_mul(escaped(s, r.weight, r.medium), s.background)
             else:
                 hit = surface(s, h.face, h.u, h.v, h.normal, r.ray.d)
                 if wp.static(ABSORPTION):
                     r.weight = absorbed(s, r.weight, r.medium, r.start, hit)
-                if wp.static(AOVS):
-                    if r.depth == 0:
-                        record_first_hit(aov, s, pixel, sample, h.face, h.u, h.v, hit, r.ray.o)
-                # ---- emitted: an area light's own surface ----
-                if wp.static(AREA):
-                    if wp.static(RECORD):
-                        rec.emit[j] = emitter_met(s, h.face, r.ray.d)
-                    color = color + wp.cw_mul(r.weight, emitted(s, h.face, r.ray.d))
-                # ---- local shading ----
-                lit = shade(s, hit, -r.ray.d, rec, j)
-                color = color + wp.cw_mul(r.weight, lit.color)
-                rays[1] += lit.shadow_rays
+                    if wp.static(TREE):
+                        reach = absorbed(s, reach, r.medium, r.start, hit)
+                color, shadow_rays = local(s, aov, rec, j, r, h, hit, pixel, sample, color)
+                rays[1] += shadow_rays
                 level = r.depth + 1  # the children's
                 # ---- mirror ----
                 if wp.static(REFLECTION):
                     kr = s.kr[hit.material]
                     if level < max_depth and follows_mirror(kr, rec, hit.material):
-                        chain = int(NO_CHAIN)
-                        if wp.static(MIRRORS):
-                            chain = mirror_chain(mir, r.chain, h.face)
                         # a mirror's ray stays in the medium it came through
-                        r = TreeRay(spawn_ray(hit, wp.normalize(reflect(r.ray.d, hit.n))), wp.cw_mul(r.weight, kr),
-                                    hit.p, level, r.medium, chain, h.face)
+                        r = TreeRay(mirror_ray(hit, r.ray.d), wp.cw_mul(r.weight, kr), hit.p, level, r.medium,
+                                    next_chain(mir, r.chain, h.face), h.face)
+                        parent = 2 * j
+                        if wp.static(TREE):
+                            reach = mirror_reach(reach, kr)
                         rays[2] += 1
                         continue
                     if wp.static(TRUNCATED):
@@ -273,14 +330,20 @@ def make_path(fx, raster_primary: bool, stack: int, report_truncated: bool, aovs
                 if wp.static(REFRACTION):
                     eta = s.ior[hit.material]
                     if eta > 0.0 and (level < max_depth or wp.static(TRUNCATED)):  # traced, or counted
-                        ch = dielectric_children(s, h.face, hit, r.ray.d, r.weight, eta)
+                        ch, kids = children(s, h.face, hit, r.ray.d, r.weight, reach, eta)
                         if level < max_depth and (ch.has_r or ch.has_t):
                             r = TreeRay(spawn_ray(hit, ch.d_r), ch.w_r, hit.p, level, ch.medium_r, NO_CHAIN, -1)
+                            parent = 2 * j
                             if ch.has_t:  # else total internal reflection, or nothing transmitted
                                 if ch.has_r:  # the reflected ray waits, the refracted one goes on
                                     stack[top] = waiting(r)
+                                    if wp.static(TREE):
+                                        parents[top] = parent
+                                        reaches[top] = kids.r
                                     top += 1
                                 r = TreeRay(spawn_ray(hit, ch.d_t), ch.w_t, hit.p, level, ch.medium_t, NO_CHAIN, -1)
+                                parent = 2 * j + 1
+                            reach = wp.where(ch.has_t, kids.t, kids.r)  # read by glass's record alone
                             rays[2] += wp.where(ch.has_r, 1, 0)
                             rays[3] += wp.where(ch.has_t, 1, 0)
                             continue
@@ -292,6 +355,8 @@ def make_path(fx, raster_primary: bool, stack: int, report_truncated: bool, aovs
                 if top > 0:  # this path has ended: the next waiting ray of the tree
                     top -= 1
                     r = resumed(stack[top])
+                    if wp.static(TREE):
+                        parent, reach = parents[top], reaches[top]
                     continue
             break
         return color, truncated, rays
