@@ -4,12 +4,10 @@ silhouettes against the background and against an object behind, and a box's fla
 differences of the forward at 64 x 64 strata a pixel (no pixel masked), each with the control that the
 interior derivative alone (edges=False) is far off; the edge function's derivative against Warp's gradcheck
 and a closed form; the sum the same to the bit on every run and thread count; the scenes whose other edges
-would move refused.
+would move refused (shadows' edges: test_shadow_edges.py).
 """
 
 from __future__ import annotations
-
-from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -21,9 +19,10 @@ from warprt.image import EdgeFrame, camera_edges, edge_points, edge_sides
 from warprt.kernels import edge_distances
 from warprt.scene import camera_basis, resolve_effects
 
+from .converged import differences, gradient
+
 WIDTH, HEIGHT = 24, 18
-SPP = 256  # the gradient frame's: 16 x 16 strata
-FD_SPP = 4096  # the differences': 64 x 64 strata (the most render.spp takes) in each quarter of a pixel
+SPP = 256  # the gradient frame's: 16 x 16 strata (the differences': converged.FD_SPP)
 TOL = 0.02  # measured: within 0.4% of the differences, 1.5% for the ball's camera.eye (0.4% of those at 256 x 256
 # samples a pixel: the differences' own error)
 LIGHT = {"position": [2.0, 3.0, 4.0], "color": [0.8, 0.8, 0.7]}
@@ -87,38 +86,6 @@ def step(scene, name: str, seed: int) -> np.ndarray:
     0.3 a component (fovy: 3 degrees)."""
     shape = np.shape(warprt.Renderer(scene).params[name])
     return np.random.default_rng(seed).standard_normal(shape) * (3.0 if name == "camera.fovy" else 0.3)
-
-
-def differences(make, name: str, u: np.ndarray, weights, h: float = 4e-2, steps: int = 17) -> float:
-    """d sum(weights * image) / dt along u from the forward at 128 x 128 samples a pixel (FD_SPP at twice the
-    width and height, each pixel the mean of its 2 x 2): the slope at 0 of a cubic fitted by least squares to
-    the loss at ``steps`` steps over [-h, h] (central, and over many steps, since the image is still a fine
-    staircase in t), the mean of those at h and h / 2, which agree within 4% (else the step is not one the
-    differences resolve)."""
-    s = make(FD_SPP)
-    r = warprt.Renderer(replace(s, camera=replace(s.camera, width=2 * WIDTH, height=2 * HEIGHT)))
-    base = np.asarray(r.params[name], np.float64)
-
-    def loss(t):
-        r.params[name] = base + t * u
-        image = r.render().image.astype(np.float64).reshape(HEIGHT, 2, WIDTH, 2, 3).mean(axis=(1, 3))
-        return float((weights.astype(np.float64) * image).sum())
-
-    slopes = []
-    for width in (h, h / 2):
-        ts = np.linspace(-1.0, 1.0, steps)
-        slopes.append(np.polyfit(ts, [loss(t * width) for t in ts], 3)[-2] / width)
-    r.close()
-    assert abs(slopes[0] - slopes[1]) <= 0.04 * abs(slopes[1]), slopes
-    return float(np.mean(slopes))
-
-
-def gradient(make, names, weights, edges: bool, **options) -> dict:
-    r = warprt.Renderer(make(), **options)
-    r.render(grad=True)
-    g = r.backward(weights, wrt=list(names), edges=edges)
-    r.close()
-    return g
 
 
 CASES = [(triangle_scene, "objects.tri.vertices", 4), (triangle_scene, "objects.tri.vertices", 12),
@@ -235,18 +202,19 @@ def test_the_edges_gradient_is_the_same_on_every_run_and_thread_count(weights):
 
 HARD_SPOT = {"type": "spot", "position": [1.0, 3.0, 3.0], "target": [0.0, 0.0, 0.0], "cutoff_angle": 20.0,
              "beam_width": 20.0, "color": [1.0, 1.0, 1.0]}
-REFUSED = {"shadows": ({"shadows": True}, "shadows"),
-           "mirror rays": ({"max_depth": 3, "wall_kr": (0.5,) * 3}, "mirrors"),
+REFUSED = {"mirror rays": ({"max_depth": 3, "wall_kr": (0.5,) * 3}, "mirrors"),
            "checker": ({"crate": {"kd_texture": {"checker": [[1, 1, 1], [0.2, 0.2, 0.2]], "scale": 4.0}}}, "checker"),
            "hard spot": ({"lights": [HARD_SPOT]}, "spot")}
 
 
+@pytest.mark.parametrize("shadows", [False, True], ids=["no shadows", "shadows"])
 @pytest.mark.parametrize("case", list(REFUSED))
-def test_edges_are_refused_where_other_edges_move(weights, case):
+def test_edges_are_refused_where_other_edges_move(weights, case, shadows):
     """A scene whose named parameters also move edges this derivative does not cover: one line naming
-    ``edges``; a parameter that moves no edge (a colour) is not refused, and edges=False never is."""
+    ``edges``, with shadows traced or not (a shadow's edges are covered: test_shadow_edges.py; those seen in a
+    mirror are not); a parameter that moves no edge (a colour) is not refused, and edges=False never is."""
     kwargs, why = REFUSED[case]
-    r = warprt.Renderer(box_scene(**kwargs))
+    r = warprt.Renderer(box_scene(**kwargs, shadows=shadows))
     r.render(grad=True)
     with pytest.raises(warprt.SceneError, match="edges") as e:  # an ArgumentError
         r.backward(weights, wrt=["objects.crate.vertices"], edges=True)

@@ -8,7 +8,7 @@ its derivative.
 
 What is differentiated, and what is held: each ray's face and the visibility of each light are held fixed, as a
 visibility-fixed derivative is (an edge or a shadow's edge moving across pixels has no derivative here; edges=True
-adds that of the edges camera rays see, grad_edges.py), and so are which rays the tree has (total internal
+adds that of the edges camera rays see and of hard shadows' edges, grad_edges.py), and so are which rays the tree has (total internal
 reflection, a child carrying nothing) and each ray's medium. Everything the forward computes from the parameters
 at those hits is differentiated as the forward computes it, because it is the forward's code: the material
 colours and exponents (with their textures' texels: the forward's bilinear lookup over SceneData.texels, each

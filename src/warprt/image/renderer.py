@@ -324,10 +324,11 @@ class Renderer:
         The derivative holds each ray's face and each shadow ray's answer fixed (an interior derivative); with
         ``edges``, that of the box-filtered pixel integral, the boundary term of the edges camera rays see
         added (silhouettes, occlusion edges and flat creases moving with objects.<name>.vertices and the
-        camera: image/grad_edges.py). Only those edges are covered so far, so ``edges=True`` is refused in
-        one line naming ``edges`` where the named parameters move others: with shadows traced
-        (render.shadows), mirror rays or glass (render.max_depth > 1), a checker texture, a spot light's hard
-        cone or an area light's centre."""
+        camera: image/grad_edges.py), and with shadows traced that of hard shadows' edges (moving with the
+        occluders, the receivers, a light's position or direction, an area light's centre and the camera:
+        image/grad_shadow_edges.py). Only those edges are covered so far, so ``edges=True`` is refused in one
+        line naming ``edges`` where the named parameters move others: mirror rays or glass (render.max_depth >
+        1), a checker texture or a spot light's hard cone."""
         if self._first_hits is None:
             raise ArgumentError("backward", "render", "no frame was rendered with grad=True since the last change")
         scene, geom, hits = self._first_hits

@@ -8,7 +8,8 @@
     record.py (what a grad=True frame's trace writes for its derivative), replay.py (the derivative: the record
     replayed with the forward's functions on a wp.Tape, a launch a ray level), pose.py (an object's pose as the
     derivative moves it), vertex_normals.py (smooth normals from moving points), edges.py (the edges camera
-    rays see: their signed distance in the image and the radiance either side), aov.py (what a first hit
+    rays see: their signed distance in the image and the radiance either side), shadow_edges.py (hard shadows'
+    edges: their signed distance in the image and one light's term either side), aov.py (what a first hit
     records besides colour), clip.py and raster.py (the Z-buffer: Fragments), hybrid.py (where the Z-buffer's
     first hit is the tracer's), mirror.py (a reflection ray's first hit from a planar mirror's virtual
     camera), zbuffer_shade.py.
@@ -61,3 +62,9 @@ __all__ += ["NO_PARENT", "NO_RAY", "GradRecord", "empty_record", "make_entry"]
 from .edges import edge_distance, edge_distances, make_edge_sides_kernel  # noqa: E402 (backward(edges=True))
 
 __all__ += ["edge_distance", "edge_distances", "make_edge_sides_kernel"]
+from .edges import plane_distance  # noqa: E402
+from .shadow_edges import (SOURCE_LIGHT, SOURCE_SAMPLE, make_light_sides_kernel, shadow_edge_distances,  # noqa: E402
+                           shadow_plane)
+
+__all__ += ["plane_distance", "SOURCE_LIGHT", "SOURCE_SAMPLE", "make_light_sides_kernel", "shadow_edge_distances",
+            "shadow_plane"]  # and hard shadows' edges

@@ -1,7 +1,7 @@
 """The edges seen by camera rays, for the gradient's boundary term (image/grad_edges.py launches them): an
 edge's signed distance in the image as a differentiable function of its vertices and the camera
-(edge_distance, edge_distances), and the radiance either side of it by the forward's own walk
-(make_edge_sides_kernel)."""
+(edge_distance, edge_distances; plane_distance, that of any plane through the eye), and the radiance either
+side of it by the forward's own walk (make_edge_sides_kernel)."""
 
 import functools  # no "from __future__ import annotations": a kernel factory's types are its locals
 
@@ -17,23 +17,30 @@ from .trace import TreeRay, make_path
 
 
 @wp.func
-def edge_distance(v0: wp.vec3, v1: wp.vec3, eye: wp.vec3, center: wp.vec3, up: wp.vec3, fovy: float, near: float,
-                  width: int, height: int, x: float, y: float) -> float:
+def plane_distance(n: wp.vec3, eye: wp.vec3, center: wp.vec3, up: wp.vec3, fovy: float, near: float, width: int,
+                   height: int, x: float, y: float) -> float:
     """The signed distance, in pixels, of the image point (x, y) (pixels from the lower-left corner) from the
-    line an edge v0 v1 projects to: g / |grad_x g| for the edge function g(x) = det(v0 - eye, v1 - eye, d(x))
-    (d: image_plane_point, affine in x, so its axes are differences of its points), positive where g is.
-    On the edge (g = 0) its derivative in any parameter is d_theta g / |grad_x g|: the edge's speed along its
-    normal, the boundary term's v . n (docs/gradients.md)."""
+    image of a plane through the eye of normal n (an edge's, a shadow's edge's): g / |grad_x g| for the edge
+    function g(x) = n . d(x) (d: image_plane_point, affine in x, so its axes are differences of its points),
+    positive where g is. On the line (g = 0) its derivative in any parameter is d_theta g / |grad_x g|: the
+    line's speed along its normal, the boundary term's v . n (docs/gradients.md)."""
     c = camera_of(eye, center, up, fovy, near, width, height)
     px = x / float(width)
     py = y / float(height)
     d = image_plane_point(c, px, py)
     d_x = (image_plane_point(c, 1.0, py) - image_plane_point(c, 0.0, py)) / float(width)
     d_y = (image_plane_point(c, px, 1.0) - image_plane_point(c, px, 0.0)) / float(height)
-    n = wp.cross(v0 - eye, v1 - eye)
     g_x = wp.dot(n, d_x)
     g_y = wp.dot(n, d_y)
     return wp.dot(n, d) / wp.sqrt(g_x * g_x + g_y * g_y)
+
+
+@wp.func
+def edge_distance(v0: wp.vec3, v1: wp.vec3, eye: wp.vec3, center: wp.vec3, up: wp.vec3, fovy: float, near: float,
+                  width: int, height: int, x: float, y: float) -> float:
+    """The signed distance, in pixels, of the image point (x, y) from the line an edge v0 v1 projects to:
+    plane_distance for the plane through the eye and the edge, g(x) = det(v0 - eye, v1 - eye, d(x))."""
+    return plane_distance(wp.cross(v0 - eye, v1 - eye), eye, center, up, fovy, near, width, height, x, y)
 
 
 @wp.kernel(module="unique")
