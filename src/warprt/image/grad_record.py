@@ -106,6 +106,7 @@ class Record:
     reflects: bool = False
     bands: list = field(default_factory=list)
     capacity: np.ndarray | None = None  # glass: per (band, level) the region's size
+    _bands: dict | None = field(default=None, repr=False)  # for_band's copies
 
     @property
     def camera_rays(self) -> int:
@@ -123,9 +124,12 @@ class Record:
         """The GradRecord a launch of the band starting at pixel ``first`` writes through (its regions' row)."""
         if not self.tree:
             return self.rec
-        r = _copy(self.rec)
-        r.band = [f for f, _ in self.bands].index(first)
-        return r
+        if self._bands is None:  # made once a frame: the bands' copies, differing only in ``band``
+            self._bands = {}
+            for b, (f, _) in enumerate(self.bands):
+                self._bands[f] = r = _copy(self.rec)
+                r.band = b
+        return self._bands[first]
 
     def used(self) -> np.ndarray:
         """Glass: per (band, level) the entries the frame's rays took (past the capacity too)."""

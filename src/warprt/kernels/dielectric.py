@@ -50,7 +50,8 @@ def refract(d: wp.vec3, n: wp.vec3, eta: float):
 @wp.struct
 class Children:
     """The reflected and the refracted ray of a dielectric hit: direction, weight, the medium each
-    travels in (the hit's material inside the glass, -1 outside) and whether it carries anything."""
+    travels in (the hit's material inside the glass, -1 outside) and whether it carries anything; and the
+    Fresnel reflectance F that splits the weight (the gradient's record follows the rays by it too)."""
 
     d_r: wp.vec3
     w_r: wp.vec3
@@ -60,6 +61,7 @@ class Children:
     w_t: wp.vec3
     medium_t: int
     has_t: bool
+    F: float
 
 
 @wp.func
@@ -85,6 +87,7 @@ def dielectric_children(s: SceneData, f: int, hit: Surface, d: wp.vec3, weight: 
     F = fresnel_dielectric(wp.where(entering, cos_i, -cos_i), eta)
     t, transmits = refract(d, m, eta_rel)
     out = Children()
+    out.F = F
     out.w_r = weight * F
     out.w_t = wp.cw_mul(weight, s.transmittance[hit.material]) * (1.0 - F)
     out.has_r = wp.max(out.w_r) > 0.0

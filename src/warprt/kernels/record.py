@@ -24,7 +24,6 @@ import functools
 
 from .._warp import wp
 from ..geometry import SceneData
-from .dielectric import dielectric_children
 from .interaction import Surface
 
 NO_RAY = -2  # the face of an entry no ray reached (a chain that ended, a region's unused tail); -1 met nothing
@@ -182,12 +181,11 @@ class Reaches:
 
 
 @wp.func
-def dielectric_reaches(s: SceneData, f: int, hit: Surface, d: wp.vec3, reach: wp.vec3, eta: float) -> Reaches:
-    """The reaches of a dielectric hit's reflected and transmitted rays: the Fresnel split of the ray's
-    ``reach`` (dielectric_children's, at weight 1) with a transmittance of 0 (every channel) taken as 1, so
-    that a refracted ray the forward leaves out because it carries nothing is followed for the derivative
-    in that transmittance (its radiance); 0 past the critical angle."""
-    F = dielectric_children(s, f, hit, d, wp.vec3(1.0), eta).w_r[0]
+def dielectric_reaches(s: SceneData, hit: Surface, reach: wp.vec3, F: float) -> Reaches:
+    """The reaches of a dielectric hit's reflected and transmitted rays: the Fresnel split (F, the hit's
+    dielectric_children's) of the ray's ``reach`` with a transmittance of 0 (every channel) taken as 1, so that a
+    refracted ray the forward leaves out because it carries nothing is followed for the derivative in that
+    transmittance (its radiance); 0 past the critical angle."""
     kt = s.transmittance[hit.material]
     if wp.max(kt) <= 0.0:
         kt = wp.vec3(1.0)

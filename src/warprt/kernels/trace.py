@@ -214,7 +214,7 @@ def make_children(TREE: bool):
         ch = dielectric_children(s, f, hit, d, weight, eta)
         kids = Reaches()
         if wp.static(TREE):
-            kids = dielectric_reaches(s, f, hit, d, reach, eta)
+            kids = dielectric_reaches(s, hit, reach, ch.F)
             ch.has_r = ch.has_r or wp.max(kids.r) > 0.0
             ch.has_t = ch.has_t or wp.max(kids.t) > 0.0
         return ch, kids
