@@ -232,10 +232,11 @@ def test_a_dark_light_with_shadows_switched_off_has_the_unshadowed_gradient():
 # --- Controls by a changed replay: the same record and launches with one kernel swapped ----------------------
 
 @wp.kernel
-def _no_cosine(s: SceneData, rec: GradRecord, first_entry: int, sample_light: wp.array(dtype=int), hits: ReplayHits):
+def _no_cosine(s: SceneData, rec: GradRecord, live: wp.array(dtype=int), sample_light: wp.array(dtype=int),
+               hits: ReplayHits):
     """replay_area with the emitter's cosine dropped: the sample's normal taken along the light's direction."""
     t, q = wp.tid()
-    j = first_entry + t
+    j = live[t]
     if rec.face[j] >= 0:
         if (rec.area_bits[j * rec.words + q / 32] >> (q % 32)) & 1 != 0:
             hit = hits.hit[j]
@@ -246,12 +247,12 @@ def _no_cosine(s: SceneData, rec: GradRecord, first_entry: int, sample_light: wp
 
 
 @wp.kernel
-def _first_sample(s: SceneData, rec: GradRecord, first_entry: int, sample_light: wp.array(dtype=int),
+def _first_sample(s: SceneData, rec: GradRecord, live: wp.array(dtype=int), sample_light: wp.array(dtype=int),
                   hits: ReplayHits):
     """replay_area with each seen sample weighted as the light's first sample point would be (the wrong
     sample's weight: a shifted or permuted index is no control, each hit seeing nearly the same sum)."""
     t, q = wp.tid()
-    j = first_entry + t
+    j = live[t]
     if rec.face[j] >= 0:
         if (rec.area_bits[j * rec.words + q / 32] >> (q % 32)) & 1 != 0:
             hit = hits.hit[j]

@@ -107,6 +107,7 @@ class Record:
     bands: list = field(default_factory=list)
     capacity: np.ndarray | None = None  # glass: per (band, level) the region's size
     _bands: dict | None = field(default=None, repr=False)  # for_band's copies
+    pool: dict = field(default_factory=dict, repr=False)  # the replay's arrays by name (grad.pooled_zeros)
 
     @property
     def camera_rays(self) -> int:
@@ -186,7 +187,7 @@ def record_arrays(scene, geom, data, fx, levels: int, device: str, bands: list, 
     (recording_effects) and ray levels; ``bands``: its bands (launch.bands_of), whose regions glass's deeper
     levels are; ``used``: with glass, what a frame used per (band, level) (the regions made from it, else a
     first guess). ``reuse``: the last grad frame's Record, whose arrays are taken again where their sizes are
-    this frame's."""
+    this frame's, and whose replay's arrays (``pool``) the next backward takes where theirs are."""
     cam = scene.camera
     k = math.isqrt(scene.render.spp) if fx.supersampling else 1
     n, L, D = cam.width * cam.height * k * k, len(scene.whitted_lights), levels
@@ -226,7 +227,7 @@ def record_arrays(scene, geom, data, fx, levels: int, device: str, bands: list, 
     absorb = fx.absorption or ((switched is None or "absorption" in switched) and not scene_effects(scene).absorption
                                and tree)
     return Record(r, level_start, cam.width, cam.height, k * k, D, L, words, tree, fx, data, absorb, tuple(mirrored),
-                  reflects, list(bands), capacity)
+                  reflects, list(bands), capacity, pool=reuse.pool if reuse is not None else {})
 
 
 def _fits(old: Record, sizes: tuple, device: str) -> bool:

@@ -169,9 +169,9 @@ def keep_for_area(hits: ReplayHits, j: int, hit: Surface, k: Coefficients, d: wp
 
 @functools.cache
 def make_replay_level(fx, lights: int, first: bool, moving: bool, camera: bool, absorption: bool):
-    """The kernel of one recorded ray level (module docstring): replay_level(s, cam, rec, first_entry, rays, hits,
-    colour) over the level's entries from ``first_entry``, adding each one's colour to its camera ray's in
-    ``colour``. ``fx``: the recording frame's effects (its smooth normals, textures, vertex colours, light
+    """The kernel of one recorded ray level (module docstring): replay_level(s, cam, rec, live, rays, hits, colour)
+    over the level's entries a ray reached (``live``: their indices, ascending), adding each one's colour to its
+    camera ray's in ``colour``. ``fx``: the recording frame's effects (its smooth normals, textures, vertex colours, light
     model, area lights, mirrors and glass); every Phong term is shaded (a ks of 0 has a derivative). ``first``:
     level 0; ``moving``: the level's hits move (vertices, poses or the camera differentiated; with glass, every
     level but the first: a refracted ray turns with the ior), its children's rays handed on with their origins
@@ -189,9 +189,9 @@ def make_replay_level(fx, lights: int, first: bool, moving: bool, camera: bool, 
     STARTS = absorption and (fx.reflection or fx.refraction)
 
     @wp.kernel(module="unique")
-    def replay_level(s: SceneData, cam: ReplayCamera, rec: GradRecord, first_entry: int, rays: ReplayRays,
+    def replay_level(s: SceneData, cam: ReplayCamera, rec: GradRecord, live: wp.array(dtype=int), rays: ReplayRays,
                      hits: ReplayHits, colour: wp.array(dtype=wp.vec3)):
-        j = first_entry + wp.tid()
+        j = live[wp.tid()]
         f = rec.face[j]
         if f == wp.static(NO_RAY):  # no ray reached this entry
             return
@@ -236,15 +236,15 @@ area_term = make_light_terms(True, True)[1]
 
 
 @wp.kernel(module="unique")
-def replay_area(s: SceneData, rec: GradRecord, first_entry: int, sample_light: wp.array(dtype=int),
+def replay_area(s: SceneData, rec: GradRecord, live: wp.array(dtype=int), sample_light: wp.array(dtype=int),
                 hits: ReplayHits):
     """The area lights at each hit of a level (one thread per entry t and sample point q: launched over (the
-    level's entries, the points)): where the record saw q, area_term of area_arrival added to the entry's
+    level's entries a ray reached, ``live``, the points)): where the record saw q, area_term of area_arrival added to the entry's
     local colour by wp.atomic_add, differentiable, rather than by a loop over the samples, which Warp would not
     replay backwards (a dynamic one) or could not unroll (over 16). On the CPU the threads run in order, so
     the samples are added as shading.area_light adds them."""
     t, q = wp.tid()
-    j = first_entry + t
+    j = live[t]
     if rec.face[j] >= 0:
         if (rec.area_bits[j * rec.words + q / 32] >> (q % 32)) & 1 != 0:
             hit = hits.hit[j]
@@ -255,14 +255,14 @@ def replay_area(s: SceneData, rec: GradRecord, first_entry: int, sample_light: w
 
 @functools.cache
 def make_replay_combine(TREE: bool):
-    """replay_combine(rec, first_entry, hits, colour): with area lights, each hit of a level's local colour (the
+    """replay_combine(rec, live, hits, colour): with area lights, each hit of a level's local colour (the
     area lights' points added) times its weight, added to its camera ray's after its emitted radiance, as the
     tracer adds them."""
     _, entry_ray, _ = make_entry(TREE)
 
     @wp.kernel(module="unique")
-    def replay_combine(rec: GradRecord, first_entry: int, hits: ReplayHits, colour: wp.array(dtype=wp.vec3)):
-        j = first_entry + wp.tid()
+    def replay_combine(rec: GradRecord, live: wp.array(dtype=int), hits: ReplayHits, colour: wp.array(dtype=wp.vec3)):
+        j = live[wp.tid()]
         if rec.face[j] >= 0:
             wp.atomic_add(colour, entry_ray(rec, j), wp.cw_mul(hits.weight[j], hits.local[j]))
 
