@@ -139,8 +139,8 @@ def scene_run(path: Path, cfg: dict) -> dict:
     image = r.render(grad=True).image
     with PeakMemory() as frame:  # the record and the backward pass together, from before the frame
         r.render(grad=True)
-        r.backward(weights, wrt=wrt)
-    t_backward, m_backward, grads, _ = warm(lambda: r.backward(weights, wrt=wrt), cfg["repeat"])
+        r.backward(weights, wrt=wrt, edges=False)
+    t_backward, m_backward, grads, _ = warm(lambda: r.backward(weights, wrt=wrt, edges=False), cfg["repeat"])
     r.close()
 
     mitsuba_variant()
@@ -210,7 +210,7 @@ def edges_run(cfg: dict, repeat: int) -> dict:
     t_forward, _, _, _ = warm(lambda: r.render(), repeat)
     t_record, _, _, _ = warm(lambda: r.render(grad=True), repeat)
     r.render(grad=True)
-    t_interior, _, _, _ = warm(lambda: r.backward(weights, wrt=wrt), repeat)
+    t_interior, _, _, _ = warm(lambda: r.backward(weights, wrt=wrt, edges=False), repeat)
     t_edges, _, grads, _ = warm(lambda: r.backward(weights, wrt=wrt, edges=True), repeat)
     r.close()
     import drjit as dr

@@ -44,7 +44,7 @@ def derivative_images(width: int = 96, height: int = 72) -> dict:
     for y in range(height):
         for x in range(width):
             weights[y, x] = 1.0
-            interior[y, x] = r.backward(weights, wrt=[NAME])[NAME][0]
+            interior[y, x] = r.backward(weights, wrt=[NAME], edges=False)[NAME][0]
             weights[y, x] = 0.0
     position = np.asarray(r.params[NAME], np.float64)
     shifted = []

@@ -41,7 +41,7 @@ def weights():
 def ours(weights):
     r = warprt.Renderer(scene())
     image = r.render(grad=True).image
-    return image, r.backward(weights)
+    return image, r.backward(weights, edges=False)
 
 
 def compared(ours_grads, theirs, parameters=PARAMETERS) -> list[str]:
@@ -88,7 +88,7 @@ def test_vertex_gradients_equal_mitsubas_ad(weights):
 
     r = warprt.Renderer(floor_scene())
     r.render(grad=True)
-    ours = r.backward(weights, wrt=["objects.floor.vertices"])["objects.floor.vertices"]
+    ours = r.backward(weights, wrt=["objects.floor.vertices"], edges=False)["objects.floor.vertices"]
     theirs = mitsuba_vertex_gradients(floor_scene(), weights)
     np.testing.assert_allclose(ours, theirs, rtol=REL, atol=REL * np.abs(theirs).max())
     detached = mitsuba_vertex_gradients(floor_scene(), weights, detach=True)  # the control
@@ -163,7 +163,7 @@ def test_gradients_through_mirrors_equal_mitsubas_ad(weights):
     weight 0) on both sides, and the gradients of the rest agree to 1e-4."""
     r = warprt.Renderer(mirror_scene())
     masked = where_images_agree(r, lambda w: mitsuba_gradients(mirror_scene(), w), weights)
-    grads = r.backward(masked, wrt=list(MIRROR_PARAMETERS))
+    grads = r.backward(masked, wrt=list(MIRROR_PARAMETERS), edges=False)
     _, m_grads = mitsuba_gradients(mirror_scene(), masked)
     names = [n for n in MIRROR_PARAMETERS if n in m_grads]
     assert "materials.floor.reflectivity" in names and len(names) >= 4
@@ -183,7 +183,7 @@ def test_gradients_under_spot_and_directional_lights_equal_mitsubas_ad():
     masked = where_images_agree(r, lambda weights: mitsuba_gradients(s, weights), w)
     names = ["materials.floor.kd", "materials.floor.ks", "materials.floor.reflectivity", "materials.ball.kd",
              "materials.ball.shininess", "lights.0.color", "lights.1.color"]
-    grads = r.backward(masked, wrt=names)
+    grads = r.backward(masked, wrt=names, edges=False)
     _, m_grads = mitsuba_gradients(s, masked)
     assert [n for n in names if not np.allclose(grads[n], m_grads[n], rtol=REL, atol=REL * np.abs(m_grads[n]).max())] == []
     _, unshadowed = mitsuba_gradients(s, masked, shadows=False)  # the control
@@ -213,7 +213,7 @@ def test_area_light_gradients_equal_mitsubas_ad():
     r = warprt.Renderer(s)
     masked = where_images_agree(r, lambda weights: mitsuba_area_gradients(s, weights), w)
     names = ["lights.0.radiance", "materials.white.kd", "materials.red.kd", "materials.green.kd"]
-    grads = r.backward(masked, wrt=names)
+    grads = r.backward(masked, wrt=names, edges=False)
     _, theirs = mitsuba_area_gradients(s, masked)
     theirs["lights.0.radiance"] = theirs.pop("area.radiance")
     assert [n for n in names if not np.allclose(grads[n], theirs[n], rtol=REL, atol=REL * np.abs(theirs[n]).max())] == []
@@ -280,7 +280,7 @@ def test_camera_gradients_equal_mitsubas_ad():
     w = np.random.default_rng(5).random((s.camera.height, s.camera.width, 3)).astype(np.float32)
     r = warprt.Renderer(s)
     masked = where_images_agree(r, lambda weights: mitsuba_camera_gradients(s, weights), w)
-    grads = r.backward(masked, wrt=list(CAMERA))
+    grads = r.backward(masked, wrt=list(CAMERA), edges=False)
     _, theirs = mitsuba_camera_gradients(s, masked)
     close = lambda a, b, rel: np.allclose(a, b, rtol=rel, atol=rel * np.abs(b).max())  # noqa: E731
     assert [n for n in CAMERA if not close(grads[n], theirs[n], 1e-3)] == []
@@ -300,7 +300,7 @@ def test_vertex_gradients_through_mirrors_equal_mitsubas_ad():
     r = warprt.Renderer(s)
     masked = where_images_agree(r, lambda weights: mitsuba_object_gradients(s, weights), w)
     names = [f"objects.{o.name}.vertices" for o in s.objects]
-    grads = r.backward(masked, wrt=names)
+    grads = r.backward(masked, wrt=names, edges=False)
     _, theirs = mitsuba_object_gradients(s, masked)
     close = lambda a, b, rel: np.allclose(a, b, rtol=rel, atol=rel * np.abs(b).max())  # noqa: E731
     assert [n for n in names if not close(grads[n], theirs[n], 1e-3)] == []
@@ -321,7 +321,7 @@ def test_smooth_vertex_gradients_equal_mitsubas_ad():
     r = warprt.Renderer(s)
     masked = where_images_agree(r, lambda weights: mitsuba_object_gradients(s, weights, normals=True), w)
     names = [f"objects.{o.name}.vertices" for o in s.objects]
-    grads = r.backward(masked, wrt=names)
+    grads = r.backward(masked, wrt=names, edges=False)
     _, theirs = mitsuba_object_gradients(s, masked, normals=True)
     close = lambda a, b, rel: np.allclose(a, b, rtol=rel, atol=rel * np.abs(b).max())  # noqa: E731
     assert [n for n in names if not close(grads[n], theirs[n], 1e-4)] == []
@@ -379,7 +379,7 @@ def test_vertex_colour_gradients_equal_mitsubas_ad():
     r = warprt.Renderer(s)
     masked = where_images_agree(r, lambda weights: mitsuba_colour_gradients(s, weights, names), w)
     materials = ["materials.paint.kd", "materials.fan.kd", "materials.fan.ka", "materials.floor.kd"]
-    grads = r.backward(masked, wrt=names + materials)
+    grads = r.backward(masked, wrt=names + materials, edges=False)
     _, theirs = mitsuba_colour_gradients(s, masked, names)
     close = lambda a, b, rel: np.allclose(a, b, rtol=rel, atol=rel * np.abs(b).max())  # noqa: E731
     assert [n for n in names + materials if not close(grads[n], theirs[n], REL)] == []
@@ -434,7 +434,7 @@ def test_area_light_centre_gradients_equal_mitsubas_ad():
     w = np.random.default_rng(5).random((H, W, 3)).astype(np.float32)
     r = warprt.Renderer(s)
     masked = where_images_agree(r, lambda weights: mitsuba_centre_gradients(s, weights), w)
-    ours = r.backward(masked, wrt=["lights.0.center"])["lights.0.center"]
+    ours = r.backward(masked, wrt=["lights.0.center"], edges=False)["lights.0.center"]
     _, theirs = mitsuba_centre_gradients(s, masked)
     np.testing.assert_allclose(ours, theirs, rtol=REL, atol=REL * np.abs(theirs).max())
     _, unshadowed = mitsuba_centre_gradients(s, masked, shadows=False)  # the control
@@ -460,7 +460,7 @@ def test_pose_gradients_equal_mitsubas_ad_through_the_poses_jacobian():
     s = r.scene
     masked = where_images_agree(r, lambda weights: mitsuba_object_gradients(s, weights), w)
     names = [f"objects.{o}.{k}" for o in ("crate", "floor") for k in ("translation", "rotation")]
-    grads = r.backward(masked, wrt=names)
+    grads = r.backward(masked, wrt=names, edges=False)
     _, vertices = mitsuba_object_gradients(s, masked)
     poses = dict(zip((o.name for o in s.objects), object_poses(s, r.poses)))
     theirs = {}

@@ -51,7 +51,7 @@ def warprt_gradients():
     r = warprt.Renderer(scene())
     r.render(grad=True)
     wrt = ["objects.occ.vertices"]
-    ours, interior = r.backward(weights, wrt=wrt, edges=True), r.backward(weights, wrt=wrt)
+    ours, interior = r.backward(weights, wrt=wrt, edges=True), r.backward(weights, wrt=wrt, edges=False)
     r.close()
     return weights, ours[wrt[0]], interior[wrt[0]]
 

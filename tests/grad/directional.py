@@ -87,6 +87,6 @@ def backward_masked(scene, weights, d: Directional, start: dict | None = None, *
     r = warprt.Renderer(scene, **options)
     r.params.update(start or {})
     r.render(grad=True)
-    g = r.backward((weights * d.mask).astype(np.float32), wrt=list(d.direction))
+    g = r.backward((weights * d.mask).astype(np.float32), wrt=list(d.direction), edges=False)
     r.close()
     return g

@@ -111,7 +111,7 @@ def component_differences(s, name: str, weights, rel: float) -> np.ndarray:
 def gradients(s, weights, names, **options) -> dict:
     r = warprt.Renderer(s, **options)
     r.render(grad=True)
-    out = r.backward(weights, wrt=names)
+    out = r.backward(weights, wrt=names, edges=False)
     r.close()
     return out
 
@@ -188,7 +188,7 @@ def test_a_dark_light_has_the_shadowed_gradient(dark, name):
     r = warprt.Renderer(s)
     r.params.update(dark)
     r.render(grad=True)
-    g = r.backward(w, wrt=[name])[name]
+    g = r.backward(w, wrt=[name], edges=False)[name]
 
     def loss(value) -> float:
         r.params[name] = value
@@ -213,7 +213,7 @@ def test_a_dark_light_with_shadows_switched_off_has_the_unshadowed_gradient():
         r = warprt.Renderer(s, **options)
         r.params[name] = [0.0, 0.0, 0.0]
         r.render(grad=True)
-        g = r.backward(w, wrt=[name])[name]
+        g = r.backward(w, wrt=[name], edges=False)[name]
 
         def loss(value) -> float:
             r.params[name] = value

@@ -78,7 +78,7 @@ def gradients(weights):
     r = warprt.Renderer(scene())
     result = r.render(grad=True)
     assert np.array_equal(result.image, warprt.render(scene())[0])  # grad=True renders the same image
-    return r.backward(weights)
+    return r.backward(weights, edges=False)
 
 
 @pytest.mark.parametrize("name", PARAMETERS)
@@ -160,7 +160,7 @@ def test_vertex_gradients_equal_central_differences(weights):
     triangles, their normals turn; the box's silhouette does not move, so nothing but shading changes."""
     r = warprt.Renderer(floor_scene())
     r.render(grad=True)
-    g = r.backward(weights, wrt=["objects.floor.vertices", "objects.crate.vertices"])["objects.floor.vertices"]
+    g = r.backward(weights, wrt=["objects.floor.vertices", "objects.crate.vertices"], edges=False)["objects.floor.vertices"]
     assert g.shape == (4, 3)
     fd = np.zeros((4, 3))
     for i in range(4):
@@ -179,7 +179,7 @@ def test_an_edge_moving_in_view_is_outside_the_gradient(weights):
     eye = [0.0, 2.0, 5.0]
     r = warprt.Renderer(floor_scene(eye=eye))
     r.render(grad=True)
-    g = r.backward(weights, wrt=["objects.floor.vertices"])["objects.floor.vertices"]
+    g = r.backward(weights, wrt=["objects.floor.vertices"], edges=False)["objects.floor.vertices"]
 
     def fd(i, c):
         up, down = np.array(TILT), np.array(TILT)
@@ -206,7 +206,7 @@ def mirror_scene(changes: dict | None = None, max_depth: int = 3):
 def mirror_gradients(weights):
     r = warprt.Renderer(mirror_scene())
     assert np.array_equal(r.render(grad=True).image, warprt.render(mirror_scene())[0])
-    everything = r.backward(weights)  # by default every parameter this frame differentiates: the mirror's vertices too
+    everything = r.backward(weights, edges=False)  # by default every parameter this frame differentiates: the mirror's vertices too
     assert f"objects.{mirror_scene().objects[0].name}.vertices" in everything
     return {name: everything[name] for name in MIRROR_PARAMETERS}
 

@@ -78,10 +78,10 @@ def test_a_named_reflectivity_of_0_has_the_mirrors_derivative(weights, reflectiv
     s = scene()
     r = warprt.Renderer(s)
     assert np.array_equal(r.render(grad=[REFLECTIVITY]).image, warprt.render(s).image)
-    g = r.backward(weights, wrt=[REFLECTIVITY])[REFLECTIVITY]
+    g = r.backward(weights, wrt=[REFLECTIVITY], edges=False)[REFLECTIVITY]
     assert np.abs(reflectivity_differences).min() > 0.1  # the sphere and the background, mirrored
     assert relative(g, reflectivity_differences) <= REL, (g, reflectivity_differences)
-    assert REFLECTIVITY in r.backward(weights)  # by default too, once recorded
+    assert REFLECTIVITY in r.backward(weights, edges=False)  # by default too, once recorded
 
 
 def test_an_unrecorded_reflectivity_of_0_is_refused_in_one_line(weights, reflectivity_differences):
@@ -93,7 +93,7 @@ def test_an_unrecorded_reflectivity_of_0_is_refused_in_one_line(weights, reflect
     r.render(grad=True)
     with pytest.raises(SceneError, match=r"render with grad=\['materials.floor.reflectivity'\]"):
         r.backward(weights, wrt=["materials.ball.kd", REFLECTIVITY])
-    assert REFLECTIVITY not in r.backward(weights)
+    assert REFLECTIVITY not in r.backward(weights, edges=False)
     geom = r.geometry
     hits = warprt.image.record_first_hits(s, geom, geom.scene_data(s), resolve_effects(s), "cpu")
     replay = warprt.image.build_replay(s, geom, hits, "cpu")
@@ -111,7 +111,7 @@ def test_where_the_frame_cannot_reflect_a_reflectivity_of_0_has_the_derivative_0
     s = scene(max_depth=1)
     r = warprt.Renderer(s)
     r.render(grad=True)
-    g = r.backward(weights, wrt=[REFLECTIVITY])[REFLECTIVITY]
+    g = r.backward(weights, wrt=[REFLECTIVITY], edges=False)[REFLECTIVITY]
     assert np.all(g == 0.0) and np.all(one_sided(s, REFLECTIVITY, weights) == 0.0)
 
 
@@ -127,7 +127,7 @@ def test_a_ks_of_0_has_the_specular_derivative(weights):
     r = warprt.Renderer(s)
     r.params["materials.floor.ks"] = [0.0] * 3
     r.render(grad=True)
-    g = r.backward(weights, wrt=["materials.ball.ks"])["materials.ball.ks"]
+    g = r.backward(weights, wrt=["materials.ball.ks"], edges=False)["materials.ball.ks"]
     fd = one_sided(r.scene, "materials.ball.ks", weights)
     r.close()
     assert np.abs(fd).min() > 0.01

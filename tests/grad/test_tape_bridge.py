@@ -63,7 +63,7 @@ def chain(r, theta_value: float, tgt: np.ndarray, handed_as: str = NAME) -> tupl
     with downstream:
         wp.launch(squared_error, dim=image.shape, inputs=[image, wp.array(tgt, dtype=float)], outputs=[loss])
     downstream.backward(loss=loss)
-    g = r.backward(image.grad, wrt=[NAME, "materials.ball.ks"], arrays=True)
+    g = r.backward(image.grad, wrt=[NAME, "materials.ball.ks"], arrays=True, edges=False)
     assert isinstance(g[NAME], wp.array) and g[NAME].shape == (3,)
     upstream.backward(grads={kd: g[handed_as]})
     return float(loss.numpy()[0]), float(theta.grad.numpy()[0])

@@ -2,7 +2,8 @@
 Renderer.backward gives for the same d_image, in the tensor's dtype, shape and device; and, in float64, the
 autograd gradient of a loss sum(w * image) along a random direction per parameter equals the central difference
 of that loss through warprt.torch.render itself, the pixels an edge crosses within the step masked out as the
-gradient tests mask them (tests/grad/directional.py), with a wrong d_image as the control.
+gradient tests mask them (tests/grad/directional.py), with a wrong d_image as the control: the interior
+derivative (edges=False; test_edges.py checks edges=True, the default).
 
 torch.autograd.gradcheck itself does not fit: it steps each element by 1e-6 and the image is float32, so its
 differences would be rounding; and it would see the edges the visibility-fixed derivative has no term for.
@@ -43,7 +44,7 @@ def torch_grads(d_image):
     """loss.backward()'s .grad of each float32 tensor, for loss = sum(d_image * image)."""
     r = warprt.Renderer(ball())
     params = tensors(r)
-    image = warprt.torch.render(r, params)
+    image = warprt.torch.render(r, params, edges=False)
     (d_image * image).sum().backward()
     r.close()
     return params
@@ -53,7 +54,7 @@ def test_the_grads_equal_backwards_for_the_same_d_image(d_image, torch_grads):
     r = warprt.Renderer(ball())
     r.params.update({n: t.detach().numpy() for n, t in torch_grads.items()})  # the values float32 rounded
     r.render(grad=True)
-    expected = r.backward(d_image.numpy(), wrt=list(NAMES))
+    expected = r.backward(d_image.numpy(), wrt=list(NAMES), edges=False)
     r.close()
     for name, t in torch_grads.items():
         g = expected[name]
@@ -70,7 +71,7 @@ def test_only_the_tensors_that_require_grad_get_one():
     r = warprt.Renderer(ball())
     kd = torch.tensor(r.params["materials.ball.kd"], requires_grad=True)
     eye = torch.tensor(r.params["camera.eye"])
-    warprt.torch.render(r, {"materials.ball.kd": kd, "camera.eye": eye}).sum().backward()
+    warprt.torch.render(r, {"materials.ball.kd": kd, "camera.eye": eye}, edges=False).sum().backward()
     r.close()
     assert kd.grad is not None and eye.grad is None
 
@@ -92,7 +93,7 @@ def weights():
 
 def loss_of(r, params: dict, w: np.ndarray) -> torch.Tensor:
     """sum(w * image) in float64, through warprt.torch.render."""
-    return (torch.from_numpy(w) * warprt.torch.render(r, params).double()).sum()
+    return (torch.from_numpy(w) * warprt.torch.render(r, params, edges=False).double()).sum()
 
 
 @pytest.fixture(scope="module", params=NAMES)

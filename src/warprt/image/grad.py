@@ -330,7 +330,7 @@ def replay_image(scene, geom, hits: Record, device: str, camera: bool = False, s
 
 
 def backward(scene, geom, hits: Record, d_image, wrt, device: str, poses: list | None = None,
-             edges: bool = False, frame: EdgeFrame | None = None) -> dict:
+             edges: bool = True, frame: EdgeFrame | None = None) -> dict:
     """{name: d(sum(d_image * image)) / d(param)} for each name in ``wrt`` (parameter_names), each shaped
     as the parameter: (3,) for colours, positions and poses, () for an exponent. ``poses``: params.Pose per
     scene object (the Renderer's, object_poses), read where ``wrt`` names a translation or rotation. With
@@ -338,12 +338,12 @@ def backward(scene, geom, hits: Record, d_image, wrt, device: str, poses: list |
     EdgeFrame; a pose's through its vertices' and the pose's Jacobian, pose_edge_gradients), where those are
     all the edges the parameters move (else one ArgumentError naming ``edges``: check_edges)."""
     wrt = checked_names(scene, geom, hits, wrt)
-    if edges:
-        check_edges(scene, geom, frame, hits, wrt)
     d = np.asarray(d_image.numpy() if isinstance(d_image, wp.array) else d_image, np.float32)
     if d.shape != (hits.height, hits.width, 3) or not np.all(np.isfinite(d)):
         raise ArgumentError("backward", "d_image", f"expected finite values of shape {(hits.height, hits.width, 3)}, "
                                                    f"got {d.shape}")
+    if edges:
+        check_edges(scene, geom, frame, hits, wrt)
     posing = any(name.startswith("objects.") and name.endswith((".translation", ".rotation")) for name in wrt)
     moving = posing or any(name.startswith("objects.") and name.endswith(".vertices") for name in wrt)
     camera = any(name.startswith("camera.") for name in wrt)

@@ -238,4 +238,5 @@ def check_edges(scene, geom, frame: EdgeFrame | None, hits, wrt):
         raise ArgumentError("backward", "edges", "no frame's plan was kept: render(grad=True) first")
     why = edge_refusal(scene, geom, frame.fx, hits, wrt)
     if why is not None:
-        raise ArgumentError("backward", "edges", why)
+        raise ArgumentError("backward", "edges", f"{why} (edges=False: the derivative with each ray's face and "
+                                                 f"each shadow ray's answer held)")

@@ -306,12 +306,12 @@ class Renderer:
         stats.memory["estimate"] = estimate
         return RenderResult(result[0], stats, result[1])
 
-    def backward(self, d_image, wrt=None, *, arrays: bool = False, edges: bool = False) -> dict:
+    def backward(self, d_image, wrt=None, *, arrays: bool = False, edges: bool = True) -> dict:
         """d(sum(d_image * image)) / d(param) at the last frame, rendered with grad=True, for each name in
         ``wrt`` (r.params names: materials.<name>.ka | kd | ks | shininess | reflectivity | ka_texture |
         kd_texture | ks_texture (image textures' texels) | emission, a dielectric's ior | transmittance |
-        absorption (through the ray tree), lights.<i>.color | position | direction | radiance | center (an area
-        light's of its own shape), objects.<name>.vertices | translation | rotation (its pose) | colors (vertex
+        absorption (through the ray tree), lights.<i>.color | position | direction | radiance | center | normal |
+        size | radius | u | v (a shape light's own shape), objects.<name>.vertices | translation | rotation (its pose) | colors (vertex
         colours), camera.eye | center | up | fovy;
         all of them by default, less a reflectivity of 0 the frame did not record): a dict of float64 NumPy
         arrays shaped as the parameters; kd's carries ka's where ka follows kd (as r.params keeps it following).
@@ -321,14 +321,15 @@ class Renderer:
         renderer's device (a () parameter's of shape (1,)), to hand to a wp.Tape's backward(grads={...}) in
         the Warp program that made the parameter (docs/gradients.md).
 
-        The derivative holds each ray's face and each shadow ray's answer fixed (an interior derivative); with
-        ``edges``, that of the box-filtered pixel integral, the boundary term of the edges camera rays see
-        added (silhouettes, occlusion edges and flat creases moving with objects.<name>.vertices and the
-        camera: image/grad_edges.py), and with shadows traced that of hard shadows' edges (moving with the
-        occluders, the receivers, a light's position or direction, an area light's centre and the camera:
-        image/grad_shadow_edges.py). Only those edges are covered so far, so ``edges=True`` is refused in one
-        line naming ``edges`` where the named parameters move others: mirror rays or glass (render.max_depth >
-        1), a checker texture or a spot light's hard cone."""
+        By default (``edges``) the derivative is that of the box-filtered pixel integral (the image ``spp``
+        converges to): the interior derivative, each ray's face and each shadow ray's answer held, plus the
+        boundary term of the edges the named parameters move: those camera rays see (silhouettes, occlusion
+        edges and flat creases moving with objects.<name>.vertices, poses and the camera: image/grad_edges.py)
+        and with shadows traced hard shadows' edges (moving with the occluders, the receivers, a light's
+        position or direction, an area light's shape and the camera: image/grad_shadow_edges.py). Where the
+        named parameters move an edge not covered yet (seen in a mirror or through glass, render.max_depth > 1;
+        a checker texture's squares; a spot light's hard cone) it is refused in one line naming ``edges``;
+        ``edges=False`` gives the interior derivative alone, as before (docs/gradients.md)."""
         if self._first_hits is None:
             raise ArgumentError("backward", "render", "no frame was rendered with grad=True since the last change")
         scene, geom, hits = self._first_hits
