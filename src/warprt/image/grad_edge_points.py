@@ -12,6 +12,7 @@ from .._warp import wp
 from ..scene import camera_basis
 
 GAUSS_POINTS = 4  # per piece of an edge inside a pixel
+PAIR_TABLE = 1 << 24  # segments' pairs that _neighbours finds in a table (bytes), more by a sort
 EDGE_OFFSET_PX = 1e-3  # the two rays either side of an edge, this far from it in the image: at any depth, that
 # share of a pixel's footprint; above float32's resolution of a ray's direction (about 1e-4 of a pixel at 512 wide)
 
@@ -75,15 +76,37 @@ def _frame_clip(a: np.ndarray, c: np.ndarray, width: int, height: int) -> tuple:
     return t0, t1, inside & (t0 < t1)
 
 
-def _pieces(a: np.ndarray, c: np.ndarray, t0: float, t1: float) -> np.ndarray:
-    """The parameters cutting a + t (c - a), t0 <= t <= t1, where it crosses the pixels' borders, in order."""
-    ts = [np.array([t0, t1])]
+def _pieces(a: np.ndarray, c: np.ndarray, spans: np.ndarray) -> tuple:
+    """(segment, t), by segment then t, no pair twice: the parameters cutting each a + t (c - a) (rows),
+    t0 <= t <= t1 (``spans``' rows), where it crosses the pixels' borders, and its ends t0 and t1."""
+    seg, ts = [np.arange(len(a))] * 2, [spans[:, 0], spans[:, 1]]
     for axis in (0, 1):
-        if c[axis] != a[axis]:
-            x0, x1 = sorted((a[axis] + t0 * (c[axis] - a[axis]), a[axis] + t1 * (c[axis] - a[axis])))
-            lines = np.arange(np.floor(x0) + 1, np.ceil(x1))
-            ts.append((lines - a[axis]) / (c[axis] - a[axis]))
-    return np.unique(np.clip(np.concatenate(ts), t0, t1))
+        moves = np.flatnonzero(c[:, axis] != a[:, axis])
+        d = c[moves, axis] - a[moves, axis]
+        x = a[moves, axis][:, None] + spans[moves] * d[:, None]  # where t0 and t1 lie along the axis
+        start = np.floor(x.min(axis=1)) + 1.0  # the borders strictly between them: np.arange(start, ceil(x1))
+        count = np.maximum(np.ceil(x.max(axis=1)) - start, 0.0).astype(np.int64)
+        which = np.repeat(np.arange(len(moves)), count)
+        lines = start[which] + (np.arange(len(which)) - np.repeat(np.cumsum(count) - count, count))
+        seg.append(moves[which])
+        ts.append((lines - a[moves[which], axis]) / d[which])
+    seg, ts = np.concatenate(seg), np.concatenate(ts)
+    return _unique(seg, np.clip(ts, spans[seg, 0], spans[seg, 1]))
+
+
+def _unique(seg: np.ndarray, ts: np.ndarray) -> tuple:
+    """(segment, t) sorted by segment then t, each pair once: per segment np.unique of its ts."""
+    order = np.lexsort((ts, seg))
+    seg, ts = seg[order], ts[order]
+    keep = np.ones(len(seg), bool)
+    keep[1:] = (seg[1:] != seg[:-1]) | (ts[1:] != ts[:-1])
+    return seg[keep], ts[keep]
+
+
+def _length(v: np.ndarray) -> np.ndarray:
+    """Per row its norm, as np.linalg.norm of the row alone computes it (sqrt of its dot product: to the bit,
+    which the axis=1 sum of squares is not)."""
+    return np.sqrt(np.vecdot(v, v))
 
 
 def _segments(q0: np.ndarray, q1: np.ndarray, n: np.ndarray, b) -> tuple:
@@ -103,27 +126,57 @@ def _segments(q0: np.ndarray, q1: np.ndarray, n: np.ndarray, b) -> tuple:
     return normal, rows, np.stack([a[inside], c[inside]], axis=1), np.stack([t0[inside], t1[inside]], axis=1)
 
 
-def _crossings(ends: np.ndarray, spans: np.ndarray, e: int) -> np.ndarray:
-    """Where segment e's image crosses the others' (its parameters t): where what lies in front of it or
-    behind it may change, so that the Gauss points integrate a smooth integrand between them."""
-    a, c = ends[e]
-    d, a_f, d_f = c - a, ends[:, 0], ends[:, 1] - ends[:, 0]
-    det = d[0] * (-d_f[:, 1]) + d_f[:, 0] * d[1]  # a + t d = a_f + s d_f, by Cramer's rule
+def _crossings(ends: np.ndarray, spans: np.ndarray, j: np.ndarray, k: np.ndarray) -> tuple:
+    """(segment, t): where segment j's image crosses segment k's (its parameter t), per pair j k: where what
+    lies in front of it or behind it may change, so that the Gauss points integrate a smooth integrand
+    between them."""
+    a, d, a_f, d_f = ends[j, 0], ends[j, 1] - ends[j, 0], ends[k, 0], ends[k, 1] - ends[k, 0]
+    det = d[:, 0] * (-d_f[:, 1]) + d_f[:, 0] * d[:, 1]  # a + t d = a_f + s d_f, by Cramer's rule
     r = a_f - a
-    ok = np.abs(det) > 1e-12 * (np.linalg.norm(d) * np.linalg.norm(d_f, axis=1) + 1e-300)
+    ok = np.abs(det) > 1e-12 * (_length(d) * np.linalg.norm(d_f, axis=1) + 1e-300)
     safe = np.where(ok, det, 1.0)
     t = (r[:, 0] * (-d_f[:, 1]) + d_f[:, 0] * r[:, 1]) / safe
-    s = (d[0] * r[:, 1] - d[1] * r[:, 0]) / safe
-    ok &= (s >= spans[:, 0]) & (s <= spans[:, 1]) & (t > spans[e, 0]) & (t < spans[e, 1])
-    return t[ok]
+    s = (d[:, 0] * r[:, 1] - d[:, 1] * r[:, 0]) / safe
+    ok &= (s >= spans[k, 0]) & (s <= spans[k, 1]) & (t > spans[j, 0]) & (t < spans[j, 1])
+    return j[ok], t[ok]
 
 
-def _pixels_of(a: np.ndarray, c: np.ndarray, ts: np.ndarray, b) -> np.ndarray:
-    """The pixel (row major, row 0 at the top) of each piece between consecutive cuts ``ts`` of a + t (c - a)."""
-    mid = a[None] + 0.5 * (ts[:-1] + ts[1:])[:, None] * (c - a)[None]
+def _pixels_of(a: np.ndarray, c: np.ndarray, seg: np.ndarray, ts: np.ndarray, b) -> tuple:
+    """(piece, pixel): the pieces between consecutive cuts ``ts`` of the same segment a + t (c - a) (``seg``;
+    piece i from ts[i] to ts[i + 1]) and each one's pixel (row major, row 0 at the top)."""
+    piece = np.flatnonzero(seg[1:] == seg[:-1])
+    e = seg[piece]
+    mid = a[e] + 0.5 * (ts[piece] + ts[piece + 1])[:, None] * (c[e] - a[e])
     x = np.minimum(mid[:, 0].astype(np.int64), b.width - 1)
     y = np.minimum(mid[:, 1].astype(np.int64), b.height - 1)
-    return (b.height - 1 - y) * b.width + x
+    return piece, (b.height - 1 - y) * b.width + x
+
+
+def _neighbours(seg: np.ndarray, pixel: np.ndarray, n: int) -> tuple:
+    """(j, k): the pairs of two of the ``n`` segments whose pieces (``seg``, ``pixel``) share a pixel, each
+    pair once, both ways."""
+    code = _distinct(pixel * n + seg)  # (pixel, segment), by pixel
+    pix, seg = code // n, code % n
+    starts = np.flatnonzero(np.concatenate([[True], pix[1:] != pix[:-1]]))
+    size = np.diff(np.append(starts, len(pix)))
+    count = np.repeat(size, size)  # per (pixel, segment): its pixel's segments
+    first = np.repeat(np.arange(len(pix)), count)
+    second = np.repeat(np.repeat(starts, size), count) + np.arange(len(first)) - np.repeat(np.cumsum(count) - count,
+                                                                                          count)
+    j, k = seg[first], seg[second]
+    if n * n <= PAIR_TABLE:  # a table of every pair, faster than sorting them
+        table = np.zeros((n, n), bool)
+        table[j, k] = True
+        table[np.arange(n), np.arange(n)] = False
+        return np.nonzero(table)
+    pairs = _distinct(j[j != k] * n + k[j != k])
+    return pairs // n, pairs % n
+
+
+def _distinct(x: np.ndarray) -> np.ndarray:
+    """np.unique of integers, by a sort (np.unique's hash table is slower here)."""
+    x = np.sort(x)
+    return x[np.concatenate([[True], x[1:] != x[:-1]])] if len(x) else x
 
 
 def segment_points(q0: np.ndarray, q1: np.ndarray, n: np.ndarray, cam, edges=None) -> EdgePoints:
@@ -134,28 +187,18 @@ def segment_points(q0: np.ndarray, q1: np.ndarray, n: np.ndarray, cam, edges=Non
     b = camera_basis(cam)
     gauss, gauss_w = np.polynomial.legendre.leggauss(GAUSS_POINTS)
     normal, rows, ends, spans = _segments(q0, q1, n, b)
-    cuts = [_pieces(a, c, *span) for (a, c), span in zip(ends, spans)]
-    by_pixel: dict = {}  # the segments in view whose image passes through each pixel, in their order
-    for j, ts in enumerate(cuts):
-        for p in np.unique(_pixels_of(*ends[j], ts, b)):
-            by_pixel.setdefault(int(p), []).append(j)
-    edge, at, weight, pixel = [], [], [], []
-    for j, e in enumerate(rows):
-        a, c = ends[j]
-        near = sorted({k for p in np.unique(_pixels_of(a, c, cuts[j], b)) for k in by_pixel[int(p)] if k != j})
-        ts = cuts[j]
-        if near:
-            near = np.asarray([j] + near)
-            ts = np.unique(np.concatenate([ts, _crossings(ends[near], spans[near], 0)]))
-        s0, s1 = ts[:-1], ts[1:]  # ts is increasing (np.unique): no piece is empty
-        t = s0[:, None] + (s1 - s0)[:, None] * 0.5 * (gauss + 1.0)[None]  # (pieces, GAUSS_POINTS)
-        at.append(a[None] + t.reshape(-1, 1) * (c - a)[None])
-        weight.append((gauss_w[None] * 0.5 * (s1 - s0)[:, None] * np.linalg.norm(c - a)).reshape(-1))
-        edge.append(np.full(t.size, e))
-        pixel.append(np.repeat(_pixels_of(a, c, ts, b), GAUSS_POINTS))
-    cat = lambda parts, shape: np.concatenate(parts) if parts else np.zeros(shape)  # noqa: E731
-    return EdgePoints(edges, cat(edge, (0,)).astype(np.int64), cat(at, (0, 2)), cat(weight, (0,)),
-                      cat(pixel, (0,)).astype(np.int64), normal)
+    a, c = ends[:, 0], ends[:, 1]
+    seg, ts = _pieces(a, c, spans)
+    piece, pixel = _pixels_of(a, c, seg, ts, b)
+    crossing, t_crossing = _crossings(ends, spans, *_neighbours(seg[piece], pixel, len(rows)))
+    seg, ts = _unique(np.concatenate([seg, crossing]), np.concatenate([ts, t_crossing]))
+    piece, pixel = _pixels_of(a, c, seg, ts, b)  # ts increases along a segment (_unique): no piece is empty
+    e, s0, s1 = seg[piece], ts[piece], ts[piece + 1]
+    t = s0[:, None] + (s1 - s0)[:, None] * 0.5 * (gauss + 1.0)[None]  # (pieces, GAUSS_POINTS)
+    at = np.repeat(a[e], GAUSS_POINTS, axis=0) + t.reshape(-1, 1) * np.repeat((c - a)[e], GAUSS_POINTS, axis=0)
+    weight = (gauss_w[None] * 0.5 * (s1 - s0)[:, None] * _length(c - a)[e][:, None]).reshape(-1)
+    return EdgePoints(edges, np.repeat(rows[e], GAUSS_POINTS).astype(np.int64), at.reshape(-1, 2), weight,
+                      np.repeat(pixel, GAUSS_POINTS).astype(np.int64), normal)
 
 
 def edge_points(edges: np.ndarray, points: np.ndarray, eye: np.ndarray, cam) -> EdgePoints:
