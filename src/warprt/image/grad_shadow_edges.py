@@ -13,7 +13,8 @@ import numpy as np
 from .._warp import wp
 from ..kernels import SOURCE_LIGHT, SOURCE_SAMPLE, make_light_sides_kernel, shadow_edge_distances
 from ..scene import camera_basis, emitter_of_triangles
-from .grad_edge_points import BoundaryTerm, EdgePoints, boundary_term, camera_adjoints, camera_copies, side_directions
+from .grad_edge_points import (BoundaryTerm, EdgePoints, boundary_term, by_column, camera_adjoints, camera_copies,
+                               side_directions)
 from .grad_mesh_edges import MeshEdges, face_normals, facing, silhouettes
 from .grad_params import area_sources, parameter_names
 from .mirrors import empty_mirrors
@@ -304,8 +305,8 @@ def shadow_speeds(scene, geom, sources: ShadowSources, segments: ShadowSegments,
                                                                              device=device)],
                   outputs=[distance], device=device)
     tape.backward(grads={distance: wp.array(np.ones(n, np.float32), dtype=float, device=device)})
-    g = geometry.grad.numpy().astype(np.float64).reshape(n, 6, 3)
-    out = {key: g[:, k] for k, key in enumerate(("v0", "v1", "light", "p0", "p1", "p2"))}
+    g = by_column(geometry.grad.numpy().reshape(n, 6, 3))
+    out = {key: g[k] for k, key in enumerate(("v0", "v1", "light", "p0", "p1", "p2"))}
     out.update(camera_adjoints(camera, fovy, n))
     tape.zero()
     return out
