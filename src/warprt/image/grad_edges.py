@@ -13,6 +13,7 @@ from ..errors import ArgumentError
 from ..kernels import edge_distances, empty_aov_buffers, empty_record, make_edge_sides_kernel
 from ..scene import drawn_objects
 from .grad_area_shape import SHAPE_KEYS, shape_edge_gradients, shape_table
+from .grad_edge_launch import launch_points
 from .grad_edge_points import (BoundaryTerm, EdgePoints, boundary_term, camera_adjoints, camera_copies,
                                segment_points, side_directions)
 from .grad_mesh_edges import MeshEdges, face_normals, facing, mesh_edges
@@ -26,11 +27,13 @@ COPLANAR = 1e-6  # |n1 x n2| of two flat faces' unit normals below which their s
 
 @dataclass(frozen=True)
 class EdgeFrame:
-    """What the edges' rays need of the frame: its effect set, ray stack and ray levels (FramePlan's)."""
+    """What the edges' rays need of the frame: its effect set, ray stack and ray levels (FramePlan's), and the
+    CPU threads its per-point launches run on (grad_edge_launch.launch_points)."""
 
     fx: object
     stack: int
     max_depth: int
+    threads: int = 1
 
 
 def moves_edges(name: str) -> bool:
@@ -107,37 +110,34 @@ def edge_sides(scene, geom, frame: EdgeFrame, pts: EdgePoints, device: str) -> n
     dirs = side_directions(pts, scene.camera)
     n = len(pts.edge)
     color = wp.zeros(2 * n, dtype=wp.vec3, device=device)
-    kernel = make_edge_sides_kernel(frame.fx, frame.stack)
-    wp.launch(kernel, dim=2 * n, inputs=[geom.scene_data(scene), wp.vec3(*geom.eye_offset(scene.camera.eye)),
-                                         frame.max_depth, empty_fragments(device), empty_mirrors(device),
-                                         empty_aov_buffers(device), empty_record(device),
-                                         wp.array(dirs, dtype=wp.vec3, device=device)], outputs=[color], device=device)
+    launch_points(make_edge_sides_kernel(frame.fx, frame.stack), 2 * n,
+                  [geom.scene_data(scene), wp.vec3(*geom.eye_offset(scene.camera.eye)), frame.max_depth,
+                   empty_fragments(device), empty_mirrors(device), empty_aov_buffers(device), empty_record(device),
+                   wp.array(dirs, dtype=wp.vec3, device=device), color], [0] * 7 + [1, 1], frame.threads, device)
     c = color.numpy().astype(np.float64)
     return c[:n] - c[n:]
 
 
-def edge_speeds(scene, geom, pts: EdgePoints, device: str) -> dict:
+def edge_speeds(scene, geom, pts: EdgePoints, device: str, threads: int = 1) -> dict:
     """Per point, the derivative of its signed distance from its edge (kernels.edges.edge_distances, on a
-    wp.Tape; float64 rows): the edge's speed along its normal, in pixels per unit of each parameter, ``v0`` and
+    its adjoint; float64 rows): the edge's speed along its normal, in pixels per unit of each parameter, ``v0`` and
     ``v1`` for its two vertices, ``eye``, ``center``, ``up`` and ``fovy`` for the camera. Each point reads
-    copies of its own, so that no two adjoints share a sum: the host reduces them in a fixed order."""
+    copies of its own, so that no two adjoints share a sum: the host reduces them in a fixed order (the adjoint
+    launch alone, in bands on ``threads``: grad_edge_launch.launch_points)."""
     cam, n = scene.camera, len(pts.edge)
     p = geom.points_np
     vec = lambda rows: wp.array(np.asarray(rows, np.float32).reshape(-1, 3), dtype=wp.vec3, device=device,  # noqa: E731
                                 requires_grad=True)
     v0, v1 = vec(p[pts.edges[pts.edge, 0]]), vec(p[pts.edges[pts.edge, 1]])
     camera, fovy = camera_copies(scene, geom, n, device)
-    distance = wp.zeros(n, dtype=float, device=device, requires_grad=True)
-    tape = wp.Tape()
-    with tape:
-        wp.launch(edge_distances, dim=n, inputs=[v0, v1, camera, fovy, float(cam.near), cam.width, cam.height,
-                                                 wp.array(pts.at.astype(np.float32), dtype=wp.vec2, device=device)],
-                  outputs=[distance], device=device)
-    tape.backward(grads={distance: wp.array(np.ones(n, np.float32), dtype=float, device=device)})
-    out = {"v0": v0.grad.numpy().astype(np.float64), "v1": v1.grad.numpy().astype(np.float64),
-           **camera_adjoints(camera, fovy, n)}
-    tape.zero()
-    return out
+    distance = wp.zeros(n, dtype=float, device=device)
+    at = wp.array(pts.at.astype(np.float32), dtype=wp.vec2, device=device)
+    launch_points(edge_distances, n, [v0, v1, camera, fovy, float(cam.near), cam.width, cam.height, at, distance],
+                  [1, 1, 3, 1, 0, 0, 0, 1, 1], threads, device,
+                  [v0.grad, v1.grad, camera.grad, fovy.grad, None, None, None, None,
+                   wp.array(np.ones(n, np.float32), dtype=float, device=device)])
+    return {"v0": v0.grad.numpy().astype(np.float64), "v1": v1.grad.numpy().astype(np.float64),
+            **camera_adjoints(camera, fovy, n)}
 
 
 def covered(name: str) -> bool:
@@ -196,10 +196,10 @@ def edge_gradients(scene, geom, frame: EdgeFrame, d: np.ndarray, wrt, device: st
     term = BoundaryTerm(np.zeros((len(geom.points_np), 3)), {k: 0.0 for k in ("eye", "center", "up", "fovy")})
     if len(b.camera.edge):
         term = boundary_term(b.camera, edge_sides(scene, geom, frame, b.camera, device), d3,
-                             edge_speeds(scene, geom, b.camera, device),
+                             edge_speeds(scene, geom, b.camera, device, frame.threads),
                              {"v0": b.edges[b.camera.edge, 0], "v1": b.edges[b.camera.edge, 1]}, len(geom.points_np))
     if b.shadows is not None and len(b.shadows.edge):
-        shadow = shadow_term(scene, geom, frame.fx, b.sources, b.segments, b.shadows, d3, device)
+        shadow = shadow_term(scene, geom, frame.fx, b.sources, b.segments, b.shadows, d3, device, frame.threads)
         term = BoundaryTerm(term.points + shadow.points, {k: term.camera[k] + shadow.camera[k] for k in term.camera},
                             shadow.sources)
     shapes = {}

@@ -13,6 +13,7 @@ import numpy as np
 from .._warp import wp
 from ..kernels import SOURCE_LIGHT, SOURCE_SAMPLE, make_light_sides_kernel, shadow_edge_distances
 from ..scene import camera_basis, emitter_of_triangles
+from .grad_edge_launch import launch_points
 from .grad_edge_points import (BoundaryTerm, EdgePoints, boundary_term, by_column, camera_adjoints, camera_copies,
                                side_directions)
 from .grad_mesh_edges import MeshEdges, face_normals, facing, silhouettes
@@ -265,29 +266,31 @@ def _wedge_span(a: np.ndarray, b: np.ndarray, v0: np.ndarray, v1: np.ndarray, at
 
 
 def light_sides(scene, geom, fx, sources: ShadowSources, segments: ShadowSegments, pts: EdgePoints,
-                device: str) -> np.ndarray:
+                device: str, threads: int = 1) -> np.ndarray:
     """(N, 3) float64: per point f_+ - f_-, the light of its segment's source alone at the nearest hits of
     camera rays EDGE_OFFSET_PX either side of it (towards its normal, then away), shadow ray included
     (kernels.make_light_sides_kernel): that source's jump, whatever other sources' shadows edge there too
-    (a row of a rectangle light's sample points casts one line through an edge parallel to it)."""
+    (a row of a rectangle light's sample points casts one line through an edge parallel to it). In bands on
+    ``threads`` (grad_edge_launch.launch_points)."""
     n = len(pts.edge)
     dirs = side_directions(pts, scene.camera)
     source = np.tile(sources.source[segments.source[pts.edge]], (2, 1))
     color = wp.zeros(2 * n, dtype=wp.vec3, device=device)
-    wp.launch(make_light_sides_kernel(fx), dim=2 * n,
-              inputs=[geom.scene_data(scene), wp.vec3(*geom.eye_offset(scene.camera.eye)), empty_fragments(device),
-                      empty_mirrors(device), wp.array(dirs, dtype=wp.vec3, device=device),
-                      wp.array(source, dtype=wp.vec3i, device=device)], outputs=[color], device=device)
+    launch_points(make_light_sides_kernel(fx), 2 * n,
+                  [geom.scene_data(scene), wp.vec3(*geom.eye_offset(scene.camera.eye)), empty_fragments(device),
+                   empty_mirrors(device), wp.array(dirs, dtype=wp.vec3, device=device),
+                   wp.array(source, dtype=wp.vec3i, device=device), color], [0, 0, 0, 0, 1, 1, 1], threads, device)
     c = color.numpy().astype(np.float64)
     return c[:n] - c[n:]
 
 
 def shadow_speeds(scene, geom, sources: ShadowSources, segments: ShadowSegments, pts: EdgePoints,
-                  device: str) -> dict:
+                  device: str, threads: int = 1) -> dict:
     """Per point, the derivative of its signed distance from its shadow edge's image
-    (kernels.shadow_edge_distances, on a wp.Tape; float64 rows): ``v0``, ``v1`` for the occluder edge's
+    (kernels.shadow_edge_distances, its adjoint; float64 rows): ``v0``, ``v1`` for the occluder edge's
     vertices, ``light`` for the source (a point's position, a light's direction of travel), ``p0``, ``p1``,
-    ``p2`` for the receiver's corners, ``eye``, ``center``, ``up`` and ``fovy`` for the camera."""
+    ``p2`` for the receiver's corners, ``eye``, ``center``, ``up`` and ``fovy`` for the camera. The adjoint
+    launch alone, in bands on ``threads`` (grad_edge_launch.launch_points)."""
     cam, n = scene.camera, len(pts.edge)
     p = geom.points_np
     seg = pts.edge
@@ -297,27 +300,25 @@ def shadow_speeds(scene, geom, sources: ShadowSources, segments: ShadowSegments,
     geometry = wp.array(rows.reshape(-1, 3).astype(np.float32), dtype=wp.vec3, device=device, requires_grad=True)
     directional = wp.array(sources.directional[segments.source[seg]].astype(np.int32), dtype=int, device=device)
     camera, fovy = camera_copies(scene, geom, n, device)
-    distance = wp.zeros(n, dtype=float, device=device, requires_grad=True)
-    tape = wp.Tape()
-    with tape:
-        wp.launch(shadow_edge_distances, dim=n, inputs=[geometry, directional, camera, fovy, float(cam.near), cam.width,
-                                                        cam.height, wp.array(pts.at.astype(np.float32), dtype=wp.vec2,
-                                                                             device=device)],
-                  outputs=[distance], device=device)
-    tape.backward(grads={distance: wp.array(np.ones(n, np.float32), dtype=float, device=device)})
+    distance = wp.zeros(n, dtype=float, device=device)
+    at = wp.array(pts.at.astype(np.float32), dtype=wp.vec2, device=device)
+    launch_points(shadow_edge_distances, n,
+                  [geometry, directional, camera, fovy, float(cam.near), cam.width, cam.height, at, distance],
+                  [6, 1, 3, 1, 0, 0, 0, 1, 1], threads, device,
+                  [geometry.grad, None, camera.grad, fovy.grad, None, None, None, None,
+                   wp.array(np.ones(n, np.float32), dtype=float, device=device)])
     g = by_column(geometry.grad.numpy().reshape(n, 6, 3))
     out = {key: g[k] for k, key in enumerate(("v0", "v1", "light", "p0", "p1", "p2"))}
     out.update(camera_adjoints(camera, fovy, n))
-    tape.zero()
     return out
 
 
 def shadow_term(scene, geom, fx, sources: ShadowSources, segments: ShadowSegments, pts: EdgePoints, d: np.ndarray,
-                device: str) -> BoundaryTerm:
+                device: str, threads: int = 1) -> BoundaryTerm:
     """The shadow edges' BoundaryTerm (boundary_term of light_sides and shadow_speeds): to the occluder
     edges' vertices, the receivers' corners, the camera and each source."""
-    jump = light_sides(scene, geom, fx, sources, segments, pts, device)
-    speed = shadow_speeds(scene, geom, sources, segments, pts, device)
+    jump = light_sides(scene, geom, fx, sources, segments, pts, device, threads)
+    speed = shadow_speeds(scene, geom, sources, segments, pts, device, threads)
     seg = pts.edge
     corners = geom.indices_np.reshape(-1, 3).astype(np.int64)[segments.face[seg]]
     vertices = {"v0": segments.edge[seg, 0], "v1": segments.edge[seg, 1], "p0": corners[:, 0], "p1": corners[:, 1],
