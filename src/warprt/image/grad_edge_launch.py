@@ -7,7 +7,17 @@ from __future__ import annotations
 from .._warp import wp
 from .launch import run_bands
 
+import numpy as np
+
 BANDS_PER_THREAD = 4  # a point's cost varies (a ray that misses, a shadow ray's BVH walk): bands balance it
+
+
+def host_array(values: np.ndarray, dtype, device: str, grad: bool = False) -> wp.array:
+    """``values`` (a NumPy array of the dtype's scalars, made for this launch and kept by the array) as a Warp
+    array on ``device``: on the CPU the same memory, not a copy (a copy of the shadows' points' rows costs
+    about 8 ms a MB-sized array on a loaded machine, measured); ``grad``: with an adjoint."""
+    return wp.array(np.ascontiguousarray(values), dtype=dtype, device=device, requires_grad=grad,
+                    copy=not wp.get_device(device).is_cpu)
 
 
 def launch_points(kernel, n: int, args: list, rows: list, threads: int, device: str, adjoints: list | None = None):

@@ -235,8 +235,10 @@ def camera_copies(scene, geom, n: int, device: str) -> tuple:
     cam = scene.camera
     rows = np.tile(np.stack([geom.eye_offset(cam.eye), geom.eye_offset(cam.center), np.asarray(cam.up, np.float32)]),
                    (n, 1))
-    camera = wp.array(rows.astype(np.float32), dtype=wp.vec3, device=device, requires_grad=True)
-    return camera, wp.array(np.full(n, cam.fovy, np.float32), dtype=float, device=device, requires_grad=True)
+    camera = wp.array(rows.astype(np.float32), dtype=wp.vec3, device=device, requires_grad=True,
+                      copy=not wp.get_device(device).is_cpu)  # on the CPU, rows' own memory
+    return camera, wp.array(np.full(n, cam.fovy, np.float32), dtype=float, device=device, requires_grad=True,
+                            copy=not wp.get_device(device).is_cpu)
 
 
 def camera_adjoints(camera: wp.array, fovy: wp.array, n: int) -> dict:

@@ -13,7 +13,7 @@ from ..errors import ArgumentError
 from ..kernels import edge_distances, empty_aov_buffers, empty_record, make_edge_sides_kernel
 from ..scene import drawn_objects
 from .grad_area_shape import SHAPE_KEYS, shape_edge_gradients, shape_table
-from .grad_edge_launch import launch_points
+from .grad_edge_launch import host_array, launch_points
 from .grad_edge_points import (BoundaryTerm, EdgePoints, boundary_term, camera_adjoints, camera_copies,
                                segment_points, side_directions)
 from .grad_mesh_edges import MeshEdges, face_normals, facing, mesh_edges
@@ -113,7 +113,7 @@ def edge_sides(scene, geom, frame: EdgeFrame, pts: EdgePoints, device: str) -> n
     launch_points(make_edge_sides_kernel(frame.fx, frame.stack), 2 * n,
                   [geom.scene_data(scene), wp.vec3(*geom.eye_offset(scene.camera.eye)), frame.max_depth,
                    empty_fragments(device), empty_mirrors(device), empty_aov_buffers(device), empty_record(device),
-                   wp.array(dirs, dtype=wp.vec3, device=device), color], [0] * 7 + [1, 1], frame.threads, device)
+                   host_array(dirs, wp.vec3, device), color], [0] * 7 + [1, 1], frame.threads, device)
     c = color.numpy().astype(np.float64)
     return c[:n] - c[n:]
 
@@ -126,16 +126,15 @@ def edge_speeds(scene, geom, pts: EdgePoints, device: str, threads: int = 1) -> 
     launch alone, in bands on ``threads``: grad_edge_launch.launch_points)."""
     cam, n = scene.camera, len(pts.edge)
     p = geom.points_np
-    vec = lambda rows: wp.array(np.asarray(rows, np.float32).reshape(-1, 3), dtype=wp.vec3, device=device,  # noqa: E731
-                                requires_grad=True)
+    vec = lambda rows: host_array(np.asarray(rows, np.float32).reshape(-1, 3), wp.vec3, device, True)  # noqa: E731
     v0, v1 = vec(p[pts.edges[pts.edge, 0]]), vec(p[pts.edges[pts.edge, 1]])
     camera, fovy = camera_copies(scene, geom, n, device)
     distance = wp.zeros(n, dtype=float, device=device)
-    at = wp.array(pts.at.astype(np.float32), dtype=wp.vec2, device=device)
+    at = host_array(pts.at.astype(np.float32), wp.vec2, device)
     launch_points(edge_distances, n, [v0, v1, camera, fovy, float(cam.near), cam.width, cam.height, at, distance],
                   [1, 1, 3, 1, 0, 0, 0, 1, 1], threads, device,
                   [v0.grad, v1.grad, camera.grad, fovy.grad, None, None, None, None,
-                   wp.array(np.ones(n, np.float32), dtype=float, device=device)])
+                   host_array(np.ones(n, np.float32), float, device)])
     return {"v0": v0.grad.numpy().astype(np.float64), "v1": v1.grad.numpy().astype(np.float64),
             **camera_adjoints(camera, fovy, n)}
 

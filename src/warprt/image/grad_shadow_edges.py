@@ -14,7 +14,7 @@ import numpy as np
 from .._warp import wp
 from ..kernels import SOURCE_LIGHT, SOURCE_SAMPLE, make_light_sides_kernel, shadow_edge_distances
 from ..scene import camera_basis, emitter_of_triangles
-from .grad_edge_launch import launch_points
+from .grad_edge_launch import host_array, launch_points
 from .grad_edge_points import (BoundaryTerm, EdgePoints, boundary_term, by_column, camera_adjoints, camera_copies,
                                side_directions)
 from .grad_mesh_edges import MeshEdges, face_normals, facing
@@ -295,8 +295,8 @@ def light_sides(scene, geom, fx, sources: ShadowSources, segments: ShadowSegment
     color = wp.zeros(2 * n, dtype=wp.vec3, device=device)
     launch_points(make_light_sides_kernel(fx), 2 * n,
                   [geom.scene_data(scene), wp.vec3(*geom.eye_offset(scene.camera.eye)), empty_fragments(device),
-                   empty_mirrors(device), wp.array(dirs, dtype=wp.vec3, device=device),
-                   wp.array(source, dtype=wp.vec3i, device=device), color], [0, 0, 0, 0, 1, 1, 1], threads, device)
+                   empty_mirrors(device), host_array(dirs, wp.vec3, device), host_array(source, wp.vec3i, device),
+                   color], [0, 0, 0, 0, 1, 1, 1], threads, device)
     c = color.numpy().astype(np.float64)
     return c[:n] - c[n:]
 
@@ -311,19 +311,20 @@ def shadow_speeds(scene, geom, sources: ShadowSources, segments: ShadowSegments,
     cam, n = scene.camera, len(pts.edge)
     p = geom.points_np
     seg = pts.edge
-    corners = geom.indices_np.reshape(-1, 3)[segments.face[seg]]
-    rows = np.stack([p[segments.edge[seg, 0]], p[segments.edge[seg, 1]], sources.at[segments.source[seg]],
-                     p[corners[:, 0]], p[corners[:, 1]], p[corners[:, 2]]], axis=1)
-    geometry = wp.array(rows.reshape(-1, 3).astype(np.float32), dtype=wp.vec3, device=device, requires_grad=True)
-    directional = wp.array(sources.directional[segments.source[seg]].astype(np.int32), dtype=int, device=device)
+    corners = geom.indices_np.reshape(-1, 3)[segments.face]
+    rows = np.empty((len(segments.face), 6, 3), np.float32)  # per segment, then per point: one gather
+    rows[:, 0], rows[:, 1], rows[:, 2] = p[segments.edge[:, 0]], p[segments.edge[:, 1]], sources.at[segments.source]
+    rows[:, 3], rows[:, 4], rows[:, 5] = p[corners[:, 0]], p[corners[:, 1]], p[corners[:, 2]]
+    geometry = host_array(rows[seg].reshape(-1, 3), wp.vec3, device, True)
+    directional = host_array(sources.directional[segments.source[seg]].astype(np.int32), int, device)
     camera, fovy = camera_copies(scene, geom, n, device)
     distance = wp.zeros(n, dtype=float, device=device)
-    at = wp.array(pts.at.astype(np.float32), dtype=wp.vec2, device=device)
+    at = host_array(pts.at.astype(np.float32), wp.vec2, device)
     launch_points(shadow_edge_distances, n,
                   [geometry, directional, camera, fovy, float(cam.near), cam.width, cam.height, at, distance],
                   [6, 1, 3, 1, 0, 0, 0, 1, 1], threads, device,
                   [geometry.grad, None, camera.grad, fovy.grad, None, None, None, None,
-                   wp.array(np.ones(n, np.float32), dtype=float, device=device)])
+                   host_array(np.ones(n, np.float32), float, device)])
     g = by_column(geometry.grad.numpy().reshape(n, 6, 3))
     out = {key: g[k] for k, key in enumerate(("v0", "v1", "light", "p0", "p1", "p2"))}
     out.update(camera_adjoints(camera, fovy, n))
