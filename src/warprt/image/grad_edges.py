@@ -4,7 +4,8 @@ shadows the hard shadows' edges (grad_shadow_edges.py), all cut at the pixels to
 each piece integrated at fixed Gauss-Legendre points with the radiance traced either side (kernels/edges.py)."""
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from functools import partial
 
 import numpy as np
 
@@ -27,13 +28,29 @@ COPLANAR = 1e-6  # |n1 x n2| of two flat faces' unit normals below which their s
 
 @dataclass(frozen=True)
 class EdgeFrame:
-    """What the edges' rays need of the frame: its effect set, ray stack and ray levels (FramePlan's), and the
-    CPU threads its per-point launches run on (grad_edge_launch.launch_points)."""
+    """What the edges' rays need of the frame: its effect set, ray stack and ray levels (FramePlan's), the
+    CPU threads its per-point launches run on (grad_edge_launch.launch_points), and what its backward calls
+    keep for the next (``kept``: kept_part's)."""
 
     fx: object
     stack: int
     max_depth: int
     threads: int = 1
+    kept: dict = field(default_factory=dict, compare=False, repr=False)
+
+
+def kept_part(frame: EdgeFrame, scene, geom, name: str, make):
+    """``make()``, kept in ``frame`` for its next backward(edges=True): a part of the boundary term that is the
+    frame's alone (its segments and points, the colours either side of them, their speeds), not the image
+    adjoint's or the parameters named; made again for another scene or geometry than the one kept (backward
+    refuses a scene changed since its frame anyway)."""
+    of = frame.kept.get("of")
+    if of is None or of[0] is not scene or of[1] is not geom:
+        frame.kept.clear()
+        frame.kept["of"] = (scene, geom)
+    if name not in frame.kept:
+        frame.kept[name] = make()
+    return frame.kept[name]
 
 
 def moves_edges(name: str) -> bool:
@@ -185,20 +202,21 @@ def edge_gradients(scene, geom, frame: EdgeFrame, d: np.ndarray, wrt, device: st
     the parameter: per edge point, d at its pixel dotted with f_+ - f_- (edge_sides; a shadow's: its source's
     light alone, grad_shadow_edges.light_sides), times its weight and its edge's speed (edge_speeds,
     shadow_speeds), summed in the points' order (np.add.at: in order, one at a time), so the sum is the same
-    on every run and thread count."""
+    on every run and thread count. What is the frame's alone is kept in it for its next backward (kept_part)."""
     wrt = [n for n in wrt if covered(n)]
     if not wrt:
         return {}
-    eye = geom.eye_offset(scene.camera.eye).astype(np.float64)
-    b = boundary(scene, geom, frame.fx, eye)
+    keep = partial(kept_part, frame, scene, geom)
+    b = keep("boundary", lambda: boundary(scene, geom, frame.fx, geom.eye_offset(scene.camera.eye).astype(np.float64)))
     d3 = d.reshape(-1, 3).astype(np.float64)
     term = BoundaryTerm(np.zeros((len(geom.points_np), 3)), {k: 0.0 for k in ("eye", "center", "up", "fovy")})
     if len(b.camera.edge):
-        term = boundary_term(b.camera, edge_sides(scene, geom, frame, b.camera, device), d3,
-                             edge_speeds(scene, geom, b.camera, device, frame.threads),
+        term = boundary_term(b.camera, keep("sides", lambda: edge_sides(scene, geom, frame, b.camera, device)), d3,
+                             keep("speeds", lambda: edge_speeds(scene, geom, b.camera, device, frame.threads)),
                              {"v0": b.edges[b.camera.edge, 0], "v1": b.edges[b.camera.edge, 1]}, len(geom.points_np))
     if b.shadows is not None and len(b.shadows.edge):
-        shadow = shadow_term(scene, geom, frame.fx, b.sources, b.segments, b.shadows, d3, device, frame.threads)
+        shadow = shadow_term(scene, geom, frame.fx, b.sources, b.segments, b.shadows, d3, device, frame.threads,
+                             keep)
         term = BoundaryTerm(term.points + shadow.points, {k: term.camera[k] + shadow.camera[k] for k in term.camera},
                             shadow.sources)
     shapes = {}

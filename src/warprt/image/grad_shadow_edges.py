@@ -332,11 +332,13 @@ def shadow_speeds(scene, geom, sources: ShadowSources, segments: ShadowSegments,
 
 
 def shadow_term(scene, geom, fx, sources: ShadowSources, segments: ShadowSegments, pts: EdgePoints, d: np.ndarray,
-                device: str, threads: int = 1) -> BoundaryTerm:
+                device: str, threads: int = 1, keep=None) -> BoundaryTerm:
     """The shadow edges' BoundaryTerm (boundary_term of light_sides and shadow_speeds): to the occluder
-    edges' vertices, the receivers' corners, the camera and each source."""
-    jump = light_sides(scene, geom, fx, sources, segments, pts, device, threads)
-    speed = shadow_speeds(scene, geom, sources, segments, pts, device, threads)
+    edges' vertices, the receivers' corners, the camera and each source. ``keep(name, make)``: make() or what
+    the frame kept of it (grad_edges.kept_part)."""
+    keep = keep or (lambda name, make: make())
+    jump = keep("shadow sides", lambda: light_sides(scene, geom, fx, sources, segments, pts, device, threads))
+    speed = keep("shadow speeds", lambda: shadow_speeds(scene, geom, sources, segments, pts, device, threads))
     seg = pts.edge
     corners = geom.indices_np.reshape(-1, 3).astype(np.int64)[segments.face[seg]]
     vertices = {"v0": segments.edge[seg, 0], "v1": segments.edge[seg, 1], "p0": corners[:, 0], "p1": corners[:, 1],
