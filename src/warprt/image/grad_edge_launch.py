@@ -24,7 +24,8 @@ def launch_points(kernel, n: int, args: list, rows: list, threads: int, device: 
     """Launch ``kernel`` over n points in bands, ``threads`` at once: ``args`` its arguments (inputs, then
     outputs), ``rows`` per argument the rows each point owns in it (a band gets its points' rows; 0: the whole
     argument to every band). With ``adjoints`` (per argument its adjoint, or None) the adjoint kernel alone:
-    the forward's values are not read, and Warp's adjoint kernel runs the forward's body itself."""
+    the forward's values are not read, and Warp's adjoint kernel runs the forward's body itself. Recorded on
+    no tape: these launches are backward's own, not steps of a Warp program around it."""
     if n == 0:
         return
     wp.load_module(kernel.module, device=device)  # once, before the threads: launch_bands' note
@@ -35,9 +36,10 @@ def launch_points(kernel, n: int, args: list, rows: list, threads: int, device: 
     def band(first: int, count: int):
         part = [cut(a, k, first, count) for a, k in zip(args, rows)]
         if adjoints is None:
-            wp.launch(kernel, dim=count, inputs=part, device=device)
+            wp.launch(kernel, dim=count, inputs=part, device=device, record_tape=False)
         else:
             wp.launch(kernel, dim=count, inputs=part, adj_inputs=[cut(a, k, first, count) for a, k in
-                                                                  zip(adjoints, rows)], adjoint=True, device=device)
+                                                                  zip(adjoints, rows)], adjoint=True, device=device,
+                      record_tape=False)
 
     run_bands(band, n, threads, BANDS_PER_THREAD * threads, device)

@@ -136,8 +136,8 @@ def edge_sides(scene, geom, frame: EdgeFrame, pts: EdgePoints, device: str) -> n
 
 
 def edge_speeds(scene, geom, pts: EdgePoints, device: str, threads: int = 1) -> dict:
-    """Per point, the derivative of its signed distance from its edge (kernels.edges.edge_distances, on a
-    its adjoint; float64 rows): the edge's speed along its normal, in pixels per unit of each parameter, ``v0`` and
+    """Per point, the derivative of its signed distance from its edge (kernels.edges.edge_distances, its
+    adjoint; float64 rows): the edge's speed along its normal, in pixels per unit of each parameter, ``v0`` and
     ``v1`` for its two vertices, ``eye``, ``center``, ``up`` and ``fovy`` for the camera. Each point reads
     copies of its own, so that no two adjoints share a sum: the host reduces them in a fixed order (the adjoint
     launch alone, in bands on ``threads``: grad_edge_launch.launch_points)."""
@@ -206,8 +206,9 @@ def edge_gradients(scene, geom, frame: EdgeFrame, d: np.ndarray, wrt, device: st
     wrt = [n for n in wrt if covered(n)]
     if not wrt:
         return {}
+    eye = geom.eye_offset(scene.camera.eye).astype(np.float64)
     keep = partial(kept_part, frame, scene, geom)
-    b = keep("boundary", lambda: boundary(scene, geom, frame.fx, geom.eye_offset(scene.camera.eye).astype(np.float64)))
+    b = keep("boundary", lambda: boundary(scene, geom, frame.fx, eye))
     d3 = d.reshape(-1, 3).astype(np.float64)
     term = BoundaryTerm(np.zeros((len(geom.points_np), 3)), {k: 0.0 for k in ("eye", "center", "up", "fovy")})
     if len(b.camera.edge):
