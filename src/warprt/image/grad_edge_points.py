@@ -12,6 +12,7 @@ from .._warp import wp
 from ..scene import camera_basis
 
 GAUSS_POINTS = 4  # per piece of an edge inside a pixel
+PAIR_TABLE = 1 << 24  # segments' pairs that _neighbours finds in a table (bytes), more by a sort
 EDGE_OFFSET_PX = 1e-3  # the two rays either side of an edge, this far from it in the image: at any depth, that
 # share of a pixel's footprint; above float32's resolution of a ray's direction (about 1e-4 of a pixel at 512 wide)
 
@@ -75,15 +76,37 @@ def _frame_clip(a: np.ndarray, c: np.ndarray, width: int, height: int) -> tuple:
     return t0, t1, inside & (t0 < t1)
 
 
-def _pieces(a: np.ndarray, c: np.ndarray, t0: float, t1: float) -> np.ndarray:
-    """The parameters cutting a + t (c - a), t0 <= t <= t1, where it crosses the pixels' borders, in order."""
-    ts = [np.array([t0, t1])]
+def _pieces(a: np.ndarray, c: np.ndarray, spans: np.ndarray) -> tuple:
+    """(segment, t), by segment then t, no pair twice: the parameters cutting each a + t (c - a) (rows),
+    t0 <= t <= t1 (``spans``' rows), where it crosses the pixels' borders, and its ends t0 and t1."""
+    seg, ts = [np.arange(len(a))] * 2, [spans[:, 0], spans[:, 1]]
     for axis in (0, 1):
-        if c[axis] != a[axis]:
-            x0, x1 = sorted((a[axis] + t0 * (c[axis] - a[axis]), a[axis] + t1 * (c[axis] - a[axis])))
-            lines = np.arange(np.floor(x0) + 1, np.ceil(x1))
-            ts.append((lines - a[axis]) / (c[axis] - a[axis]))
-    return np.unique(np.clip(np.concatenate(ts), t0, t1))
+        moves = np.flatnonzero(c[:, axis] != a[:, axis])
+        d = c[moves, axis] - a[moves, axis]
+        x = a[moves, axis][:, None] + spans[moves] * d[:, None]  # where t0 and t1 lie along the axis
+        start = np.floor(x.min(axis=1)) + 1.0  # the borders strictly between them: np.arange(start, ceil(x1))
+        count = np.maximum(np.ceil(x.max(axis=1)) - start, 0.0).astype(np.int64)
+        which = np.repeat(np.arange(len(moves)), count)
+        lines = start[which] + (np.arange(len(which)) - np.repeat(np.cumsum(count) - count, count))
+        seg.append(moves[which])
+        ts.append((lines - a[moves[which], axis]) / d[which])
+    seg, ts = np.concatenate(seg), np.concatenate(ts)
+    return _unique(seg, np.clip(ts, spans[seg, 0], spans[seg, 1]))
+
+
+def _unique(seg: np.ndarray, ts: np.ndarray) -> tuple:
+    """(segment, t) sorted by segment then t, each pair once: per segment np.unique of its ts."""
+    order = np.lexsort((ts, seg))
+    seg, ts = seg[order], ts[order]
+    keep = np.ones(len(seg), bool)
+    keep[1:] = (seg[1:] != seg[:-1]) | (ts[1:] != ts[:-1])
+    return seg[keep], ts[keep]
+
+
+def _length(v: np.ndarray) -> np.ndarray:
+    """Per row its norm, as np.linalg.norm of the row alone computes it (sqrt of its dot product: to the bit,
+    which the axis=1 sum of squares is not)."""
+    return np.sqrt(np.vecdot(v, v))
 
 
 def _segments(q0: np.ndarray, q1: np.ndarray, n: np.ndarray, b) -> tuple:
@@ -103,27 +126,57 @@ def _segments(q0: np.ndarray, q1: np.ndarray, n: np.ndarray, b) -> tuple:
     return normal, rows, np.stack([a[inside], c[inside]], axis=1), np.stack([t0[inside], t1[inside]], axis=1)
 
 
-def _crossings(ends: np.ndarray, spans: np.ndarray, e: int) -> np.ndarray:
-    """Where segment e's image crosses the others' (its parameters t): where what lies in front of it or
-    behind it may change, so that the Gauss points integrate a smooth integrand between them."""
-    a, c = ends[e]
-    d, a_f, d_f = c - a, ends[:, 0], ends[:, 1] - ends[:, 0]
-    det = d[0] * (-d_f[:, 1]) + d_f[:, 0] * d[1]  # a + t d = a_f + s d_f, by Cramer's rule
+def _crossings(ends: np.ndarray, spans: np.ndarray, j: np.ndarray, k: np.ndarray) -> tuple:
+    """(segment, t): where segment j's image crosses segment k's (its parameter t), per pair j k: where what
+    lies in front of it or behind it may change, so that the Gauss points integrate a smooth integrand
+    between them."""
+    a, d, a_f, d_f = ends[j, 0], ends[j, 1] - ends[j, 0], ends[k, 0], ends[k, 1] - ends[k, 0]
+    det = d[:, 0] * (-d_f[:, 1]) + d_f[:, 0] * d[:, 1]  # a + t d = a_f + s d_f, by Cramer's rule
     r = a_f - a
-    ok = np.abs(det) > 1e-12 * (np.linalg.norm(d) * np.linalg.norm(d_f, axis=1) + 1e-300)
+    ok = np.abs(det) > 1e-12 * (_length(d) * np.linalg.norm(d_f, axis=1) + 1e-300)
     safe = np.where(ok, det, 1.0)
     t = (r[:, 0] * (-d_f[:, 1]) + d_f[:, 0] * r[:, 1]) / safe
-    s = (d[0] * r[:, 1] - d[1] * r[:, 0]) / safe
-    ok &= (s >= spans[:, 0]) & (s <= spans[:, 1]) & (t > spans[e, 0]) & (t < spans[e, 1])
-    return t[ok]
+    s = (d[:, 0] * r[:, 1] - d[:, 1] * r[:, 0]) / safe
+    ok &= (s >= spans[k, 0]) & (s <= spans[k, 1]) & (t > spans[j, 0]) & (t < spans[j, 1])
+    return j[ok], t[ok]
 
 
-def _pixels_of(a: np.ndarray, c: np.ndarray, ts: np.ndarray, b) -> np.ndarray:
-    """The pixel (row major, row 0 at the top) of each piece between consecutive cuts ``ts`` of a + t (c - a)."""
-    mid = a[None] + 0.5 * (ts[:-1] + ts[1:])[:, None] * (c - a)[None]
+def _pixels_of(a: np.ndarray, c: np.ndarray, seg: np.ndarray, ts: np.ndarray, b) -> tuple:
+    """(piece, pixel): the pieces between consecutive cuts ``ts`` of the same segment a + t (c - a) (``seg``;
+    piece i from ts[i] to ts[i + 1]) and each one's pixel (row major, row 0 at the top)."""
+    piece = np.flatnonzero(seg[1:] == seg[:-1])
+    e = seg[piece]
+    mid = a[e] + 0.5 * (ts[piece] + ts[piece + 1])[:, None] * (c[e] - a[e])
     x = np.minimum(mid[:, 0].astype(np.int64), b.width - 1)
     y = np.minimum(mid[:, 1].astype(np.int64), b.height - 1)
-    return (b.height - 1 - y) * b.width + x
+    return piece, (b.height - 1 - y) * b.width + x
+
+
+def _neighbours(seg: np.ndarray, pixel: np.ndarray, n: int) -> tuple:
+    """(j, k): the pairs of two of the ``n`` segments whose pieces (``seg``, ``pixel``) share a pixel, each
+    pair once, both ways."""
+    code = _distinct(pixel * n + seg)  # (pixel, segment), by pixel
+    pix, seg = code // n, code % n
+    starts = np.flatnonzero(np.concatenate([[True], pix[1:] != pix[:-1]]))
+    size = np.diff(np.append(starts, len(pix)))
+    count = np.repeat(size, size)  # per (pixel, segment): its pixel's segments
+    first = np.repeat(np.arange(len(pix)), count)
+    second = np.repeat(np.repeat(starts, size), count) + np.arange(len(first)) - np.repeat(np.cumsum(count) - count,
+                                                                                          count)
+    j, k = seg[first], seg[second]
+    if n * n <= PAIR_TABLE:  # a table of every pair, faster than sorting them
+        table = np.zeros((n, n), bool)
+        table[j, k] = True
+        table[np.arange(n), np.arange(n)] = False
+        return np.nonzero(table)
+    pairs = _distinct(j[j != k] * n + k[j != k])
+    return pairs // n, pairs % n
+
+
+def _distinct(x: np.ndarray) -> np.ndarray:
+    """np.unique of integers, by a sort (np.unique's hash table is slower here)."""
+    x = np.sort(x)
+    return x[np.concatenate([[True], x[1:] != x[:-1]])] if len(x) else x
 
 
 def segment_points(q0: np.ndarray, q1: np.ndarray, n: np.ndarray, cam, edges=None) -> EdgePoints:
@@ -134,28 +187,18 @@ def segment_points(q0: np.ndarray, q1: np.ndarray, n: np.ndarray, cam, edges=Non
     b = camera_basis(cam)
     gauss, gauss_w = np.polynomial.legendre.leggauss(GAUSS_POINTS)
     normal, rows, ends, spans = _segments(q0, q1, n, b)
-    cuts = [_pieces(a, c, *span) for (a, c), span in zip(ends, spans)]
-    by_pixel: dict = {}  # the segments in view whose image passes through each pixel, in their order
-    for j, ts in enumerate(cuts):
-        for p in np.unique(_pixels_of(*ends[j], ts, b)):
-            by_pixel.setdefault(int(p), []).append(j)
-    edge, at, weight, pixel = [], [], [], []
-    for j, e in enumerate(rows):
-        a, c = ends[j]
-        near = sorted({k for p in np.unique(_pixels_of(a, c, cuts[j], b)) for k in by_pixel[int(p)] if k != j})
-        ts = cuts[j]
-        if near:
-            near = np.asarray([j] + near)
-            ts = np.unique(np.concatenate([ts, _crossings(ends[near], spans[near], 0)]))
-        s0, s1 = ts[:-1], ts[1:]  # ts is increasing (np.unique): no piece is empty
-        t = s0[:, None] + (s1 - s0)[:, None] * 0.5 * (gauss + 1.0)[None]  # (pieces, GAUSS_POINTS)
-        at.append(a[None] + t.reshape(-1, 1) * (c - a)[None])
-        weight.append((gauss_w[None] * 0.5 * (s1 - s0)[:, None] * np.linalg.norm(c - a)).reshape(-1))
-        edge.append(np.full(t.size, e))
-        pixel.append(np.repeat(_pixels_of(a, c, ts, b), GAUSS_POINTS))
-    cat = lambda parts, shape: np.concatenate(parts) if parts else np.zeros(shape)  # noqa: E731
-    return EdgePoints(edges, cat(edge, (0,)).astype(np.int64), cat(at, (0, 2)), cat(weight, (0,)),
-                      cat(pixel, (0,)).astype(np.int64), normal)
+    a, c = ends[:, 0], ends[:, 1]
+    seg, ts = _pieces(a, c, spans)
+    piece, pixel = _pixels_of(a, c, seg, ts, b)
+    crossing, t_crossing = _crossings(ends, spans, *_neighbours(seg[piece], pixel, len(rows)))
+    seg, ts = _unique(np.concatenate([seg, crossing]), np.concatenate([ts, t_crossing]))
+    piece, pixel = _pixels_of(a, c, seg, ts, b)  # ts increases along a segment (_unique): no piece is empty
+    e, s0, s1 = seg[piece], ts[piece], ts[piece + 1]
+    t = s0[:, None] + (s1 - s0)[:, None] * 0.5 * (gauss + 1.0)[None]  # (pieces, GAUSS_POINTS)
+    at = np.repeat(a[e], GAUSS_POINTS, axis=0) + t.reshape(-1, 1) * np.repeat((c - a)[e], GAUSS_POINTS, axis=0)
+    weight = (gauss_w[None] * 0.5 * (s1 - s0)[:, None] * _length(c - a)[e][:, None]).reshape(-1)
+    return EdgePoints(edges, np.repeat(rows[e], GAUSS_POINTS).astype(np.int64), at.reshape(-1, 2), weight,
+                      np.repeat(pixel, GAUSS_POINTS).astype(np.int64), normal)
 
 
 def edge_points(edges: np.ndarray, points: np.ndarray, eye: np.ndarray, cam) -> EdgePoints:
@@ -166,18 +209,23 @@ def edge_points(edges: np.ndarray, points: np.ndarray, eye: np.ndarray, cam) -> 
 
 
 def ray_directions(at: np.ndarray, b) -> np.ndarray:
-    """Unit camera-ray directions (float32) through image points (pixels from the lower-left corner)."""
-    d = (-b.d_f * b.z_e[None] + b.h * (at[:, 1:2] / b.height - 0.5) * b.y_e[None]
-         + b.w * (at[:, 0:1] / b.width - 0.5) * b.x_e[None])
-    return (d / np.linalg.norm(d, axis=1, keepdims=True)).astype(np.float32)
+    """Unit camera-ray directions (float32) through image points (pixels from the lower-left corner): -d_f z_e
+    + h (y / H - 1/2) y_e + w (x / W - 1/2) x_e over its norm, a component at a time (the same sums, in the same
+    order, as the rows', in a third of the time)."""
+    y, x = b.h * (at[:, 1] / b.height - 0.5), b.w * (at[:, 0] / b.width - 0.5)
+    d = [-b.d_f * b.z_e[k] + y * b.y_e[k] + x * b.x_e[k] for k in range(3)]
+    norm = np.sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
+    out = np.empty((len(at), 3), np.float32)
+    for k in range(3):
+        out[:, k] = d[k] / norm
+    return out
 
 
 def side_directions(pts: EdgePoints, cam) -> np.ndarray:
     """(2 N, 3) float32: per point the camera rays EDGE_OFFSET_PX either side of its segment's image, first
     every point's towards the normal (g > 0), then every point's away from it."""
-    b = camera_basis(cam)
     offset = EDGE_OFFSET_PX * pts.normal[pts.edge]
-    return np.concatenate([ray_directions(pts.at + offset, b), ray_directions(pts.at - offset, b)])
+    return ray_directions(np.concatenate([pts.at + offset, pts.at - offset]), camera_basis(cam))
 
 
 def camera_copies(scene, geom, n: int, device: str) -> tuple:
@@ -187,15 +235,27 @@ def camera_copies(scene, geom, n: int, device: str) -> tuple:
     cam = scene.camera
     rows = np.tile(np.stack([geom.eye_offset(cam.eye), geom.eye_offset(cam.center), np.asarray(cam.up, np.float32)]),
                    (n, 1))
-    camera = wp.array(rows.astype(np.float32), dtype=wp.vec3, device=device, requires_grad=True)
-    return camera, wp.array(np.full(n, cam.fovy, np.float32), dtype=float, device=device, requires_grad=True)
+    camera = wp.array(rows.astype(np.float32), dtype=wp.vec3, device=device, requires_grad=True,
+                      copy=not wp.get_device(device).is_cpu)  # on the CPU, rows' own memory
+    return camera, wp.array(np.full(n, cam.fovy, np.float32), dtype=float, device=device, requires_grad=True,
+                            copy=not wp.get_device(device).is_cpu)
 
 
 def camera_adjoints(camera: wp.array, fovy: wp.array, n: int) -> dict:
     """Per point the adjoints camera_copies' arrays hold after a tape's backward: ``eye``, ``center``,
     ``up`` (n, 3) and ``fovy`` (n,), float64."""
-    rows = camera.grad.numpy().astype(np.float64).reshape(n, 3, 3)
-    return {"eye": rows[:, 0], "center": rows[:, 1], "up": rows[:, 2], "fovy": fovy.grad.numpy().astype(np.float64)}
+    rows = by_column(camera.grad.numpy().reshape(n, 3, 3))
+    return {"eye": rows[0], "center": rows[1], "up": rows[2], "fovy": fovy.grad.numpy().astype(np.float64)}
+
+
+def by_column(rows: np.ndarray) -> np.ndarray:
+    """(K, n, 3) float64 views of per point rows (n, K, 3) stored a column at a time: what boundary_term reads
+    a column at a time, so that each column is contiguous. Copied a block of points at a time (a whole-array
+    transposing copy runs 4 times slower, measured)."""
+    out = np.empty((rows.shape[1], 3, len(rows)))
+    for lo in range(0, len(rows), 1024):
+        out[:, :, lo:lo + 1024] = rows[lo:lo + 1024].transpose(1, 2, 0)
+    return out.transpose(0, 2, 1)
 
 
 @dataclass
@@ -217,13 +277,26 @@ def boundary_term(pts: EdgePoints, jump: np.ndarray, d: np.ndarray, speed: dict,
     geometry point it moves}; ``sources``: (per point its source, how many there are), whose speed is
     ``speed["light"]``."""
     w = pts.weight * np.einsum("ij,ij->i", d[pts.pixel], jump)
-    points = np.zeros((n_points, 3))
-    for key, rows in vertices.items():
-        np.add.at(points, rows, w[:, None] * speed[key])
-    camera = {k: np.add.reduce(w[:, None] * speed[k].reshape(len(w), -1), axis=0) for k in
-              ("eye", "center", "up", "fovy")}
+    points = _add_at(n_points, list(vertices.values()), w, [speed[key] for key in vertices])
+    camera = {k: _sum(w, speed[k]) for k in ("eye", "center", "up")}
+    camera["fovy"] = np.add.reduce(w[:, None] * speed["fovy"].reshape(len(w), -1), axis=0)
     term = BoundaryTerm(points, camera)
     if sources is not None:
-        term.sources = np.zeros((sources[1], 3))
-        np.add.at(term.sources, sources[0], w[:, None] * speed["light"])
+        term.sources = _add_at(sources[1], [sources[0]], w, [speed["light"]])
     return term
+
+
+def _sum(w: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """np.add.reduce(w[:, None] * v, axis=0) of per point rows ``v`` (n, 3) as C-ordered rows sum it, to the bit
+    whatever v's order: one at a time, in order (np.bincount, a column at a time)."""
+    first = np.zeros(len(w), np.intp)
+    return np.array([np.bincount(first, w * v[:, k], minlength=1)[0] for k in range(3)])
+
+
+def _add_at(n: int, rows: list, w: np.ndarray, values: list) -> np.ndarray:
+    """(n, 3): w times each list's ``values`` (rows) added at its ``rows``, the lists in order and each in its
+    rows' order, one at a time: np.add.at's sums, to the bit (np.bincount adds its weights in their order
+    too), a column at a time over the lists joined, ten times faster."""
+    at = np.concatenate(rows)
+    return np.stack([np.bincount(at, np.concatenate([w * v[:, k] for v in values]), minlength=n) for k in range(3)],
+                    axis=1)

@@ -4,7 +4,8 @@ shadows the hard shadows' edges (grad_shadow_edges.py), all cut at the pixels to
 each piece integrated at fixed Gauss-Legendre points with the radiance traced either side (kernels/edges.py)."""
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from functools import partial
 
 import numpy as np
 
@@ -13,6 +14,7 @@ from ..errors import ArgumentError
 from ..kernels import edge_distances, empty_aov_buffers, empty_record, make_edge_sides_kernel
 from ..scene import drawn_objects
 from .grad_area_shape import SHAPE_KEYS, shape_edge_gradients, shape_table
+from .grad_edge_launch import host_array, launch_points
 from .grad_edge_points import (BoundaryTerm, EdgePoints, boundary_term, camera_adjoints, camera_copies,
                                segment_points, side_directions)
 from .grad_mesh_edges import MeshEdges, face_normals, facing, mesh_edges
@@ -26,11 +28,29 @@ COPLANAR = 1e-6  # |n1 x n2| of two flat faces' unit normals below which their s
 
 @dataclass(frozen=True)
 class EdgeFrame:
-    """What the edges' rays need of the frame: its effect set, ray stack and ray levels (FramePlan's)."""
+    """What the edges' rays need of the frame: its effect set, ray stack and ray levels (FramePlan's), the
+    CPU threads its per-point launches run on (grad_edge_launch.launch_points), and what its backward calls
+    keep for the next (``kept``: kept_part's)."""
 
     fx: object
     stack: int
     max_depth: int
+    threads: int = 1
+    kept: dict = field(default_factory=dict, compare=False, repr=False)
+
+
+def kept_part(frame: EdgeFrame, scene, geom, name: str, make):
+    """``make()``, kept in ``frame`` for its next backward(edges=True): a part of the boundary term that is the
+    frame's alone (its segments and points, the colours either side of them, their speeds), not the image
+    adjoint's or the parameters named; made again for another scene or geometry than the one kept (backward
+    refuses a scene changed since its frame anyway)."""
+    of = frame.kept.get("of")
+    if of is None or of[0] is not scene or of[1] is not geom:
+        frame.kept.clear()
+        frame.kept["of"] = (scene, geom)
+    if name not in frame.kept:
+        frame.kept[name] = make()
+    return frame.kept[name]
 
 
 def moves_edges(name: str) -> bool:
@@ -107,37 +127,33 @@ def edge_sides(scene, geom, frame: EdgeFrame, pts: EdgePoints, device: str) -> n
     dirs = side_directions(pts, scene.camera)
     n = len(pts.edge)
     color = wp.zeros(2 * n, dtype=wp.vec3, device=device)
-    kernel = make_edge_sides_kernel(frame.fx, frame.stack)
-    wp.launch(kernel, dim=2 * n, inputs=[geom.scene_data(scene), wp.vec3(*geom.eye_offset(scene.camera.eye)),
-                                         frame.max_depth, empty_fragments(device), empty_mirrors(device),
-                                         empty_aov_buffers(device), empty_record(device),
-                                         wp.array(dirs, dtype=wp.vec3, device=device)], outputs=[color], device=device)
+    launch_points(make_edge_sides_kernel(frame.fx, frame.stack), 2 * n,
+                  [geom.scene_data(scene), wp.vec3(*geom.eye_offset(scene.camera.eye)), frame.max_depth,
+                   empty_fragments(device), empty_mirrors(device), empty_aov_buffers(device), empty_record(device),
+                   host_array(dirs, wp.vec3, device), color], [0] * 7 + [1, 1], frame.threads, device)
     c = color.numpy().astype(np.float64)
     return c[:n] - c[n:]
 
 
-def edge_speeds(scene, geom, pts: EdgePoints, device: str) -> dict:
-    """Per point, the derivative of its signed distance from its edge (kernels.edges.edge_distances, on a
-    wp.Tape; float64 rows): the edge's speed along its normal, in pixels per unit of each parameter, ``v0`` and
+def edge_speeds(scene, geom, pts: EdgePoints, device: str, threads: int = 1) -> dict:
+    """Per point, the derivative of its signed distance from its edge (kernels.edges.edge_distances, its
+    adjoint; float64 rows): the edge's speed along its normal, in pixels per unit of each parameter, ``v0`` and
     ``v1`` for its two vertices, ``eye``, ``center``, ``up`` and ``fovy`` for the camera. Each point reads
-    copies of its own, so that no two adjoints share a sum: the host reduces them in a fixed order."""
+    copies of its own, so that no two adjoints share a sum: the host reduces them in a fixed order (the adjoint
+    launch alone, in bands on ``threads``: grad_edge_launch.launch_points)."""
     cam, n = scene.camera, len(pts.edge)
     p = geom.points_np
-    vec = lambda rows: wp.array(np.asarray(rows, np.float32).reshape(-1, 3), dtype=wp.vec3, device=device,  # noqa: E731
-                                requires_grad=True)
+    vec = lambda rows: host_array(np.asarray(rows, np.float32).reshape(-1, 3), wp.vec3, device, True)  # noqa: E731
     v0, v1 = vec(p[pts.edges[pts.edge, 0]]), vec(p[pts.edges[pts.edge, 1]])
     camera, fovy = camera_copies(scene, geom, n, device)
-    distance = wp.zeros(n, dtype=float, device=device, requires_grad=True)
-    tape = wp.Tape()
-    with tape:
-        wp.launch(edge_distances, dim=n, inputs=[v0, v1, camera, fovy, float(cam.near), cam.width, cam.height,
-                                                 wp.array(pts.at.astype(np.float32), dtype=wp.vec2, device=device)],
-                  outputs=[distance], device=device)
-    tape.backward(grads={distance: wp.array(np.ones(n, np.float32), dtype=float, device=device)})
-    out = {"v0": v0.grad.numpy().astype(np.float64), "v1": v1.grad.numpy().astype(np.float64),
-           **camera_adjoints(camera, fovy, n)}
-    tape.zero()
-    return out
+    distance = wp.zeros(n, dtype=float, device=device)
+    at = host_array(pts.at.astype(np.float32), wp.vec2, device)
+    launch_points(edge_distances, n, [v0, v1, camera, fovy, float(cam.near), cam.width, cam.height, at, distance],
+                  [1, 1, 3, 1, 0, 0, 0, 1, 1], threads, device,
+                  [v0.grad, v1.grad, camera.grad, fovy.grad, None, None, None, None,
+                   host_array(np.ones(n, np.float32), float, device)])
+    return {"v0": v0.grad.numpy().astype(np.float64), "v1": v1.grad.numpy().astype(np.float64),
+            **camera_adjoints(camera, fovy, n)}
 
 
 def covered(name: str) -> bool:
@@ -186,20 +202,22 @@ def edge_gradients(scene, geom, frame: EdgeFrame, d: np.ndarray, wrt, device: st
     the parameter: per edge point, d at its pixel dotted with f_+ - f_- (edge_sides; a shadow's: its source's
     light alone, grad_shadow_edges.light_sides), times its weight and its edge's speed (edge_speeds,
     shadow_speeds), summed in the points' order (np.add.at: in order, one at a time), so the sum is the same
-    on every run and thread count."""
+    on every run and thread count. What is the frame's alone is kept in it for its next backward (kept_part)."""
     wrt = [n for n in wrt if covered(n)]
     if not wrt:
         return {}
     eye = geom.eye_offset(scene.camera.eye).astype(np.float64)
-    b = boundary(scene, geom, frame.fx, eye)
+    keep = partial(kept_part, frame, scene, geom)
+    b = keep("boundary", lambda: boundary(scene, geom, frame.fx, eye))
     d3 = d.reshape(-1, 3).astype(np.float64)
     term = BoundaryTerm(np.zeros((len(geom.points_np), 3)), {k: 0.0 for k in ("eye", "center", "up", "fovy")})
     if len(b.camera.edge):
-        term = boundary_term(b.camera, edge_sides(scene, geom, frame, b.camera, device), d3,
-                             edge_speeds(scene, geom, b.camera, device),
+        term = boundary_term(b.camera, keep("sides", lambda: edge_sides(scene, geom, frame, b.camera, device)), d3,
+                             keep("speeds", lambda: edge_speeds(scene, geom, b.camera, device, frame.threads)),
                              {"v0": b.edges[b.camera.edge, 0], "v1": b.edges[b.camera.edge, 1]}, len(geom.points_np))
     if b.shadows is not None and len(b.shadows.edge):
-        shadow = shadow_term(scene, geom, frame.fx, b.sources, b.segments, b.shadows, d3, device)
+        shadow = shadow_term(scene, geom, frame.fx, b.sources, b.segments, b.shadows, d3, device, frame.threads,
+                             keep)
         term = BoundaryTerm(term.points + shadow.points, {k: term.camera[k] + shadow.camera[k] for k in term.camera},
                             shadow.sources)
     shapes = {}

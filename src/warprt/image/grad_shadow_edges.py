@@ -6,6 +6,7 @@ term either side and the edge's speed in the occluder, the receiver, the light a
 (kernels/shadow_edges.py)."""
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass
 
 import numpy as np
@@ -13,8 +14,10 @@ import numpy as np
 from .._warp import wp
 from ..kernels import SOURCE_LIGHT, SOURCE_SAMPLE, make_light_sides_kernel, shadow_edge_distances
 from ..scene import camera_basis, emitter_of_triangles
-from .grad_edge_points import BoundaryTerm, EdgePoints, boundary_term, camera_adjoints, camera_copies, side_directions
-from .grad_mesh_edges import MeshEdges, face_normals, facing, silhouettes
+from .grad_edge_launch import host_array, launch_points
+from .grad_edge_points import (BoundaryTerm, EdgePoints, boundary_term, by_column, camera_adjoints, camera_copies,
+                               side_directions)
+from .grad_mesh_edges import MeshEdges, face_normals, facing
 from .grad_params import area_sources, parameter_names
 from .mirrors import empty_mirrors
 from .zbuffer import empty_fragments
@@ -126,87 +129,104 @@ def _in_view(tri: np.ndarray, b) -> np.ndarray:
 
 
 def shadow_segments(scene, geom, m: MeshEdges, sources: ShadowSources, eye: np.ndarray) -> ShadowSegments:
-    """The ShadowSegments of every source, in the sources' order (source_segments)."""
+    """The ShadowSegments of every source, in the sources' order: each one's occluder edges and receivers
+    (source_edges), the segments their wedges cut (_wedge_segments), all sources at once."""
     r = receivers(scene, geom, eye)
-    parts = []
-    for s in range(len(sources.at)):
-        part = source_segments(r, m, sources.at[s], bool(sources.directional[s]), int(sources.emitter[s]))
-        part.source = np.full(len(part.face), s)
-        parts.append(part)
-    return ShadowSegments.concatenate(parts)
+    step = max(1, PAIRS_AT_ONCE // max(len(r.faces), 1))  # sources at once: (sources, faces) arrays this big
+    parts = [source_edges(r, m, sources, np.arange(lo, min(lo + step, len(sources.at))))
+             for lo in range(0, len(sources.at), step)]
+    source, edges, shows = (np.concatenate([p[k] for p in parts]) if parts else None for k in range(3))
+    if source is None:
+        return ShadowSegments.concatenate([])
+    return _wedge_segments(r, sources, source, edges.reshape(-1, 2), shows.reshape(-1, len(r.faces)))
 
 
-def source_segments(r: Receivers, m: MeshEdges, at: np.ndarray, directional: bool, emitter: int) -> ShadowSegments:
-    """The edges of the shadows one source casts (its ``source`` rows left 0): of the silhouettes from it
-    (open edges, shared by more than two faces, or joining a face that faces it and one that does not; not
-    its own emitter's), each one's wedge (the part of the plane through the source and the edge beyond the
-    edge) cut by each receiver triangle it crosses, those that can show its light (Receivers.lit; a flat
-    face only where the eye sees the side the source lights; not its own emitter's)."""
-    own = (r.emitter == emitter) & (emitter >= 0)
-    which, edges = silhouettes(m, facing(r.normal, r.p[r.faces[:, 0]], at, directional))
-    toward = np.broadcast_to(-at, r.normal.shape) if directional else at - r.p[r.faces[:, 0]]
-    lit_side = np.sign(np.einsum("ij,ij->i", r.normal, toward))
-    eye_side = np.sign(np.einsum("ij,ij->i", r.normal, r.eye - r.p[r.faces[:, 0]]))
-    shown = ~r.flat | (lit_side == eye_side)
-    return _wedge_segments(r, edges[which & ~own[m.f1]], np.flatnonzero(r.lit & shown & ~own), at, directional)
+def source_edges(r: Receivers, m: MeshEdges, sources: ShadowSources, which: np.ndarray) -> tuple:
+    """(source, edges, shows) of the sources ``which``: their occluder edges by source, each its source and
+    two vertex indices (the silhouettes from it: open edges, shared by more than two faces, or joining a face
+    that faces it and one that does not; not its own emitter's), and per source (rows of ``which``) the faces
+    whose shadows it may show (Receivers.lit; a flat face only where the eye sees the side the source
+    lights; not its own emitter's)."""
+    at, directional, emitter = sources.at[which], sources.directional[which], sources.emitter[which]
+    corner = r.p[r.faces[:, 0]]
+    own = (r.emitter[None] == emitter[:, None]) & (emitter[:, None] >= 0)
+    toward = np.where(directional[:, None, None], -at[:, None], at[:, None] - corner[None])
+    lit_side = np.sign(_dots(r.normal, toward))
+    front = _dots(r.normal, corner[None] - at[:, None]) < 0.0  # grad_mesh_edges.facing's, a point's
+    for s in np.flatnonzero(directional):  # a light travelling along at: facing's product
+        front[s] = facing(r.normal, corner, at[s], True)
+    eye_side = np.sign(np.einsum("ij,ij->i", r.normal, r.eye - corner))
+    shows = r.lit & (~r.flat | (lit_side == eye_side)) & ~own
+    silhouette = ~m.pair | (front[:, m.f1] != front[:, m.f2])  # grad_mesh_edges.silhouettes', every source's
+    second = m.pair & ~front[:, m.f1] & front[:, m.f2]
+    s, e = np.nonzero(silhouette & ~own[:, m.f1])
+    return which[s], np.where(second[s, e][:, None], m.v2[e], m.v[e]), shows
 
 
-def _wedge_normals(v0: np.ndarray, v1: np.ndarray, at: np.ndarray, directional: bool) -> np.ndarray:
-    """Per edge v0 v1 the normal N of the plane through it and the source: (v0 - at) x (v1 - v0), or for a
-    light travelling along ``at``, at x (v1 - v0) (kernels.shadow_plane's)."""
-    w = np.broadcast_to(at, v0.shape) if directional else v0 - at
-    return np.cross(w, v1 - v0)
+def _dots(normal: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """(S, F): per source and face, its normal dotted with v[s, f] (the rows' einsum of the faces' alone, so
+    each value to the bit)."""
+    rows = v.reshape(-1, 3)
+    return np.einsum("ij,ij->i", np.tile(normal, (len(rows) // max(len(normal), 1), 1)), rows).reshape(v.shape[:2])
 
 
-def _wedge_segments(r: Receivers, edges: np.ndarray, faces: np.ndarray, at: np.ndarray,
-                    directional: bool) -> ShadowSegments:
-    """The segments the wedges of ``edges`` (vertex pairs) cut on the triangles ``faces`` (indices), by edge
-    then face: the crossing pairs (_crossing_pairs), each triangle's chord on the wedge's plane (_chords)
-    clipped to the wedge (_wedge_span), less those shorter than ON_PLANE."""
+def _wedge_segments(r: Receivers, sources: ShadowSources, source: np.ndarray, edges: np.ndarray,
+                    shows: np.ndarray) -> ShadowSegments:
+    """The segments the wedges of ``edges`` (vertex pairs, by ``source``) cut on the triangles each source
+    shows (``shows``: (sources, faces)), by source, edge then face: the crossing pairs (_crossing_pairs),
+    each triangle's chord on the wedge's plane (_chords) clipped to the wedge (_wedge_span), less those
+    shorter than ON_PLANE. A wedge's normal N: (v0 - at) x (v1 - v0), or for a light travelling along
+    ``at``, at x (v1 - v0) (kernels.shadow_plane's)."""
     tol = ON_PLANE * r.reach
+    at, directional = sources.at[source], sources.directional[source]
     v0, v1 = r.p[edges[:, 0]], r.p[edges[:, 1]]
-    n = _wedge_normals(v0, v1, at, directional)
+    n = np.cross(np.where(directional[:, None], at, v0 - at), v1 - v0)
     size = np.linalg.norm(n, axis=1)
-    lever = np.ones(len(v0)) if directional else np.linalg.norm(v0 - at, axis=1)
+    lever = np.where(directional, 1.0, np.linalg.norm(v0 - at, axis=1))
     ok = size > 1e-12 * np.linalg.norm(v1 - v0, axis=1) * lever  # not seen end on from the source
-    edges, v0, v1, n, size = edges[ok], v0[ok], v1[ok], n[ok], size[ok]
-    e, f, phi = _crossing_pairs(r, v0, v1, n / size[:, None], faces, tol)
+    source, edges, v0, v1, n, size, at, directional = (x[ok] for x in (source, edges, v0, v1, n, size, at,
+                                                                       directional))
+    e, f, phi = _crossing_pairs(r, source, v0, v1, n / size[:, None], shows, tol)
     a, b = _chords(r.p[r.faces[f]], phi, tol)
-    t0, t1 = _wedge_span(a, b, v0[e], v1[e], at, directional)
+    t0, t1 = _wedge_span(a, b, v0[e], v1[e], at[e], directional[e])
     keep = (t1 - t0) * np.linalg.norm(b - a, axis=1) > tol
     e, f, a, b, t0, t1 = e[keep], f[keep], a[keep], b[keep], t0[keep], t1[keep]
     corner = r.p[r.faces[f]]
     n_r = np.cross(corner[:, 1] - corner[:, 0], corner[:, 2] - corner[:, 0])
     plane = (np.einsum("ij,ij->i", n[e], r.eye - v0[e])[:, None] * n_r
              + np.einsum("ij,ij->i", n_r, corner[:, 0] - r.eye)[:, None] * n[e])  # kernels.shadow_plane's M
-    return ShadowSegments(np.zeros(len(e), np.int64), edges[e], f, a + t0[:, None] * (b - a),
+    return ShadowSegments(source[e].astype(np.int64), edges[e], f, a + t0[:, None] * (b - a),
                           a + t1[:, None] * (b - a), plane)
 
 
-def _crossing_pairs(r: Receivers, v0: np.ndarray, v1: np.ndarray, unit: np.ndarray, faces: np.ndarray,
-                    tol: float) -> tuple:
-    """(edge, face, phi): the pairs of an edge and a triangle of ``faces`` whose corners lie strictly either
-    side of the edge's wedge plane (unit normal ``unit``), by edge then face, with phi the corners' signed
-    distances from it; less those whose triangle's plane holds the edge (its shadow would lie along the
-    edge itself: where the occluder touches the receiver, a camera edge). A few edges at a time, so that the
-    NumPy arrays stay within PAIRS_AT_ONCE pairs."""
-    corner = r.p[r.faces[faces]]
-    n_r = r.normal[faces]
-    offset = np.einsum("ij,ij->i", n_r, corner[:, 0])
+def _crossing_pairs(r: Receivers, source: np.ndarray, v0: np.ndarray, v1: np.ndarray, unit: np.ndarray,
+                    shows: np.ndarray, tol: float) -> tuple:
+    """(edge, face, phi): the pairs of an edge and a triangle its source shows whose corners lie strictly
+    either side of the edge's wedge plane (unit normal ``unit``), by edge then face, with phi the corners'
+    signed distances from it; less those whose triangle's plane holds the edge (its shadow would lie along
+    the edge itself: where the occluder touches the receiver, a camera edge). A source at a time (its
+    matrix products as ever, so each value the same to the bit), a few edges at a time, so that the NumPy
+    arrays stay within PAIRS_AT_ONCE pairs."""
+    corner = r.p[r.faces]
+    offset = np.einsum("ij,ij->i", r.normal, corner[:, 0])
     corner_t = [np.ascontiguousarray(corner[:, k].T) for k in range(3)]  # (3, faces): BLAS's fast layout
-    n_r_t = np.ascontiguousarray(n_r.T)
-    step = max(1, PAIRS_AT_ONCE // max(len(faces), 1))
+    n_r_t = np.ascontiguousarray(r.normal.T)
+    bounds = np.flatnonzero(np.diff(source, prepend=-1, append=-1))  # each source's run of edges
     out_e, out_f, out_phi = [], [], []
-    for lo in range(0, len(v0), step):
-        hi = min(lo + step, len(v0))
-        plane = np.einsum("ec,ec->e", unit[lo:hi], v0[lo:hi])[:, None]
-        phi = [unit[lo:hi] @ c - plane for c in corner_t]  # (edges, faces) a corner: matrix products
-        low, high = np.minimum(np.minimum(phi[0], phi[1]), phi[2]), np.maximum(np.maximum(phi[0], phi[1]), phi[2])
-        holds = (np.abs(v0[lo:hi] @ n_r_t - offset) <= tol) & (np.abs(v1[lo:hi] @ n_r_t - offset) <= tol)
-        e, f = np.nonzero((low < -tol) & (high > tol) & ~holds)
-        out_e.append(e + lo)
-        out_f.append(faces[f])
-        out_phi.append(np.stack([x[e, f] for x in phi], axis=1))
+    for first, end in itertools.pairwise(bounds):
+        faces = np.flatnonzero(shows[source[first]])
+        c_t, n_t, off = [c[:, faces] for c in corner_t], n_r_t[:, faces], offset[faces]
+        step = max(1, PAIRS_AT_ONCE // max(len(faces), 1))
+        for lo in range(first, end, step):
+            hi = min(lo + step, end)
+            plane = np.einsum("ec,ec->e", unit[lo:hi], v0[lo:hi])[:, None]
+            phi = [unit[lo:hi] @ c - plane for c in c_t]  # (edges, faces) a corner: matrix products
+            low, high = np.minimum(np.minimum(phi[0], phi[1]), phi[2]), np.maximum(np.maximum(phi[0], phi[1]), phi[2])
+            holds = (np.abs(v0[lo:hi] @ n_t - off) <= tol) & (np.abs(v1[lo:hi] @ n_t - off) <= tol)
+            e, f = np.nonzero((low < -tol) & (high > tol) & ~holds)
+            out_e.append(e + lo)
+            out_f.append(faces[f])
+            out_phi.append(np.stack([x[e, f] for x in phi], axis=1))
     if not out_e:
         return np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros((0, 3))
     return np.concatenate(out_e), np.concatenate(out_f), np.concatenate(out_phi)
@@ -231,15 +251,14 @@ def _chords(corner: np.ndarray, phi: np.ndarray, tol: float) -> tuple:
 
 
 def _wedge_span(a: np.ndarray, b: np.ndarray, v0: np.ndarray, v1: np.ndarray, at: np.ndarray,
-                directional: bool) -> tuple:
+                directional: np.ndarray) -> tuple:
     """(t0, t1): per chord a + t (b - a) on a wedge's plane, the part inside the wedge (t1 <= t0: none).
     With coordinates y - at = alpha (v0 - at) + beta (v1 - at) in the plane, the wedge of a point source is
     alpha >= 0, beta >= 0, alpha + beta >= 1; with y - v0 = alpha (v1 - v0) + beta D, that of a light
-    travelling along D is 0 <= alpha <= 1, beta >= 0. Each is linear in y, so in t (Liang-Barsky)."""
-    if directional:
-        u, w, origin = v1 - v0, np.broadcast_to(at, v0.shape), v0
-    else:
-        u, w, origin = v0 - at, v1 - at, np.broadcast_to(at, v0.shape)
+    travelling along D (``directional``, per chord) is 0 <= alpha <= 1, beta >= 0. Each is linear in y, so in
+    t (Liang-Barsky)."""
+    along = directional[:, None]
+    u, w, origin = np.where(along, v1 - v0, v0 - at), np.where(along, at, v1 - at), np.where(along, v0, at)
     n = np.cross(u, w)
     nn = np.einsum("ij,ij->i", n, n)
 
@@ -248,12 +267,12 @@ def _wedge_span(a: np.ndarray, b: np.ndarray, v0: np.ndarray, v1: np.ndarray, at
         return (np.einsum("ij,ij->i", np.cross(rel, w), n) / nn, np.einsum("ij,ij->i", np.cross(u, rel), n) / nn)
 
     (alpha_a, beta_a), (alpha_b, beta_b) = coordinates(a), coordinates(b)
-    if directional:
-        bounds = ((alpha_a, alpha_b), (1.0 - alpha_a, 1.0 - alpha_b), (beta_a, beta_b))
-    else:
-        bounds = ((alpha_a, alpha_b), (beta_a, beta_b), (alpha_a + beta_a - 1.0, alpha_b + beta_b - 1.0))
+    bounds = ((alpha_a, alpha_b), (np.where(directional, 1.0 - alpha_a, beta_a), np.where(directional, 1.0 - alpha_b,
+                                                                                            beta_b)),
+              (np.where(directional, beta_a, alpha_a + beta_a - 1.0), np.where(directional, beta_b,
+                                                                                alpha_b + beta_b - 1.0)))
     t0, t1 = np.zeros(len(a)), np.ones(len(a))
-    for c_a, c_b in bounds:  # c_a + t (c_b - c_a) >= 0
+    for c_a, c_b in bounds:  # c_a + t (c_b - c_a) >= 0, in any order: the largest t0, the smallest t1
         rise = c_b - c_a
         with np.errstate(divide="ignore", invalid="ignore"):
             t = -c_a / rise
@@ -264,59 +283,62 @@ def _wedge_span(a: np.ndarray, b: np.ndarray, v0: np.ndarray, v1: np.ndarray, at
 
 
 def light_sides(scene, geom, fx, sources: ShadowSources, segments: ShadowSegments, pts: EdgePoints,
-                device: str) -> np.ndarray:
+                device: str, threads: int = 1) -> np.ndarray:
     """(N, 3) float64: per point f_+ - f_-, the light of its segment's source alone at the nearest hits of
     camera rays EDGE_OFFSET_PX either side of it (towards its normal, then away), shadow ray included
     (kernels.make_light_sides_kernel): that source's jump, whatever other sources' shadows edge there too
-    (a row of a rectangle light's sample points casts one line through an edge parallel to it)."""
+    (a row of a rectangle light's sample points casts one line through an edge parallel to it). In bands on
+    ``threads`` (grad_edge_launch.launch_points)."""
     n = len(pts.edge)
     dirs = side_directions(pts, scene.camera)
     source = np.tile(sources.source[segments.source[pts.edge]], (2, 1))
     color = wp.zeros(2 * n, dtype=wp.vec3, device=device)
-    wp.launch(make_light_sides_kernel(fx), dim=2 * n,
-              inputs=[geom.scene_data(scene), wp.vec3(*geom.eye_offset(scene.camera.eye)), empty_fragments(device),
-                      empty_mirrors(device), wp.array(dirs, dtype=wp.vec3, device=device),
-                      wp.array(source, dtype=wp.vec3i, device=device)], outputs=[color], device=device)
+    launch_points(make_light_sides_kernel(fx), 2 * n,
+                  [geom.scene_data(scene), wp.vec3(*geom.eye_offset(scene.camera.eye)), empty_fragments(device),
+                   empty_mirrors(device), host_array(dirs, wp.vec3, device), host_array(source, wp.vec3i, device),
+                   color], [0, 0, 0, 0, 1, 1, 1], threads, device)
     c = color.numpy().astype(np.float64)
     return c[:n] - c[n:]
 
 
 def shadow_speeds(scene, geom, sources: ShadowSources, segments: ShadowSegments, pts: EdgePoints,
-                  device: str) -> dict:
+                  device: str, threads: int = 1) -> dict:
     """Per point, the derivative of its signed distance from its shadow edge's image
-    (kernels.shadow_edge_distances, on a wp.Tape; float64 rows): ``v0``, ``v1`` for the occluder edge's
+    (kernels.shadow_edge_distances, its adjoint; float64 rows): ``v0``, ``v1`` for the occluder edge's
     vertices, ``light`` for the source (a point's position, a light's direction of travel), ``p0``, ``p1``,
-    ``p2`` for the receiver's corners, ``eye``, ``center``, ``up`` and ``fovy`` for the camera."""
+    ``p2`` for the receiver's corners, ``eye``, ``center``, ``up`` and ``fovy`` for the camera. The adjoint
+    launch alone, in bands on ``threads`` (grad_edge_launch.launch_points)."""
     cam, n = scene.camera, len(pts.edge)
     p = geom.points_np
     seg = pts.edge
-    corners = geom.indices_np.reshape(-1, 3)[segments.face[seg]]
-    rows = np.stack([p[segments.edge[seg, 0]], p[segments.edge[seg, 1]], sources.at[segments.source[seg]],
-                     p[corners[:, 0]], p[corners[:, 1]], p[corners[:, 2]]], axis=1)
-    geometry = wp.array(rows.reshape(-1, 3).astype(np.float32), dtype=wp.vec3, device=device, requires_grad=True)
-    directional = wp.array(sources.directional[segments.source[seg]].astype(np.int32), dtype=int, device=device)
+    corners = geom.indices_np.reshape(-1, 3)[segments.face]
+    rows = np.empty((len(segments.face), 6, 3), np.float32)  # per segment, then per point: one gather
+    rows[:, 0], rows[:, 1], rows[:, 2] = p[segments.edge[:, 0]], p[segments.edge[:, 1]], sources.at[segments.source]
+    rows[:, 3], rows[:, 4], rows[:, 5] = p[corners[:, 0]], p[corners[:, 1]], p[corners[:, 2]]
+    geometry = host_array(rows[seg].reshape(-1, 3), wp.vec3, device, True)
+    directional = host_array(sources.directional[segments.source[seg]].astype(np.int32), int, device)
     camera, fovy = camera_copies(scene, geom, n, device)
-    distance = wp.zeros(n, dtype=float, device=device, requires_grad=True)
-    tape = wp.Tape()
-    with tape:
-        wp.launch(shadow_edge_distances, dim=n, inputs=[geometry, directional, camera, fovy, float(cam.near), cam.width,
-                                                        cam.height, wp.array(pts.at.astype(np.float32), dtype=wp.vec2,
-                                                                             device=device)],
-                  outputs=[distance], device=device)
-    tape.backward(grads={distance: wp.array(np.ones(n, np.float32), dtype=float, device=device)})
-    g = geometry.grad.numpy().astype(np.float64).reshape(n, 6, 3)
-    out = {key: g[:, k] for k, key in enumerate(("v0", "v1", "light", "p0", "p1", "p2"))}
+    distance = wp.zeros(n, dtype=float, device=device)
+    at = host_array(pts.at.astype(np.float32), wp.vec2, device)
+    launch_points(shadow_edge_distances, n,
+                  [geometry, directional, camera, fovy, float(cam.near), cam.width, cam.height, at, distance],
+                  [6, 1, 3, 1, 0, 0, 0, 1, 1], threads, device,
+                  [geometry.grad, None, camera.grad, fovy.grad, None, None, None, None,
+                   host_array(np.ones(n, np.float32), float, device)])
+    g = by_column(geometry.grad.numpy().reshape(n, 6, 3))
+    out = {key: g[k] for k, key in enumerate(("v0", "v1", "light", "p0", "p1", "p2"))}
     out.update(camera_adjoints(camera, fovy, n))
-    tape.zero()
     return out
 
 
 def shadow_term(scene, geom, fx, sources: ShadowSources, segments: ShadowSegments, pts: EdgePoints, d: np.ndarray,
-                device: str) -> BoundaryTerm:
+                device: str, threads: int = 1, keep=None) -> BoundaryTerm:
     """The shadow edges' BoundaryTerm (boundary_term of light_sides and shadow_speeds): to the occluder
-    edges' vertices, the receivers' corners, the camera and each source."""
-    jump = light_sides(scene, geom, fx, sources, segments, pts, device)
-    speed = shadow_speeds(scene, geom, sources, segments, pts, device)
+    edges' vertices, the receivers' corners, the camera and each source. ``keep(name, make)``: make() or what
+    the frame kept of it (grad_edges.kept_part)."""
+    keep = keep or (lambda name, make: make())
+    jump = keep("shadow sides", lambda: light_sides(scene, geom, fx, sources, segments, pts, device, threads))
+    speed = keep("shadow speeds", lambda: shadow_speeds(scene, geom, sources, segments, pts, device, threads))
     seg = pts.edge
     corners = geom.indices_np.reshape(-1, 3).astype(np.int64)[segments.face[seg]]
     vertices = {"v0": segments.edge[seg, 0], "v1": segments.edge[seg, 1], "p0": corners[:, 0], "p1": corners[:, 1],

@@ -102,6 +102,34 @@ def launch_bands(kernel, inputs_for, n_items: int, threads: int, bands: int, dev
     wp.synchronize_device(device)
 
 
+def run_bands(run_band, n_items: int, threads: int, bands: int, device: str):
+    """Call ``run_band(first, count)`` (a band's launches) over ranges of [0, n_items) as launch_bands launches
+    a kernel: on the CPU ``threads`` bands at once, on a pool that lives for this call; the caller loads the
+    kernels' modules first (launch_bands' note)."""
+    ranges = bands_of(n_items, bands)
+    stop = threading.Event()
+
+    def run(r):
+        if stop.is_set():
+            return
+        try:
+            run_band(*r)
+        except BaseException:
+            stop.set()
+            raise
+
+    if threads <= 1 or len(ranges) <= 1 or device != "cpu":
+        for r in ranges:
+            run(r)
+    else:
+        own = band_pool(threads)
+        try:
+            _run_bands(own, run, ranges, stop)
+        finally:
+            own.shutdown(wait=True)
+    wp.synchronize_device(device)
+
+
 def _run_bands(pool: ThreadPoolExecutor, run, ranges, stop: threading.Event):
     """Submit a band per range and wait for them; see launch_bands for what an exception does."""
     futures = []

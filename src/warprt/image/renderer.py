@@ -257,7 +257,7 @@ class Renderer:
                 raise ArgumentError("render", "grad", why)
             if grad:
                 check_record_memory(scene, plan.fx, o.device, mirrored)
-            edge_frame = EdgeFrame(plan.fx, plan.stack, plan.max_depth)
+            edge_frame = EdgeFrame(plan.fx, plan.stack, plan.max_depth, plan.threads)
             if grad:  # the trace writes the record as it goes
                 plan = recording_plan(scene, plan, switched, mirrored)
             pool = self._bands_pool(plan.threads)
