@@ -12,16 +12,12 @@ from .._warp import wp
 from ..errors import ArgumentError
 from ..kernels import edge_distances, empty_aov_buffers, empty_record, make_edge_sides_kernel
 from ..scene import drawn_objects
-from .grad_edge_points import (BoundaryTerm, EdgePoints, boundary_term, camera_adjoints, camera_copies,
-                               segment_points, side_directions)
-from .grad_mesh_edges import MeshEdges, face_normals, facing, mesh_edges
+from .grad_edge_points import BoundaryTerm, EdgePoints, boundary_term, segment_points, side_directions, tape_speeds
+from .grad_mesh_edges import camera_edges, mesh_edges
 from .grad_shadow_edges import ShadowSources, shadow_segments, shadow_sources, shadow_term
 from .mirrors import empty_mirrors
 from .params import object_names
 from .zbuffer import empty_fragments
-
-COPLANAR = 1e-6  # |n1 x n2| of two flat faces' unit normals below which their shared edge shows no crease
-
 
 @dataclass(frozen=True)
 class EdgeFrame:
@@ -62,43 +58,6 @@ def edge_refusal(scene, geom, fx, hits, wrt) -> str | None:
     return None
 
 
-def _same(a: np.ndarray, i: np.ndarray, k: np.ndarray) -> np.ndarray:
-    """Whether a per-vertex attribute is equal at vertices i and k (rows)."""
-    return np.all(a[i] == a[k], axis=-1)
-
-
-def camera_edges(scene, geom, fx, eye, sources: ShadowSources | None = None, m: MeshEdges | None = None) -> np.ndarray:
-    """(E, 2) vertex indices of the edges whose image can jump, sorted by (object, position): of each mesh's
-    edges (grad_mesh_edges.mesh_edges, or ``m``), those that are open (one face), silhouettes from ``eye``
-    (two faces facing opposite ways from it), shared by more than two faces, or creases where the shading
-    jumps (two faces of other materials, a flat pair not coplanar, a smooth pair whose normals, uvs or
-    colours differ at the edge, or with shadows (``sources``) a smooth pair one of whose faces faces a source
-    and the other does not: there the mesh shadows itself); each by its face facing the eye (the edge the
-    visible side shows), else its first."""
-    if geom.triangle_count == 0:
-        return np.zeros((0, 2), np.int64)
-    m = mesh_edges(scene, geom) if m is None else m
-    p = geom.points_np.astype(np.float64)
-    faces = geom.indices_np.reshape(-1, 3).astype(np.int64)
-    normal = face_normals(p, faces)
-    front = facing(normal, p[faces[:, 0]], np.asarray(eye, np.float64))
-    f1, f2, (i0, i1), (a2, b2) = m.f1, m.f2, m.v.T, m.v2.T
-    jump = (front[f1] != front[f2]) | (geom.tri_material_np[f1] != geom.tri_material_np[f2])
-    smooth = (geom.tri_smooth_np[f1] != 0) & (geom.tri_smooth_np[f2] != 0)
-    flat = (geom.tri_smooth_np[f1] == 0) & (geom.tri_smooth_np[f2] == 0)
-    crease = np.linalg.norm(np.cross(normal[f1], normal[f2]), axis=1) > COPLANAR
-    smooth_jump = ~(_same(geom.normals.numpy(), i0, a2) & _same(geom.normals.numpy(), i1, b2))
-    jump |= ~(smooth | flat) | (flat & crease) | (smooth & smooth_jump)
-    for table in ([geom.uv_array().numpy()] if fx.texture else []) + ([geom.colors.numpy()] if fx.vertex_color else []):
-        jump |= ~(_same(table, i0, a2) & _same(table, i1, b2))
-    for at, directional in zip(sources.at, sources.directional) if sources is not None else ():
-        lit = facing(normal, p[faces[:, 0]], at, directional)
-        jump |= smooth & (lit[f1] != lit[f2])
-    keep = ~m.pair | jump
-    use_second = m.pair & ~front[f1] & front[f2]
-    return np.where(use_second[:, None], m.v2, m.v)[keep]
-
-
 def edge_sides(scene, geom, frame: EdgeFrame, pts: EdgePoints, device: str) -> np.ndarray:
     """(N, 3) float64: per point f_+ - f_-, the colours of camera rays EDGE_OFFSET_PX either side of the edge
     (towards its normal, then away), traced with the frame's walk (kernels.edges.make_edge_sides_kernel)."""
@@ -115,27 +74,13 @@ def edge_sides(scene, geom, frame: EdgeFrame, pts: EdgePoints, device: str) -> n
 
 
 def edge_speeds(scene, geom, pts: EdgePoints, device: str) -> dict:
-    """Per point, the derivative of its signed distance from its edge (kernels.edges.edge_distances, on a
-    wp.Tape; float64 rows): the edge's speed along its normal, in pixels per unit of each parameter, ``v0`` and
-    ``v1`` for its two vertices, ``eye``, ``center``, ``up`` and ``fovy`` for the camera. Each point reads
-    copies of its own, so that no two adjoints share a sum: the host reduces them in a fixed order."""
-    cam, n = scene.camera, len(pts.edge)
+    """Per point, the derivative of its signed distance from its edge (kernels.edge_distances, on a wp.Tape:
+    grad_edge_points.tape_speeds; float64 rows): the edge's speed along its normal, in pixels per unit of each
+    parameter, ``v0`` and ``v1`` for its two vertices, ``eye``, ``center``, ``up`` and ``fovy`` for the camera."""
     p = geom.points_np
-    vec = lambda rows: wp.array(np.asarray(rows, np.float32).reshape(-1, 3), dtype=wp.vec3, device=device,  # noqa: E731
-                                requires_grad=True)
-    v0, v1 = vec(p[pts.edges[pts.edge, 0]]), vec(p[pts.edges[pts.edge, 1]])
-    camera, fovy = camera_copies(scene, geom, n, device)
-    distance = wp.zeros(n, dtype=float, device=device, requires_grad=True)
-    tape = wp.Tape()
-    with tape:
-        wp.launch(edge_distances, dim=n, inputs=[v0, v1, camera, fovy, float(cam.near), cam.width, cam.height,
-                                                 wp.array(pts.at.astype(np.float32), dtype=wp.vec2, device=device)],
-                  outputs=[distance], device=device)
-    tape.backward(grads={distance: wp.array(np.ones(n, np.float32), dtype=float, device=device)})
-    out = {"v0": v0.grad.numpy().astype(np.float64), "v1": v1.grad.numpy().astype(np.float64),
-           **camera_adjoints(camera, fovy, n)}
-    tape.zero()
-    return out
+    (v0, v1), camera = tape_speeds(scene, geom, pts, edge_distances,
+                                   [p[pts.edges[pts.edge, 0]], p[pts.edges[pts.edge, 1]]], [], device)
+    return {"v0": v0, "v1": v1, **camera}
 
 
 def covered(name: str) -> bool:

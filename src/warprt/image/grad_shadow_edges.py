@@ -13,7 +13,7 @@ import numpy as np
 from .._warp import wp
 from ..kernels import SOURCE_LIGHT, SOURCE_SAMPLE, make_light_sides_kernel, shadow_edge_distances
 from ..scene import camera_basis, emitter_of_triangles
-from .grad_edge_points import BoundaryTerm, EdgePoints, boundary_term, camera_adjoints, camera_copies, side_directions
+from .grad_edge_points import BoundaryTerm, EdgePoints, boundary_term, side_directions, tape_speeds
 from .grad_mesh_edges import MeshEdges, face_normals, facing, silhouettes
 from .grad_params import area_sources, parameter_names
 from .mirrors import empty_mirrors
@@ -103,13 +103,14 @@ class Receivers:
     reach: float
 
 
-def receivers(scene, geom, eye: np.ndarray) -> Receivers:
-    """The Receivers of a frame seen from ``eye`` (relative to the frame origin)."""
+def receivers(scene, geom, eye: np.ndarray, basis=None) -> Receivers:
+    """The Receivers of a frame seen from ``eye`` (relative to the frame origin) along ``basis`` (the
+    camera's, or a virtual camera's: grad_mirror_edges.MirrorChain.basis)."""
     p = geom.points_np.astype(np.float64)
     faces = geom.indices_np.reshape(-1, 3).astype(np.int64)
     mats = geom.slot_materials(scene)
     dark = np.asarray([max(m.kd) <= 0.0 and max(m.ks) <= 0.0 for m in mats] or [True])
-    lit = ~dark[geom.tri_material_np] & _in_view(p[faces] - eye, camera_basis(scene.camera))
+    lit = ~dark[geom.tri_material_np] & _in_view(p[faces] - eye, camera_basis(scene.camera) if basis is None else basis)
     reach = max(float(np.abs(p).max(initial=0.0)), float(np.abs(eye).max()), 1e-30)
     return Receivers(p, faces, face_normals(p, faces), emitter_of_triangles(scene), lit, geom.tri_smooth_np == 0,
                      eye, reach)
@@ -125,9 +126,10 @@ def _in_view(tri: np.ndarray, b) -> np.ndarray:
     return ~np.any([np.all(o, axis=1) for o in outside], axis=0)
 
 
-def shadow_segments(scene, geom, m: MeshEdges, sources: ShadowSources, eye: np.ndarray) -> ShadowSegments:
-    """The ShadowSegments of every source, in the sources' order (source_segments)."""
-    r = receivers(scene, geom, eye)
+def shadow_segments(scene, geom, m: MeshEdges, sources: ShadowSources, eye: np.ndarray, basis=None) -> ShadowSegments:
+    """The ShadowSegments of every source, in the sources' order (source_segments), seen from ``eye`` along
+    ``basis`` (receivers)."""
+    r = receivers(scene, geom, eye, basis)
     parts = []
     for s in range(len(sources.at)):
         part = source_segments(r, m, sources.at[s], bool(sources.directional[s]), int(sources.emitter[s]))
@@ -264,51 +266,57 @@ def _wedge_span(a: np.ndarray, b: np.ndarray, v0: np.ndarray, v1: np.ndarray, at
 
 
 def light_sides(scene, geom, fx, sources: ShadowSources, segments: ShadowSegments, pts: EdgePoints,
-                device: str) -> np.ndarray:
+                device: str, level: np.ndarray | None = None) -> np.ndarray:
     """(N, 3) float64: per point f_+ - f_-, the light of its segment's source alone at the nearest hits of
-    camera rays EDGE_OFFSET_PX either side of it (towards its normal, then away), shadow ray included
+    camera rays EDGE_OFFSET_PX either side of it (towards its normal, then away), or with ``level`` (per
+    point) at their rays' of that level through the mirrors, times its k_r, shadow ray included
     (kernels.make_light_sides_kernel): that source's jump, whatever other sources' shadows edge there too
     (a row of a rectangle light's sample points casts one line through an edge parallel to it)."""
     n = len(pts.edge)
     dirs = side_directions(pts, scene.camera)
     source = np.tile(sources.source[segments.source[pts.edge]], (2, 1))
+    level = np.tile(np.zeros(n, np.int32) if level is None else np.asarray(level, np.int32), 2)
     color = wp.zeros(2 * n, dtype=wp.vec3, device=device)
     wp.launch(make_light_sides_kernel(fx), dim=2 * n,
               inputs=[geom.scene_data(scene), wp.vec3(*geom.eye_offset(scene.camera.eye)), empty_fragments(device),
                       empty_mirrors(device), wp.array(dirs, dtype=wp.vec3, device=device),
-                      wp.array(source, dtype=wp.vec3i, device=device)], outputs=[color], device=device)
+                      wp.array(source, dtype=wp.vec3i, device=device), wp.array(level, dtype=int, device=device)],
+              outputs=[color], device=device)
     c = color.numpy().astype(np.float64)
     return c[:n] - c[n:]
+
+
+def shadow_rows(geom, sources: ShadowSources, segments: ShadowSegments, pts: EdgePoints) -> np.ndarray:
+    """(N, 6, 3) float64: per point what its shadow edge's distance reads of the geometry: the occluder edge's
+    v0 and v1, the source (a point's position, a light's direction of travel), the receiver's p0, p1, p2."""
+    p, seg = geom.points_np.astype(np.float64), pts.edge
+    corners = geom.indices_np.reshape(-1, 3)[segments.face[seg]]
+    return np.stack([p[segments.edge[seg, 0]], p[segments.edge[seg, 1]], sources.at[segments.source[seg]],
+                     p[corners[:, 0]], p[corners[:, 1]], p[corners[:, 2]]], axis=1)
+
+
+def shadow_vertices(geom, segments: ShadowSegments, pts: EdgePoints) -> dict:
+    """Per point the geometry points shadow_rows' rows are (boundary_term's ``vertices``)."""
+    seg = pts.edge
+    corners = geom.indices_np.reshape(-1, 3).astype(np.int64)[segments.face[seg]]
+    return {"v0": segments.edge[seg, 0], "v1": segments.edge[seg, 1], "p0": corners[:, 0], "p1": corners[:, 1],
+            "p2": corners[:, 2]}
+
+
+SHADOW_KEYS = ("v0", "v1", "light", "p0", "p1", "p2")  # shadow_rows' rows, as the speeds name them
 
 
 def shadow_speeds(scene, geom, sources: ShadowSources, segments: ShadowSegments, pts: EdgePoints,
                   device: str) -> dict:
     """Per point, the derivative of its signed distance from its shadow edge's image
-    (kernels.shadow_edge_distances, on a wp.Tape; float64 rows): ``v0``, ``v1`` for the occluder edge's
-    vertices, ``light`` for the source (a point's position, a light's direction of travel), ``p0``, ``p1``,
-    ``p2`` for the receiver's corners, ``eye``, ``center``, ``up`` and ``fovy`` for the camera."""
-    cam, n = scene.camera, len(pts.edge)
-    p = geom.points_np
-    seg = pts.edge
-    corners = geom.indices_np.reshape(-1, 3)[segments.face[seg]]
-    rows = np.stack([p[segments.edge[seg, 0]], p[segments.edge[seg, 1]], sources.at[segments.source[seg]],
-                     p[corners[:, 0]], p[corners[:, 1]], p[corners[:, 2]]], axis=1)
-    geometry = wp.array(rows.reshape(-1, 3).astype(np.float32), dtype=wp.vec3, device=device, requires_grad=True)
-    directional = wp.array(sources.directional[segments.source[seg]].astype(np.int32), dtype=int, device=device)
-    camera, fovy = camera_copies(scene, geom, n, device)
-    distance = wp.zeros(n, dtype=float, device=device, requires_grad=True)
-    tape = wp.Tape()
-    with tape:
-        wp.launch(shadow_edge_distances, dim=n, inputs=[geometry, directional, camera, fovy, float(cam.near), cam.width,
-                                                        cam.height, wp.array(pts.at.astype(np.float32), dtype=wp.vec2,
-                                                                             device=device)],
-                  outputs=[distance], device=device)
-    tape.backward(grads={distance: wp.array(np.ones(n, np.float32), dtype=float, device=device)})
-    g = geometry.grad.numpy().astype(np.float64).reshape(n, 6, 3)
-    out = {key: g[:, k] for k, key in enumerate(("v0", "v1", "light", "p0", "p1", "p2"))}
-    out.update(camera_adjoints(camera, fovy, n))
-    tape.zero()
-    return out
+    (kernels.shadow_edge_distances, on a wp.Tape: grad_edge_points.tape_speeds; float64 rows): ``v0``, ``v1``
+    for the occluder edge's vertices, ``light`` for the source (a point's position, a light's direction of
+    travel), ``p0``, ``p1``, ``p2`` for the receiver's corners, ``eye``, ``center``, ``up`` and ``fovy`` for the
+    camera."""
+    directional = sources.directional[segments.source[pts.edge]].astype(np.int32)
+    (g,), camera = tape_speeds(scene, geom, pts, shadow_edge_distances, [shadow_rows(geom, sources, segments, pts)],
+                               [wp.array(directional, dtype=int, device=device)], device)
+    return {**{key: g[:, k] for k, key in enumerate(SHADOW_KEYS)}, **camera}
 
 
 def shadow_term(scene, geom, fx, sources: ShadowSources, segments: ShadowSegments, pts: EdgePoints, d: np.ndarray,
@@ -317,8 +325,5 @@ def shadow_term(scene, geom, fx, sources: ShadowSources, segments: ShadowSegment
     edges' vertices, the receivers' corners, the camera and each source."""
     jump = light_sides(scene, geom, fx, sources, segments, pts, device)
     speed = shadow_speeds(scene, geom, sources, segments, pts, device)
-    seg = pts.edge
-    corners = geom.indices_np.reshape(-1, 3).astype(np.int64)[segments.face[seg]]
-    vertices = {"v0": segments.edge[seg, 0], "v1": segments.edge[seg, 1], "p0": corners[:, 0], "p1": corners[:, 1],
-                "p2": corners[:, 2]}
-    return boundary_term(pts, jump, d, speed, vertices, len(geom.points_np), (segments.source[seg], len(sources.at)))
+    return boundary_term(pts, jump, d, speed, shadow_vertices(geom, segments, pts), len(geom.points_np),
+                         (segments.source[pts.edge], len(sources.at)))
