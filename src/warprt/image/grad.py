@@ -306,7 +306,7 @@ def backward(scene, geom, hits: Record, d_image, wrt, device: str, poses: list |
     all the edges the parameters move (else one ArgumentError naming ``edges``: check_edges)."""
     wrt = checked_names(scene, geom, hits, wrt)
     if edges:
-        check_edges(scene, geom, frame, hits, wrt)
+        check_edges(scene, geom, frame, wrt)
     d = np.asarray(d_image.numpy() if isinstance(d_image, wp.array) else d_image, np.float32)
     if d.shape != (hits.height, hits.width, 3) or not np.all(np.isfinite(d)):
         raise ArgumentError("backward", "d_image", f"expected finite values of shape {(hits.height, hits.width, 3)}, "

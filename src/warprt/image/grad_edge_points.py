@@ -251,3 +251,14 @@ def boundary_term(pts: EdgePoints, jump: np.ndarray, d: np.ndarray, speed: dict,
         term.sources = np.zeros((sources[1], 3))
         np.add.at(term.sources, sources[0], w[:, None] * speed["light"])
     return term
+
+
+def add_terms(terms: list, n_points: int) -> BoundaryTerm:
+    """The sum of BoundaryTerms, in their order (sources: those of the terms that have them; None if none)."""
+    out = BoundaryTerm(np.zeros((n_points, 3)), {k: 0.0 for k in ("eye", "center", "up", "fovy")})
+    for t in terms:
+        out.points = out.points + t.points
+        out.camera = {k: out.camera[k] + t.camera[k] for k in out.camera}
+        if t.sources is not None:
+            out.sources = t.sources if out.sources is None else out.sources + t.sources
+    return out

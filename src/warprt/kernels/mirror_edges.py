@@ -53,13 +53,13 @@ def make_mirrored_distances(levels: int):
     host sums them in a fixed order."""
 
     @wp.kernel(module="unique")
-    def mirrored_distances(geometry: wp.array(dtype=wp.vec3), kind: wp.array(dtype=int),
-                           mirrors: wp.array(dtype=wp.vec3), level: wp.array(dtype=int),
+    def mirrored_distances(geometry: wp.array(dtype=wp.vec3), mirrors: wp.array(dtype=wp.vec3),
+                           kind: wp.array(dtype=int), level: wp.array(dtype=int),
                            camera: wp.array(dtype=wp.vec3), fovy: wp.array(dtype=float), near: float, width: int,
                            height: int, at: wp.array(dtype=wp.vec2), distance: wp.array(dtype=float)):
         j = wp.tid()
-        v0, v1, light = geometry[6 * j], geometry[6 * j + 1], geometry[6 * j + 2]
-        p0, p1, p2 = geometry[6 * j + 3], geometry[6 * j + 4], geometry[6 * j + 5]
+        v0, v1, light = wp.vec3(geometry[6 * j]), wp.vec3(geometry[6 * j + 1]), wp.vec3(geometry[6 * j + 2])
+        p0, p1, p2 = wp.vec3(geometry[6 * j + 3]), wp.vec3(geometry[6 * j + 4]), wp.vec3(geometry[6 * j + 5])
         for step in range(wp.static(levels)):  # unrolled (Warp replays no dynamic loop backwards): last mirror first
             i = wp.static(levels) - 1 - step
             if i < level[j]:
