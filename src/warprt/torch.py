@@ -18,22 +18,30 @@ dtype and moved to its device.
 
 from __future__ import annotations
 
+import inspect
+
 import numpy as np
 import torch
 
 from ._warp import wp
 from .errors import ArgumentError, SceneError
 from .image.grad_params import not_differentiated
+from .image.renderer import Renderer
 
 FUNCTION = "warprt.torch.render"
+# Renderer.backward's own default, read from it: the image's backward passes the same unless told otherwise.
+BACKWARD_EDGES = inspect.signature(Renderer.backward).parameters["edges"].default
 
 
-def render(renderer, params: dict) -> torch.Tensor:
+def render(renderer, params: dict, edges: bool = BACKWARD_EDGES) -> torch.Tensor:
     """The next frame of ``renderer`` (a warprt.Renderer) with ``params`` ({r.params name: torch.Tensor of that
     parameter's shape}) set, as an (H, W, 3) float32 tensor on the tensors' device (the renderer's without any).
     Where a tensor requires grad (and torch records gradients), the frame is rendered with grad=[those names]
-    and the image's grad_fn hands its adjoint to renderer.backward(d_image, wrt=those names): each tensor's
-    .grad gets its gradient, in its dtype, on its device. Else a plain frame, nothing recorded.
+    and the image's grad_fn hands its adjoint to renderer.backward(d_image, wrt=those names, edges=edges): each
+    tensor's .grad gets its gradient, in its dtype, on its device; with ``edges`` (Renderer.backward's default
+    unless given), the boundary term of silhouettes and shadows' edges included, and backward's refusal of it
+    (mirrors, glass, a checker texture, a spot's hard cone) raised by loss.backward() as backward's one line.
+    Else a plain frame, nothing recorded.
 
     One ArgumentError line, naming the parameter, before anything is set or rendered: a name r.params does not
     have, a value that is not a tensor or not of the parameter's shape, tensors on two devices, and a tensor
@@ -51,7 +59,7 @@ def render(renderer, params: dict) -> torch.Tensor:
     renderer.params.update({n: t.detach().to("cpu", dtypes[n]).numpy() for n, t in zip(names, tensors)})
     if not wrt:
         return _image(renderer.render().image, device)
-    return _GradFrame.apply(renderer, tuple(names), wrt, device, *tensors)
+    return _GradFrame.apply(renderer, tuple(names), wrt, bool(edges), device, *tensors)
 
 
 def _checked(renderer, names: list, tensors: list) -> tuple[dict, torch.device]:
@@ -91,12 +99,13 @@ def _adjoint(d_image: torch.Tensor, renderer_device: str):
 
 class _GradFrame(torch.autograd.Function):
     """A grad frame of a renderer whose parameters render() has set from ``tensors`` (inputs here so that
-    autograd reaches them): the image forward, backward()'s gradients for the names in ``wrt`` back."""
+    autograd reaches them): the image forward, backward()'s gradients for the names in ``wrt`` back (with the
+    edges' boundary term where ``edges``)."""
 
     @staticmethod
-    def forward(ctx, renderer, names, wrt, device, *tensors):
+    def forward(ctx, renderer, names, wrt, edges, device, *tensors):
         image = renderer.render(grad=list(wrt)).image  # grad=[names]: a named reflectivity of 0 recorded too
-        ctx.renderer, ctx.names, ctx.wrt, ctx.frame = renderer, names, wrt, renderer.grad_frame
+        ctx.renderer, ctx.names, ctx.wrt, ctx.edges, ctx.frame = renderer, names, wrt, edges, renderer.grad_frame
         ctx.like = [(t.shape, t.dtype, t.device) for t in tensors]
         return _image(image, device)
 
@@ -108,9 +117,9 @@ class _GradFrame(torch.autograd.Function):
             raise ArgumentError(FUNCTION, ", ".join(ctx.wrt), "the renderer has rendered another frame (or was "
                                 "closed) since this image, so backward() would differentiate that frame: call "
                                 "loss.backward() before the next render, or give each image its own Renderer")
-        grads = r.backward(_adjoint(d_image, r.options.device), wrt=list(ctx.wrt))
+        grads = r.backward(_adjoint(d_image, r.options.device), wrt=list(ctx.wrt), edges=ctx.edges)
         out = [None if name not in grads else _gradient(grads[name], *like) for name, like in zip(ctx.names, ctx.like)]
-        return (None, None, None, None, *out)
+        return (None, None, None, None, None, *out)
 
 
 def _gradient(g, shape, dtype, device) -> torch.Tensor:

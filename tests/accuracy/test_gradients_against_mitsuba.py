@@ -423,12 +423,12 @@ def mitsuba_centre_gradients(s, weights, shadows: bool = True) -> tuple[np.ndarr
 
 
 def test_area_light_centre_gradients_equal_mitsubas_ad():
-    """tests/grad/test_area_light_centre_gradients.py's rectangle light over a glossy sphere and a mirroring
+    """tests/grad/test_area_light_shape_gradients.py's rectangle light over a glossy sphere and a mirroring
     floor (two levels, 4 samples): lights.0.center against Mitsuba's AD through its rectangle's to_world, both
     holding the faces and which sample points each hit sees. Pixels whose images part are left out of both
     losses. Measured: within 2.6e-7 relative (at 16 samples too). The control: Mitsuba's model without shadows
     (every sample point seen) is 0.21 off."""
-    from grad.test_area_light_centre_gradients import HEIGHT as H, WIDTH as W, lit
+    from grad.test_area_light_shape_gradients import HEIGHT as H, WIDTH as W, lit
 
     s = lit().with_render(light_samples=4)  # Mitsuba's kernels unroll the points: 16 took 74 s of the suite
     w = np.random.default_rng(5).random((H, W, 3)).astype(np.float32)

@@ -290,6 +290,29 @@ def test_an_area_lights_centre_set_renders_as_a_fresh_load(tmp_path, shape):
     assert "lights.0.center" not in r.params  # a point light has none
 
 
+@pytest.mark.parametrize("shape, name, value", [("rectangle", "size", [1.1, 0.3]), ("rectangle", "normal", [0.3, -1.0, 0.0]),
+                                                ("disk", "radius", 0.45), ("sphere", "radius", 0.2)])
+def test_an_area_lights_shape_set_renders_as_a_fresh_load(tmp_path, shape, name, value):
+    """lights.<i>.size, normal and radius: the light's drawn triangles, its sample points, their normals and areas
+    as a file saying the new shape gives them; a wrong shape of value is one line naming the parameter."""
+    d = copy.deepcopy(doc())
+    light = {"type": "area", "shape": shape, "center": [0.5, 2.5, 0.5], "radiance": [3.0, 2.5, 2.0]}
+    light.update({"normal": [0.0, -1.0, 0.3], "size": [0.8, 0.5]} if shape == "rectangle" else
+                 {"normal": [0.1, -1.0, 0.0], "radius": 0.3} if shape == "disk" else {"radius": 0.3})
+    d["lights"] = [d["lights"][0], light]
+    d["render"]["light_samples"] = 4
+    r = warprt.Renderer(load(tmp_path, d), primary_query="raytrace")
+    before = r.render()
+    r.params[f"lights.1.{name}"] = value
+    after = r.render()
+    edited = copy.deepcopy(d)
+    edited["lights"][1][name] = value
+    assert_same_frame(after, warprt.render(load(tmp_path, edited, "edited.toml"), primary_query="raytrace"))
+    assert not np.array_equal(after.image, before.image)
+    with pytest.raises(warprt.SceneError, match=f"lights.1.{name}"):
+        r.params[f"lights.1.{name}"] = [1.0, 2.0, 3.0, 4.0]
+
+
 # --- An object's pose: objects.<name>.translation and rotation -------------------------------------------
 
 POSE = {"objects.block.translation": [0.15, 0.05, -0.2], "objects.block.rotation": [0.2, 0.5, -0.1]}

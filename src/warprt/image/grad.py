@@ -15,8 +15,9 @@ colours and exponents (with their textures' texels: the forward's bilinear looku
 image colour its own copy here so that each gets its own adjoint; and the vertex colours), the lights' colours,
 positions and directions (a spot's cone, 1 / r^2 falloff), the area lights' radiance (an area light's, an
 emitting material's emission) through their sample points and the emitter a ray meets, a rectangle, disk or
-sphere light's centre (its sample points translated by the centre's move, kernels.translate_samples; its
-normals and areas unchanged; an object light's points and its emitting object's vertices held fixed), a
+sphere light's own shape (its center, normal, size or radius, or a rectangle's half-edges: its sample points,
+normals and areas moved with it, grad_area_shape.moving_samples; an object light's points and its emitting
+object's vertices held fixed), a
 mirror's reflectivity (at 0 too, where render(grad=[that name]) followed its rays with weight 0:
 grad_params.mirrored_materials; backward() refuses an unrecorded one in one line rather than give it 0), a
 dielectric's ior, transmittance and absorption (Fresnel, Snell and Beer, through the whole ray tree; a
@@ -48,10 +49,11 @@ from .._warp import wp
 from ..errors import ArgumentError
 from ..geometry import AreaLights, SceneData, TextureSlot, texel_array, texture_slots
 from ..kernels import (ReplayCamera, ReplayHits, ReplayRays, camera_data, make_replay_combine, make_replay_level,
-                       posed_points, replay_area, sample_mean, smooth_vertex_normals, translate_samples, vertex_normal_sums)
+                       posed_points, replay_area, sample_mean, smooth_vertex_normals, vertex_normal_sums)
 from ..kernels.interaction import Surface
 from ..kernels.shading import Coefficients
 from ..scene import camera_basis, drawn_objects, position_ids
+from .grad_area_shape import SHAPE_KEYS, moving_samples, shape_table
 from .grad_edges import EdgeFrame, check_edges, edge_gradients
 from .grad_params import checked_names, gradients_by_name
 from .grad_record import Record
@@ -68,7 +70,8 @@ class Replay:
     the area lights' translated points); ``arrays`` the differentiable inputs by key (ka, kd, ks, shininess,
     reflectivity, ior, transmittance, absorption per material slot; color, position per Whitted light and
     direction, its LightShape's; texels; radiance per area light; with vertices the points, with poses each
-    object's translation and rotation, with vertex colours the colors, with centres each area light's center,
+    object's translation and rotation, with vertex colours the colors, with shapes the shape lights' parameters
+    (``shape``: grad_area_shape.ShapeTable),
     with the camera the camera and fovy); ``images`` where each image colour's texels lie in ``texels``."""
 
     hits: Record
@@ -126,14 +129,14 @@ def _struct(value, cls):
 
 
 def build_replay(scene, geom, hits: Record, device: str, vertices: bool = False, camera: bool = False,
-                 centres: bool = False, poses: list | None = None) -> Replay:
+                 shapes: bool = False, poses: list | None = None) -> Replay:
     """The Replay of ``hits`` (a frame of ``scene`` on ``geom``): the frame's SceneData with its materials', lights',
     textures' and area lights' arrays copied, differentiable; with ``vertices`` its points too (the hits recomputed
     on the moved faces, a smooth object's normals made from the points, moving_normals); with ``poses``
     (params.Pose per scene object, with ``vertices``) the points posed by the objects' translations and rotations
     (pose_points); with ``camera`` its eye, center, up and fovy (the camera rays made from them, the hits
-    recomputed from the moved rays); with ``centres`` (and area lights) the area lights' sample points translated
-    by their centres' moves (0: the forward's points)."""
+    recomputed from the moved rays); with ``shapes`` (and area lights) the area lights' sample points, normals and
+    areas moving with their shape lights' centers, normals, sizes and radii (the forward's at the frame's values)."""
     data, mats, before = _struct(hits.data, SceneData), geom.slot_materials(scene), []
     for key in ("ka", "kd", "ks", "kr", "shininess", "ior", "transmittance", "absorption", "light_pos",
                 "light_color", "light_shape"):
@@ -161,7 +164,7 @@ def build_replay(scene, geom, hits: Record, device: str, vertices: bool = False,
             before += launches
     sample_light = wp.zeros(1, dtype=int, device=device)
     if hits.words:
-        data.area, sample_light, area_arrays, launches = area_replay_table(scene, hits.data.area, device, centres)
+        data.area, sample_light, area_arrays, launches = area_replay_table(scene, geom, hits, device, shapes)
         arrays.update(area_arrays)
         before += launches
     cam = replay_camera(scene, geom, hits, device)
@@ -208,22 +211,23 @@ def replay_hits(hits: Record, device: str) -> ReplayHits:
     return h
 
 
-def area_replay_table(scene, area: AreaLights, device: str, centres: bool) -> tuple:
+def area_replay_table(scene, geom, hits: Record, device: str, shapes: bool) -> tuple:
     """(area, sample_light, arrays, launches): the frame's area lights (AreaLights) with their radiance copied,
-    differentiable, and with ``centres`` their sample points moved with their lights' centres (c - c0, 0 here:
-    the forward's points to the bit; their normals and areas as they are, a shape light's points being its
-    centre plus fixed offsets) by translate_samples (the launch), the shift differentiable; each point's light."""
+    differentiable, and with ``shapes`` their sample points, normals and areas moving with their shape lights'
+    centers, normals, sizes and radii (grad_area_shape.moving_samples: the forward's at the frame's values, to the
+    bit), the launch that makes them; each point's light."""
+    area = hits.data.area
     first = area.first.numpy()
-    count = int(first[-1])
     light = wp.array(np.repeat(np.arange(len(first) - 1), np.diff(first)).astype(np.int32), dtype=int, device=device)
     out = _struct(area, AreaLights)
     out.radiance = _copy(area.radiance)
     arrays, launches = {"radiance": out.radiance}, []
-    if centres:
-        shift = wp.zeros(len(scene.area_lights), dtype=wp.vec3, device=device, requires_grad=True)
-        out.points = wp.zeros(count, dtype=wp.vec3, device=device, requires_grad=True)
-        launches.append((translate_samples, count, [area.points, light, shift], [out.points]))
-        arrays["center"] = shift
+    if shapes:
+        table = shape_table(scene, geom, device)
+        k = int(round(np.sqrt(scene.render.light_samples)))
+        out.points, out.normals, out.dA, launch = moving_samples(scene, area, table, k, device)
+        launches.append(launch)
+        arrays["shape"] = table
     return out, light, arrays, launches
 
 
@@ -280,14 +284,14 @@ def moving_normals(scene, geom, points, device: str) -> tuple:
                      (smooth_vertex_normals, base, [sums, position, geom.normals], [normals])]
 
 
-def replay_image(scene, geom, hits: Record, device: str, camera: bool = False, centres: bool = False,
+def replay_image(scene, geom, hits: Record, device: str, camera: bool = False, shapes: bool = False,
                  poses: list | None = None) -> np.ndarray:
     """The image the replay makes of a recorded frame, (height, width, 3): the forward's, to float32
     rounding, where the replay models what the forward traced (what the tests check); with ``camera``, the
-    replay camera gradients run (the rays made again from the camera, the hits re-intersected); with ``centres``,
-    the area lights' sample points translated (by 0) as the replay of their centres' gradients does; with
+    replay camera gradients run (the rays made again from the camera, the hits re-intersected); with ``shapes``,
+    the area lights' sample points moved (by 0) as the replay of their shapes' gradients moves them; with
     ``poses`` (params.Pose per scene object), the points posed as the replay of the poses' gradients poses them."""
-    replay = build_replay(scene, geom, hits, device, vertices=poses is not None, camera=camera, centres=centres,
+    replay = build_replay(scene, geom, hits, device, vertices=poses is not None, camera=camera, shapes=shapes,
                           poses=poses)
     replay.launch()
     image = wp.empty(hits.width * hits.height, dtype=wp.vec3, device=device)
@@ -314,10 +318,10 @@ def backward(scene, geom, hits: Record, d_image, wrt, device: str, poses: list |
     posing = any(name.startswith("objects.") and name.endswith((".translation", ".rotation")) for name in wrt)
     moving = posing or any(name.startswith("objects.") and name.endswith(".vertices") for name in wrt)
     camera = any(name.startswith("camera.") for name in wrt)
-    centres = any(name.startswith("lights.") and name.endswith(".center") for name in wrt)
+    shapes = any(name.startswith("lights.") and name.endswith(tuple(f".{k}" for k in SHAPE_KEYS)) for name in wrt)
     if posing and poses is None:
         poses = object_poses(scene, {})
-    replay = build_replay(scene, geom, hits, device, moving, camera, centres, poses if posing else None)
+    replay = build_replay(scene, geom, hits, device, moving, camera, shapes, poses if posing else None)
     tape = wp.Tape()
     with tape:
         replay.launch()

@@ -12,6 +12,7 @@ from .._warp import wp
 from ..errors import ArgumentError
 from ..kernels import edge_distances, empty_aov_buffers, empty_record, make_edge_sides_kernel
 from ..scene import drawn_objects
+from .grad_area_shape import SHAPE_KEYS, shape_edge_gradients, shape_table
 from .grad_edge_points import (BoundaryTerm, EdgePoints, add_terms, boundary_term, segment_points, side_directions,
                                tape_speeds)
 from .grad_mesh_edges import camera_edges, mesh_edges
@@ -33,11 +34,12 @@ class EdgeFrame:
 
 def moves_edges(name: str) -> bool:
     """Whether a parameter moves an edge of the image: the objects' vertices (their poses too) and the camera move the edges
-    camera rays see; a light's position, direction or centre moves its shadows, a spot's hard cone, a shape
-    light's own outline; a dielectric's ior what is seen through it."""
+    camera rays see; a light's position or direction, or a shape light's own shape (its center, normal, size,
+    radius), moves its shadows, a spot's hard cone, a shape light's own outline; a dielectric's ior what is seen
+    through it."""
     parts = name.split(".")
     return (parts[0] == "camera" or (parts[0] == "objects" and parts[-1] in ("vertices", "translation", "rotation"))
-            or (parts[0] == "lights" and parts[-1] in ("position", "direction", "center"))
+            or (parts[0] == "lights" and parts[-1] in ("position", "direction") + SHAPE_KEYS)
             or (parts[0] == "materials" and parts[-1] == "ior"))
 
 
@@ -92,10 +94,11 @@ def edge_speeds(scene, geom, pts: EdgePoints, device: str) -> dict:
 
 def covered(name: str) -> bool:
     """Whether edge_gradients gives ``name`` a term: the camera, objects' vertices (their poses through them:
-    grad.pose_edge_gradients), a Whitted light's position or direction, an area light's centre."""
+    grad.pose_edge_gradients), a Whitted light's position or direction, a shape light's own shape (its sample
+    points' and outline's term taken back to it: grad_area_shape.shape_edge_gradients)."""
     parts = name.split(".")
     return (parts[0] == "camera" or (parts[0] == "objects" and parts[-1] == "vertices")
-            or (parts[0] == "lights" and parts[-1] in ("position", "direction", "center")))
+            or (parts[0] == "lights" and parts[-1] in ("position", "direction") + SHAPE_KEYS))
 
 
 @dataclass
@@ -167,14 +170,19 @@ def edge_gradients(scene, geom, frame: EdgeFrame, d: np.ndarray, wrt, device: st
         jump = edge_sides(scene, geom, frame, seen, device) if len(seen.edge) else None
         terms += mirror_terms(scene, geom, frame.fx, b.mirrored, b.sources, jump, d3, device)
     term = add_terms(terms, len(geom.points_np))
-    return {name: g for name in wrt if (g := _by_name(scene, b.sources, term, name)) is not None}
+    shapes = {}
+    if any(n.startswith("lights.") and n.endswith(tuple(f".{k}" for k in SHAPE_KEYS)) for n in wrt):
+        samples = None if term.sources is None else term.sources[len(scene.whitted_lights):]
+        shapes = shape_edge_gradients(scene, geom, shape_table(scene, geom, device), samples, term.points,
+                                      int(round(np.sqrt(scene.render.light_samples))), device)
+    return {name: g for name in wrt if (g := shapes.get(name, _by_name(scene, b.sources, term, name))) is not None}
 
 
 def _by_name(scene, sources: ShadowSources | None, term: BoundaryTerm, name: str):
     """``name``'s share of ``term`` (None: the term has none): a camera parameter's sum, an object's
-    vertices' rows, a light's sources' sum (a direction's projected as Light keeps it unit: (I - u u^T)), an
-    area light's centre that of its sample points and of its own triangles' points (its outline, the
-    shadows they cast), which move with it."""
+    vertices' rows, a light's sources' sum (a direction's projected as Light keeps it unit: (I - u u^T)). A
+    shape light's own shape's is its sample points' and its own triangles' points' taken back through the
+    shape (edge_gradients: grad_area_shape.shape_edge_gradients)."""
     section, owner, key = (name.split(".") + [""])[:3]
     if section == "camera":
         return np.asarray(term.camera[owner], np.float64).reshape(np.shape(getattr(scene.camera, owner)))
@@ -189,10 +197,6 @@ def _by_name(scene, sources: ShadowSources | None, term: BoundaryTerm, name: str
     if key == "direction" and g is not None:
         unit = np.asarray(scene.lights[int(owner)].direction, np.float64)
         g = g - unit * (unit @ g)
-    if key == "center":
-        shapes = [l for l in scene.area_lights if l.shape is not None]
-        i = len(scene.objects) + next(k for k, l in enumerate(shapes) if l is scene.lights[int(owner)])
-        g = (0.0 if g is None else g) + np.add.reduce(term.points[starts[i]:starts[i + 1]], axis=0)
     return g
 
 

@@ -7,6 +7,7 @@ import numpy as np
 from ..errors import ArgumentError
 from ..kernels import MAX_GRAD_LIGHTS
 from ..scene import scene_effects
+from .grad_area_shape import gradients_of, shape_keys
 from .grad_record import Record
 from .params import POSE_KEYS, object_names
 
@@ -62,7 +63,8 @@ def parameter_names(scene) -> list[str]:
     """The r.params names backward() can differentiate with respect to: the objects' vertices and poses
     (translation, rotation) too (a smooth object's computed vertex normals moving with them), but not an area
     light's own object's (its sample points are held fixed), and their vertex colours where they have them;
-    an area light's radiance and an emitting material's emission, a rectangle, disk or sphere light's center;
+    an area light's radiance and an emitting material's emission, a rectangle, disk or sphere light's own
+    shape (grad_area_shape.shape_keys: its center, normal, size or radius, a rectangle's u and v);
     the camera's eye, center, up and fovy."""
     names = [f"materials.{m}.{k}" for m in scene.materials for k in MATERIAL_KEYS]
     names += [f"materials.{name}.{k}" for name, m in scene.materials.items() if m.dielectric for k in DIELECTRIC_KEYS]
@@ -72,7 +74,7 @@ def parameter_names(scene) -> list[str]:
     names += [f"lights.{i}.{k}" for i, light in enumerate(scene.lights) if not light.area for k in LIGHT_KEYS
               if getattr(light, k) is not None]  # as r.params has them: no position for a directional light
     names += [f"lights.{i}.radiance" for i, light in enumerate(scene.lights) if light.area]
-    names += [f"lights.{i}.center" for i, light in enumerate(scene.lights) if _centred(light)]
+    names += [f"lights.{i}.{k}" for i, light in enumerate(scene.lights) for k in shape_keys(light)]
     emitters = _emitter_objects(scene)
     names += [f"objects.{name}.vertices" for name, i in object_names(scene).items()
               if scene.objects[i].name not in emitters]
@@ -82,12 +84,6 @@ def parameter_names(scene) -> list[str]:
               if scene.objects[i].colors is not None]
     names += [f"camera.{k}" for k in CAMERA_KEYS]
     return names
-
-
-def _centred(light) -> bool:
-    """Whether a light is an area light of its own shape (rectangle, disk, sphere) with a ``center``, which
-    r.params names and whose move translates its sample points (translate_samples)."""
-    return light.area and light.shape is not None and light.center is not None
 
 
 def _emits(material) -> bool:
@@ -137,8 +133,8 @@ def not_differentiated(scene, name, known=None) -> str | None:
     return _name_refusal(scene, str(name)) or (
         "not a parameter backward() differentiates yet (materials.<name>.ka | kd | ks | shininess | "
         "reflectivity | ka_texture | kd_texture | ks_texture | emission, a dielectric's ior | "
-        "transmittance | absorption, lights.<i>.color | position | direction | radiance | center (an "
-        "area light's of its own shape), objects.<name>.vertices | translation | rotation | colors (vertex "
+        "transmittance | absorption, lights.<i>.color | position | direction | radiance | center | normal | "
+        "size | radius | u | v (an area light's of its own shape, as it has them), objects.<name>.vertices | translation | rotation | colors (vertex "
         "colours), camera.eye | center | up | fovy)")
 
 
@@ -190,7 +186,8 @@ def gradients_by_name(scene, geom, launched, wrt) -> dict:
     arrays = launched.arrays
     slot = {name: i for i, name in enumerate(geom.material_names)}
     whitted = [i for i, light in enumerate(scene.lights) if not light.area]
-    grads = {k: a.grad.numpy() for k, a in arrays.items() if k != "points" and a.grad is not None}
+    grads = {k: a.grad.numpy() for k, a in arrays.items() if k not in ("points", "shape") and a.grad is not None}
+    shapes = gradients_of(scene, arrays["shape"]) if "shape" in arrays else {}
     grads["direction"] = grads["direction"]["direction"]  # the lights' LightShape rows' direction field
     camera_rows = {key: i for i, key in enumerate(CAMERA_KEYS[:3])}
 
@@ -215,8 +212,8 @@ def gradients_by_name(scene, geom, launched, wrt) -> dict:
             out[name] = point_grads[starts[i]:starts[i + 1]]
         elif section == "camera":  # eye and center less the frame origin (a shift: the same derivative), up
             out[name] = (grads["fovy"][0] if owner == "fovy" else grads["camera"][camera_rows[owner]]).astype(np.float64)
-        elif key == "center":  # an area light's: its row among the area lights (area_sources' order)
-            out[name] = grads["center"][area_sources(scene).index(f"lights.{owner}.radiance")].astype(np.float64)
+        elif name in shapes:  # a shape light's center, normal, size, radius, u or v
+            out[name] = shapes[name]
         elif key in ("radiance", "emission"):  # the area lights whose radiance it is
             rows = [j for j, source in enumerate(area_sources(scene)) if source == name]
             out[name] = grads["radiance"][rows].astype(np.float64).sum(0) if rows else np.zeros(3)

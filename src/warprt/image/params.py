@@ -6,7 +6,9 @@ frame may change without loading the scene again, each read and written as NumPy
     materials.<name>.shininess | ior                                            ()
     materials.<name>.ka_texture | kd_texture | ks_texture     (H, W, 3) linear float32, row 0 the image's top
     lights.<i>.position | color | direction | radiance (an area light's)         (3,)
-    lights.<i>.center        (3,), an area light's of its own shape (rectangle, disk, sphere) given one
+    lights.<i>.center | normal | u | v   (3,), an area light's of its own shape (rectangle, disk, sphere), as given
+    lights.<i>.size          (2,), a rectangle light's (width, height) about its normal
+    lights.<i>.radius        (), a disk or sphere light's
     objects.<name>.vertices                                                     (N, 3), world space
     objects.<name>.translation | rotation          (3,), the object's pose (Pose), 0 at load
     objects.<name>.colors                      (N, 3) linear RGB, where the object has vertex colours
@@ -40,7 +42,8 @@ from ..errors import SceneError
 MATERIAL_COLOURS = ("ka", "kd", "ks", "reflectivity")
 DIELECTRIC_COLOURS = ("transmittance", "absorption")
 TEXTURES = ("ka_texture", "kd_texture", "ks_texture")
-LIGHT_VECTORS = ("position", "color", "direction", "radiance", "center")
+LIGHT_VECTORS = ("position", "color", "direction", "radiance", "center", "normal", "u", "v")
+LIGHT_SHAPES = {"size": (2,), "radius": ()}  # an area light's shape's other parameters, and their shapes
 CAMERA_VECTORS = ("eye", "center", "up")
 POSE_KEYS = ("translation", "rotation")
 SOURCE = "Renderer.params"
@@ -57,7 +60,7 @@ def _names(scene) -> list[str]:
         if m.emission is not None:
             out.append(f"materials.{name}.emission")
     for i, light in enumerate(scene.lights):
-        out += [f"lights.{i}.{k}" for k in LIGHT_VECTORS if getattr(light, k) is not None
+        out += [f"lights.{i}.{k}" for k in (*LIGHT_VECTORS, *LIGHT_SHAPES) if getattr(light, k) is not None
                 and not (light.area and k == "color")]  # an area light's light is its radiance
     out += [f"objects.{name}.vertices" for name in object_names(scene)]
     out += [f"objects.{name}.{k}" for name in object_names(scene) for k in POSE_KEYS]
@@ -131,7 +134,8 @@ class SceneParameters(MutableMapping):
             elif section == "materials":
                 materials[owner] = _set_material(materials[owner], key, name, value)
             elif section == "lights":
-                lights[owner] = replace(lights[owner], **{key: tuple(_vector(name, value, (3,)))})
+                v = _vector(name, value, LIGHT_SHAPES.get(key, (3,)))
+                lights[owner] = replace(lights[owner], **{key: float(v) if v.ndim == 0 else tuple(v)})
             elif section == "objects":
                 old = objects[owner]
                 objects[owner] = replace(old, **{key: _vector(name, value, getattr(old, key).shape)})

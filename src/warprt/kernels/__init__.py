@@ -24,8 +24,9 @@ from .dielectric import beer, beer_forever, fresnel_dielectric, refract
 from .texture import bilinear, texel
 from .pose import POSE_TAYLOR, posed_point, posed_points, rodrigues_coefficients
 from .replay import (MAX_GRAD_LIGHTS, ReplayCamera, ReplayHits, ReplayRays, barycentrics_on, make_replay_level,
-                     make_replay_combine, replay_area, sample_mean, translate_samples)
+                     make_replay_combine, replay_area, sample_mean)
 from .vertex_normals import corner_angle, smooth_vertex_normals, vertex_normal_sums
+from .area_shape import ShapeLights, coordinate_system, shape_area, shape_axes, shape_points, shape_samples
 from .hybrid import MARGIN_PX, uncertain, uncertain_np
 from .interaction import OFFSET_SCALE, make_surface, offset_ray_origin, reflect
 from .mirror import MARGIN_PX as MIRROR_MARGIN_PX, MAX_BOUNCES, Mirrors, gather_kernel, mirror_chain, mirror_hit, probe_kernel, total_kernel
@@ -50,9 +51,10 @@ __all__ = ["CLIP_SCALE", "CameraData", "Fragments", "MARGIN_PX", "MAX_BOUNCES", 
            "total_kernel", "triangle", "uncertain", "uncertain_np", "unit_normal", "woop_hit", "wp"]
 # The gradient: its replay, and what moves the points, normals and area lights' samples it reads.
 __all__ += ["MAX_GRAD_LIGHTS", "ReplayCamera", "ReplayHits", "ReplayRays", "barycentrics_on", "make_replay_level",
-            "replay_area", "make_replay_combine", "sample_mean", "translate_samples", "corner_angle",
+            "replay_area", "make_replay_combine", "sample_mean", "corner_angle",
             "smooth_vertex_normals", "vertex_normal_sums", "POSE_TAYLOR", "posed_point", "posed_points",
-            "rodrigues_coefficients"]
+            "rodrigues_coefficients", "ShapeLights", "coordinate_system", "shape_area", "shape_axes", "shape_points",
+            "shape_samples"]
 # The forward's functions the replay differentiates (tests gradcheck them one by one).
 __all__ += ["AreaTest", "Coefficients", "LightArrival", "Surface", "absorbed", "absorbed_forever", "area_arrival",
             "dielectric_children", "light_weight", "make_coefficients", "make_light_arrival", "make_light_terms",

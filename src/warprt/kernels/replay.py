@@ -269,17 +269,6 @@ def make_replay_combine(TREE: bool):
     return replay_combine
 
 
-@wp.kernel(module="unique")
-def translate_samples(points0: wp.array(dtype=wp.vec3), sample_light: wp.array(dtype=int),
-                      shift: wp.array(dtype=wp.vec3), points: wp.array(dtype=wp.vec3)):
-    """The area lights' sample points moved with their lights' centres: points0[q] (the forward's) plus its
-    light's shift (c - c0, the centre's move: a shape light's points are its centre plus offsets the
-    centre does not change), differentiable in the shift; its normal and dA stay. At a shift of 0 the
-    points are the forward's to the bit."""
-    q = wp.tid()
-    points[q] = points0[q] + shift[sample_light[q]]
-
-
 @wp.kernel(enable_backward=False)
 def sample_mean(rays: wp.array(dtype=wp.vec3), samples: int, image: wp.array(dtype=wp.vec3)):
     """Each pixel's colour from its ``samples`` camera rays' (in sample order) as the trace kernel makes it,

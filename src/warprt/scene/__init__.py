@@ -10,8 +10,8 @@ alone (the camera basis, vertex normals, the effect set).
 
 from ..memo import ObjectCache
 from . import shapes
-from .area import (EMITTER_MATERIAL, EMITTER_MATERIAL_NAME, drawn_objects, emitter_area, emitter_of_triangles,
-                   emitter_samples, sample_coordinates, shape_frame)
+from .area import (EMITTER_MATERIAL, EMITTER_MATERIAL_NAME, SHAPE_KINDS, drawn_objects, emitter_area,
+                   emitter_of_triangles, emitter_samples, local_coordinates, sample_coordinates, shape_frame)
 from .camera import CameraBasis, camera_basis, pixel_ray_directions
 from .dielectric import eye_medium, open_edges, signed_volume, winding_number
 from .dielectric_formats import DEFAULT_IOR, dielectric_from_gltf, dielectric_from_mtl, dielectric_from_usd
@@ -27,7 +27,7 @@ from .texture import Texture, srgb_to_linear
 from .toml_fields import TableReader, did_you_mean, read_toml
 from .validate import MAX_REACH, CheckedContent, check_setting, validate_camera, validate_scene, validate_view
 
-__all__ = ["EMITTER_MATERIAL", "EMITTER_MATERIAL_NAME", "drawn_objects", "emitter_area", "emitter_of_triangles",
+__all__ = ["EMITTER_MATERIAL", "EMITTER_MATERIAL_NAME", "SHAPE_KINDS", "local_coordinates", "drawn_objects", "emitter_area", "emitter_of_triangles",
            "emitter_samples", "sample_coordinates", "shape_frame", "Camera", "camera_basis", "CameraBasis", "CheckedContent", "check_setting", "DEFAULT_IOR", "DEFAULT_MATERIAL",
            "did_you_mean", "dielectric_from_gltf", "dielectric_from_mtl", "dielectric_from_usd", "EFFECTS", "EffectSet",
            "eye_medium", "input_kind", "Light", "load_dict", "load_mitsuba_file", "load_scene", "Material", "MAX_REACH", "ObjectCache", "open_edges",

@@ -201,6 +201,34 @@ def emitter_samples(scene, light, k: int) -> tuple[np.ndarray, np.ndarray, np.nd
     return points, normals, np.full(count, area / count)
 
 
+SHAPE_KINDS = {"rectangle": 0, "disk": 1, "sphere": 2}  # a shape light's kind, as the gradient's kernels number it
+
+
+def local_coordinates(light, k: int) -> tuple[np.ndarray, np.ndarray]:
+    """(samples, vertices): where a shape light's k*k sample points (emitter_samples) and its drawn triangles'
+    vertices (shape_object) lie in its own frame, (N, 3) float64: the world point is center + x A + y B + z C,
+    (A, B) a rectangle's half-edges or a disk's axes times its radius (shape_frame) and z = 0, a sphere's axes
+    times its radius (the world's). What moves with the light's center, size, normal and radius is the frame,
+    not these."""
+    a, b = sample_coordinates(light, k)
+    if light.shape == "rectangle":
+        samples = np.stack([2.0 * a - 1.0, 2.0 * b - 1.0, np.zeros_like(a)], axis=1)
+        vertices = np.array([[-1.0, -1.0, 0.0], [1.0, -1.0, 0.0], [1.0, 1.0, 0.0], [-1.0, 1.0, 0.0]])
+    elif light.shape == "disk":
+        samples = np.concatenate([concentric_disk(a, b), np.zeros((len(a), 1))], axis=1)
+        theta = 2.0 * np.pi * np.arange(DISK_SEGMENTS) / DISK_SEGMENTS
+        vertices = np.concatenate([[[0.0, 0.0, 0.0]], np.stack([np.cos(theta), np.sin(theta),
+                                                                  np.zeros_like(theta)], axis=1)])
+    else:
+        from .shapes import sphere
+
+        z = 1.0 - 2.0 * b
+        ring = np.sqrt(np.maximum(1.0 - z * z, 0.0))
+        samples = np.stack([ring * np.cos(2.0 * np.pi * a), ring * np.sin(2.0 * np.pi * a), z], axis=1)
+        vertices = sphere(1.0, SPHERE_SUBDIVISIONS)[0]
+    return samples, vertices
+
+
 def emitter_area(scene, light) -> float:
     """The emitting area of an area light."""
     return float(emitter_samples(scene, light, 1)[2].sum())
