@@ -309,12 +309,12 @@ def backward(scene, geom, hits: Record, d_image, wrt, device: str, poses: list |
     EdgeFrame; a pose's through its vertices' and the pose's Jacobian, pose_edge_gradients), where those are
     all the edges the parameters move (else one ArgumentError naming ``edges``: check_edges)."""
     wrt = checked_names(scene, geom, hits, wrt)
-    if edges:
-        check_edges(scene, geom, frame, wrt)
     d = np.asarray(d_image.numpy() if isinstance(d_image, wp.array) else d_image, np.float32)
     if d.shape != (hits.height, hits.width, 3) or not np.all(np.isfinite(d)):
         raise ArgumentError("backward", "d_image", f"expected finite values of shape {(hits.height, hits.width, 3)}, "
                                                    f"got {d.shape}")
+    if edges:
+        check_edges(scene, geom, frame, wrt)
     posing = any(name.startswith("objects.") and name.endswith((".translation", ".rotation")) for name in wrt)
     moving = posing or any(name.startswith("objects.") and name.endswith(".vertices") for name in wrt)
     camera = any(name.startswith("camera.") for name in wrt)

@@ -206,4 +206,5 @@ def check_edges(scene, geom, frame: EdgeFrame | None, wrt):
         raise ArgumentError("backward", "edges", "no frame's plan was kept: render(grad=True) first")
     why = edge_refusal(scene, geom, frame.fx, wrt)
     if why is not None:
-        raise ArgumentError("backward", "edges", why)
+        raise ArgumentError("backward", "edges", f"{why} (edges=False: the derivative with each ray's face and "
+                                                 f"each shadow ray's answer held)")
