@@ -10,6 +10,8 @@ count; glass and curved mirrors still refused.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 import warp as wp
@@ -18,8 +20,8 @@ import warp.autograd
 import warprt
 from marks import slow
 from oracle import image_point, line_distance, mirror_point, shadow_point
-from warprt.image import EdgeFrame, boundary, chain_faces, edge_sides, mirrored_speeds
-from warprt.kernels import make_mirrored_distances
+from warprt.image import MAX_CHAINS, EdgeFrame, boundary, chain_faces, edge_sides, mirrored_speeds, shadow_rows
+from warprt.kernels import DIRECTIONAL_SHADOW, EDGE, POINT_SHADOW, make_mirrored_distances
 from warprt.scene import resolve_effects
 
 from .converged import differences, gradient
@@ -127,3 +129,195 @@ def test_the_mirror_edges_gradient_equals_central_differences(weights, make, nam
     interior = float((gradient(make, [name], weights, False)[name] * u).sum())
     assert abs(with_edges - fd) <= TOL * abs(fd), (with_edges, fd)
     assert abs(interior - fd) > CONTROL * abs(fd), (interior, fd)
+
+
+def _frame(make):
+    """A frame of ``make`` (one sample a pixel) and its Boundary, seen from its eye."""
+    s = make(1)
+    r = warprt.Renderer(s)
+    r.render(grad=True)
+    fx = resolve_effects(s)
+    return r, s, boundary(s, r.geometry, fx, r.geometry.eye_offset(s.camera.eye).astype(np.float64)), fx
+
+
+def _unfolded(q, mirrors) -> np.ndarray:
+    """The point q as the eye sees it through the mirror faces ``mirrors`` (its ray's first first): reflected
+    across the last one's plane, then each before it (oracle.mirror_point)."""
+    for m in mirrors[::-1]:
+        q = mirror_point(q, m[0], np.cross(m[1] - m[0], m[2] - m[0]))
+    return q
+
+
+def _oracle_distance(cam, x, inputs: dict, level: int, shadow: bool, directional: bool) -> float:
+    """The signed distance of image point x from the image of an edge v0 v1 (with ``shadow``: its shadow from
+    the light on the plane of the receiver p0 p1 p2, oracle.shadow_point) seen through ``level`` mirror faces
+    m<i><c>, in float64."""
+    ends = [inputs["v0"], inputs["v1"]]
+    if shadow:
+        n = np.cross(inputs["p1"] - inputs["p0"], inputs["p2"] - inputs["p0"])
+        ends = [shadow_point(v, inputs["light"], inputs["p0"], n, directional) for v in ends]
+    mirrors = [[inputs[f"m{i}{c}"] for c in range(3)] for i in range(level)]
+    return line_distance(x, *(image_point(cam, _unfolded(q, mirrors)) for q in ends))
+
+
+def _speed_cases(r, s, b, fx):
+    """(points, speeds, per point its inputs' keys and float64 world values, level, whether a shadow's and
+    directional) of the mirrored edges and shadows' edges of a frame (b.mirrored), a point per segment whose
+    ray follows its chain."""
+    geom, mb, origin = r.geometry, b.mirrored, r.geometry.origin
+    p = geom.points_np.astype(np.float64) + origin
+    faces = geom.indices_np.reshape(-1, 3)
+    out = []
+    for pts, chain, shadow in ((mb.camera, mb.edge_chain, False), (mb.shadow_points, mb.shadow_chain, True)):
+        cf = chain_faces(s, geom, fx, mb.group, mb.chains, chain, pts, "cpu")
+        if shadow:
+            seg, src = mb.shadows, b.sources
+            rows = shadow_rows(geom, src, seg, pts)
+            kind = np.where(src.directional[seg.source[pts.edge]], DIRECTIONAL_SHADOW, POINT_SHADOW)
+        else:
+            rows = np.zeros((len(pts.edge), 6, 3))
+            rows[:, :2] = geom.points_np.astype(np.float64)[mb.edges[pts.edge]]
+            kind = np.full(len(pts.edge), EDGE)
+        speed = mirrored_speeds(s, geom, rows, kind, cf, pts, "cpu")
+        first = np.unique(pts.edge, return_index=True)[1]
+        for j in first[cf.follows[first]]:
+            directional = bool(kind[j] == DIRECTIONAL_SHADOW)
+            keys = ("v0", "v1", "light", "p0", "p1", "p2") if shadow else ("v0", "v1")
+            inputs = {k: rows[j, i] + (0.0 if k == "light" and directional else origin) for i, k in enumerate(keys)}
+            inputs.update({f"m{i}{c}": p[faces[cf.faces[j, i], c]] for i in range(cf.level[j]) for c in range(3)})
+            inputs["eye"] = np.asarray(s.camera.eye, np.float64)
+            out.append((pts.at[j], {k: speed[k][j] for k in inputs}, inputs, int(cf.level[j]), shadow, directional))
+    return out
+
+
+@pytest.mark.parametrize("make", [floor_scene, two_mirrors_scene], ids=["one mirror", "two mirrors"])
+def test_the_mirrored_edge_speed_is_the_reflections_projection(make):
+    """mirrored_speeds (kernels.make_mirrored_distances on a wp.Tape, float32) against central differences in
+    float64 of the signed distance of each point from its edge's (or its shadow's edge's) image through its
+    mirrors (oracle: the ends, or their shadows, reflected across each mirror face's plane, the last first,
+    then projected), in every input: the edge, the light, the receiver, each mirror face's corners and the eye
+    (up to one sign per point: the oracle's line has no side). The control: the edge's own image, unreflected,
+    moves otherwise."""
+    r, s, b, fx = _frame(make)
+    cases = _speed_cases(r, s, b, fx)
+    assert {(level, shadow) for *_, level, shadow, _ in cases} >= (
+        {(1, False), (1, True)} if make is floor_scene else {(2, True)})
+    for x, got, inputs, level, shadow, directional in cases:
+        def distance(key, k, h):
+            moved = {n: v.copy() for n, v in inputs.items()}
+            moved[key][k] += h
+            cam = s.camera if key != "eye" else type(s.camera)(**{**vars(s.camera), "eye": tuple(moved["eye"])})
+            return _oracle_distance(cam, x, moved, level, shadow, directional)
+
+        expected = np.array([[(distance(key, k, 1e-6) - distance(key, k, -1e-6)) / 2e-6 for k in range(3)]
+                             for key in inputs])
+        found = np.array([got[key] for key in inputs])
+        sign = np.sign(np.sum(found * expected))
+        np.testing.assert_allclose(found, sign * expected, rtol=0, atol=1e-3 * np.abs(expected).max())
+        if not shadow:
+            own = [_oracle_distance(s.camera, x, {**inputs, "v0": inputs["v0"] + dv}, 0, False, False)
+                   - _oracle_distance(s.camera, x, {**inputs, "v0": inputs["v0"] - dv}, 0, False, False)
+                   for dv in np.eye(3) * 1e-6]
+            assert np.abs(np.abs(np.array(own) / 2e-6) - np.abs(expected[0])).max() > 0.2 * np.abs(expected[0]).max()
+    r.close()
+
+
+def test_the_mirrored_distance_passes_warps_gradcheck():
+    """make_mirrored_distances' adjoints (edge, light, receiver, the mirror faces, eye, center, up, fovy; mesh
+    edges, point and directional shadows, through one mirror and two) against Warp's own finite differences."""
+    n, levels = 6, 2
+    rng = np.random.default_rng(5)
+    cam = floor_scene(1).camera
+    v = rng.uniform(-1, 1, (n, 2, 3)) * [1.0, 0.2, 1.0] + [0.0, 4.0, 0.0]
+    light = np.where(np.arange(n)[:, None] % 3 == 2, rng.uniform(-0.3, 0.3, (n, 3)) + [0.0, 1.0, 0.0],
+                     rng.uniform(-1, 1, (n, 3)))
+    receiver = rng.uniform(-1, 1, (n, 3, 3)) * [2.0, 0.1, 2.0] + [0.0, 5.0, 0.0]
+    floor = np.array([[-3.0, 0.0, -3.0], [0.0, 0.0, 3.0], [3.0, 0.0, -3.0]])
+    tilted = np.array([[-2.5, 1.5, -4.0], [5.5, 9.5, -4.2], [5.6, 9.6, 4.0]])
+    mirrors = np.stack([floor, tilted])[None] + rng.uniform(-0.1, 0.1, (n, levels, 3, 3))
+    geometry = np.concatenate([v, light[:, None], receiver], axis=1).reshape(-1, 3)
+    camera = np.tile(np.stack([cam.eye, cam.center, cam.up]), (n, 1))
+    at = rng.uniform(0, 1, (n, 2)) * [cam.width, cam.height]
+    vec = lambda a: wp.array(np.asarray(a, np.float32).reshape(-1, 3), dtype=wp.vec3, requires_grad=True)  # noqa: E731
+    ints = lambda a: wp.array(np.asarray(a, np.int32), dtype=int)  # noqa: E731
+    inputs = [vec(geometry), vec(mirrors), ints(np.arange(n) % 3), ints(1 + np.arange(n) // 3 % 2), vec(camera),
+              wp.array(np.full(n, cam.fovy, np.float32), dtype=float, requires_grad=True), float(cam.near), cam.width,
+              cam.height, wp.array(at.astype(np.float32), dtype=wp.vec2)]
+    out = wp.zeros(n, dtype=float, requires_grad=True)
+    assert [EDGE, POINT_SHADOW, DIRECTIONAL_SHADOW] == [0, 1, 2]
+    assert warp.autograd.gradcheck(make_mirrored_distances(levels), dim=n, inputs=inputs, outputs=[out], eps=1e-3,
+                                   atol=2e-2, rtol=2e-2, show_summary=False, raise_exception=False)
+
+
+def test_a_reflection_off_its_mirror_jumps_by_nothing():
+    """The crate's reflection in the small wall mirror is cut by the mirror's outline: where the unfolded
+    edges run on past it (pixels with no mirror in their 3 x 3 neighbourhood) their rays miss the mirror
+    (chain_faces: not following their chain, so no term) and the forward's jump there is 0, where inside the
+    mirror (its pixels alone) the rays of some follow and the reflected silhouette jumps."""
+    r, s, b, fx = _frame(wall_scene)
+    pts, mb = b.mirrored.camera, b.mirrored
+    seen = warprt.Renderer(s, aovs=("object",)).render().aovs["object"].reshape(HEIGHT, WIDTH)
+    jump = np.abs(edge_sides(s, r.geometry, EdgeFrame(fx, 0, s.render.max_depth), pts, "cpu")).max(axis=1)
+    follows = chain_faces(s, r.geometry, fx, mb.group, mb.chains, mb.edge_chain, pts, "cpu").follows
+    padded = np.pad(seen, 1, constant_values=-1)
+    near, inside = np.zeros_like(seen, bool), np.ones_like(seen, bool)  # the mirror (object 2) near, all round
+    for dy in range(3):
+        for dx in range(3):
+            near |= padded[dy:dy + HEIGHT, dx:dx + WIDTH] == 2
+            inside &= padded[dy:dy + HEIGHT, dx:dx + WIDTH] == 2
+    away, inside = ~near.reshape(-1)[pts.pixel], inside.reshape(-1)[pts.pixel]
+    assert away.sum() > 8 and not follows[away].any() and jump[away].max() < 1e-6
+    assert (inside & follows).sum() > 8 and jump[inside & follows].max() > 0.1
+    r.close()
+
+
+def test_the_mirror_edges_gradient_is_the_same_on_every_run_and_thread_count(weights):
+    """The mirrors' sums run in a fixed order (each point its own adjoints, np.add.at on the host): two runs,
+    and one thread against two, give the same gradient to the bit."""
+    names = ["objects.occ.vertices", "objects.mirror.vertices", "lights.0.position", "camera.eye"]
+    runs = [gradient(lambda: floor_scene(16), names, weights, True, threads=t) for t in (1, 1, 2)]
+    for other in runs[1:]:
+        for name in names:
+            assert np.array_equal(runs[0][name], other[name]), name
+
+
+def _box_of_mirrors(spp: int):
+    """The camera inside a box whose six faces are mirrors (planar: six groups), four ray levels: more chains
+    of mirrors than followed."""
+    return _scene(spp, 4, {"eye": [0.2, 0.1, 0.3], "center": [1.0, 0.3, -2.0], "fovy": 60.0},
+                  [{"position": [-0.3, 0.5, 0.2], "color": [0.9, 0.8, 0.7]}], {"mirror": MIRROR},
+                  [{"shape": "box", "name": "room", "size": [3.0, 2.5, 3.5], "material": "mirror"},
+                   {"shape": "triangles", "name": "occ", "faces": [[0, 1, 2]], "material": "mirror",
+                    "vertices": [[-0.7, 0.9, -0.4], [0.8, 1.0, -0.2], [0.0, 1.1, 0.7]]}])
+
+
+def _curved_mirror(spp: int):
+    """floor_scene's triangle over a smooth (curved) mirroring ball instead of the floor mirror."""
+    return _scene(spp, 2, {"eye": [0.3, 2.0, 0.6], "center": [0.0, 0.0, 0.0], "fovy": 45.0},
+                  [{"position": [1.5, 3.0, 1.0], "color": [0.9, 0.8, 0.7]}], {"mirror": MIRROR},
+                  [{"shape": "sphere", "name": "ball", "subdivisions": 2, "smooth": True, "material": "mirror"},
+                   {"shape": "triangles", "name": "occ", "faces": [[0, 1, 2]], "material": "mirror",
+                    "vertices": [[-0.7, 3.9, -0.4], [0.8, 4.0, -0.2], [0.0, 4.1, 0.7]]}])
+
+
+def _glass_floor(spp: int):
+    """floor_scene with its mirror glass."""
+    s = floor_scene(spp)
+    glass = replace(s.materials["mirror"], ior=1.5, transmittance=(0.9,) * 3, reflectivity=(0.0,) * 3)
+    return replace(s, materials={**s.materials, "mirror": glass})
+
+
+@pytest.mark.parametrize("make, why", [(_curved_mirror, "curved"), (_glass_floor, "glass"),
+                                       (_box_of_mirrors, f"more than {MAX_CHAINS} chains")],
+                         ids=["curved mirror", "glass", "too many chains"])
+def test_what_mirror_edges_leave_out_is_refused_in_one_line(weights, make, why):
+    """A curved mirror's reflections, glass's rays and more chains of mirrors than MAX_CHAINS: one line naming
+    ``edges`` and why; a colour is not refused, and edges=False never is."""
+    r = warprt.Renderer(make(1))
+    r.render(grad=True)
+    with pytest.raises(warprt.SceneError, match="edges") as e:
+        r.backward(weights, wrt=["objects.occ.vertices"], edges=True)
+    assert why in str(e.value) and "\n" not in str(e.value)
+    r.backward(weights, wrt=["materials.mirror.kd"], edges=True)
+    r.backward(weights, wrt=["objects.occ.vertices"], edges=False)
+    r.close()

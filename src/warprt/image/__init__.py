@@ -15,9 +15,10 @@ from .grad import Replay, build_replay, pose_points, replay_image
 from .grad_edge_points import EdgePoints, edge_points, segment_points
 from .grad_edges import Boundary, EdgeFrame, boundary, edge_sides, edge_speeds
 from .grad_mesh_edges import MeshEdges, camera_edges, mesh_edges
-from .grad_mirror_edges import (ChainFaces, MirrorChain, MirroredSegments, chain_faces, mirror_chains, mirror_planes,
-                                mirrored_speeds)
-from .grad_shadow_edges import ShadowSegments, ShadowSources, light_sides, shadow_segments, shadow_sources, shadow_speeds
+from .grad_mirror_edges import (MAX_CHAINS, ChainFaces, MirrorChain, MirroredSegments, chain_faces, mirror_chains,
+                                mirror_planes, mirrored_speeds)
+from .grad_shadow_edges import (ShadowSegments, ShadowSources, light_sides, shadow_rows, shadow_segments, shadow_sources,
+                                shadow_speeds)
 from .grad_record import Record, record_first_hits
 from .film import aov_paths, partial_files, read_aovs, read_image, to_srgb8, write_image
 from .launch import bands_of, default_threads, launch_bands
@@ -35,6 +36,6 @@ __all__ = ["AOVS", "Record", "Replay", "build_replay", "FrameCaches", "LightHist
            "to_srgb8", "write_image"]
 __all__ += ["EdgeFrame", "EdgePoints", "camera_edges", "edge_points", "edge_sides", "edge_speeds"]  # backward(edges=True)
 __all__ += ["Boundary", "MeshEdges", "ShadowSegments", "ShadowSources", "boundary", "light_sides", "mesh_edges",
-            "segment_points", "shadow_segments", "shadow_sources", "shadow_speeds"]  # and hard shadows' edges
-__all__ += ["ChainFaces", "MirrorChain", "MirroredSegments", "chain_faces", "mirror_chains", "mirror_planes",
+            "segment_points", "shadow_rows", "shadow_segments", "shadow_sources", "shadow_speeds"]  # and hard shadows' edges
+__all__ += ["MAX_CHAINS", "ChainFaces", "MirrorChain", "MirroredSegments", "chain_faces", "mirror_chains", "mirror_planes",
             "mirrored_speeds"]  # and both seen in planar mirrors

@@ -77,7 +77,7 @@ def mirror_planes(scene, geom) -> tuple[np.ndarray, np.ndarray, str | None]:
     curved = reflective[geom.tri_material_np[:n]] & (group[:n] < 0)
     if not curved.any():
         return group, planes, None
-    name = geom.slot_materials(scene)[geom.tri_material_np[:n][curved][0]].name
+    name = geom.material_names[geom.tri_material_np[:n][curved][0]]
     why = "a smooth (curved) mirror" if geom.tri_smooth_np[:n][curved].any() else "more mirror planes than followed"
     return group, planes, f"{why}, materials.{name}"
 

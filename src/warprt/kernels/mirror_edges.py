@@ -64,7 +64,9 @@ def make_mirrored_distances(levels: int):
             i = wp.static(levels) - 1 - step
             if i < level[j]:
                 at_i = wp.static(3 * levels) * j + 3 * i
-                m0, m1, m2 = mirrors[at_i], mirrors[at_i + 1], mirrors[at_i + 2]
+                m0 = wp.vec3(mirrors[at_i])  # copies: the unrolled levels each bind their own
+                m1 = wp.vec3(mirrors[at_i + 1])
+                m2 = wp.vec3(mirrors[at_i + 2])
                 v0 = mirrored_point(v0, m0, m1, m2)
                 v1 = mirrored_point(v1, m0, m1, m2)
                 light = wp.where(kind[j] == wp.static(DIRECTIONAL_SHADOW), mirrored_direction(light, m0, m1, m2),
