@@ -326,9 +326,12 @@ class Renderer:
         added (silhouettes, occlusion edges and flat creases moving with objects.<name>.vertices and the
         camera: image/grad_edges.py), and with shadows traced that of hard shadows' edges (moving with the
         occluders, the receivers, a light's position or direction, an area light's centre and the camera:
-        image/grad_shadow_edges.py). Only those edges are covered so far, so ``edges=True`` is refused in one
-        line naming ``edges`` where the named parameters move others: mirror rays or glass (render.max_depth >
-        1), a checker texture or a spot light's hard cone."""
+        image/grad_shadow_edges.py), both seen directly and in planar mirrors (render.max_depth > 1: through
+        each chain of mirror planes a camera ray may follow, moving with the mirrors' vertices too:
+        image/grad_mirror_edges.py). Only those edges are covered so far, so ``edges=True`` is refused in one
+        line naming ``edges`` where the named parameters move others: glass's rays, a curved (smooth) mirror's
+        reflections, more chains of mirrors than grad_mirror_edges.MAX_CHAINS, a checker texture or a spot
+        light's hard cone."""
         if self._first_hits is None:
             raise ArgumentError("backward", "render", "no frame was rendered with grad=True since the last change")
         scene, geom, hits = self._first_hits
