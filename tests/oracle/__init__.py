@@ -4,14 +4,14 @@ Scene by its fields, and never calls warprt's geometry or shading.
 
     camera.py (the seed's pinhole rays) -> geometry.py (ray-triangle, ray-plane, ray-sphere, normals),
     transform.py (the scene file's rotate, an object's pose and its Jacobian), shading.py (Phong), optics.py (Fresnel, Snell, the slab's
-    series, Beer), shadow.py (a point's hard shadow on a plane, its image) -> whitted.py (brute-force tracers,
+    series, Beer), shadow.py (a point's hard shadow on a plane, its mirror image, its image) -> whitted.py (brute-force tracers,
     glass's ray tree included)
 """
 
 from .camera import Pinhole, camera_rays, pinhole, pixel_directions, ray_directions
 from .geometry import (TriangleHit, face_normals, nearest_triangle, ray_plane, ray_sphere_distance, ray_triangle,
                        vertex_normals, winding_number)
-from .shadow import image_point, line_distance, shadow_point
+from .shadow import image_point, line_distance, mirror_point, shadow_point
 from .shading import TERMS, light_direction, light_intensity, light_source, phong, phong_terms, spot_profile
 from .transform import axis_rotation, cross_matrix, pose_gradients, pose_jacobian, posed, rotation, rotation_vector
 from .whitted import (MITSUBA_RAY_EPSILON, MITSUBA_SHADOW_EPSILON, OFFSET_SWEEP, Branch, PixelTrace, Whitted,
@@ -24,4 +24,4 @@ __all__ = ["Branch", "MITSUBA_RAY_EPSILON", "MITSUBA_SHADOW_EPSILON", "OFFSET_SW
            "ray_sphere_distance", "ray_triangle", "rotation", "shade_triangles", "spot_profile", "texture_value", "vertex_normals",
            "winding_number"]
 __all__ += ["cross_matrix", "pose_gradients", "pose_jacobian", "posed", "rotation_vector"]
-__all__ += ["image_point", "line_distance", "shadow_point"]
+__all__ += ["image_point", "line_distance", "mirror_point", "shadow_point"]

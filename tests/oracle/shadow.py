@@ -1,6 +1,7 @@
 """Hard shadows and where a point shows in the image, in float64 from their textbook formulas: a point's
 shadow on a plane, cast from a point light (central projection) or along a light's direction (parallel
-projection), and the pinhole's projection of a point to pixels."""
+projection), a point's image in a planar mirror (where the eye sees it through the mirror), and the pinhole's
+projection of a point to pixels."""
 
 from __future__ import annotations
 
@@ -17,6 +18,14 @@ def shadow_point(p, light, plane_point, plane_normal, directional: bool = False)
     d = light if directional else p - light
     o = p if directional else light
     return o + ray_plane(o, d, plane_point, plane_normal) * d
+
+
+def mirror_point(p, plane_point, plane_normal) -> np.ndarray:
+    """The point p reflected across the plane (point, normal): p - 2 ((p - point) . n) n, n the unit normal.
+    An eye sees p in a planar mirror on that plane where it would see this point with no mirror."""
+    p, n = np.asarray(p, np.float64), np.asarray(plane_normal, np.float64)
+    n = n / np.linalg.norm(n)
+    return p - 2.0 * ((p - np.asarray(plane_point, np.float64)) @ n) * n
 
 
 def image_point(cam, q) -> np.ndarray:

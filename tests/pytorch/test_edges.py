@@ -1,7 +1,7 @@
 """warprt.torch.render(..., edges=...) (issue 38): the image's backward passes ``edges`` on to
 Renderer.backward, so each tensor's .grad is backward(edges=True)'s, silhouettes' and shadows' edges
 included, with the interior derivative (edges=False) as the control; its default is backward's own; and
-backward's refusal of edges (a mirror's reflected silhouettes) reaches loss.backward()'s caller as its one
+backward's refusal of edges (a curved mirror's reflections) reaches loss.backward()'s caller as its one
 line, no .grad written."""
 
 from __future__ import annotations
@@ -27,6 +27,13 @@ def one_level() -> warprt.Scene:
     """ball() with primary rays only: no mirror rays, so edges=True is the whole derivative."""
     s = ball()
     return replace(s, render=replace(s.render, max_depth=1))
+
+
+def curved_mirror() -> warprt.Scene:
+    """ball() with the ball itself a mirror: smooth, curved, what it reflects has no edge term yet (the
+    floor's planar reflections have: tests/grad/test_mirror_edges.py)."""
+    s = ball()
+    return replace(s, materials={**s.materials, "ball": replace(s.materials["ball"], reflectivity=(0.3,) * 3)})
 
 
 @pytest.fixture(scope="module")
@@ -73,8 +80,8 @@ def test_the_default_is_backwards_own():
 
 
 def test_backwards_refusal_of_edges_reaches_the_caller_in_one_line():
-    """ball() has a mirroring floor and two ray levels: its reflected silhouettes have no edge term yet."""
-    with warprt.Renderer(ball()) as r:
+    """A mirroring ball and two ray levels: what it reflects has no edge term yet."""
+    with warprt.Renderer(curved_mirror()) as r:
         t = torch.tensor(r.params["objects.ball.translation"], requires_grad=True)
         image = warprt.torch.render(r, {"objects.ball.translation": t}, edges=True)
         with pytest.raises(SceneError) as e:

@@ -4,8 +4,8 @@ changes between frames (params.py); launching bands (launch.py), the stats (stat
 (zbuffer.py), the planar mirrors' virtual cameras (mirrors.py), the AOVs (aovs.py), memory (memory.py),
 image files (film.py) and the progress line (progress.py); the gradient: its record (grad_record.py), its
 parameters (grad_params.py), its replay and backward() (grad.py), and its boundary term (grad_edges.py: the
-edges camera rays see; grad_shadow_edges.py: hard shadows' edges; grad_edge_points.py: where they lie in the
-image; grad_mesh_edges.py: the meshes' edges and silhouettes).
+edges camera rays see; grad_shadow_edges.py: hard shadows' edges; grad_mirror_edges.py: both seen in planar
+mirrors; grad_edge_points.py: where they lie in the image; grad_mesh_edges.py: the meshes' edges and silhouettes).
 """
 
 from ..options import RenderOptions
@@ -13,9 +13,12 @@ from .aovs import AOVS, check_aovs
 from .caches import FrameCaches, LightHistory
 from .grad import Replay, build_replay, pose_points, replay_image
 from .grad_edge_points import EdgePoints, edge_points, segment_points
-from .grad_edges import Boundary, EdgeFrame, boundary, camera_edges, edge_sides, edge_speeds
-from .grad_mesh_edges import MeshEdges, mesh_edges
-from .grad_shadow_edges import ShadowSegments, ShadowSources, light_sides, shadow_segments, shadow_sources, shadow_speeds
+from .grad_edges import Boundary, EdgeFrame, boundary, edge_sides, edge_speeds
+from .grad_mesh_edges import MeshEdges, camera_edges, mesh_edges
+from .grad_mirror_edges import (MAX_CHAINS, ChainFaces, MirrorChain, MirroredSegments, chain_faces, mirror_chains,
+                                mirror_planes, mirrored_speeds)
+from .grad_shadow_edges import (ShadowSegments, ShadowSources, light_sides, shadow_rows, shadow_segments, shadow_sources,
+                                shadow_speeds)
 from .grad_record import Record, record_first_hits
 from .film import aov_paths, partial_files, read_aovs, read_image, to_srgb8, write_image
 from .launch import bands_of, default_threads, launch_bands
@@ -33,4 +36,6 @@ __all__ = ["AOVS", "Record", "Replay", "build_replay", "FrameCaches", "LightHist
            "to_srgb8", "write_image"]
 __all__ += ["EdgeFrame", "EdgePoints", "camera_edges", "edge_points", "edge_sides", "edge_speeds"]  # backward(edges=True)
 __all__ += ["Boundary", "MeshEdges", "ShadowSegments", "ShadowSources", "boundary", "light_sides", "mesh_edges",
-            "segment_points", "shadow_segments", "shadow_sources", "shadow_speeds"]  # and hard shadows' edges
+            "segment_points", "shadow_rows", "shadow_segments", "shadow_sources", "shadow_speeds"]  # and hard shadows' edges
+__all__ += ["MAX_CHAINS", "ChainFaces", "MirrorChain", "MirroredSegments", "chain_faces", "mirror_chains", "mirror_planes",
+            "mirrored_speeds"]  # and both seen in planar mirrors

@@ -343,7 +343,7 @@ def backward(scene, geom, hits: Record, d_image, wrt, device: str, poses: list |
         raise ArgumentError("backward", "d_image", f"expected finite values of shape {(hits.height, hits.width, 3)}, "
                                                    f"got {d.shape}")
     if edges:
-        check_edges(scene, geom, frame, hits, wrt)
+        check_edges(scene, geom, frame, wrt)
     posing = any(name.startswith("objects.") and name.endswith((".translation", ".rotation")) for name in wrt)
     moving = posing or any(name.startswith("objects.") and name.endswith(".vertices") for name in wrt)
     camera = any(name.startswith("camera.") for name in wrt)

@@ -258,6 +258,30 @@ def by_column(rows: np.ndarray) -> np.ndarray:
     return out.transpose(0, 2, 1)
 
 
+def tape_speeds(scene, geom, pts: EdgePoints, kernel, rows: list, extras: list, device: str) -> tuple[list, dict]:
+    """Per point of ``pts``, the derivative of the signed distance a distance kernel gives (edge_distances,
+    shadow_edge_distances, a mirrored distances kernel: its inputs the differentiable ``rows``, then ``extras``,
+    then the camera, fovy, near, width, height and the points) in each of ``rows`` (float32 copies per point,
+    (n, ...) x 3 each) and in the camera (camera_copies), on a wp.Tape: (per row array its adjoints, float64,
+    shaped as given; camera_adjoints). Each point reads copies of its own, so that no two adjoints share a sum:
+    the host reduces them in a fixed order."""
+    cam, n = scene.camera, len(pts.edge)
+    arrays = [wp.array(np.asarray(r, np.float32).reshape(-1, 3), dtype=wp.vec3, device=device, requires_grad=True)
+              for r in rows]
+    camera, fovy = camera_copies(scene, geom, n, device)
+    distance = wp.zeros(n, dtype=float, device=device, requires_grad=True)
+    tape = wp.Tape()
+    with tape:
+        wp.launch(kernel, dim=n, inputs=[*arrays, *extras, camera, fovy, float(cam.near), cam.width, cam.height,
+                                         wp.array(pts.at.astype(np.float32), dtype=wp.vec2, device=device)],
+                  outputs=[distance], device=device)
+    tape.backward(grads={distance: wp.array(np.ones(n, np.float32), dtype=float, device=device)})
+    out = [a.grad.numpy().astype(np.float64).reshape(np.shape(r)) for a, r in zip(arrays, rows)], \
+        camera_adjoints(camera, fovy, n)
+    tape.zero()
+    return out
+
+
 @dataclass
 class BoundaryTerm:
     """A boundary term's sums, each in a fixed order: per geometry point (``points``), per camera parameter
@@ -300,3 +324,14 @@ def _add_at(n: int, rows: list, w: np.ndarray, values: list) -> np.ndarray:
     at = np.concatenate(rows)
     return np.stack([np.bincount(at, np.concatenate([w * v[:, k] for v in values]), minlength=n) for k in range(3)],
                     axis=1)
+
+
+def add_terms(terms: list, n_points: int) -> BoundaryTerm:
+    """The sum of BoundaryTerms, in their order (sources: those of the terms that have them; None if none)."""
+    out = BoundaryTerm(np.zeros((n_points, 3)), {k: 0.0 for k in ("eye", "center", "up", "fovy")})
+    for t in terms:
+        out.points = out.points + t.points
+        out.camera = {k: out.camera[k] + t.camera[k] for k in out.camera}
+        if t.sources is not None:
+            out.sources = t.sources if out.sources is None else out.sources + t.sources
+    return out

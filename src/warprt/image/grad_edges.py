@@ -15,15 +15,15 @@ from ..kernels import edge_distances, empty_aov_buffers, empty_record, make_edge
 from ..scene import drawn_objects
 from .grad_area_shape import SHAPE_KEYS, shape_edge_gradients, shape_table
 from .grad_edge_launch import host_array, launch_points
-from .grad_edge_points import (BoundaryTerm, EdgePoints, boundary_term, camera_adjoints, camera_copies,
+from .grad_edge_points import (BoundaryTerm, EdgePoints, add_terms, boundary_term, camera_adjoints, camera_copies,
                                segment_points, side_directions)
-from .grad_mesh_edges import MeshEdges, face_normals, facing, mesh_edges
+from .grad_mesh_edges import MeshEdges, camera_edges, face_normals, facing, mesh_edges
+from .grad_mirror_edges import (MirroredSegments, mirror_chains, mirror_planes, mirror_refusal, mirror_terms,
+                                mirrored_segments)
 from .grad_shadow_edges import ShadowSources, shadow_segments, shadow_sources, shadow_term
 from .mirrors import empty_mirrors
 from .params import object_names
 from .zbuffer import empty_fragments
-
-COPLANAR = 1e-6  # |n1 x n2| of two flat faces' unit normals below which their shared edge shows no crease
 
 
 @dataclass(frozen=True)
@@ -64,16 +64,20 @@ def moves_edges(name: str) -> bool:
             or (parts[0] == "materials" and parts[-1] == "ior"))
 
 
-def edge_refusal(scene, geom, fx, hits, wrt) -> str | None:
+def edge_refusal(scene, geom, fx, wrt) -> str | None:
     """Why backward(edges=True) would leave out an edge that the parameters ``wrt`` move (None: the camera
-    rays' edges and the hard shadows' are all of them): mirror or glass rays, a checker's squares, a spot's
-    hard cone."""
+    rays' edges, the hard shadows' and those seen in planar mirrors are all of them): glass's rays, a curved
+    mirror's or too many mirrors' (mirror_refusal), a checker's squares, a spot's hard cone. (A reflectivity of 0
+    whose mirror rays a frame records for its derivative reflects nothing: no edge is seen in it.)"""
     moving = [n for n in wrt if moves_edges(n)]
     if not moving:
         return None
-    if scene.render.max_depth > 1 and (fx.reflection or fx.refraction or hits.mirrored):
-        return (f"{moving[0]} moves the edges seen in mirrors or through glass, not differentiated yet: only the "
-                f"edges camera rays see and their shadows (render.max_depth 1)")
+    if scene.render.max_depth > 1 and fx.refraction:
+        return (f"{moving[0]} moves the edges seen through glass (its refracted and reflected rays), not "
+                f"differentiated yet: only those camera rays see, their shadows, and both seen in planar mirrors")
+    why = mirror_refusal(scene, geom) if scene.render.max_depth > 1 and fx.reflection else None
+    if why is not None:
+        return f"{moving[0]} moves the edges seen in {why}, not differentiated yet: only those seen in planar mirrors"
     for m in geom.slot_materials(scene):
         if any(getattr(m, k) is not None and getattr(m, k).checker is not None for k in
                ("ka_texture", "kd_texture", "ks_texture")):
@@ -82,43 +86,6 @@ def edge_refusal(scene, geom, fx, hits, wrt) -> str | None:
         if light.type == "spot" and light.beam >= light.cutoff_angle:
             return f"{moving[0]} moves a spot light's hard cone edge, not differentiated yet"
     return None
-
-
-def _same(a: np.ndarray, i: np.ndarray, k: np.ndarray) -> np.ndarray:
-    """Whether a per-vertex attribute is equal at vertices i and k (rows)."""
-    return np.all(a[i] == a[k], axis=-1)
-
-
-def camera_edges(scene, geom, fx, eye, sources: ShadowSources | None = None, m: MeshEdges | None = None) -> np.ndarray:
-    """(E, 2) vertex indices of the edges whose image can jump, sorted by (object, position): of each mesh's
-    edges (grad_mesh_edges.mesh_edges, or ``m``), those that are open (one face), silhouettes from ``eye``
-    (two faces facing opposite ways from it), shared by more than two faces, or creases where the shading
-    jumps (two faces of other materials, a flat pair not coplanar, a smooth pair whose normals, uvs or
-    colours differ at the edge, or with shadows (``sources``) a smooth pair one of whose faces faces a source
-    and the other does not: there the mesh shadows itself); each by its face facing the eye (the edge the
-    visible side shows), else its first."""
-    if geom.triangle_count == 0:
-        return np.zeros((0, 2), np.int64)
-    m = mesh_edges(scene, geom) if m is None else m
-    p = geom.points_np.astype(np.float64)
-    faces = geom.indices_np.reshape(-1, 3).astype(np.int64)
-    normal = face_normals(p, faces)
-    front = facing(normal, p[faces[:, 0]], np.asarray(eye, np.float64))
-    f1, f2, (i0, i1), (a2, b2) = m.f1, m.f2, m.v.T, m.v2.T
-    jump = (front[f1] != front[f2]) | (geom.tri_material_np[f1] != geom.tri_material_np[f2])
-    smooth = (geom.tri_smooth_np[f1] != 0) & (geom.tri_smooth_np[f2] != 0)
-    flat = (geom.tri_smooth_np[f1] == 0) & (geom.tri_smooth_np[f2] == 0)
-    crease = np.linalg.norm(np.cross(normal[f1], normal[f2]), axis=1) > COPLANAR
-    smooth_jump = ~(_same(geom.normals.numpy(), i0, a2) & _same(geom.normals.numpy(), i1, b2))
-    jump |= ~(smooth | flat) | (flat & crease) | (smooth & smooth_jump)
-    for table in ([geom.uv_array().numpy()] if fx.texture else []) + ([geom.colors.numpy()] if fx.vertex_color else []):
-        jump |= ~(_same(table, i0, a2) & _same(table, i1, b2))
-    for at, directional in zip(sources.at, sources.directional) if sources is not None else ():
-        lit = facing(normal, p[faces[:, 0]], at, directional)
-        jump |= smooth & (lit[f1] != lit[f2])
-    keep = ~m.pair | jump
-    use_second = m.pair & ~front[f1] & front[f2]
-    return np.where(use_second[:, None], m.v2, m.v)[keep]
 
 
 def edge_sides(scene, geom, frame: EdgeFrame, pts: EdgePoints, device: str) -> np.ndarray:
@@ -168,32 +135,44 @@ def covered(name: str) -> bool:
 @dataclass
 class Boundary:
     """A frame's boundary segments, cut at the pixels together (grad_edge_points.segment_points): the
-    camera's edges (``edges``, their points ``camera``) and with shadows the shadows' (``segments`` from
-    ``sources``, their points ``shadows``)."""
+    camera's edges (``edges``, their points ``camera``), with shadows the shadows' (``segments`` from
+    ``sources``, their points ``shadows``) and with mirror rays those seen in planar mirrors (``mirrored``,
+    their points within)."""
 
     edges: np.ndarray
     camera: EdgePoints
     sources: ShadowSources | None = None
     segments: object = None
     shadows: EdgePoints | None = None
+    mirrored: MirroredSegments | None = None
 
 
 def boundary(scene, geom, fx, eye: np.ndarray) -> Boundary:
     """The Boundary of a frame seen from ``eye`` (relative to the frame origin): with shadows (fx.shadows),
-    the sources (shadow_sources), the camera's edges and the shadows' (shadow_segments), each one's image cut
-    where it crosses the others'."""
+    the sources (shadow_sources), the camera's edges and the shadows' (shadow_segments), with mirror rays
+    (fx.reflection, render.max_depth > 1) those seen through each chain of planar mirrors (mirrored_segments),
+    each one's image cut where it crosses the others'."""
     m = mesh_edges(scene, geom) if geom.triangle_count else None
     sources = shadow_sources(scene, geom) if fx.shadows and m is not None else None
     edges = camera_edges(scene, geom, fx, eye, sources, m)
     p = geom.points_np.astype(np.float64)
     q0, q1 = p[edges[:, 0]] - eye, p[edges[:, 1]] - eye
-    if sources is None:
-        return Boundary(edges, segment_points(q0, q1, np.cross(q0, q1), scene.camera, edges))
-    segments = shadow_segments(scene, geom, m, sources, eye)
-    pts = segment_points(np.concatenate([q0, segments.q0 - eye]), np.concatenate([q1, segments.q1 - eye]),
-                         np.concatenate([np.cross(q0, q1), segments.plane]), scene.camera)
-    n = len(edges)
-    return Boundary(edges, pts.part(0, n, edges), sources, segments, pts.part(n, n + len(segments.face)))
+    blocks, segments, mirrored = [(q0, q1, np.cross(q0, q1))], None, None
+    if sources is not None:
+        segments = shadow_segments(scene, geom, m, sources, eye)
+        blocks.append((segments.q0 - eye, segments.q1 - eye, segments.plane))
+    if m is not None and fx.reflection and scene.render.max_depth > 1:
+        group, planes, _ = mirror_planes(scene, geom)
+        chains = mirror_chains(scene, geom, eye, group, planes)
+        if chains:
+            mirrored = mirrored_segments(scene, geom, fx, m, sources, eye, group, chains)
+            blocks += mirrored.blocks(eye)
+    start = np.cumsum([0] + [len(q) for q, _, _ in blocks])
+    pts = segment_points(*(np.concatenate([block[k] for block in blocks]) for k in range(3)), scene.camera)
+    part = lambda i, what=None: pts.part(start[i], start[i + 1], what)  # noqa: E731
+    if mirrored is not None:  # the seams' points (the last block) only cut the others
+        mirrored.camera, mirrored.shadow_points = part(len(blocks) - 3), part(len(blocks) - 2)
+    return Boundary(edges, part(0, edges), sources, segments, part(1) if segments is not None else None, mirrored)
 
 
 def edge_gradients(scene, geom, frame: EdgeFrame, d: np.ndarray, wrt, device: str) -> dict:
@@ -210,16 +189,20 @@ def edge_gradients(scene, geom, frame: EdgeFrame, d: np.ndarray, wrt, device: st
     keep = partial(kept_part, frame, scene, geom)
     b = keep("boundary", lambda: boundary(scene, geom, frame.fx, eye))
     d3 = d.reshape(-1, 3).astype(np.float64)
-    term = BoundaryTerm(np.zeros((len(geom.points_np), 3)), {k: 0.0 for k in ("eye", "center", "up", "fovy")})
+    terms = []
     if len(b.camera.edge):
-        term = boundary_term(b.camera, keep("sides", lambda: edge_sides(scene, geom, frame, b.camera, device)), d3,
-                             keep("speeds", lambda: edge_speeds(scene, geom, b.camera, device, frame.threads)),
-                             {"v0": b.edges[b.camera.edge, 0], "v1": b.edges[b.camera.edge, 1]}, len(geom.points_np))
+        terms.append(boundary_term(b.camera, keep("sides", lambda: edge_sides(scene, geom, frame, b.camera, device)),
+                                   d3, keep("speeds", lambda: edge_speeds(scene, geom, b.camera, device, frame.threads)),
+                                   {"v0": b.edges[b.camera.edge, 0], "v1": b.edges[b.camera.edge, 1]},
+                                   len(geom.points_np)))
     if b.shadows is not None and len(b.shadows.edge):
-        shadow = shadow_term(scene, geom, frame.fx, b.sources, b.segments, b.shadows, d3, device, frame.threads,
-                             keep)
-        term = BoundaryTerm(term.points + shadow.points, {k: term.camera[k] + shadow.camera[k] for k in term.camera},
-                            shadow.sources)
+        terms.append(shadow_term(scene, geom, frame.fx, b.sources, b.segments, b.shadows, d3, device, frame.threads,
+                                 keep))
+    if b.mirrored is not None:
+        seen = b.mirrored.camera
+        jump = edge_sides(scene, geom, frame, seen, device) if len(seen.edge) else None
+        terms += mirror_terms(scene, geom, frame.fx, b.mirrored, b.sources, jump, d3, device)
+    term = add_terms(terms, len(geom.points_np))
     shapes = {}
     if any(n.startswith("lights.") and n.endswith(tuple(f".{k}" for k in SHAPE_KEYS)) for n in wrt):
         samples = None if term.sources is None else term.sources[len(scene.whitted_lights):]
@@ -250,11 +233,11 @@ def _by_name(scene, sources: ShadowSources | None, term: BoundaryTerm, name: str
     return g
 
 
-def check_edges(scene, geom, frame: EdgeFrame | None, hits, wrt):
+def check_edges(scene, geom, frame: EdgeFrame | None, wrt):
     """backward(edges=True)'s refusal (edge_refusal) as one ArgumentError naming ``edges``."""
     if frame is None:
         raise ArgumentError("backward", "edges", "no frame's plan was kept: render(grad=True) first")
-    why = edge_refusal(scene, geom, frame.fx, hits, wrt)
+    why = edge_refusal(scene, geom, frame.fx, wrt)
     if why is not None:
         raise ArgumentError("backward", "edges", f"{why} (edges=False: the derivative with each ray's face and "
                                                  f"each shadow ray's answer held)")

@@ -1,6 +1,6 @@
 """The meshes' edges and the faces they join, for the boundary term (backward(edges=True)): which edges
-are silhouettes from a viewpoint (the eye, a light), the one table the camera's edges and the shadows'
-occluders are both read from."""
+are silhouettes from a viewpoint (the eye, a light, a mirror's virtual eye) and which the camera sees jump
+(camera_edges), the one table the camera's edges and the shadows' occluders are both read from."""
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -8,6 +8,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..scene import drawn_objects, position_ids
+
+COPLANAR = 1e-6  # |n1 x n2| of two flat faces' unit normals below which their shared edge shows no crease
 
 
 @dataclass
@@ -75,3 +77,40 @@ def silhouettes(m: MeshEdges, front: np.ndarray) -> tuple[np.ndarray, np.ndarray
     which = ~m.pair | (front[m.f1] != front[m.f2])
     second = m.pair & ~front[m.f1] & front[m.f2]
     return which, np.where(second[:, None], m.v2, m.v)
+
+
+def _same(a: np.ndarray, i: np.ndarray, k: np.ndarray) -> np.ndarray:
+    """Whether a per-vertex attribute is equal at vertices i and k (rows)."""
+    return np.all(a[i] == a[k], axis=-1)
+
+
+def camera_edges(scene, geom, fx, eye, sources=None, m: MeshEdges | None = None) -> np.ndarray:
+    """(E, 2) vertex indices of the edges whose image can jump, sorted by (object, position): of each mesh's
+    edges (mesh_edges, or ``m``), those that are open (one face), silhouettes from ``eye`` (two faces facing
+    opposite ways from it), shared by more than two faces, or creases where the shading jumps (two faces of
+    other materials, a flat pair not coplanar, a smooth pair whose normals, uvs or colours differ at the
+    edge, or with shadows (``sources``: ShadowSources) a smooth pair one of whose faces faces a source and
+    the other does not: there the mesh shadows itself); each by its face facing the eye (the edge the
+    visible side shows), else its first."""
+    if geom.triangle_count == 0:
+        return np.zeros((0, 2), np.int64)
+    m = mesh_edges(scene, geom) if m is None else m
+    p = geom.points_np.astype(np.float64)
+    faces = geom.indices_np.reshape(-1, 3).astype(np.int64)
+    normal = face_normals(p, faces)
+    front = facing(normal, p[faces[:, 0]], np.asarray(eye, np.float64))
+    f1, f2, (i0, i1), (a2, b2) = m.f1, m.f2, m.v.T, m.v2.T
+    jump = (front[f1] != front[f2]) | (geom.tri_material_np[f1] != geom.tri_material_np[f2])
+    smooth = (geom.tri_smooth_np[f1] != 0) & (geom.tri_smooth_np[f2] != 0)
+    flat = (geom.tri_smooth_np[f1] == 0) & (geom.tri_smooth_np[f2] == 0)
+    crease = np.linalg.norm(np.cross(normal[f1], normal[f2]), axis=1) > COPLANAR
+    smooth_jump = ~(_same(geom.normals.numpy(), i0, a2) & _same(geom.normals.numpy(), i1, b2))
+    jump |= ~(smooth | flat) | (flat & crease) | (smooth & smooth_jump)
+    for table in ([geom.uv_array().numpy()] if fx.texture else []) + ([geom.colors.numpy()] if fx.vertex_color else []):
+        jump |= ~(_same(table, i0, a2) & _same(table, i1, b2))
+    for at, directional in zip(sources.at, sources.directional) if sources is not None else ():
+        lit = facing(normal, p[faces[:, 0]], at, directional)
+        jump |= smooth & (lit[f1] != lit[f2])
+    keep = ~m.pair | jump
+    use_second = m.pair & ~front[f1] & front[f2]
+    return np.where(use_second[:, None], m.v2, m.v)[keep]

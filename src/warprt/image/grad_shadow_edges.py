@@ -106,13 +106,14 @@ class Receivers:
     reach: float
 
 
-def receivers(scene, geom, eye: np.ndarray) -> Receivers:
-    """The Receivers of a frame seen from ``eye`` (relative to the frame origin)."""
+def receivers(scene, geom, eye: np.ndarray, basis=None) -> Receivers:
+    """The Receivers of a frame seen from ``eye`` (relative to the frame origin) along ``basis`` (the
+    camera's, or a virtual camera's: grad_mirror_edges.MirrorChain.basis)."""
     p = geom.points_np.astype(np.float64)
     faces = geom.indices_np.reshape(-1, 3).astype(np.int64)
     mats = geom.slot_materials(scene)
     dark = np.asarray([max(m.kd) <= 0.0 and max(m.ks) <= 0.0 for m in mats] or [True])
-    lit = ~dark[geom.tri_material_np] & _in_view(p[faces] - eye, camera_basis(scene.camera))
+    lit = ~dark[geom.tri_material_np] & _in_view(p[faces] - eye, camera_basis(scene.camera) if basis is None else basis)
     reach = max(float(np.abs(p).max(initial=0.0)), float(np.abs(eye).max()), 1e-30)
     return Receivers(p, faces, face_normals(p, faces), emitter_of_triangles(scene), lit, geom.tri_smooth_np == 0,
                      eye, reach)
@@ -128,10 +129,11 @@ def _in_view(tri: np.ndarray, b) -> np.ndarray:
     return ~np.any([np.all(o, axis=1) for o in outside], axis=0)
 
 
-def shadow_segments(scene, geom, m: MeshEdges, sources: ShadowSources, eye: np.ndarray) -> ShadowSegments:
-    """The ShadowSegments of every source, in the sources' order: each one's occluder edges and receivers
-    (source_edges), the segments their wedges cut (_wedge_segments), all sources at once."""
-    r = receivers(scene, geom, eye)
+def shadow_segments(scene, geom, m: MeshEdges, sources: ShadowSources, eye: np.ndarray, basis=None) -> ShadowSegments:
+    """The ShadowSegments of every source, in the sources' order, seen from ``eye`` along ``basis`` (receivers):
+    each one's occluder edges and receivers (source_edges), the segments their wedges cut (_wedge_segments), all
+    sources at once."""
+    r = receivers(scene, geom, eye, basis)
     step = max(1, PAIRS_AT_ONCE // max(len(r.faces), 1))  # sources at once: (sources, faces) arrays this big
     parts = [source_edges(r, m, sources, np.arange(lo, min(lo + step, len(sources.at))))
              for lo in range(0, len(sources.at), step)]
@@ -283,22 +285,44 @@ def _wedge_span(a: np.ndarray, b: np.ndarray, v0: np.ndarray, v1: np.ndarray, at
 
 
 def light_sides(scene, geom, fx, sources: ShadowSources, segments: ShadowSegments, pts: EdgePoints,
-                device: str, threads: int = 1) -> np.ndarray:
+                device: str, threads: int = 1, level: np.ndarray | None = None) -> np.ndarray:
     """(N, 3) float64: per point f_+ - f_-, the light of its segment's source alone at the nearest hits of
-    camera rays EDGE_OFFSET_PX either side of it (towards its normal, then away), shadow ray included
+    camera rays EDGE_OFFSET_PX either side of it (towards its normal, then away), or with ``level`` (per
+    point) at their rays' of that level through the mirrors, times its k_r, shadow ray included
     (kernels.make_light_sides_kernel): that source's jump, whatever other sources' shadows edge there too
     (a row of a rectangle light's sample points casts one line through an edge parallel to it). In bands on
     ``threads`` (grad_edge_launch.launch_points)."""
     n = len(pts.edge)
     dirs = side_directions(pts, scene.camera)
     source = np.tile(sources.source[segments.source[pts.edge]], (2, 1))
+    level = np.tile(np.zeros(n, np.int32) if level is None else np.asarray(level, np.int32), 2)
     color = wp.zeros(2 * n, dtype=wp.vec3, device=device)
     launch_points(make_light_sides_kernel(fx), 2 * n,
                   [geom.scene_data(scene), wp.vec3(*geom.eye_offset(scene.camera.eye)), empty_fragments(device),
                    empty_mirrors(device), host_array(dirs, wp.vec3, device), host_array(source, wp.vec3i, device),
-                   color], [0, 0, 0, 0, 1, 1, 1], threads, device)
+                   host_array(level, int, device), color], [0, 0, 0, 0, 1, 1, 1, 1], threads, device)
     c = color.numpy().astype(np.float64)
     return c[:n] - c[n:]
+
+
+def shadow_rows(geom, sources: ShadowSources, segments: ShadowSegments, pts: EdgePoints) -> np.ndarray:
+    """(N, 6, 3) float64: per point what its shadow edge's distance reads of the geometry: the occluder edge's
+    v0 and v1, the source (a point's position, a light's direction of travel), the receiver's p0, p1, p2."""
+    p, seg = geom.points_np.astype(np.float64), pts.edge
+    corners = geom.indices_np.reshape(-1, 3)[segments.face[seg]]
+    return np.stack([p[segments.edge[seg, 0]], p[segments.edge[seg, 1]], sources.at[segments.source[seg]],
+                     p[corners[:, 0]], p[corners[:, 1]], p[corners[:, 2]]], axis=1)
+
+
+def shadow_vertices(geom, segments: ShadowSegments, pts: EdgePoints) -> dict:
+    """Per point the geometry points shadow_rows' rows are (boundary_term's ``vertices``)."""
+    seg = pts.edge
+    corners = geom.indices_np.reshape(-1, 3).astype(np.int64)[segments.face[seg]]
+    return {"v0": segments.edge[seg, 0], "v1": segments.edge[seg, 1], "p0": corners[:, 0], "p1": corners[:, 1],
+            "p2": corners[:, 2]}
+
+
+SHADOW_KEYS = ("v0", "v1", "light", "p0", "p1", "p2")  # shadow_rows' rows, as the speeds name them
 
 
 def shadow_speeds(scene, geom, sources: ShadowSources, segments: ShadowSegments, pts: EdgePoints,
@@ -306,8 +330,8 @@ def shadow_speeds(scene, geom, sources: ShadowSources, segments: ShadowSegments,
     """Per point, the derivative of its signed distance from its shadow edge's image
     (kernels.shadow_edge_distances, its adjoint; float64 rows): ``v0``, ``v1`` for the occluder edge's
     vertices, ``light`` for the source (a point's position, a light's direction of travel), ``p0``, ``p1``,
-    ``p2`` for the receiver's corners, ``eye``, ``center``, ``up`` and ``fovy`` for the camera. The adjoint
-    launch alone, in bands on ``threads`` (grad_edge_launch.launch_points)."""
+    ``p2`` for the receiver's corners (SHADOW_KEYS: shadow_rows' rows), ``eye``, ``center``, ``up`` and ``fovy``
+    for the camera. The adjoint launch alone, in bands on ``threads`` (grad_edge_launch.launch_points)."""
     cam, n = scene.camera, len(pts.edge)
     p = geom.points_np
     seg = pts.edge
@@ -326,7 +350,7 @@ def shadow_speeds(scene, geom, sources: ShadowSources, segments: ShadowSegments,
                   [geometry.grad, None, camera.grad, fovy.grad, None, None, None, None,
                    host_array(np.ones(n, np.float32), float, device)])
     g = by_column(geometry.grad.numpy().reshape(n, 6, 3))
-    out = {key: g[k] for k, key in enumerate(("v0", "v1", "light", "p0", "p1", "p2"))}
+    out = {key: g[k] for k, key in enumerate(SHADOW_KEYS)}
     out.update(camera_adjoints(camera, fovy, n))
     return out
 
@@ -339,8 +363,5 @@ def shadow_term(scene, geom, fx, sources: ShadowSources, segments: ShadowSegment
     keep = keep or (lambda name, make: make())
     jump = keep("shadow sides", lambda: light_sides(scene, geom, fx, sources, segments, pts, device, threads))
     speed = keep("shadow speeds", lambda: shadow_speeds(scene, geom, sources, segments, pts, device, threads))
-    seg = pts.edge
-    corners = geom.indices_np.reshape(-1, 3).astype(np.int64)[segments.face[seg]]
-    vertices = {"v0": segments.edge[seg, 0], "v1": segments.edge[seg, 1], "p0": corners[:, 0], "p1": corners[:, 1],
-                "p2": corners[:, 2]}
-    return boundary_term(pts, jump, d, speed, vertices, len(geom.points_np), (segments.source[seg], len(sources.at)))
+    return boundary_term(pts, jump, d, speed, shadow_vertices(geom, segments, pts), len(geom.points_np),
+                         (segments.source[pts.edge], len(sources.at)))

@@ -9,7 +9,8 @@
     replayed with the forward's functions on a wp.Tape, a launch a ray level), pose.py (an object's pose as the
     derivative moves it), vertex_normals.py (smooth normals from moving points), edges.py (the edges camera
     rays see: their signed distance in the image and the radiance either side), shadow_edges.py (hard shadows'
-    edges: their signed distance in the image and one light's term either side), aov.py (what a first hit
+    edges: their signed distance in the image and one light's term either side), mirror_edges.py (the edges
+    seen in planar mirrors: their signed distance in the image through the reflections), aov.py (what a first hit
     records besides colour), clip.py and raster.py (the Z-buffer: Fragments), hybrid.py (where the Z-buffer's
     first hit is the tracer's), mirror.py (a reflection ray's first hit from a planar mirror's virtual
     camera), zbuffer_shade.py.
@@ -70,3 +71,9 @@ from .shadow_edges import (SOURCE_LIGHT, SOURCE_SAMPLE, make_light_sides_kernel,
 
 __all__ += ["plane_distance", "SOURCE_LIGHT", "SOURCE_SAMPLE", "make_light_sides_kernel", "shadow_edge_distances",
             "shadow_plane"]  # and hard shadows' edges
+from .edges import MirrorEnd, make_mirror_path  # noqa: E402
+from .mirror_edges import (DIRECTIONAL_SHADOW, EDGE, POINT_SHADOW, make_mirror_faces_kernel,  # noqa: E402
+                           make_mirrored_distances, mirrored_direction, mirrored_point)
+
+__all__ += ["MirrorEnd", "make_mirror_path", "DIRECTIONAL_SHADOW", "EDGE", "POINT_SHADOW", "make_mirror_faces_kernel",
+            "make_mirrored_distances", "mirrored_direction", "mirrored_point"]  # and the edges seen in planar mirrors

@@ -1,7 +1,8 @@
 """The edges seen by camera rays, for the gradient's boundary term (image/grad_edges.py launches them): an
 edge's signed distance in the image as a differentiable function of its vertices and the camera
-(edge_distance, edge_distances; plane_distance, that of any plane through the eye), and the radiance either
-side of it by the forward's own walk (make_edge_sides_kernel)."""
+(edge_distance, edge_distances; plane_distance, that of any plane through the eye), the radiance either
+side of it by the forward's own walk (make_edge_sides_kernel), and a camera ray followed through the mirrors
+it meets to a given level's hit, as that walk follows it (make_mirror_path)."""
 
 import functools  # no "from __future__ import annotations": a kernel factory's types are its locals
 
@@ -9,11 +10,12 @@ from .._warp import wp
 from ..geometry import SceneData
 from .aov import AovBuffers
 from .camera import camera_of, image_plane_point
-from .interaction import Ray
+from .dielectric import absorbed
+from .interaction import Ray, Surface, make_surface, mirror_ray
 from .mirror import FROM_CAMERA, Mirrors
 from .raster import Fragments
 from .record import GradRecord
-from .trace import TreeRay, make_path
+from .trace import TreeRay, make_first_hit, make_path
 
 
 @wp.func
@@ -72,3 +74,52 @@ def make_edge_sides_kernel(fx, stack: int):
         color[j] = c
 
     return edge_sides
+
+
+@wp.struct
+class MirrorEnd:
+    """Where a camera ray's mirror path reaches a level: the hit's face (-1: the path ended before it, meeting
+    nothing or a surface that reflects nothing), its hit record, the level's ray direction and its weight (the
+    k_r of the mirrors before it, and with absorption Beer's law to its hit)."""
+
+    face: int
+    hit: Surface
+    d: wp.vec3
+    weight: wp.vec3
+
+
+@functools.cache
+def make_mirror_path(fx):
+    """mirror_path(s, frags, mir, eye, d, level) -> MirrorEnd: the camera ray from ``eye`` along ``d`` followed
+    as the forward's walk follows it through mirrors (trace.make_path: its nearest hit by the BVH, its weight
+    through Beer's law, a bounce off a hit whose k_r is not 0 by mirror_ray, weighted by k_r) to its ray of
+    level ``level`` (0: the camera ray) and that ray's hit. The frames it serves have no glass rays
+    (grad_edges.edge_refusal), so the path is a chain: no dielectric child to choose."""
+    first_hit = make_first_hit(False, False, fx.culling)
+    surface = make_surface(fx.smooth, fx.texture, fx.vertex_color)
+    ABSORPTION = fx.absorption
+
+    @wp.func
+    def mirror_path(s: SceneData, frags: Fragments, mir: Mirrors, eye: wp.vec3, d: wp.vec3, level: int) -> MirrorEnd:
+        r = TreeRay(Ray(eye, d), wp.vec3(1.0), eye, 0, s.eye_medium, FROM_CAMERA, -1)
+        end = MirrorEnd()
+        end.face = -1
+        going = bool(True)
+        while going:
+            going = False
+            h = first_hit(s, frags, mir, r, 0, 0, 0, 0, 0)
+            if h.face >= 0:
+                hit = surface(s, h.face, h.u, h.v, h.normal, r.ray.d)
+                weight = r.weight
+                if wp.static(ABSORPTION):
+                    weight = absorbed(s, weight, r.medium, r.start, hit)
+                kr = s.kr[hit.material]
+                if r.depth == level:
+                    end = MirrorEnd(h.face, hit, r.ray.d, weight)
+                elif wp.max(kr) > 0.0:  # the forward's follows_mirror, a mirror's ray in its parent's medium
+                    r = TreeRay(mirror_ray(hit, r.ray.d), wp.cw_mul(weight, kr), hit.p, r.depth + 1, r.medium,
+                                FROM_CAMERA, h.face)
+                    going = True
+        return end
+
+    return mirror_path

@@ -1,19 +1,16 @@
 """The edges of hard shadows seen by camera rays, for the gradient's boundary term (image/grad_shadow_edges.py
 launches them): a shadow edge's signed distance in the image as a differentiable function of its occluder's
 edge, its receiver, the light and the camera (shadow_plane, shadow_edge_distances), and one light's term
-either side of it, by the forward's own functions (make_light_sides_kernel)."""
+either side of it, seen directly or through mirrors, by the forward's own functions (make_light_sides_kernel)."""
 
 import functools  # no "from __future__ import annotations": a kernel factory's types are its locals
 
 from .._warp import wp
 from ..geometry import SceneData
-from .dielectric import absorbed
-from .edges import plane_distance
-from .interaction import Ray, make_surface
-from .mirror import FROM_CAMERA, Mirrors
+from .edges import make_mirror_path, plane_distance
+from .mirror import Mirrors
 from .raster import Fragments
 from .shading import make_area_sample_test, make_coefficients, make_light_terms, make_light_test
-from .trace import TreeRay, make_first_hit
 
 SOURCE_LIGHT = 0  # a light sides kernel's source: a Whitted light l (shading's light_test)
 SOURCE_SAMPLE = 1  # an area light e's sample point q (shading's area_sample_test)
@@ -56,43 +53,39 @@ def shadow_edge_distances(geometry: wp.array(dtype=wp.vec3), directional: wp.arr
 
 @functools.cache
 def make_light_sides_kernel(fx):
-    """The kernel that traces camera rays along given directions (``dirs``, unit) to their nearest hit (the
-    forward's first_hit on the BVH) and writes what one light source gives there (``source``: (SOURCE_LIGHT,
-    l, -1) a Whitted light, (SOURCE_SAMPLE, q, e) area light e's sample point q), by shading's own test and
-    term (light_test and whitted_term, area_sample_test and area_term: its shadow ray included), as shade adds
-    it: the jump of that source's light alone across its shadow's edge. The camera rays see their first hit
-    only: the frames it serves have no mirror or glass rays (grad_edges.edge_refusal)."""
-    first_hit = make_first_hit(False, False, fx.culling)
-    surface = make_surface(fx.smooth, fx.texture, fx.vertex_color)
+    """The kernel that follows camera rays along given directions (``dirs``, unit) to the hit of their ray of
+    level ``level`` (0: their nearest hit; k: through k mirrors, edges.make_mirror_path: the forward's hits and
+    bounces) and writes what one light source gives there (``source``: (SOURCE_LIGHT, l, -1) a Whitted light,
+    (SOURCE_SAMPLE, q, e) area light e's sample point q), by shading's own test and term (light_test and
+    whitted_term, area_sample_test and area_term: its shadow ray included), as shade adds it, times the
+    ray's weight (the mirrors' k_r): the jump of that source's light alone across its shadow's edge, seen
+    directly or in mirrors."""
+    mirror_path = make_mirror_path(fx)
     coefficients = make_coefficients(fx.texture, fx.vertex_color)
     light_test = make_light_test(fx.light_model, True)
     area_sample_test = make_area_sample_test(True)
     whitted_term, area_term = make_light_terms(fx.diffuse, fx.specular)
-    ABSORPTION = fx.absorption
 
     @wp.kernel(module="unique", enable_backward=False)
     def light_sides(s: SceneData, eye: wp.vec3, frags: Fragments, mir: Mirrors, dirs: wp.array(dtype=wp.vec3),
-                    source: wp.array(dtype=wp.vec3i), color: wp.array(dtype=wp.vec3)):
+                    source: wp.array(dtype=wp.vec3i), level: wp.array(dtype=int), color: wp.array(dtype=wp.vec3)):
         j = wp.tid()
-        d = dirs[j]
-        h = first_hit(s, frags, mir, TreeRay(Ray(eye, d), wp.vec3(1.0), eye, 0, s.eye_medium, FROM_CAMERA, -1),
-                      j, 0, 0, 0, 0)
+        end = mirror_path(s, frags, mir, eye, dirs[j], level[j])
         c = wp.vec3(0.0)
-        if h.face >= 0:
-            hit = surface(s, h.face, h.u, h.v, h.normal, d)
+        if end.face >= 0:
+            hit = end.hit
             k = coefficients(s, hit)
             shininess = s.shininess[hit.material]
             src = source[j]
             if src[0] == wp.static(SOURCE_LIGHT):
                 t = light_test(s, hit, src[1])
                 if t.lit != 0:
-                    c = whitted_term(t.arrival, k, shininess, hit.n, -d)
+                    c = whitted_term(t.arrival, k, shininess, hit.n, -end.d)
             else:
                 a = area_sample_test(s, hit, src[1])
                 if a.lit != 0:
-                    c = area_term(a, s.area.radiance[src[2]], s.area.dA[src[1]], k, shininess, hit.n, -d)
-            if wp.static(ABSORPTION):
-                c = absorbed(s, c, s.eye_medium, eye, hit)
+                    c = area_term(a, s.area.radiance[src[2]], s.area.dA[src[1]], k, shininess, hit.n, -end.d)
+            c = wp.cw_mul(end.weight, c)
         color[j] = c
 
     return light_sides
