@@ -66,61 +66,42 @@ def launch_bands(kernel, inputs_for, n_items: int, threads: int, bands: int, dev
     cancels the bands not yet started and waits for the running ones before it propagates: a Warp
     launch cannot be stopped, and the bands still running would write into buffers the caller has let
     go (a next frame would reuse them)."""
+    def band(first: int, count: int):
+        wp.launch(kernel, dim=count, inputs=inputs_for(first), device=device)
+        if on_band is not None:
+            if device != "cpu":  # a GPU launch returns before the band is done
+                wp.synchronize_device(device)
+            on_band(first, count)
+
+    if threads > 1 and device == "cpu":
+        # Loaded (compiled, on a cold cache) here, not by the first launch of each band thread: two bands
+        # starting at once would both load the module, and a load replaces the module the other may be
+        # running (Warp's Module.load is not one critical section). About 8 us where it is loaded.
+        wp.load_module(kernel.module, device=device)
+    run_bands(band, n_items, threads, bands, device, pool)
+
+
+def run_bands(run_band, n_items: int, threads: int, bands: int, device: str, pool: ThreadPoolExecutor | None = None):
+    """Call ``run_band(first, count)`` (a band's launches) over ranges of [0, n_items): on the CPU ``threads``
+    bands at once, on ``pool`` or a pool that lives for this call (launch_bands' ``pool``, and what an
+    exception does); the caller loads the kernels' modules first (launch_bands' note)."""
     ranges = bands_of(n_items, bands)
     stop = threading.Event()
 
     def run(r):
         if stop.is_set():  # taken by a worker just before the others were cancelled
             return
-        first, count = r
-        try:
-            wp.launch(kernel, dim=count, inputs=inputs_for(first), device=device)
-            if on_band is not None:
-                if device != "cpu":  # a GPU launch returns before the band is done
-                    wp.synchronize_device(device)
-                on_band(first, count)
-        except BaseException:
-            stop.set()  # at once, not when the main thread gets to this band's result
-            raise
-
-    if threads <= 1 or len(ranges) == 1 or device != "cpu":
-        for r in ranges:
-            run(r)
-    else:
-        # Loaded (compiled, on a cold cache) here, not by the first launch of each band thread: two bands
-        # starting at once would both load the module, and a load replaces the module the other may be
-        # running (Warp's Module.load is not one critical section). About 8 us where it is loaded.
-        wp.load_module(kernel.module, device=device)
-        if pool is not None:
-            _run_bands(pool, run, ranges, stop)
-        else:
-            own = band_pool(threads)
-            try:
-                _run_bands(own, run, ranges, stop)
-            finally:
-                own.shutdown(wait=True)
-    wp.synchronize_device(device)
-
-
-def run_bands(run_band, n_items: int, threads: int, bands: int, device: str):
-    """Call ``run_band(first, count)`` (a band's launches) over ranges of [0, n_items) as launch_bands launches
-    a kernel: on the CPU ``threads`` bands at once, on a pool that lives for this call; the caller loads the
-    kernels' modules first (launch_bands' note)."""
-    ranges = bands_of(n_items, bands)
-    stop = threading.Event()
-
-    def run(r):
-        if stop.is_set():
-            return
         try:
             run_band(*r)
         except BaseException:
-            stop.set()
+            stop.set()  # at once, not when the main thread gets to this band's result
             raise
 
     if threads <= 1 or len(ranges) <= 1 or device != "cpu":
         for r in ranges:
             run(r)
+    elif pool is not None:
+        _run_bands(pool, run, ranges, stop)
     else:
         own = band_pool(threads)
         try:
