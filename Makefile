@@ -4,7 +4,7 @@ LLVM ?= /usr/lib/x86_64-linux-gnu/libLLVM.so.19.1
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 export DRJIT_LIBLLVM_PATH ?= $(LLVM)
 
-.PHONY: install install-extras llvm demo test quick figures benchmark device-check
+.PHONY: install install-extras llvm demo test test-exhaustive quick figures benchmark device-check
 
 # The package alone: rendering an image needs neither pytest, Mitsuba nor Ray.
 install:
@@ -31,7 +31,11 @@ demo: install
 TEST_WORKERS ?= 2
 XDIST := -n $(TEST_WORKERS) --max-worker-restart=0
 test: install-extras llvm
-	$(PYTHON) -m pytest -q $(XDIST) --dist loadfile
+	$(PYTHON) -m pytest -q $(XDIST) --dist loadfile -m "not exhaustive"
+
+# The cases make test leaves to others of their kind (tests/marks.py: exhaustive), each minutes long.
+test-exhaustive: install-extras llvm
+	$(PYTHON) -m pytest -q $(XDIST) --dist loadfile -m exhaustive
 
 # The inner loop: every test not marked slow (pyproject.toml's markers), under a minute on 2 cores.
 quick: install-extras llvm

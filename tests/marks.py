@@ -6,6 +6,10 @@ from __future__ import annotations
 import pytest
 
 slow = pytest.mark.slow
+# Cases of a property that make test already checks on others of its kind, each minutes long: run by
+# `make test-exhaustive` (their measured errors in the cases' comments), not by make test or CI, whose time they
+# would take past its budget.
+exhaustive = pytest.mark.exhaustive
 
 
 def quick_cases(values, quick, ids=None) -> list:

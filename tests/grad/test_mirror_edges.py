@@ -18,7 +18,7 @@ import warp as wp
 import warp.autograd
 
 import warprt
-from marks import slow
+from marks import exhaustive, slow
 from oracle import image_point, line_distance, mirror_point, shadow_point
 from warprt.image import MAX_CHAINS, EdgeFrame, boundary, chain_faces, edge_sides, mirrored_speeds, shadow_rows
 from warprt.kernels import DIRECTIONAL_SHADOW, EDGE, POINT_SHADOW, make_mirrored_distances
@@ -133,12 +133,18 @@ UNRESOLVED = {11: "edges 0.1394, interior 0.0528; the differences' slopes 0.086,
                   "h = 8e-2 to 5e-3 (128 strata a pixel) and 0.133 at h = 2e-2 with 256: a staircase at small steps "
                   "and a bend at large ones; 256 strata move them towards edges=True (4.5% off)"}
 QUICK = {0}  # the rest: slow (about 2 minutes each on 2 cores)
+# make test's: an occluder seen in a mirror (quick), its shadow moved by the light, a mirror's own vertices, an
+# occluder seen in a mirror seen in a mirror; the rest exhaustive (make test-exhaustive)
+SUITE = {0, 1, 6, 8}
+
+
+def _marks(i: int) -> tuple:
+    marks = () if i in QUICK else (slow,) if i in SUITE else (slow, exhaustive)
+    return marks + ((pytest.mark.xfail(reason=UNRESOLVED[i], strict=False),) if i in UNRESOLVED else ())
 
 
 @pytest.mark.parametrize("make, name, seed, h", [
-    pytest.param(*case, id=f"{case[0].__name__}-{case[1]}-{case[2]}",
-                 marks=(() if i in QUICK else (slow,)) + ((pytest.mark.xfail(reason=UNRESOLVED[i], strict=False),)
-                                                         if i in UNRESOLVED else ()))
+    pytest.param(*case, id=f"{case[0].__name__}-{case[1]}-{case[2]}", marks=_marks(i))
     for i, case in enumerate(CASES)])
 def test_the_mirror_edges_gradient_equals_central_differences(weights, make, name, seed, h):
     """edges=True against the differences of the converged forward, every pixel kept; the control: the
