@@ -17,7 +17,7 @@ import warp as wp
 import warp.autograd
 
 import warprt
-from marks import slow
+from marks import exhaustive, slow
 from oracle import image_point, line_distance, shadow_point
 from warprt.image import EdgeFrame, EdgePoints, boundary, edge_sides, light_sides, shadow_speeds
 from warprt.kernels import shadow_edge_distances
@@ -148,11 +148,16 @@ CASES = [(triangle_scene, "objects.occ.vertices", 4, 4e-2, 2), (triangle_scene, 
          # resolve)
          (area_scene, "lights.0.normal", [0.0, 0.0, 0.3], 5e-2, 2), (seen_area_scene, "lights.0.size", 24, 1e-2, 4)]
 QUICK = {0}  # the rest: slow (about 20 to 60 s each on 2 cores, the last 150 s)
+# make test-exhaustive's alone (tests/marks.py): the receiver's vertices under an area light (the triangle's floor
+# checks a receiver's) and the seen light's size (its centre and an area light's normal check its outline and
+# its points' shadows moving): 75 s and 175 s of the suite's time
+EXHAUSTIVE = {12, 16}
 
 
 @pytest.mark.parametrize("make, name, seed, h, k", [
     pytest.param(*case, id=f"{case[0].__name__}-{case[1]}-{case[2] if isinstance(case[2], int) else 'tilt'}",
-                 marks=() if i in QUICK else slow) for i, case in enumerate(CASES)])
+                 marks=() if i in QUICK else (slow, exhaustive) if i in EXHAUSTIVE else slow)
+    for i, case in enumerate(CASES)])
 def test_the_shadow_edges_gradient_equals_central_differences(weights, make, name, seed, h, k):
     """edges=True against the differences of the converged forward, every pixel kept; the control: the
     interior derivative alone (edges=False) misses the moving shadows' term by far."""
