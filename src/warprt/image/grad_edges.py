@@ -18,7 +18,7 @@ from .grad_edge_launch import host_array, launch_points
 from .grad_edge_points import (BoundaryTerm, EdgePoints, add_terms, boundary_term, camera_adjoints, camera_copies,
                                segment_points, side_directions)
 from .grad_mesh_edges import MeshEdges, camera_edges, face_normals, facing, mesh_edges
-from .grad_mirror_edges import (MirroredSegments, mirror_chains, mirror_planes, mirror_refusal, mirror_terms,
+from .grad_mirror_edges import (MirroredSegments, frame_mirrors, mirror_terms,
                                 mirrored_segments)
 from .grad_shadow_edges import ShadowSources, shadow_segments, shadow_sources, shadow_term
 from .mirrors import empty_mirrors
@@ -64,10 +64,11 @@ def moves_edges(name: str) -> bool:
             or (parts[0] == "materials" and parts[-1] == "ior"))
 
 
-def edge_refusal(scene, geom, fx, wrt) -> str | None:
+def edge_refusal(scene, geom, fx, wrt, mirrors=None) -> str | None:
     """Why backward(edges=True) would leave out an edge that the parameters ``wrt`` move (None: the camera
     rays' edges, the hard shadows' and those seen in planar mirrors are all of them): glass's rays, a curved
-    mirror's or too many mirrors' (mirror_refusal), a checker's squares, a spot's hard cone. (A reflectivity of 0
+    mirror's or too many mirrors' (frame_mirrors, or ``mirrors()``: its answer kept), a checker's squares, a
+    spot's hard cone. (A reflectivity of 0
     whose mirror rays a frame records for its derivative reflects nothing: no edge is seen in it.)"""
     moving = [n for n in wrt if moves_edges(n)]
     if not moving:
@@ -75,7 +76,8 @@ def edge_refusal(scene, geom, fx, wrt) -> str | None:
     if scene.render.max_depth > 1 and fx.refraction:
         return (f"{moving[0]} moves the edges seen through glass (its refracted and reflected rays), not "
                 f"differentiated yet: only those camera rays see, their shadows, and both seen in planar mirrors")
-    why = mirror_refusal(scene, geom) if scene.render.max_depth > 1 and fx.reflection else None
+    reflects = scene.render.max_depth > 1 and fx.reflection
+    why = (mirrors or partial(frame_mirrors, scene, geom))()[3] if reflects else None
     if why is not None:
         return f"{moving[0]} moves the edges seen in {why}, not differentiated yet: only those seen in planar mirrors"
     for m in geom.slot_materials(scene):
@@ -147,11 +149,12 @@ class Boundary:
     mirrored: MirroredSegments | None = None
 
 
-def boundary(scene, geom, fx, eye: np.ndarray) -> Boundary:
+def boundary(scene, geom, fx, eye: np.ndarray, mirrors=None) -> Boundary:
     """The Boundary of a frame seen from ``eye`` (relative to the frame origin): with shadows (fx.shadows),
     the sources (shadow_sources), the camera's edges and the shadows' (shadow_segments), with mirror rays
     (fx.reflection, render.max_depth > 1) those seen through each chain of planar mirrors (mirrored_segments),
-    each one's image cut where it crosses the others'."""
+    each one's image cut where it crosses the others'. ``mirrors()``: the frame's frame_mirrors, kept (else
+    made here; ``eye`` is then the frame's own)."""
     m = mesh_edges(scene, geom) if geom.triangle_count else None
     sources = shadow_sources(scene, geom) if fx.shadows and m is not None else None
     edges = camera_edges(scene, geom, fx, eye, sources, m)
@@ -162,8 +165,7 @@ def boundary(scene, geom, fx, eye: np.ndarray) -> Boundary:
         segments = shadow_segments(scene, geom, m, sources, eye)
         blocks.append((segments.q0 - eye, segments.q1 - eye, segments.plane))
     if m is not None and fx.reflection and scene.render.max_depth > 1:
-        group, planes, _ = mirror_planes(scene, geom)
-        chains = mirror_chains(scene, geom, eye, group, planes)
+        group, planes, chains, _ = (mirrors or partial(frame_mirrors, scene, geom))()
         if chains:
             mirrored = mirrored_segments(scene, geom, fx, m, sources, eye, group, chains)
             blocks += mirrored.blocks(eye)
@@ -187,7 +189,8 @@ def edge_gradients(scene, geom, frame: EdgeFrame, d: np.ndarray, wrt, device: st
         return {}
     eye = geom.eye_offset(scene.camera.eye).astype(np.float64)
     keep = partial(kept_part, frame, scene, geom)
-    b = keep("boundary", lambda: boundary(scene, geom, frame.fx, eye))
+    mirrors = partial(keep, "mirrors", partial(frame_mirrors, scene, geom))  # check_edges' too
+    b = keep("boundary", lambda: boundary(scene, geom, frame.fx, eye, mirrors))
     d3 = d.reshape(-1, 3).astype(np.float64)
     terms = []
     if len(b.camera.edge):
@@ -237,7 +240,8 @@ def check_edges(scene, geom, frame: EdgeFrame | None, wrt):
     """backward(edges=True)'s refusal (edge_refusal) as one ArgumentError naming ``edges``."""
     if frame is None:
         raise ArgumentError("backward", "edges", "no frame's plan was kept: render(grad=True) first")
-    why = edge_refusal(scene, geom, frame.fx, wrt)
+    why = edge_refusal(scene, geom, frame.fx, wrt, partial(kept_part, frame, scene, geom, "mirrors",
+                                                           partial(frame_mirrors, scene, geom)))
     if why is not None:
         raise ArgumentError("backward", "edges", f"{why} (edges=False: the derivative with each ray's face and "
                                                  f"each shadow ray's answer held)")

@@ -102,14 +102,17 @@ def mirror_chains(scene, geom, eye: np.ndarray, group: np.ndarray, planes: np.nd
     return chains
 
 
-def mirror_refusal(scene, geom) -> str | None:
-    """What backward(edges=True) cannot follow the edges seen in mirrors through (None: nothing): a curved
-    mirror (mirror_planes), or more than MAX_CHAINS chains of mirrors (mirror_chains)."""
+def frame_mirrors(scene, geom) -> tuple:
+    """(group, planes, chains, why not) of a frame's mirrors, seen from its eye: mirror_planes' groups and
+    planes, mirror_chains' chains (none where a curved mirror refuses them), and what backward(edges=True)
+    cannot follow the edges seen in them through (None: nothing): a curved mirror (mirror_planes), or more than
+    MAX_CHAINS chains of mirrors. Made once a frame (grad_edges.kept_part): the refusal and the boundary read it."""
     group, planes, why = mirror_planes(scene, geom)
-    if why is None and len(mirror_chains(scene, geom, geom.eye_offset(scene.camera.eye).astype(np.float64), group,
-                                         planes)) > MAX_CHAINS:
+    chains = [] if why is not None else mirror_chains(scene, geom, geom.eye_offset(scene.camera.eye).astype(np.float64),
+                                                      group, planes)
+    if len(chains) > MAX_CHAINS:
         why = f"more than {MAX_CHAINS} chains of mirrors within render.max_depth {scene.render.max_depth}"
-    return why
+    return group, planes, chains, why
 
 
 def _extend(prefix: MirrorChain, g: int, plane: np.ndarray, tri: np.ndarray, basis, eye: np.ndarray,
