@@ -11,7 +11,7 @@ mirrors; grad_edge_points.py: where they lie in the image; grad_mesh_edges.py: t
 from ..options import RenderOptions
 from .aovs import AOVS, check_aovs
 from .caches import FrameCaches, LightHistory
-from .grad import Replay, build_replay, pose_points, replay_image
+from .grad import Replay, build_replay, pose_points, replay_focus, replay_image
 from .grad_edge_points import EdgePoints, edge_points, segment_points
 from .grad_edges import Boundary, EdgeFrame, boundary, edge_sides, edge_speeds
 from .grad_mesh_edges import MeshEdges, camera_edges, mesh_edges
@@ -32,7 +32,7 @@ from .zbuffer import ZBuffer, eye_on_surface
 __all__ = ["AOVS", "Record", "Replay", "build_replay", "FrameCaches", "LightHistory", "MirrorFrame", "Pose", "RenderOptions", "RenderResult", "RenderStats",
            "Renderer", "SceneParameters", "ZBuffer", "aov_paths", "bands_of", "check_aovs", "check_finite",
            "default_threads", "eye_on_surface", "launch_bands", "mirrors_from_rasters", "object_poses", "partial_files", "pose_points",
-           "raster_is_cheaper", "read_aovs", "read_image", "record_first_hits", "render", "replay_image", "render_zbuffer", "shadows_from_grid",
+           "raster_is_cheaper", "read_aovs", "read_image", "record_first_hits", "render", "replay_focus", "replay_image", "render_zbuffer", "shadows_from_grid",
            "to_srgb8", "write_image"]
 __all__ += ["EdgeFrame", "EdgePoints", "camera_edges", "edge_points", "edge_sides", "edge_speeds"]  # backward(edges=True)
 __all__ += ["Boundary", "MeshEdges", "ShadowSegments", "ShadowSources", "boundary", "light_sides", "mesh_edges",

@@ -88,6 +88,7 @@ class Replay:
     camera_moves: bool
     device: str
     area_kernel: object = replay_area  # what adds the area lights' sample points (a test's control swaps it)
+    focus: np.ndarray | None = None  # per camera ray, whether its tree is launched (replay_focus; None: every one)
 
     def launch(self):
         """The replay's launches, in order: ``before``, then per recorded level its kernel (and with area
@@ -95,7 +96,7 @@ class Replay:
         h, device = self.hits, self.device
         for kernel, dim, inputs, outputs in self.before:
             wp.launch(kernel, dim=dim, inputs=inputs, outputs=outputs, device=device)
-        for k, live in enumerate(live_entries(h, device)):
+        for k, live in enumerate(live_entries(h, device, self.focus)):
             if live is None:
                 continue
             moving = self.moving or (k > 0 and h.fx.refraction)  # a refracted ray turns with the ior
@@ -115,18 +116,61 @@ def _vec3(rows, device: str, grad: bool = True) -> wp.array:
     return wp.array(np.asarray(rows, np.float32).reshape(-1, 3), dtype=wp.vec3, device=device, requires_grad=grad)
 
 
-def live_entries(hits: Record, device: str) -> list:
+def live_entries(hits: Record, device: str, focus: np.ndarray | None = None) -> list:
     """Per recorded level the entries a ray reached (its face not NO_RAY), ascending, as an int wp.array (None
-    where none did): what the replay launches over. A mirror chain's deeper levels and glass's regions are mostly
+    where none did): what the replay launches over; with ``focus`` (per camera ray, replay_focus) only those of
+    the camera rays it keeps. A mirror chain's deeper levels and glass's regions are mostly
     places no ray reached (scenes/mirrors.toml at 512x384: 45% of level 1's, 1% of level 7's reached), and an
     adjoint thread costs even where its entry is empty. In ascending order the CPU's threads add to the colours
     and the adjoints in the order the whole level's would: the same sums to the bit."""
     face, out = hits.rec.face.numpy(), []
+    ray = None if focus is None else entry_rays(hits)
     for k in range(hits.levels):
         first, count = hits.level(k)
-        live = np.flatnonzero(face[first:first + count] != NO_RAY).astype(np.int32) + np.int32(first)
+        reached = face[first:first + count] != NO_RAY
+        if focus is not None:
+            reached &= focus[ray[first:first + count]]
+        live = np.flatnonzero(reached).astype(np.int32) + np.int32(first)
         out.append(wp.array(live, dtype=int, device=device) if len(live) else None)
     return out
+
+
+def entry_rays(hits: Record) -> np.ndarray:
+    """Per entry of the record its camera ray (kernels/record.py make_entry's entry_ray: a chain's from its place,
+    glass's as written; 0 where no ray reached it)."""
+    if not hits.tree:
+        return np.arange(hits.entries) % hits.camera_rays
+    ray = hits.rec.ray_of.numpy()[:hits.entries].copy()
+    ray[hits.rec.face.numpy()[:hits.entries] == NO_RAY] = 0
+    return ray
+
+
+OBJECT_KEYS = ("vertices", "translation", "rotation", "colors")
+
+
+def replay_focus(scene, hits: Record, wrt, d: np.ndarray) -> np.ndarray:
+    """Per camera ray, whether the replay launches its ray tree for the gradients of ``wrt`` against ``d`` (the
+    image's adjoint): not where its pixel's adjoint is 0, and where every name is an object's (its vertices, pose
+    or vertex colours) only where the tree meets a face of those objects. The derivative of a pixel in those
+    parameters, its faces and its lights' answers held, is the sum over its rays at the objects' faces of what
+    they shade there and what they spawn: a tree that never meets them adds exactly 0, the trees kept add what
+    they did in the order they did (live_entries), and the gradients are the same to the bit (checked). A pose's
+    pixels are a fraction of the frame (tests/grad/test_replay_focus.py: what each scene keeps)."""
+    keep = np.repeat((d.reshape(-1, 3) != 0).any(axis=1), hits.samples)
+    names = [n for n in wrt if n.startswith("objects.") and n.rsplit(".", 1)[1] in OBJECT_KEYS]
+    if len(names) < len(wrt):
+        return keep
+    index = object_names(scene)
+    starts = np.cumsum([0] + [len(o.faces) for o in drawn_objects(scene)])
+    named = np.zeros(int(starts[-1]) + 1, bool)  # the last for a face no drawn object has (a miss: -1)
+    for n in names:
+        i = index[n[len("objects."):n.rindex(".")]]
+        named[starts[i]:starts[i + 1]] = True
+    face = hits.rec.face.numpy()[:hits.entries]
+    meets = named[np.where((face >= 0) & (face < len(named) - 1), face, len(named) - 1)]
+    trees = np.zeros(hits.camera_rays, bool)
+    trees[entry_rays(hits)[meets]] = True
+    return keep & trees
 
 
 def pooled_zeros(hits: Record, key: str, n: int, dtype, device: str) -> wp.array:
@@ -351,6 +395,7 @@ def backward(scene, geom, hits: Record, d_image, wrt, device: str, poses: list |
     if posing and poses is None:
         poses = object_poses(scene, {})
     replay = build_replay(scene, geom, hits, device, moving, camera, shapes, poses if posing else None)
+    replay.focus = replay_focus(scene, hits, wrt, d)
     tape = wp.Tape()
     with tape:
         replay.launch()
