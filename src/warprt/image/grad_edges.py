@@ -203,8 +203,8 @@ def edge_gradients(scene, geom, frame: EdgeFrame, d: np.ndarray, wrt, device: st
                                  keep))
     if b.mirrored is not None:
         seen = b.mirrored.camera
-        jump = edge_sides(scene, geom, frame, seen, device) if len(seen.edge) else None
-        terms += mirror_terms(scene, geom, frame.fx, b.mirrored, b.sources, jump, d3, device)
+        jump = keep("mirrored sides", lambda: edge_sides(scene, geom, frame, seen, device)) if len(seen.edge) else None
+        terms += mirror_terms(scene, geom, frame.fx, b.mirrored, b.sources, jump, d3, device, keep)
     term = add_terms(terms, len(geom.points_np))
     shapes = {}
     if any(n.startswith("lights.") and n.endswith(tuple(f".{k}" for k in SHAPE_KEYS)) for n in wrt):

@@ -278,28 +278,37 @@ def mirror_vertices(geom, cf: ChainFaces) -> dict:
 
 
 def mirror_terms(scene, geom, fx, mb: MirroredSegments, sources: ShadowSources | None,
-                 camera_jump: np.ndarray | None, d: np.ndarray, device: str) -> list:
+                 camera_jump: np.ndarray | None, d: np.ndarray, device: str, keep=None) -> list:
     """The BoundaryTerms of the edges seen in mirrors: per point d at its pixel · its jump (the mirrored mesh
     edges' ``camera_jump``: the forward walk's either side, grad_edges.edge_sides; the shadows': light_sides,
     its source's light at its ray's hit through its chain, times the mirrors' k_r), 0 where its ray does not
     follow its chain (chain_faces), times its weight and its speed (mirrored_speeds), into the edges' and the
-    receivers' vertices, the mirrors' (their faces the rays meet), the camera and the sources."""
+    receivers' vertices, the mirrors' (their faces the rays meet), the camera and the sources. ``keep(name,
+    make)``: where what is the frame's alone (the chains' faces, jumps and speeds) is kept for its next backward
+    (grad_edges.kept_part; None: made here)."""
+    keep = keep or (lambda name, make: make())
     n_points, terms = len(geom.points_np), []
     p = geom.points_np.astype(np.float64)
     if mb.camera is not None and len(mb.camera.edge):
         pts = mb.camera
-        cf = chain_faces(scene, geom, fx, mb.group, mb.chains, mb.edge_chain, pts, device)
-        rows = np.zeros((len(pts.edge), 6, 3))
-        rows[:, :2] = p[mb.edges[pts.edge]]
-        speed = mirrored_speeds(scene, geom, rows, np.full(len(pts.edge), EDGE), cf, pts, device)
+
+        def seen():
+            cf = chain_faces(scene, geom, fx, mb.group, mb.chains, mb.edge_chain, pts, device)
+            rows = np.zeros((len(pts.edge), 6, 3))
+            rows[:, :2] = p[mb.edges[pts.edge]]
+            return cf, mirrored_speeds(scene, geom, rows, np.full(len(pts.edge), EDGE), cf, pts, device)
+        cf, speed = keep("mirrored edges", seen)
         vertices = {"v0": mb.edges[pts.edge, 0], "v1": mb.edges[pts.edge, 1], **mirror_vertices(geom, cf)}
         terms.append(boundary_term(pts, camera_jump * cf.follows[:, None], d, speed, vertices, n_points))
     if mb.shadow_points is not None and len(mb.shadow_points.edge):
         pts, seg = mb.shadow_points, mb.shadows
-        cf = chain_faces(scene, geom, fx, mb.group, mb.chains, mb.shadow_chain, pts, device)
-        jump = light_sides(scene, geom, fx, sources, seg, pts, device, level=cf.level) * cf.follows[:, None]
-        kind = np.where(sources.directional[seg.source[pts.edge]], DIRECTIONAL_SHADOW, POINT_SHADOW)
-        speed = mirrored_speeds(scene, geom, shadow_rows(geom, sources, seg, pts), kind, cf, pts, device)
+
+        def shadows():
+            cf = chain_faces(scene, geom, fx, mb.group, mb.chains, mb.shadow_chain, pts, device)
+            jump = light_sides(scene, geom, fx, sources, seg, pts, device, level=cf.level) * cf.follows[:, None]
+            kind = np.where(sources.directional[seg.source[pts.edge]], DIRECTIONAL_SHADOW, POINT_SHADOW)
+            return cf, jump, mirrored_speeds(scene, geom, shadow_rows(geom, sources, seg, pts), kind, cf, pts, device)
+        cf, jump, speed = keep("mirrored shadows", shadows)
         terms.append(boundary_term(pts, jump, d, speed, {**shadow_vertices(geom, seg, pts), **mirror_vertices(geom, cf)},
                                    n_points, (seg.source[pts.edge], len(sources.at))))
     return terms
