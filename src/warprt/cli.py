@@ -99,6 +99,9 @@ def _add_scene_options(p: argparse.ArgumentParser):
     p.add_argument("--max-depth", type=int, metavar="N", help="ray levels: 1 = primary rays only, 2 = one reflection, ...")
     p.add_argument("--light-samples", type=int, metavar="N",
                    help="points per area light, one shadow ray each (a square: 16, 64, 256, ...; default 16)")
+    p.add_argument("--adaptive", type=float, metavar="T",
+                   help="Whitted's adaptive supersampling: each pixel's centre traced, its --spp samples only where "
+                        "its 3x3 neighbourhood differs by more than T (e.g. 0.005; 0: off, the default)")
     p.add_argument("--no-shadows", action="store_true", help="switch shadow rays off")
     p.add_argument("--up", metavar="AXIS", help="a mesh file's up axis: x, y, z, -x, -y or -z (write --up=-z); "
                                                "default: what the file says (USD, glTF), else y")
@@ -118,6 +121,10 @@ def _load(args):
             overrides[key] = check_setting("command line", "--" + flag.replace("_", "-"), key, v)
     if args.no_shadows:
         overrides["render.shadows"] = False
+    if args.adaptive is not None:
+        if not 0.0 <= args.adaptive < float("inf"):
+            raise SceneError("command line", "--adaptive", f"expected a number >= 0 (0: off), got {args.adaptive}")
+        overrides["render.adaptive"] = args.adaptive
     return load_scene(args.scene, overrides, up=args.up, camera=args.camera)
 
 

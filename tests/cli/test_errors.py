@@ -149,6 +149,8 @@ CASES = [
      "command line: --spp: expected a square number of samples (k*k stratified: 1, 4, 9, 16, ...), got 5"),
     ("--light-samples 10", ["render", "ok.toml", "--light-samples", "10"],
      "command line: --light-samples: expected a square number of samples (k*k stratified: 1, 4, 9, 16, ...), got 10"),
+    ("--adaptive -1", ["render", "ok.toml", "--spp", "4", "--adaptive", "-1"],
+     "command line: --adaptive: expected a number >= 0 (0: off), got -1.0"),
     ("--max-depth 0", ["render", "ok.toml", "--max-depth", "0"],
      "command line: --max-depth: expected an integer in [1, 1024], got 0"),
     ("--threads 0", ["render", "ok.toml", "--threads", "0"], "command line: --threads: expected an integer >= 1, got 0"),

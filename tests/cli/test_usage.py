@@ -53,7 +53,7 @@ def run_on_terminal(*args, cwd=None, env=None, timeout=300):
     return p.returncode, b"".join(seen).decode(errors="replace"), out
 
 
-FLAGS = ["-o", "--output", "--spp", "--width", "--height", "--max-depth", "--light-samples", "--no-shadows", "--threads",
+FLAGS = ["-o", "--output", "--spp", "--width", "--height", "--max-depth", "--light-samples", "--adaptive", "--no-shadows", "--threads",
          "--device", "--set", "--stats", "--stats-file", "-q", "--quiet", "--debug"]
 
 

@@ -2,13 +2,14 @@
 (renderer.py), its plan and policies (plan.py), the caches it keeps (caches.py) and the parameters it
 changes between frames (params.py); launching bands (launch.py), the stats (stats.py), the Z-buffer
 (zbuffer.py), the planar mirrors' virtual cameras (mirrors.py), the AOVs (aovs.py), memory (memory.py),
-image files (film.py) and the progress line (progress.py); the gradient: its record (grad_record.py), its
+image files (film.py), the progress line (progress.py) and render.adaptive's refinement (adaptive.py); the gradient: its record (grad_record.py), its
 parameters (grad_params.py), its replay and backward() (grad.py), and its boundary term (grad_edges.py: the
 edges camera rays see; grad_shadow_edges.py: hard shadows' edges; grad_mirror_edges.py: both seen in planar
 mirrors; grad_edge_points.py: where they lie in the image; grad_mesh_edges.py: the meshes' edges and silhouettes).
 """
 
 from ..options import RenderOptions
+from .adaptive import refined_pixels
 from .aovs import AOVS, check_aovs
 from .caches import FrameCaches, LightHistory
 from .grad import Replay, build_replay, pose_points, replay_focus, replay_image
@@ -34,6 +35,7 @@ __all__ = ["AOVS", "Record", "Replay", "build_replay", "FrameCaches", "LightHist
            "default_threads", "eye_on_surface", "launch_bands", "mirrors_from_rasters", "object_poses", "partial_files", "pose_points",
            "raster_is_cheaper", "read_aovs", "read_image", "record_first_hits", "render", "replay_focus", "replay_image", "render_zbuffer", "shadows_from_grid",
            "to_srgb8", "write_image"]
+__all__ += ["refined_pixels"]  # render.adaptive
 __all__ += ["EdgeFrame", "EdgePoints", "camera_edges", "edge_points", "edge_sides", "edge_speeds"]  # backward(edges=True)
 __all__ += ["Boundary", "MeshEdges", "ShadowSegments", "ShadowSources", "boundary", "light_sides", "mesh_edges",
             "segment_points", "shadow_rows", "shadow_segments", "shadow_sources", "shadow_speeds"]  # and hard shadows' edges

@@ -34,6 +34,9 @@ def refusal(scene, fx, mirrored=()) -> str | None:
         return f"at most {MAX_GRAD_DEPTH} ray levels (render.max_depth) are differentiated (Warp's unrolled loop)"
     if len(scene.whitted_lights) > MAX_GRAD_LIGHTS:
         return f"at most {MAX_GRAD_LIGHTS} lights are differentiated (Warp's unrolled loop)"
+    if scene.render.adaptive > 0 and fx.supersampling:
+        return ("render.adaptive picks the pixels it refines by the frame's own image: a gradient is that of a frame "
+                "of every pixel's strata (render.adaptive = 0)")
     return None
 
 

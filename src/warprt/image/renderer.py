@@ -20,6 +20,7 @@ from ..options import RenderOptions
 from ..scene import (EffectSet, camera_basis, drawn_objects, switched_on, validate_camera, validate_scene, validate_view,
                      zbuffer_effects)
 from ..timing import timed
+from .adaptive import adaptive_spp, refine
 from .aovs import finish_aovs
 from .caches import SHADOW_GRIDS_KEPT, FrameCaches
 from .grad import backward as grad_backward
@@ -189,6 +190,14 @@ class Renderer:
         """The scene the next frame renders (set_scene, or changed through params)."""
         return self._scene
 
+    def _centres_scene(self):
+        """The scene at one sample a pixel (its centre) that an adaptive frame traces first (image/adaptive.py),
+        kept while the scene is the same object: the frame caches then see one scene from frame to frame."""
+        kept = getattr(self, "_centres", None)
+        if kept is None or kept[0] is not self._scene:
+            self._centres = kept = (self._scene, self._scene.with_render(spp=1))
+        return kept[1]
+
     @property
     def geometry(self) -> Geometry | None:
         """The Geometry of the last frame (None before the first)."""
@@ -248,15 +257,11 @@ class Renderer:
         scene, o, times = self._scene, self.options, {}
         with timed(times, "total"):
             plan = plan_frame(scene, o)
-            mirrored = ()
-            if grad:
-                switched = switched_on(scene, o.effects, o.disable)
-                mirrored = mirrored_materials(scene, named_parameters(scene, named), switched)
-            why = grad_refusal(scene, plan.fx, mirrored) if grad else None
-            if why is not None:
-                raise ArgumentError("render", "grad", why)
-            if grad:
-                check_record_memory(scene, plan.fx, o.device, mirrored)
+            refine_k, effects = adaptive_spp(scene, plan.fx, grad), plan.fx
+            if refine_k:  # traced at the pixels' centres, then refined where they differ (image/adaptive.py)
+                scene = self._centres_scene()
+                plan = plan_frame(scene, o)
+            switched, mirrored = _grad_frame_checked(scene, o, plan, named) if grad else (None, ())
             edge_frame = EdgeFrame(plan.fx, plan.stack, plan.max_depth, plan.threads)
             if grad:  # the trace writes the record as it goes
                 plan = recording_plan(scene, plan, switched, mirrored)
@@ -295,16 +300,27 @@ class Renderer:
                                          switched, hits, self._record_used)
                     frame = _trace(scene, o, plan, geom, data, kernel, zb, used, progress, pool, hits)
             result = _finish(scene, o, plan, geom, frame)
+            if refine_k:
+                with timed(times, "refine"):
+                    image, extra, refined = refine(self._scene, plan, geom, data, result[0], refine_k, o.device, pool)
+                result, frame = (image, result[1]), replace(frame, per_kind=frame.per_kind + extra)
             if grad:
-                self._record = hits
-                if hits.tree:
-                    self._record_used = hits.used()
-                self._first_hits = (scene, geom, hits)
-                self._grad_frames += 1
-                self._edge_frame = edge_frame
+                self._keep_grad_frame(scene, geom, hits, edge_frame)
         stats = _frame_stats(scene, o, plan, shortcuts, variant, geom, geometry_info, grid, mirrors, zb, frame, times)
         stats.memory["estimate"] = estimate
+        if refine_k:
+            stats.spp, stats.effects, stats.adaptive = self._scene.render.spp, str(effects), {
+                "threshold": scene.render.adaptive, "refined": refined, "share": refined / max(plan.n_pixels, 1)}
         return RenderResult(result[0], stats, result[1])
+
+    def _keep_grad_frame(self, scene, geom, hits, edge_frame):
+        """What backward() reads of a grad=True frame, and what the next grad frame takes again (its record)."""
+        self._record = hits
+        if hits.tree:
+            self._record_used = hits.used()
+        self._first_hits = (scene, geom, hits)
+        self._grad_frames += 1
+        self._edge_frame = edge_frame
 
     def backward(self, d_image, wrt=None, *, arrays: bool = False, edges: bool = True) -> dict:
         """d(sum(d_image * image)) / d(param) at the last frame, rendered with grad=True, for each name in
@@ -439,6 +455,19 @@ def given_geometry(geom: Geometry, eye) -> dict:
         raise ValueError(f"the Geometry passed to render() does not cover the eye {list(eye)}: "
                          f"{geometry_reason(geom, eye)}; build one for this eye")
     return {"bvh": "given", "reason": geometry_reason(geom, eye)}
+
+
+def _grad_frame_checked(scene, o: RenderOptions, plan: FramePlan, named: list) -> tuple:
+    """(switched, mirrored) of a grad=True frame (the effects switched on; the materials whose mirror rays it
+    records whatever their reflectivity), refused in one ArgumentError where it cannot be differentiated or its
+    record would not fit in memory."""
+    switched = switched_on(scene, o.effects, o.disable)
+    mirrored = mirrored_materials(scene, named_parameters(scene, named), switched)
+    why = grad_refusal(scene, plan.fx, mirrored)
+    if why is not None:
+        raise ArgumentError("render", "grad", why)
+    check_record_memory(scene, plan.fx, o.device, mirrored)
+    return switched, mirrored
 
 
 def _trace(scene, o: RenderOptions, plan: FramePlan, geom: Geometry, data, kernel, zb, mirror_frame,

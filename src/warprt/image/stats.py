@@ -37,6 +37,8 @@ class RenderStats:
     # render(report_truncated=True): per pixel (H, W, 3), the weight of the rays max_depth cut off.
     truncated: np.ndarray | None = field(default=None, repr=False)
     geometry: dict = field(default_factory=dict)  # bvh: "built" | "reused" | "given", and the reason
+    # render.adaptive: the pixels refined at spp (image/adaptive.py), their share, the threshold; {} when off
+    adaptive: dict = field(default_factory=dict)
 
     def to_dict(self) -> dict:
         """The stats as JSON values; the truncated weights, if reported, as their largest and mean value."""

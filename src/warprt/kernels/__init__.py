@@ -36,7 +36,7 @@ from .shading import (AreaTest, Coefficients, LightArrival, area_arrival, light_
 from .interaction import Surface, mirror_ray, spawn_ray
 from .dielectric import absorbed, absorbed_forever, dielectric_children
 from .shadow import grid_occluded
-from .trace import MAX_TREE_DEPTH, make_trace_kernel, stack_size, tile_order_pixel
+from .trace import MAX_TREE_DEPTH, make_pixels_kernel, make_trace_kernel, stack_size, tile_order_pixel
 from .triangle import query_normal, triangle, unit_normal, woop_hit
 from .zbuffer_shade import make_shade_kernel
 
@@ -45,7 +45,7 @@ __all__ = ["CLIP_SCALE", "CameraData", "Fragments", "MARGIN_PX", "MAX_BOUNCES", 
            "Mirrors", "OFFSET_SCALE", "aov_buffers", "aov_bytes", "aov_sums", "beer", "beer_forever", "bilinear",
            "camera_data", "camera_of", "camera_ray", "count_kernel", "empty_aov_buffers", "fill_kernel",
            "fresnel_dielectric", "gather_kernel", "grid_occluded", "image_plane_point", "init_warp", "make_shade_kernel",
-           "make_surface", "make_trace_kernel", "mirror_chain", "mirror_hit", "offset_ray_origin", "phong_diffuse",
+           "make_surface", "make_pixels_kernel", "make_trace_kernel", "mirror_chain", "mirror_hit", "offset_ray_origin", "phong_diffuse",
            "phong_specular", "probe_kernel", "project_kernel", "query_normal", "raster_camera", "raster_kernel",
            "raster_pixel_kernel", "reflect", "refract", "sample_offset", "stack_size", "texel", "tile_order_pixel",
            "total_kernel", "triangle", "uncertain", "uncertain_np", "unit_normal", "woop_hit", "wp"]

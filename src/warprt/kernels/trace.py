@@ -419,3 +419,40 @@ def make_trace_kernel(fx, raster_primary: bool = False, stack: int = 0, report_t
         counts[i] = rays  # in tile order: a band's counts are contiguous
 
     return trace
+
+
+@functools.cache
+def make_pixels_kernel(fx, stack: int = 0, shadow_grid: bool = False):
+    """make_trace_kernel's image at k x k samples a pixel over a list of pixels (image/adaptive.py: those Whitted's
+    adaptive supersampling refines), each ray traced (no Z-buffer, no virtual camera: the shortcuts give the same
+    bits): the colour of ``pixels[first + tid]`` at ``image[first + tid]``, the trace kernel's for that pixel at
+    that spp to the bit, its ray counts at ``counts[first + tid]``."""
+    if fx.refraction and stack < 1:
+        raise ValueError("a kernel with refraction needs a stack: stack_size(max_depth)")
+    path = make_path(fx, False, stack, False, (), shadow_grid, False, False)
+    COUNTS = wp.vec4i if fx.refraction else wp.vec3i
+
+    @wp.kernel(module="unique", enable_backward=False)
+    def trace_pixels(s: SceneData, c: CameraData, max_depth: int, k: int, first: int, pixels: wp.array(dtype=int),
+                     frags: Fragments, mir: Mirrors, aov: AovBuffers, rec: GradRecord, image: wp.array(dtype=wp.vec3),
+                     counts: wp.array(dtype=COUNTS)):
+        i = first + wp.tid()
+        pixel = pixels[i]
+        x = pixel % c.width
+        row = pixel / c.width
+        total = wp.vec3(0.0)
+        truncated = wp.vec3(0.0)
+        rays = COUNTS()
+        samples = k * k
+        for sample in range(samples):
+            offset = sample_offset(sample, k)
+            r = TreeRay(Ray(c.eye, camera_ray(c, x, row, offset[0], offset[1])), wp.vec3(1.0), c.eye, 0,
+                        s.eye_medium, FROM_CAMERA, -1)
+            color, truncated, rays = path(s, frags, mir, aov, rec, r, max_depth, i, pixel, samples, sample, x, row,
+                                          truncated, rays)
+            total = total + color
+        image[i] = total / float(samples)
+        rays[0] = samples
+        counts[i] = rays
+
+    return trace_pixels

@@ -67,6 +67,9 @@ class RenderSettings:
     spp: int = 1  # k*k stratified samples per pixel
     effects: tuple | None = None  # None: every effect the scene calls for
     light_samples: int = 16  # k*k stratified points on each area light, one shadow ray each
+    # > 0: Whitted's adaptive supersampling (image/adaptive.py): each pixel's centre traced, and the spp samples
+    # only in pixels whose 3 x 3 neighbourhood of centres differs by more than this (a colour channel's step)
+    adaptive: float = 0.0
 
     def __post_init__(self):
         _convert(self, vectors=("ambient", "background"), ints=("max_depth", "spp", "light_samples"))

@@ -22,7 +22,7 @@ from .validate import check_setting, validate_camera, validate_scene
 
 SECTIONS = {"camera", "render", "lights", "materials", "objects"}
 _CAMERA_KEYS = {"eye", "center", "up", "fovy", "near", "width", "height"}
-_RENDER_KEYS = {"ambient", "background", "max_depth", "shadows", "spp", "effects", "light_samples"}
+_RENDER_KEYS = {"ambient", "background", "max_depth", "shadows", "spp", "effects", "light_samples", "adaptive"}
 _LIGHT_KEYS = {"type", "position", "color", "direction", "target", "cutoff_angle", "beam_width", "falloff"}
 _AREA_KEYS = {"type", "radiance", "shape", "object", "center", "normal", "u", "v", "size", "radius"}
 _SPOT_KEYS = ("target", "cutoff_angle", "beam_width")  # meaningful only for a spot
@@ -120,6 +120,7 @@ def read_render(source: str, t: dict) -> RenderSettings:
         effects=effects,
         light_samples=check_setting(source, "render.light_samples", "render.light_samples",
                                     r.integer("light_samples", d.light_samples)),
+        adaptive=r.number("adaptive", d.adaptive, lo=0.0),
     )
 
 

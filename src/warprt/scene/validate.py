@@ -365,6 +365,8 @@ def _check_render(src, r):
     background = _check_vector(src, "render.background", r.background, nonneg=True)
     for key in ("render.max_depth", "render.spp", "render.light_samples"):
         check_setting(src, key, key, getattr(r, key.split(".")[1]))
+    if not _is_real(r.adaptive) or not 0.0 <= r.adaptive < math.inf:
+        raise SceneError(src, "render.adaptive", f"expected a number >= 0 (0: off), got {show(r.adaptive)}")
     return ambient, background
 
 
