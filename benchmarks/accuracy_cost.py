@@ -14,7 +14,9 @@ Knobs (warprt.render on the scene, everything else as the scene file says):
   with every level 1..8 at 1 spp; a row stops at the first level that traces no reflection ray (no deeper
   level can change a pixel then); shadows off at each spp (the scene's ray levels);
   resolution: a half- and a quarter-size image at 1, 4, 16 spp, upscaled to the reference size by
-  bilinear interpolation in linear RGB (pixel centres aligned, edges clamped); the upscale is timed too.
+  bilinear interpolation in linear RGB (pixel centres aligned, edges clamped); the upscale is timed too;
+  render.adaptive 0.005 and 0.02 at 4, 16, 64 spp (Whitted's adaptive supersampling: the spp samples only in
+  pixels whose 3x3 neighbourhood of centres differs by more than that).
 Error: SSIM (7x7 window, channels averaged) and PSNR of linear RGB clamped to [0, 1] (reference/compare.py).
 
 Scenes lit by area lights (a Mitsuba file: scenes/cornell_box.xml) are measured against Mitsuba's own
@@ -53,10 +55,11 @@ THRESHOLDS = (0.99, 0.999)
 FULL = {"box": (320, 240), "ref_spp": 256, "ref_depth": 64, "spps": [1, 4, 16, 64], "grid_depths": [1, 2, 3, 4, 8],
         "depths": list(range(1, 9)), "scales": [2, 4], "scale_spps": [1, 4, 16], "repeat": 3,
         "light_samples": [1, 4, 16, 64, 256], "max_light_rays": 1024, "direct_ref_spp": 4096,
-        "direct_spps": [1, 4, 16, 64, 256, 1024]}
+        "direct_spps": [1, 4, 16, 64, 256, 1024], "adaptive": [0.005, 0.02]}
 QUICK = {"box": (96, 72), "ref_spp": 16, "ref_depth": 16, "spps": [1, 4], "grid_depths": [1, 2, 3],
          "depths": [1, 2, 3], "scales": [2], "scale_spps": [1], "repeat": 1,
-         "light_samples": [1, 4, 16], "max_light_rays": 64, "direct_ref_spp": 1024, "direct_spps": [1, 16, 64]}
+         "light_samples": [1, 4, 16], "max_light_rays": 64, "direct_ref_spp": 1024, "direct_spps": [1, 16, 64],
+         "adaptive": [0.02]}
 DIRECT_PASS = 256  # Mitsuba's direct integrator renders its reference in passes of this many samples per pixel
 CHEAP = 0.3  # seconds: frames faster than this are timed as the median of `repeat` renders, others once
 NOISE = 0.15  # relative: times closer than this are a tie, broken by the number of rays traced
@@ -95,7 +98,8 @@ def describe(p: dict) -> str:
     levels = f"{p['depth']} ray level{'s' * (p['depth'] > 1)}"
     size = f", {p['width']}x{p['height']} upscaled" if p["scale"] > 1 else ""
     lights = f", {p['light_samples']} light sample{'s' * (p['light_samples'] > 1)}" if p.get("light_samples") else ""
-    return f"{p['spp']} spp, {levels}{lights}, {'shadows' if p['shadows'] else 'no shadows'}{size}"
+    adaptive = f", adaptive {p['adaptive']:g}" if p.get("adaptive") else ""
+    return f"{p['spp']} spp{adaptive}, {levels}{lights}, {'shadows' if p['shadows'] else 'no shadows'}{size}"
 
 
 def measure(scene, geometry, p: dict, ref: np.ndarray, repeat: int) -> tuple[dict, np.ndarray]:
@@ -106,6 +110,8 @@ def measure(scene, geometry, p: dict, ref: np.ndarray, repeat: int) -> tuple[dic
     s = scene.with_camera(width=w, height=h).with_render(spp=p["spp"], max_depth=p["depth"], shadows=True)
     if p.get("light_samples"):
         s = s.with_render(light_samples=p["light_samples"])
+    if p.get("adaptive"):
+        s = s.with_render(adaptive=p["adaptive"])
     # Warmed up at full size (a small warm-up may not compile the kernels the frame takes: at 8 x 6 the
     # tracer finds every first hit, at full size the Z-buffer may); the warm-up's time says whether the frame
     # is cheap enough to be timed as the median of ``repeat``.
@@ -135,11 +141,11 @@ def sweep(scene, geometry, ref, cfg) -> tuple[list[dict], dict, dict, int, bool]
     base_ls = scene.render.light_samples if scene.area_lights else None
     points, images = {}, {}
 
-    def point(spp, depth, shadows=True, scale=1, ls=base_ls):
-        key = (spp, depth, shadows, scale, ls)
+    def point(spp, depth, shadows=True, scale=1, ls=base_ls, adaptive=0.0):
+        key = (spp, depth, shadows, scale, ls, adaptive)
         if key not in points:
             points[key], images[key] = measure(scene, geometry, dict(zip(("spp", "depth", "shadows", "scale",
-                                                                           "light_samples"), key)),
+                                                                           "light_samples", "adaptive"), key)),
                                                ref, cfg["repeat"])
             m = points[key]
             print(f"    {describe(m):<66} {ms(m['seconds']):>9}  SSIM {m['ssim']:.5f}  PSNR {m['psnr']:6.2f} dB", flush=True)
@@ -168,7 +174,10 @@ def sweep(scene, geometry, ref, cfg) -> tuple[list[dict], dict, dict, int, bool]
     for scale in cfg["scales"]:
         for spp in cfg["scale_spps"]:
             point(spp, base_depth, scale=scale)
-    same = (cfg["spps"][-2], last[cfg["spps"][-2]], True, 1, base_ls)  # warprt against Mitsuba at these settings
+    for spp in cfg["spps"][1:]:  # render.adaptive: the spp samples where the pixels' centres differ
+        for t in cfg["adaptive"]:
+            point(spp, base_depth, adaptive=t)
+    same = (cfg["spps"][-2], last[cfg["spps"][-2]], True, 1, base_ls, 0.0)  # warprt against Mitsuba at these settings
     return list(points.values()), {"point": points[same], "image": images[same]}, stopped, base_depth, reflective
 
 
@@ -228,7 +237,7 @@ def at_depth(points, spp: int, depth: int, shadows=True, scale=1, light_samples=
     early stands for every deeper level, which renders the same image); at ``light_samples`` where the
     scene has area lights."""
     row = [p for p in points if p["spp"] == spp and p["shadows"] == shadows and p["scale"] == scale and p["depth"] <= depth
-           and p.get("light_samples") == light_samples]
+           and p.get("light_samples") == light_samples and not p.get("adaptive")]
     return max(row, key=lambda p: p["depth"])
 
 
@@ -370,7 +379,7 @@ def _pyplot():
 
 def families(r: dict) -> list[tuple[str, list[dict], str]]:
     """The one-knob sweeps through the measured points: (label, points in knob order, marker)."""
-    pts, d0 = r["points"], r["base_depth"]
+    pts, d0 = [p for p in r["points"] if not p.get("adaptive")], r["base_depth"]
     spp1 = min(p["spp"] for p in pts)
     spps = sorted({p["spp"] for p in pts if p["scale"] == 1})
     ls0 = r.get("base_light_samples")
@@ -387,6 +396,8 @@ def families(r: dict) -> list[tuple[str, list[dict], str]]:
     out.append(("shadows off", sorted([p for p in pts if not p["shadows"]], key=lambda p: p["spp"]), "x"))
     for s in sorted({p["scale"] for p in pts if p["scale"] > 1}):
         out.append((f"1/{s} size, upscaled", sorted([p for p in pts if p["scale"] == s], key=lambda p: p["spp"]), "s"))
+    for t in sorted({p["adaptive"] for p in r["points"] if p.get("adaptive")}):
+        out.append((f"adaptive {t:g}", sorted([p for p in r["points"] if p.get("adaptive") == t], key=lambda p: p["spp"]), "v"))
     return out
 
 
@@ -551,7 +562,7 @@ def report(data: dict, relative_to: Path | str | None = ROOT) -> str:
 def soft_shadows(r: dict) -> list[str]:
     """The light-samples rows of an area-lit scene: SSIM and time per (spp, light samples), and Mitsuba's
     direct integrator at the spp that reaches the same error."""
-    pts = [p for p in r["points"] if p["shadows"] and p["scale"] == 1]
+    pts = [p for p in r["points"] if p["shadows"] and p["scale"] == 1 and not p.get("adaptive")]
     spps = sorted({p["spp"] for p in pts})
     counts = sorted({p["light_samples"] for p in pts})
     at = {(p["spp"], p["light_samples"]): p for p in pts}
