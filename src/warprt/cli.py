@@ -18,7 +18,7 @@ from pathlib import Path
 from . import __version__, diagnostics
 from .errors import ArgumentError, SceneError, one_line
 from .options import DEVICES, RenderOptions
-from .scene import EFFECTS, input_kind
+from .scene import AREA_ESTIMATORS, EFFECTS, input_kind
 from .timing import timed
 
 EXAMPLES = """examples:
@@ -99,6 +99,12 @@ def _add_scene_options(p: argparse.ArgumentParser):
     p.add_argument("--max-depth", type=int, metavar="N", help="ray levels: 1 = primary rays only, 2 = one reflection, ...")
     p.add_argument("--light-samples", type=int, metavar="N",
                    help="points per area light, one shadow ray each (a square: 16, 64, 256, ...; default 16)")
+    p.add_argument("--area-estimator", choices=AREA_ESTIMATORS, metavar="{samples,analytic}",
+                   help="area lights: each point a point light (samples, the default), or a rectangle's or a "
+                        "mesh light's unshadowed diffuse term in closed form, its points estimating its "
+                        "visibility (analytic)")
+    p.add_argument("--light-spread", action="store_true",
+                   help="with --spp > 1, each pixel sample takes its own share of every area light's points")
     p.add_argument("--no-shadows", action="store_true", help="switch shadow rays off")
     p.add_argument("--up", metavar="AXIS", help="a mesh file's up axis: x, y, z, -x, -y or -z (write --up=-z); "
                                                "default: what the file says (USD, glTF), else y")
@@ -118,6 +124,10 @@ def _load(args):
             overrides[key] = check_setting("command line", "--" + flag.replace("_", "-"), key, v)
     if args.no_shadows:
         overrides["render.shadows"] = False
+    if args.area_estimator is not None:
+        overrides["render.area_estimator"] = args.area_estimator
+    if args.light_spread:
+        overrides["render.light_spread"] = True
     return load_scene(args.scene, overrides, up=args.up, camera=args.camera)
 
 

@@ -34,6 +34,11 @@ def refusal(scene, fx, mirrored=()) -> str | None:
         return f"at most {MAX_GRAD_DEPTH} ray levels (render.max_depth) are differentiated (Warp's unrolled loop)"
     if len(scene.whitted_lights) > MAX_GRAD_LIGHTS:
         return f"at most {MAX_GRAD_LIGHTS} lights are differentiated (Warp's unrolled loop)"
+    if fx.area_analytic:
+        return ("render.area_estimator = 'analytic' is not differentiated yet (the closed form and its ratio "
+                "estimator): render the gradient with 'samples'")
+    if fx.light_spread:
+        return "render.light_spread is not differentiated yet: render the gradient without it"
     return None
 
 

@@ -67,6 +67,10 @@ class RenderSettings:
     spp: int = 1  # k*k stratified samples per pixel
     effects: tuple | None = None  # None: every effect the scene calls for
     light_samples: int = 16  # k*k stratified points on each area light, one shadow ray each
+    # "samples": each point a point light; "analytic": a rectangle's unshadowed diffuse term in closed form,
+    # times the points' ratio estimate of its visibility (kernels/shading.py)
+    area_estimator: str = "samples"
+    light_spread: bool = False  # with spp > 1: each pixel sample takes its own share of the light's points
 
     def __post_init__(self):
         _convert(self, vectors=("ambient", "background"), ints=("max_depth", "spp", "light_samples"))
@@ -77,6 +81,7 @@ class RenderSettings:
 
 
 LIGHT_TYPES = ("point", "spot", "directional", "area")
+AREA_ESTIMATORS = ("samples", "analytic")  # render.area_estimator
 FALLOFFS = ("none", "inverse_square")
 AREA_SHAPES = ("rectangle", "disk", "sphere")  # an area light's own shape; else it names an object (Light.object)
 

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import SceneError, show
-from .model import AREA_SHAPES, FALLOFFS, LIGHT_TYPES, Camera, Light, Scene
+from .model import AREA_ESTIMATORS, AREA_SHAPES, FALLOFFS, LIGHT_TYPES, Camera, Light, Scene
 from .texture import Texture
 from .toml_fields import did_you_mean
 
@@ -365,6 +365,11 @@ def _check_render(src, r):
     background = _check_vector(src, "render.background", r.background, nonneg=True)
     for key in ("render.max_depth", "render.spp", "render.light_samples"):
         check_setting(src, key, key, getattr(r, key.split(".")[1]))
+    if r.area_estimator not in AREA_ESTIMATORS:
+        raise SceneError(src, "render.area_estimator",
+                         f"expected one of {', '.join(map(repr, AREA_ESTIMATORS))}, got {show(r.area_estimator)}")
+    if not isinstance(r.light_spread, bool):
+        raise SceneError(src, "render.light_spread", f"expected true or false, got {show(r.light_spread)}")
     return ambient, background
 
 
