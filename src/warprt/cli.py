@@ -100,8 +100,8 @@ def _add_scene_options(p: argparse.ArgumentParser):
     p.add_argument("--light-samples", type=int, metavar="N",
                    help="points per area light, one shadow ray each (a square: 16, 64, 256, ...; default 16)")
     p.add_argument("--area-estimator", choices=AREA_ESTIMATORS, metavar="{samples,analytic}",
-                   help="area lights: each point a point light (samples, the default), or a rectangle's or a "
-                        "mesh light's unshadowed diffuse term in closed form, its points estimating its "
+                   help="area lights: each point a point light (samples, the default), or a rectangle's, a mesh "
+                        "light's or a sphere's unshadowed diffuse term in closed form, its points estimating its "
                         "visibility (analytic)")
     p.add_argument("--light-spread", action="store_true",
                    help="with --spp > 1, each pixel sample takes its own share of every area light's points")

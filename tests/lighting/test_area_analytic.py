@@ -15,6 +15,7 @@ import pytest
 import warprt
 from warprt import SceneError
 
+from marks import exhaustive
 from oracle.area import corner_rectangle_irradiance, corner_rectangle_without_emitter_cosine
 
 KD = 0.5
@@ -80,13 +81,14 @@ def mean_rel(a, b) -> float:
     return float(np.abs(a - b).mean() / b.mean())
 
 
-@pytest.mark.parametrize("shadows", [False, True])
+@pytest.mark.parametrize("shadows", [pytest.param(False, marks=exhaustive), True])
 def test_the_closed_form_is_the_sampled_integral_at_many_points(shadows):
     """Analytic against sampled at 64 x 64 points, both estimating the same integral: unshadowed, the closed
     form over the hemisphere-clipped polygons (the sphere's and the panel's horizons cut the lights); shadowed,
     its ratio estimate too (measured: 4.6e-5 and 5.3e-5 of the mean). The control: the sampled estimator at
     4 x 4 points is more than ten times as far from it (1.2e-2 and 2.4e-2; the analytic one at 4 x 4 points:
-    4.6e-5 unshadowed, exact but for the 64 x 64 points' own error, and 1.5e-2 shadowed)."""
+    4.6e-5 unshadowed, exact but for the 64 x 64 points' own error, and 1.5e-2 shadowed). make test runs the
+    shadowed case, whose closed form is the unshadowed one's; make test-exhaustive both."""
     ours = warprt.render(tilted_room("analytic", 4096, shadows)).image
     sampled = warprt.render(tilted_room("samples", 4096, shadows)).image
     coarse = warprt.render(tilted_room("samples", 16, shadows)).image
@@ -95,12 +97,23 @@ def test_the_closed_form_is_the_sampled_integral_at_many_points(shadows):
     assert mean_rel(coarse, sampled) > 10 * mean_rel(ours, sampled) and mean_rel(coarse, sampled) > bound
 
 
-def test_disks_and_spheres_stay_on_their_samples():
-    """No closed form is used for a disk or a sphere light: the analytic option renders them as the samples do,
-    to the bit; a rectangle beside them it changes (the control)."""
+def test_a_sphere_above_the_horizon_is_its_closed_form_with_one_light_sample():
+    """A sphere light of radius R, its centre D above the point: kd pi L R^2 / D^2 from one point (measured:
+    -1.9e-7); the sampled estimator's one point is the control (-82%; at 16 points +4.1%)."""
+    sphere = {"type": "area", "radiance": [L_E] * 3, "shape": "sphere", "center": [0.3, 1.2, -0.2], "radius": 0.25}
+    d2 = 0.3 ** 2 + 1.2 ** 2 + 0.2 ** 2
+    expected = KD * np.pi * L_E * 0.25 ** 2 / d2 * (1.2 / np.sqrt(d2))
+    assert floor_point(sphere, 1, "analytic") == pytest.approx(expected, rel=1e-5)
+    assert abs(floor_point(sphere, 1, "samples") / expected - 1.0) > 0.1
+
+
+def test_disks_and_spheres_the_horizon_cuts_stay_on_their_samples():
+    """No closed form is used for a disk light, nor for a sphere light partly below a point's horizon: the
+    analytic option renders them as the samples do, to the bit (a sphere light on the floor, half below every
+    floor point's horizon); a rectangle beside them it changes (the control)."""
     disk = {"type": "area", "radiance": [2.0] * 3, "shape": "disk", "center": [0.3, 1.0, 0.2],
             "normal": [0.0, -1.0, 0.0], "radius": 0.3}
-    sphere = {"type": "area", "radiance": [1.0] * 3, "shape": "sphere", "center": [-0.5, 1.2, 0.0], "radius": 0.2}
+    sphere = {"type": "area", "radiance": [1.0] * 3, "shape": "sphere", "center": [-0.5, 0.0, 0.0], "radius": 0.2}
 
     def pixels(lights, estimator):
         return warprt.render(warprt.load_dict({
@@ -121,13 +134,14 @@ def test_spread_light_samples_trace_a_pixel_samples_share():
 
 
 def test_spread_light_samples_converge_to_the_same_image():
-    """Spread over 4 pixel samples at 64 x 64 points against every pixel sample taking them all: the same
-    function (measured: 1.6e-3 of the mean, the pixel samples' hit points differing); the control, 2 x 2 points
-    taken by every sample, is far beyond (8.7e-2)."""
-    spread = warprt.render(tilted_room("samples", 4096, spp=4, spread=True)).image
-    every = warprt.render(tilted_room("samples", 4096, spp=4)).image
+    """Spread over 4 pixel samples at 32 x 32 points against every pixel sample taking them all: the same
+    function, the difference (the pixel samples' hit points differ) falling as the points grow (measured: 3.4e-3
+    of the mean at 32 x 32, 1.6e-3 at 64 x 64); the control, 2 x 2 points taken by every sample, is far beyond
+    (8.7e-2)."""
+    spread = warprt.render(tilted_room("samples", 1024, spp=4, spread=True)).image
+    every = warprt.render(tilted_room("samples", 1024, spp=4)).image
     coarse = warprt.render(tilted_room("samples", 4, spp=4)).image
-    assert mean_rel(spread, every) < 3e-3 < mean_rel(coarse, every)
+    assert mean_rel(spread, every) < 6e-3 < mean_rel(coarse, every)
 
 
 def test_the_gradient_refuses_the_new_estimators_in_one_line():

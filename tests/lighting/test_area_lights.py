@@ -265,7 +265,7 @@ def test_the_area_light_code_is_absent_from_the_other_variants():
     assert all(m in area for m in markers)
     # render.area_estimator = "analytic" and render.light_spread (issue 39) compile only where asked for
     spread = _generated_source(EffectSet(area_lights=True, area_analytic=True, supersampling=True, light_spread=True))
-    for marker in ("polygon_integral(s, e, hit)", "a.first[e * a.strata + stratum]"):
+    for marker in ("closed_integral(s, e, hit)", "a.first[e * a.strata + stratum]"):
         assert marker not in area and marker in spread
 
 

@@ -128,7 +128,8 @@ class AreaLights:
     sample stratum s of light e: first[e strata + s]), its points ordered by stratum, each dA times strata; with
     render.area_estimator = "analytic", ``corners`` holds the triangles each light's diffuse term is integrated
     over in closed form (three corners each; none for a disk or a sphere), light e's from polygon[e] to
-    polygon[e + 1], both read only then."""
+    polygon[e + 1], and ``spheres`` each sphere light's centre and radius (radius 0: not a sphere), all read
+    only then."""
 
     num: int
     strata: int
@@ -140,6 +141,7 @@ class AreaLights:
     tri_emitter: wp.array(dtype=wp.int32)
     corners: wp.array(dtype=wp.vec3)
     polygon: wp.array(dtype=wp.int32)
+    spheres: wp.array(dtype=wp.vec4)
 
 
 @wp.struct
@@ -410,6 +412,7 @@ class Geometry:
                 a.strata = 1
                 a.corners = wp.zeros(1, dtype=wp.vec3, device=d)
                 a.polygon = wp.zeros(1, dtype=wp.int32, device=d)
+                a.spheres = wp.zeros(1, dtype=wp.vec4, device=d)
                 a.first = wp.zeros(1, dtype=wp.int32, device=d)
                 a.radiance, a.points, a.normals = (wp.zeros(1, dtype=wp.vec3, device=d) for _ in range(3))
                 a.dA = wp.zeros(1, dtype=float, device=d)
@@ -437,6 +440,9 @@ class Geometry:
         a.corners = vec(np.concatenate([t.reshape(-1, 3) - self.origin for t in tris] + [np.zeros((1, 3))]))
         a.polygon = wp.array(np.concatenate([[0], np.cumsum([len(t) for t in tris])]).astype(np.int32),
                              dtype=wp.int32, device=d)
+        spheres = [[*(np.asarray(l.center if l.center is not None else (0.0, 0.0, 0.0)) - self.origin), l.radius]
+                   if l.shape == "sphere" and scene.render.area_estimator == "analytic" else [0.0] * 4 for l in area]
+        a.spheres = wp.array(np.asarray(spheres, np.float32), dtype=wp.vec4, device=d)
         return a
 
     def uv_array(self):

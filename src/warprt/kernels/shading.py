@@ -18,6 +18,7 @@ A shadow ray runs to each sample on the BVH, stopping SHADOW_EPSILON of the way 
 from __future__ import annotations
 
 import functools
+import math
 
 from .._warp import wp
 from ..geometry import LIGHT_DIRECTIONAL, LIGHT_SPOT, LightShape, SceneData
@@ -398,6 +399,33 @@ def polygon_integral(s: SceneData, e: int, hit: Surface) -> float:
     return wp.max(total, 0.0)
 
 
+@wp.func
+def sphere_integral(sphere: wp.vec4, hit: Surface) -> float:
+    """The unshadowed integral of n.L cos_q / r^2 dA over a sphere light (centre, radius) that lies wholly
+    above the hit's horizon: pi sin^2(alpha) cos(theta) = pi R^2 (n . d) / |d|^3, d the way to its centre,
+    alpha its angular radius; -1 where part of it is below the horizon or the hit inside it (no closed
+    form here: its points integrate it)."""
+    d = wp.vec3(sphere[0], sphere[1], sphere[2]) - hit.p
+    r = sphere[3]
+    dist2 = wp.dot(d, d)
+    n_dot_d = wp.dot(hit.n, d)
+    if dist2 <= r * r or n_dot_d <= 0.0 or n_dot_d * n_dot_d < r * r:  # cos(theta) >= sin(alpha) above it
+        return -1.0
+    return wp.static(math.pi) * r * r * n_dot_d / (dist2 * wp.sqrt(dist2))
+
+
+@wp.func
+def closed_integral(s: SceneData, e: int, hit: Surface) -> float:
+    """Area light e's unshadowed diffuse integral in closed form: its triangles' (polygon_integral), a sphere's
+    wholly above the horizon (sphere_integral); -1 where none applies (a disk; a sphere the horizon cuts)."""
+    if s.area.polygon[e + 1] > s.area.polygon[e]:
+        return polygon_integral(s, e, hit)
+    sphere = s.area.spheres[e]
+    if sphere[3] > 0.0:
+        return sphere_integral(sphere, hit)
+    return -1.0
+
+
 @functools.cache
 def make_area_light(DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool, RECORD: bool = False, ANALYTIC: bool = False,
                     SPREAD: bool = False):
@@ -405,11 +433,11 @@ def make_area_light(DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool, RECORD: bool =
     its sample points, one shadow ray (the BVH's any-hit query) each where the point faces both ways
     (make_area_sample_test); with RECORD, a bit per point seen set in ``rec``'s entry j (record_area_point).
     With SPREAD, over the points of the pixel sample's ``stratum`` only (render.light_spread: AreaLights).
-    With ANALYTIC, a rectangle's diffuse term is its unshadowed closed form (polygon_integral) times the ratio
+    With ANALYTIC, a polygonal or sphere light's diffuse term is its unshadowed closed form (closed_integral) times the ratio
     estimate of its visibility over the points, sum_q vis_q f_q / sum_q f_q with f_q = n.L_q cos_q / r_q^2 each
     point's unshadowed share (Heitz et al. 2018): exact where every point is seen, the points' own estimate in
     a penumbra; 1 where no point faces the hit (the light then only grazes its horizon). The specular term
-    stays on the points."""
+    stays on the points, and so does the whole of a disk's, and of a sphere's where the horizon cuts it."""
     area_sample_test = make_area_sample_test(SHADOWS)
     _, area_term = make_light_terms(DIFFUSE, SPECULAR)
     _, specular_term = make_light_terms(False, SPECULAR)
@@ -446,8 +474,10 @@ def make_area_light(DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool, RECORD: bool =
             if wp.static(SPREAD):
                 lo, hi = int(a.first[e * a.strata + stratum]), int(a.first[e * a.strata + stratum + 1])
             closed = int(0)
+            U = float(0.0)
             if wp.static(DIFFUSE_CLOSED):
-                closed = a.polygon[e + 1] - a.polygon[e]
+                U = closed_integral(s, e, hit)
+                closed = wp.where(U >= 0.0, 1, 0)
             seen, facing = float(0.0), float(0.0)
             for q in range(lo, hi):
                 t = area_sample_test(s, hit, q)
@@ -465,7 +495,7 @@ def make_area_light(DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool, RECORD: bool =
                     out.color = out.color + area_term(t, L_e, a.dA[q], k, s.shininess[hit.material], n, v)
             if closed != 0:
                 ratio = wp.where(facing > 0.0, seen / facing, 1.0)
-                out.color = out.color + wp.cw_mul(k.kd, L_e) * (polygon_integral(s, e, hit) * ratio)
+                out.color = out.color + wp.cw_mul(k.kd, L_e) * (U * ratio)
         return out
 
     return area_light_split

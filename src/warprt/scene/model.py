@@ -67,8 +67,8 @@ class RenderSettings:
     spp: int = 1  # k*k stratified samples per pixel
     effects: tuple | None = None  # None: every effect the scene calls for
     light_samples: int = 16  # k*k stratified points on each area light, one shadow ray each
-    # "samples": each point a point light; "analytic": a rectangle's unshadowed diffuse term in closed form,
-    # times the points' ratio estimate of its visibility (kernels/shading.py)
+    # "samples": each point a point light; "analytic": a polygon's (rectangle, mesh) or an unclipped sphere's
+    # unshadowed diffuse term in closed form, times the points' ratio estimate of its visibility (kernels/shading.py)
     area_estimator: str = "samples"
     light_spread: bool = False  # with spp > 1: each pixel sample takes its own share of the light's points
 
