@@ -161,3 +161,19 @@ def test_a_bad_estimator_is_one_line_naming_it():
     with pytest.raises(SceneError, match=r"render\.light_spread"):
         warprt.load_dict({"render": {"light_spread": 1}})
     assert warprt.load_dict({"render": {"area_estimator": "analytic"}}).render.area_estimator == "analytic"
+
+
+def test_the_flags_set_the_estimator_and_the_spread(tmp_path):
+    """`warprt render --area-estimator analytic --light-spread` renders what the two --set overrides render, and
+    not what the defaults render (the control): the flags reach the kernel."""
+    from warprt.cli import main
+
+    def render(*flags):
+        out = tmp_path / f"{len(list(tmp_path.iterdir()))}.npy"
+        assert main(["render", str(CORNELL), "--width", "24", "--height", "24", "--spp", "4", "-o", str(out), "-q",
+                     *flags]) == 0
+        return np.load(out)
+
+    flags = render("--area-estimator", "analytic", "--light-spread")
+    setting = render("--set", 'render.area_estimator="analytic"', "--set", "render.light_spread=true")
+    assert np.array_equal(flags, setting) and not np.array_equal(flags, render())
