@@ -175,6 +175,8 @@ def test_equal_error_quick_run_times_every_method_to_each_target(tmp_path):
         assert errs == sorted(errs, reverse=True) and len(errs) >= 2
         assert f"| Mitsuba direct, {sampler} |" in text
     assert "| warprt analytic + light_spread |" in text and "SSIM 0.999 | mean rel. error 1% |" in text
+    (row,) = equal_error.target_rows(data)  # the report's Targets row: met only where both ratios are <= 0.5
+    assert row[2] in ("met", "not met") and "SSIM 0.998" in row[1] and "SSIM 0.999" in row[1]
 
 
 def _targets_row(text: str, start: str) -> list[str]:
