@@ -139,3 +139,16 @@ def test_info_gives_the_emitters_area_and_power_as_mitsuba_measures_them(mi, cap
     assert power == pytest.approx([np.pi * float(c) * theirs for c in radiance], rel=1e-5)
     # The negative control: the power is not the radiance times the area without pi.
     assert power != pytest.approx([float(c) * theirs for c in radiance], rel=1e-2)
+
+
+def test_compare_refuses_the_estimators_its_reference_does_not_integrate(scene, mi):
+    """`warprt compare`'s reference sums warprt's own light points (the sampled estimator): the analytic one and the
+    spread are refused in one line naming their field, not shown as a difference; the sampled one is compared
+    (the control)."""
+    from reference import compare
+
+    small = scene.with_camera(width=16, height=16).with_render(spp=4, light_samples=4)
+    for changes, field in ((dict(area_estimator="analytic"), r"render\.area_estimator"), (dict(light_spread=True), r"render\.light_spread")):
+        with pytest.raises(warprt.SceneError, match=field):
+            compare(small.with_render(**changes))
+    assert compare(small).ssim > 0.99
