@@ -144,6 +144,19 @@ def test_spread_light_samples_converge_to_the_same_image():
     assert mean_rel(spread, every) < 6e-3 < mean_rel(coarse, every)
 
 
+@pytest.mark.parametrize("algorithm", ["raytrace", "zbuffer"])
+def test_spread_with_supersampling_switched_off_takes_every_point(algorithm):
+    """One sample a pixel (disable=["supersampling"]) has nothing to spread over: light_spread then renders what
+    every point gives, to the bit, in the tracer and the Z-buffer alike; with its 4 samples it does not (the
+    control)."""
+    def image(spread, **kw):
+        return warprt.render(tilted_room("samples", 16, spp=4, spread=spread), algorithm=algorithm, **kw).image
+
+    off = ["supersampling"]
+    assert np.array_equal(image(True, disable=off), image(False, disable=off))
+    assert not np.array_equal(image(True), image(False))
+
+
 def test_the_gradient_refuses_the_new_estimators_in_one_line():
     """render(grad=True) names render.area_estimator (and render.light_spread) rather than differentiate a term
     its replay does not have; with the samples it renders (the control)."""

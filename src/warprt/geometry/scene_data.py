@@ -178,11 +178,11 @@ class SceneData:
     area: AreaLights  # a stand-in of no lights where the scene has none
 
 
-def light_strata(scene) -> int:
-    """The pixel samples an area light's points are spread over: spp with render.light_spread (and spp > 1),
-    else 1 (every pixel sample takes every point)."""
-    r = scene.render
-    return r.spp if r.light_spread and r.spp > 1 else 1
+def light_strata(scene, fx) -> int:
+    """The pixel samples an area light's points are spread over in a frame of effect set ``fx``: spp where it
+    spreads them (fx.light_spread: render.light_spread, spp > 1 and supersampling on), else 1 (every pixel
+    sample takes every point). The table's layout (AreaLights) and the kernel's switch agree by this."""
+    return scene.render.spp if fx.light_spread else 1
 
 
 def _spread(area, samples: list, k: int, strata: int) -> tuple[list, np.ndarray]:
@@ -352,17 +352,18 @@ class Geometry:
         lights' own shapes (drawn_objects), which the scene's materials do not name."""
         return [EMITTER_MATERIAL if n == EMITTER_MATERIAL_NAME else scene.materials[n] for n in self.material_names]
 
-    def scene_data(self, scene, shadow_grid: ShadowGrid | None = None) -> SceneData:
+    def scene_data(self, scene, shadow_grid: ShadowGrid | None = None, strata: int = 1) -> SceneData:
         """The kernels' view of these triangles for a frame of ``scene``: its materials and textures,
         lights, ambient, background and the eye's medium as small new arrays where they changed, and the
-        shadow rays' grid if one is given; the triangle arrays and the BVH are shared, never rebuilt."""
+        shadow rays' grid if one is given, and the area lights' points spread over ``strata`` pixel samples
+        (light_strata); the triangle arrays and the BVH are shared, never rebuilt."""
         m = self.slot_materials(scene)
         dielectric = any(x.dielectric for x in m)
         area = scene.area_lights
         # With glass, the medium the eye is in (eye_medium) depends on the eye too.
         key = (tuple(m), tuple(scene.lights), tuple(scene.render.ambient), tuple(scene.render.background),
                id(shadow_grid), tuple(scene.camera.eye) if dielectric else None,
-               (scene.render.light_samples, scene.render.area_estimator, light_strata(scene)) if area else None)
+               (scene.render.light_samples, scene.render.area_estimator, strata) if area else None)
         if self._tables is not None and self._tables[0] == key:
             return self._tables[1]
         d, lights = self.device, scene.whitted_lights
@@ -397,11 +398,11 @@ class Geometry:
         if shadow_grid is None and self._no_grid is None:
             self._no_grid = empty_grid(d)
         s.shadow_grid = shadow_grid if shadow_grid is not None else self._no_grid
-        s.area = self._area_lights(scene, area)
+        s.area = self._area_lights(scene, area, strata)
         self._tables = (key, s, shadow_grid, textures)  # the grid and images kept alive with their ids
         return s
 
-    def _area_lights(self, scene, area: list) -> AreaLights:
+    def _area_lights(self, scene, area: list, strata: int = 1) -> AreaLights:
         """The area lights' table for a frame: light_samples points each, relative to the origin (float64,
         then float32), and each triangle's emitter; a stand-in of no lights (kept) for a scene without."""
         d = self.device
@@ -421,7 +422,6 @@ class Geometry:
             return self._no_area
         k = int(np.sqrt(scene.render.light_samples))
         samples = [emitter_samples(scene, light, k) for light in area]
-        strata = light_strata(scene)
         first = np.concatenate([[0], np.cumsum([len(p) for p, _, _ in samples])])
         if strata > 1:
             samples, first = _spread(area, samples, k, strata)

@@ -12,7 +12,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from .._warp import init_warp, wp
-from ..geometry import Geometry, ShadowGridBuild, shadow_grid
+from ..geometry import Geometry, ShadowGridBuild, light_strata, shadow_grid
 from ..kernels import (aov_buffers, aov_bytes, aov_sums, camera_data, empty_aov_buffers, empty_record, make_shade_kernel,
                        make_trace_kernel, raster_kernel, total_kernel)
 from ..errors import ArgumentError
@@ -267,7 +267,7 @@ class Renderer:
                 geom, geometry_info = self._frame_geometry(scene)
             shortcuts = choose_shortcuts(scene, o, plan, geom, self.caches)
             grid = self._shadow_grid(geom, shortcuts, times)
-            data = geom.scene_data(scene, grid.grid if grid is not None else None)
+            data = geom.scene_data(scene, grid.grid if grid is not None else None, light_strata(scene, plan.fx))
             mirrors = self._virtual_cameras(scene, plan, geom, data, shortcuts, times, pool)
             used = mirrors if mirrors is not None and mirrors.mirrors is not None else None  # None: no chain rasterized
             variant = TraceVariant(plan.fx, shortcuts.raster, plan.stack, o.report_truncated, o.aovs,
@@ -584,7 +584,7 @@ def _zbuffer_frame(scene, o: RenderOptions, geometry_for, progress, pool=None) -
         stats.rays = {"primary": 0, "shadow": 0, "reflection": 0, "refraction": 0, "total": 0}  # visibility is rasterized
         with stats.phase("geometry"):
             geom = geometry_for(scene)
-            data = geom.scene_data(scene)
+            data = geom.scene_data(scene, strata=light_strata(scene, fx))
         stats.triangles = geom.triangle_count
         with stats.phase("compile"):
             kernel = make_shade_kernel(fx)
