@@ -40,7 +40,7 @@ def machine() -> str:
 
 def targets(h2h: dict, cast: dict, floor: dict | None = None, orbit: dict | None = None,
             many: dict | None = None, cold: dict | None = None, mirrors: dict | None = None,
-            kernel_floor: dict | None = None, gradient: dict | None = None) -> str:
+            kernel_floor: dict | None = None, gradient: dict | None = None, soft_shadows: dict | None = None) -> str:
     """The performance targets, each measured against Mitsuba or against warprt itself in this run (many
     frames: against a loop, Ray against local): met or not, with the gap."""
     rows_h = h2h["rows"]
@@ -111,6 +111,10 @@ def targets(h2h: dict, cast: dict, floor: dict | None = None, orbit: dict | None
         from . import gradient_cost
 
         rows += gradient_cost.target_rows(gradient)
+    if soft_shadows is not None:
+        from . import equal_error
+
+        rows += equal_error.target_rows(soft_shadows)
     lines = ["## Targets", "", "Measured in this run; why the unmet ones are not met is in the last section "
              "(\"What was tried\").", "", "| target | measured | |", "|---|---|---|"]
     lines += [f"| {a} | {b} | {c} |" for a, b, c in rows]
@@ -119,7 +123,7 @@ def targets(h2h: dict, cast: dict, floor: dict | None = None, orbit: dict | None
 
 # The sections --only runs again: a module with run(quick) and report(data), and with target_rows(data), its
 # rows of the Targets table.
-SECTIONS = ("accuracy_cost", "growth", "gradient_cost")
+SECTIONS = ("accuracy_cost", "growth", "gradient_cost", "equal_error")
 
 
 def commit() -> str:
@@ -245,9 +249,10 @@ def main():
     (RESULTS / "mirrors.json").write_text(json.dumps(mirrors, indent=1))
     sections.append(mirrors_bench.report(mirrors))
 
-    from . import accuracy_cost, gradient_cost, growth
+    from . import accuracy_cost, equal_error, gradient_cost, growth
 
-    for name, module in (("growth", growth), ("accuracy_cost", accuracy_cost), ("gradient_cost", gradient_cost)):
+    for name, module in (("growth", growth), ("accuracy_cost", accuracy_cost), ("gradient_cost", gradient_cost),
+                         ("equal_error", equal_error)):
         print(f"{name} ...", file=sys.stderr, flush=True)
         data = module.run(quick=q)
         (RESULTS / f"{name}.json").write_text(json.dumps(data, indent=1, default=str))
@@ -270,7 +275,9 @@ def main():
     (RESULTS / "batch.json").write_text(json.dumps(many, indent=1))
     sections.append(batch.report(many))
     gradient = json.loads((RESULTS / "gradient_cost.json").read_text())
-    sections.insert(0, targets(h2h, cast, floor, orbit, many, cold, mirrors, kernel_floor=kfloor, gradient=gradient))
+    soft = json.loads((RESULTS / "equal_error.json").read_text())
+    sections.insert(0, targets(h2h, cast, floor, orbit, many, cold, mirrors, kernel_floor=kfloor, gradient=gradient,
+                               soft_shadows=soft))
 
     attempts = (ROOT / "ATTEMPTS.md").read_text() if (ROOT / "ATTEMPTS.md").exists() else ""
     head = commit()

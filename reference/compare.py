@@ -98,6 +98,12 @@ def compare(scene, *, effects=None, disable=(), threads: int | None = None, outp
     from .mitsuba_whitted import Switches, mitsuba_scene, mitsuba_variant
 
     fx = resolve_effects(scene, effects, disable)
+    for on, field in ((fx.area_analytic, "render.area_estimator"), (fx.light_spread, "render.light_spread")):
+        if on:  # the reference sums the same points as warprt's "samples"; the others are checked against Mitsuba's direct
+            raise warprt.SceneError(scene.source, field, "the reference integrates area lights at warprt's own points, "
+                                    "as render.area_estimator = 'samples' without render.light_spread does: compare "
+                                    "that (this estimator is checked against Mitsuba's direct integrator, "
+                                    "tests/accuracy/test_xml_area_lights.py)")
     switches = Switches.for_effects(fx, scene.render)
     t = time.perf_counter()
     ours = warprt.render(scene, threads=threads, effects=effects, disable=disable, **render_options).image

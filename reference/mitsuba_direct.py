@@ -19,18 +19,21 @@ import numpy as np
 from .mitsuba_whitted import mitsuba_variant
 
 SAMPLERS = ("independent", "stratified")  # Mitsuba's default, and its jittered k x k strata (spp a square)
+# Every sampler the direct integrator is timed with at equal error (benchmarks/equal_error.py): also Kensler's
+# correlated multi-jittered and its low-discrepancy (0,2)-sequence sampler (spp a power of two for both)
+ALL_SAMPLERS = SAMPLERS + ("multijitter", "ldsampler")
 SEEDS_PER_CALL = 1 << 16  # pass k of a call with seed s renders with seed s * SEEDS_PER_CALL + k
 
 
 class DirectRenderer:
     """Mitsuba's ``direct`` integrator (its defaults: one emitter and one BSDF sample per sample, MIS) on
     the scene file at ``path``, loaded once. ``width`` x ``height`` (default: the file's film) keeps the
-    file's horizontal field of view; ``sampler`` one of SAMPLERS."""
+    file's horizontal field of view; ``sampler`` one of ALL_SAMPLERS."""
 
     def __init__(self, path: Path | str, width: int | None = None, height: int | None = None,
                  sampler: str = "independent"):
-        if sampler not in SAMPLERS:
-            raise ValueError(f"sampler '{sampler}': expected one of {', '.join(SAMPLERS)}")
+        if sampler not in ALL_SAMPLERS:
+            raise ValueError(f"sampler '{sampler}': expected one of {', '.join(ALL_SAMPLERS)}")
         mitsuba_variant()
         import mitsuba as mi
 
@@ -57,7 +60,7 @@ class DirectRenderer:
     def sensor(self, spp: int):
         if spp not in self._sensors:
             sampler = {"type": self.sampler, "sample_count": spp}
-            if self.sampler == "stratified":
+            if self.sampler in ("stratified", "multijitter"):
                 sampler["jitter"] = True
             self._sensors[spp] = self.mi.load_dict({**self._sensor, "sampler": sampler})
         return self._sensors[spp]

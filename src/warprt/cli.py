@@ -18,7 +18,7 @@ from pathlib import Path
 from . import __version__, diagnostics
 from .errors import ArgumentError, SceneError, one_line
 from .options import DEVICES, RenderOptions
-from .scene import EFFECTS, input_kind
+from .scene import AREA_ESTIMATORS, EFFECTS, input_kind
 from .timing import timed
 
 EXAMPLES = """examples:
@@ -102,6 +102,12 @@ def _add_scene_options(p: argparse.ArgumentParser):
     p.add_argument("--adaptive", type=float, metavar="T",
                    help="Whitted's adaptive supersampling: each pixel's centre traced, its --spp samples only where "
                         "its 3x3 neighbourhood differs by more than T (e.g. 0.005; 0: off, the default)")
+    p.add_argument("--area-estimator", choices=AREA_ESTIMATORS, metavar="{samples,analytic}",
+                   help="area lights: each point a point light (samples, the default), or a rectangle's, a mesh "
+                        "light's or a sphere's unshadowed diffuse term in closed form, its points estimating its "
+                        "visibility (analytic)")
+    p.add_argument("--light-spread", action="store_true",
+                   help="with --spp > 1, each pixel sample takes its own share of every area light's points")
     p.add_argument("--no-shadows", action="store_true", help="switch shadow rays off")
     p.add_argument("--up", metavar="AXIS", help="a mesh file's up axis: x, y, z, -x, -y or -z (write --up=-z); "
                                                "default: what the file says (USD, glTF), else y")
@@ -125,6 +131,10 @@ def _load(args):
         if not 0.0 <= args.adaptive < float("inf"):
             raise SceneError("command line", "--adaptive", f"expected a number >= 0 (0: off), got {args.adaptive}")
         overrides["render.adaptive"] = args.adaptive
+    if args.area_estimator is not None:
+        overrides["render.area_estimator"] = args.area_estimator
+    if args.light_spread:
+        overrides["render.light_spread"] = True
     return load_scene(args.scene, overrides, up=args.up, camera=args.camera)
 
 

@@ -259,9 +259,14 @@ def _generated_source(fx) -> str:
 
 def test_the_area_light_code_is_absent_from_the_other_variants():
     """A line of the area lights' sum and of the emitted radiance, as Warp quotes them in the C++."""
-    markers = ("out = area_light(s, hit, k, v, out, rec, j)", "emitted(s, h.face, r.ray.d)")
+    markers = ("out = area_light(s, hit, k, v, out, rec, j, stratum)", "emitted(s, h.face, r.ray.d)")
     assert not any(m in _generated_source(EffectSet()) for m in markers)
-    assert all(m in _generated_source(EffectSet(area_lights=True)) for m in markers)
+    area = _generated_source(EffectSet(area_lights=True))
+    assert all(m in area for m in markers)
+    # render.area_estimator = "analytic" and render.light_spread (issue 39) compile only where asked for
+    spread = _generated_source(EffectSet(area_lights=True, area_analytic=True, supersampling=True, light_spread=True))
+    for marker in ("closed_integral(s, e, hit)", "a.first[e * a.strata + stratum]"):
+        assert marker not in area and marker in spread
 
 
 def test_the_light_samples_flag_sets_the_scenes_light_samples(tmp_path):

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from benchmarks import accuracy_cost, growth
+from benchmarks import accuracy_cost, equal_error, growth
 from marks import slow
 from warprt.scene import Camera
 
@@ -156,6 +156,27 @@ def test_accuracy_cost_measures_what_light_samples_buy_against_mitsubas_direct_i
         assert errs == sorted(errs, reverse=True) and len(errs) == 3
     assert len(r["equal_error"]) == len(r["pareto"])
     assert "What soft shadows cost" in (tmp_path / "accuracy_cost.md").read_text()
+
+
+@slow
+def test_equal_error_quick_run_times_every_method_to_each_target(tmp_path):
+    """benchmarks/equal_error.py --quick: a row per warprt estimator and Mitsuba sampler, a column per target;
+    the physics, not the timer: more light samples bring each warprt estimator closer at 1 spp, the analytic
+    estimator is closer than the samples at 1 light sample, and each Mitsuba sampler's error falls with spp."""
+    equal_error.main(["--quick", "-o", str(tmp_path / "equal_error.md")])
+    data = json.loads((tmp_path / "equal_error.json").read_text())
+    text = (tmp_path / "equal_error.md").read_text()
+    at = {(p["estimator"], p["spread"], p["spp"], p["light_samples"]): p for p in data["warprt"]}
+    for estimator in ("samples", "analytic"):
+        assert at[(estimator, False, 1, 1)]["rel"] > at[(estimator, False, 1, 4)]["rel"] > at[(estimator, False, 1, 16)]["rel"]
+    assert at[("analytic", False, 1, 1)]["ssim"] > at[("samples", False, 1, 1)]["ssim"]
+    for sampler in ("independent", "stratified", "multijitter", "ldsampler"):
+        errs = [f["rel"] for f in data["mitsuba"] if f["sampler"] == sampler]
+        assert errs == sorted(errs, reverse=True) and len(errs) >= 2
+        assert f"| Mitsuba direct, {sampler} |" in text
+    assert "| warprt analytic + light_spread |" in text and "SSIM 0.999 | mean rel. error 1% |" in text
+    (row,) = equal_error.target_rows(data)  # the report's Targets row: met only where both ratios are <= 0.5
+    assert row[2] in ("met", "not met") and "SSIM 0.998" in row[1] and "SSIM 0.999" in row[1]
 
 
 def _targets_row(text: str, start: str) -> list[str]:

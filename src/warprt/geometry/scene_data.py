@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 from .._warp import wp
 from ..scene import (EMITTER_MATERIAL, EMITTER_MATERIAL_NAME, drawn_objects, emitter_of_triangles, emitter_samples,
-                     eye_medium, vertex_normals)
+                     eye_medium, emitting_triangles, spread_strata, vertex_normals)
 from .bvh import build_mesh, eye_reach, frame_origin, objects_center, refit_mesh
 from .shadow_grid import ShadowGrid, empty_grid
 
@@ -124,15 +124,24 @@ class AreaLights:
     """The area lights (scene.area), read only where a scene has some (EffectSet.area_lights): per light its
     radiance L_e and its first sample (first[num] the total), per sample its point (relative to the frame
     origin), its unit normal on the emitting side and the area it stands for (A / N), and per triangle the
-    area light it emits for (-1: none)."""
+    area light it emits for (-1: none). With render.light_spread, ``first`` has ``strata`` starts a light (pixel
+    sample stratum s of light e: first[e strata + s]), its points ordered by stratum, each dA times strata; with
+    render.area_estimator = "analytic", ``corners`` holds the triangles each light's diffuse term is integrated
+    over in closed form (three corners each; none for a disk or a sphere), light e's from polygon[e] to
+    polygon[e + 1], and ``spheres`` each sphere light's centre and radius (radius 0: not a sphere), all read
+    only then."""
 
     num: int
+    strata: int
     first: wp.array(dtype=wp.int32)
     radiance: wp.array(dtype=wp.vec3)
     points: wp.array(dtype=wp.vec3)
     normals: wp.array(dtype=wp.vec3)
     dA: wp.array(dtype=float)
     tri_emitter: wp.array(dtype=wp.int32)
+    corners: wp.array(dtype=wp.vec3)
+    polygon: wp.array(dtype=wp.int32)
+    spheres: wp.array(dtype=wp.vec4)
 
 
 @wp.struct
@@ -167,6 +176,25 @@ class SceneData:
     background: wp.vec3
     shadow_grid: ShadowGrid  # the light-space structure (shadow_grid.py), read where shadow rays use it
     area: AreaLights  # a stand-in of no lights where the scene has none
+
+
+def light_strata(scene, fx) -> int:
+    """The pixel samples an area light's points are spread over in a frame of effect set ``fx``: spp where it
+    spreads them (fx.light_spread: render.light_spread, spp > 1 and supersampling on), else 1 (every pixel
+    sample takes every point). The table's layout (AreaLights) and the kernel's switch agree by this."""
+    return scene.render.spp if fx.light_spread else 1
+
+
+def _spread(area, samples: list, k: int, strata: int) -> tuple[list, np.ndarray]:
+    """The lights' (points, normals, dA) ordered by the pixel sample that takes them (spread_strata), dA times
+    ``strata``, and the start of each light's stratum (``strata`` a light, then the total)."""
+    out, counts = [], []
+    for light, (p, n, w) in zip(area, samples):
+        s = spread_strata(light, k, strata)
+        order = np.argsort(s, kind="stable")
+        out.append((p[order], n[order], w[order] * strata))
+        counts.append(np.bincount(s, minlength=strata))
+    return out, np.concatenate([[0], np.cumsum(np.concatenate(counts))])
 
 
 def vertex_colors(objects) -> np.ndarray:
@@ -324,17 +352,18 @@ class Geometry:
         lights' own shapes (drawn_objects), which the scene's materials do not name."""
         return [EMITTER_MATERIAL if n == EMITTER_MATERIAL_NAME else scene.materials[n] for n in self.material_names]
 
-    def scene_data(self, scene, shadow_grid: ShadowGrid | None = None) -> SceneData:
+    def scene_data(self, scene, shadow_grid: ShadowGrid | None = None, strata: int = 1) -> SceneData:
         """The kernels' view of these triangles for a frame of ``scene``: its materials and textures,
         lights, ambient, background and the eye's medium as small new arrays where they changed, and the
-        shadow rays' grid if one is given; the triangle arrays and the BVH are shared, never rebuilt."""
+        shadow rays' grid if one is given, and the area lights' points spread over ``strata`` pixel samples
+        (light_strata); the triangle arrays and the BVH are shared, never rebuilt."""
         m = self.slot_materials(scene)
         dielectric = any(x.dielectric for x in m)
         area = scene.area_lights
         # With glass, the medium the eye is in (eye_medium) depends on the eye too.
         key = (tuple(m), tuple(scene.lights), tuple(scene.render.ambient), tuple(scene.render.background),
                id(shadow_grid), tuple(scene.camera.eye) if dielectric else None,
-               scene.render.light_samples if area else None)
+               (scene.render.light_samples, scene.render.area_estimator, strata) if area else None)
         if self._tables is not None and self._tables[0] == key:
             return self._tables[1]
         d, lights = self.device, scene.whitted_lights
@@ -369,11 +398,11 @@ class Geometry:
         if shadow_grid is None and self._no_grid is None:
             self._no_grid = empty_grid(d)
         s.shadow_grid = shadow_grid if shadow_grid is not None else self._no_grid
-        s.area = self._area_lights(scene, area)
+        s.area = self._area_lights(scene, area, strata)
         self._tables = (key, s, shadow_grid, textures)  # the grid and images kept alive with their ids
         return s
 
-    def _area_lights(self, scene, area: list) -> AreaLights:
+    def _area_lights(self, scene, area: list, strata: int = 1) -> AreaLights:
         """The area lights' table for a frame: light_samples points each, relative to the origin (float64,
         then float32), and each triangle's emitter; a stand-in of no lights (kept) for a scene without."""
         d = self.device
@@ -381,6 +410,10 @@ class Geometry:
             if self._no_area is None:
                 a = AreaLights()
                 a.num = 0
+                a.strata = 1
+                a.corners = wp.zeros(1, dtype=wp.vec3, device=d)
+                a.polygon = wp.zeros(1, dtype=wp.int32, device=d)
+                a.spheres = wp.zeros(1, dtype=wp.vec4, device=d)
                 a.first = wp.zeros(1, dtype=wp.int32, device=d)
                 a.radiance, a.points, a.normals = (wp.zeros(1, dtype=wp.vec3, device=d) for _ in range(3))
                 a.dA = wp.zeros(1, dtype=float, device=d)
@@ -389,16 +422,27 @@ class Geometry:
             return self._no_area
         k = int(np.sqrt(scene.render.light_samples))
         samples = [emitter_samples(scene, light, k) for light in area]
+        first = np.concatenate([[0], np.cumsum([len(p) for p, _, _ in samples])])
+        if strata > 1:
+            samples, first = _spread(area, samples, k, strata)
         vec = lambda rows: wp.array(np.asarray(rows, np.float32).reshape(-1, 3), dtype=wp.vec3, device=d)
         a = AreaLights()
         a.num = len(area)
-        a.first = wp.array(np.concatenate([[0], np.cumsum([len(p) for p, _, _ in samples])]).astype(np.int32),
-                           dtype=wp.int32, device=d)
+        a.strata = strata
+        a.first = wp.array(first.astype(np.int32), dtype=wp.int32, device=d)
         a.radiance = vec([l.radiance for l in area])
         a.points = vec(np.concatenate([p - self.origin for p, _, _ in samples]))
         a.normals = vec(np.concatenate([n for _, n, _ in samples]))
         a.dA = wp.array(np.concatenate([w for _, _, w in samples]).astype(np.float32), dtype=float, device=d)
         a.tri_emitter = wp.array(emitter_of_triangles(scene), dtype=wp.int32, device=d)
+        tris = [emitting_triangles(scene, l) if scene.render.area_estimator == "analytic" else np.zeros((0, 3, 3))
+                for l in area]
+        a.corners = vec(np.concatenate([t.reshape(-1, 3) - self.origin for t in tris] + [np.zeros((1, 3))]))
+        a.polygon = wp.array(np.concatenate([[0], np.cumsum([len(t) for t in tris])]).astype(np.int32),
+                             dtype=wp.int32, device=d)
+        spheres = [[*(np.asarray(l.center if l.center is not None else (0.0, 0.0, 0.0)) - self.origin), l.radius]
+                   if l.shape == "sphere" and scene.render.area_estimator == "analytic" else [0.0] * 4 for l in area]
+        a.spheres = wp.array(np.asarray(spheres, np.float32), dtype=wp.vec4, device=d)
         return a
 
     def uv_array(self):

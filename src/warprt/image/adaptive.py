@@ -13,7 +13,7 @@ spp refines 3% of its pixels at t = 0.005: docs/accuracy.md)."""
 
 from __future__ import annotations
 
-from dataclasses import replace
+import math
 
 import numpy as np
 
@@ -29,7 +29,7 @@ def adaptive_spp(scene, fx, grad: bool) -> int:
     """The k of the frame's k x k strata where render.adaptive refines it (0: a plain frame): adaptive on, more
     than one sample a pixel and supersampling not switched off, not a grad=True frame (backward's record is that
     of every pixel's strata; renderer.render refuses the two together)."""
-    k = int(round(np.sqrt(scene.render.spp)))
+    k = math.isqrt(scene.render.spp)
     return k if scene.render.adaptive > 0 and k > 1 and fx.supersampling and not grad else 0
 
 
@@ -48,7 +48,8 @@ def refined_pixels(image: np.ndarray, threshold: float) -> np.ndarray:
 
 def refine(scene, plan, geom, data, image: np.ndarray, k: int, device: str, pool=None) -> tuple:
     """(image, per_kind, refined): ``image`` (the pixel-centre frame's, (height, width, 3)) with the pixels
-    refined_pixels picks traced at k x k samples (kernels.make_pixels_kernel, in bands on the frame's threads),
+    refined_pixels picks traced at k x k samples with ``plan``'s effects (the spp frame's: its supersampling,
+    its lights spread over the samples, ``data`` their table) (kernels.make_pixels_kernel, in bands on the frame's threads),
     the rays they took by kind (camera, shadow, reflection[, refraction]) and how many pixels were refined."""
     cam = scene.camera
     pixels = refined_pixels(image, scene.render.adaptive)
@@ -56,7 +57,7 @@ def refine(scene, plan, geom, data, image: np.ndarray, k: int, device: str, pool
     per_kind = np.zeros(4 if plan.fx.refraction else 3, np.int64)
     if n == 0:
         return image, per_kind, 0
-    kernel = make_pixels_kernel(replace(plan.fx, supersampling=True), plan.stack)
+    kernel = make_pixels_kernel(plan.fx, plan.stack)
     listed = wp.array(pixels, dtype=int, device=device)
     colour = wp.empty(n, dtype=wp.vec3, device=device)
     counts = wp.empty(n, dtype=wp.vec4i if plan.fx.refraction else wp.vec3i, device=device)

@@ -37,6 +37,11 @@ def refusal(scene, fx, mirrored=()) -> str | None:
     if scene.render.adaptive > 0 and fx.supersampling:
         return ("render.adaptive picks the pixels it refines by the frame's own image: a gradient is that of a frame "
                 "of every pixel's strata (render.adaptive = 0)")
+    if fx.area_analytic:
+        return ("render.area_estimator = 'analytic' is not differentiated yet (the closed form and its ratio "
+                "estimator): render the gradient with 'samples'")
+    if fx.light_spread:
+        return "render.light_spread is not differentiated yet: render the gradient without it"
     return None
 
 

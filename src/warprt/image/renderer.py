@@ -12,7 +12,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from .._warp import init_warp, wp
-from ..geometry import Geometry, ShadowGridBuild, shadow_grid
+from ..geometry import Geometry, ShadowGridBuild, light_strata, shadow_grid
 from ..kernels import (aov_buffers, aov_bytes, aov_sums, camera_data, empty_aov_buffers, empty_record, make_shade_kernel,
                        make_trace_kernel, raster_kernel, total_kernel)
 from ..errors import ArgumentError
@@ -272,7 +272,7 @@ class Renderer:
                 geom, geometry_info = self._frame_geometry(scene)
             shortcuts = choose_shortcuts(scene, o, plan, geom, self.caches)
             grid = self._shadow_grid(geom, shortcuts, times)
-            data = geom.scene_data(scene, grid.grid if grid is not None else None)
+            data = geom.scene_data(scene, grid.grid if grid is not None else None, light_strata(scene, plan.fx))
             mirrors = self._virtual_cameras(scene, plan, geom, data, shortcuts, times, pool)
             used = mirrors if mirrors is not None and mirrors.mirrors is not None else None  # None: no chain rasterized
             variant = TraceVariant(plan.fx, shortcuts.raster, plan.stack, o.report_truncated, o.aovs,
@@ -301,8 +301,11 @@ class Renderer:
                     frame = _trace(scene, o, plan, geom, data, kernel, zb, used, progress, pool, hits)
             result = _finish(scene, o, plan, geom, frame)
             if refine_k:
-                with timed(times, "refine"):
-                    image, extra, refined = refine(self._scene, plan, geom, data, result[0], refine_k, o.device, pool)
+                with timed(times, "refine"):  # the frame's own effect set: its spread lights' table too
+                    fine = data if not effects.light_spread else geom.scene_data(
+                        self._scene, strata=light_strata(self._scene, effects))
+                    image, extra, refined = refine(self._scene, replace(plan, fx=effects), geom, fine, result[0],
+                                                   refine_k, o.device, pool)
                 result, frame = (image, result[1]), replace(frame, per_kind=frame.per_kind + extra)
             if grad:
                 self._keep_grad_frame(scene, geom, hits, edge_frame)
@@ -613,7 +616,7 @@ def _zbuffer_frame(scene, o: RenderOptions, geometry_for, progress, pool=None) -
         stats.rays = {"primary": 0, "shadow": 0, "reflection": 0, "refraction": 0, "total": 0}  # visibility is rasterized
         with stats.phase("geometry"):
             geom = geometry_for(scene)
-            data = geom.scene_data(scene)
+            data = geom.scene_data(scene, strata=light_strata(scene, fx))
         stats.triangles = geom.triangle_count
         with stats.phase("compile"):
             kernel = make_shade_kernel(fx)

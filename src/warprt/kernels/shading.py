@@ -18,6 +18,7 @@ A shadow ray runs to each sample on the BVH, stopping SHADOW_EPSILON of the way 
 from __future__ import annotations
 
 import functools
+import math
 
 from .._warp import wp
 from ..geometry import LIGHT_DIRECTIONAL, LIGHT_SPOT, LightShape, SceneData
@@ -136,11 +137,13 @@ def make_shade(fx, shadow_grid: bool = False, record: bool = False):
     """The local shading function for one effect set (its ambient, diffuse, specular and shadow
     switches, and how ka, kd and ks are read): ambient + the lit terms of every light, with shadow
     rays when fx.shadows, answered by the BVH or, with ``shadow_grid``, by the light-space grid (the
-    same answers: kernels/shadow.py). shade(s, hit, v, rec, j): with ``record``, also which lights and
+    same answers: kernels/shadow.py). shade(s, hit, v, rec, j, stratum): ``stratum`` the pixel sample's share of
+    the area lights' points under render.light_spread (fx.light_spread), else unread; with ``record``, also which lights and
     area-light sample points the hit sees, written into the GradRecord ``rec`` at its entry ``j``
     (kernels/record.py); without, ``rec`` is never read. Inlined: its arguments are not copied."""
     return _make_shade(fx.ambient, fx.diffuse, fx.specular, fx.shadows, fx.texture, fx.vertex_color,
-                       fx.shadows and shadow_grid, fx.light_model, fx.area_lights, record)
+                       fx.shadows and shadow_grid, fx.light_model, fx.area_lights, record, fx.area_analytic,
+                       fx.light_spread)
 
 
 @wp.struct
@@ -341,46 +344,176 @@ def make_light_terms(DIFFUSE: bool, SPECULAR: bool):
     return whitted_term, area_term
 
 
+@wp.func
+def edge_term(a: wp.vec3, b: wp.vec3, n: wp.vec3) -> float:
+    """An edge a -> b's term of Arvo's polygon integral: theta (n . unit(a x b)), theta the angle it subtends."""
+    c = wp.cross(a, b)
+    sin = wp.length(c)
+    if sin <= 0.0:
+        return 0.0
+    return wp.atan2(sin, wp.dot(a, b)) * wp.dot(n, c) / sin
+
+
+@wp.func
+def triangle_integral(a: wp.vec3, b: wp.vec3, c: wp.vec3, hit: Surface) -> float:
+    """The unshadowed integral of n.L cos_q / r^2 dA over an emitting triangle (its corners relative to the
+    hit, wound counter-clockwise about its emitting normal) seen from the hit: Lambert's and Arvo's polygon
+    irradiance over pi, -1/2 sum_i theta_i (n . unit(v_i x v_i+1)) over the triangle clipped to the hit's
+    hemisphere (Sutherland-Hodgman: the edges' parts above it and the horizon's edge from where the boundary
+    leaves to where it comes back); 0 behind it (one-sided)."""
+    if wp.dot(a, wp.cross(b - a, c - a)) >= 0.0:
+        return 0.0
+    n = hit.n
+    h = wp.vec3(wp.dot(n, a), wp.dot(n, b), wp.dot(n, c))
+    m = wp.matrix_from_rows(a, b, c)
+    total = float(0.0)
+    leave = wp.vec3(0.0)
+    enter = wp.vec3(0.0)
+    clipped = False
+    for i in range(3):
+        p, q = m[i], m[(i + 1) % 3]
+        hp, hq = h[i], h[(i + 1) % 3]
+        if hp >= 0.0 and hq >= 0.0:
+            total += edge_term(p, q, n)
+        elif hp >= 0.0 or hq >= 0.0:
+            x = p + (q - p) * (hp / (hp - hq))  # where the edge crosses the horizon
+            clipped = True
+            if hp >= 0.0:
+                total += edge_term(p, x, n)
+                leave = x
+            else:
+                total += edge_term(x, q, n)
+                enter = x
+    if clipped:
+        total += edge_term(leave, enter, n)
+    return -0.5 * total
+
+
+@wp.func
+def polygon_integral(s: SceneData, e: int, hit: Surface) -> float:
+    """triangle_integral over area light e's emitting triangles (AreaLights.corners)."""
+    total = float(0.0)
+    for t in range(s.area.polygon[e], s.area.polygon[e + 1]):
+        total += triangle_integral(s.area.corners[3 * t] - hit.p, s.area.corners[3 * t + 1] - hit.p,
+                                   s.area.corners[3 * t + 2] - hit.p, hit)
+    return wp.max(total, 0.0)
+
+
+@wp.func
+def sphere_integral(sphere: wp.vec4, hit: Surface) -> float:
+    """The unshadowed integral of n.L cos_q / r^2 dA over a sphere light (centre, radius) that lies wholly
+    above the hit's horizon: pi sin^2(alpha) cos(theta) = pi R^2 (n . d) / |d|^3, d the way to its centre,
+    alpha its angular radius; -1 where part of it is below the horizon or the hit inside it (no closed
+    form here: its points integrate it)."""
+    d = wp.vec3(sphere[0], sphere[1], sphere[2]) - hit.p
+    r = sphere[3]
+    dist2 = wp.dot(d, d)
+    n_dot_d = wp.dot(hit.n, d)
+    if dist2 <= r * r or n_dot_d <= 0.0 or n_dot_d * n_dot_d < r * r:  # cos(theta) >= sin(alpha) above it
+        return -1.0
+    return wp.static(math.pi) * r * r * n_dot_d / (dist2 * wp.sqrt(dist2))
+
+
+@wp.func
+def closed_integral(s: SceneData, e: int, hit: Surface) -> float:
+    """Area light e's unshadowed diffuse integral in closed form: its triangles' (polygon_integral), a sphere's
+    wholly above the horizon (sphere_integral); -1 where none applies (a disk; a sphere the horizon cuts)."""
+    if s.area.polygon[e + 1] > s.area.polygon[e]:
+        return polygon_integral(s, e, hit)
+    sphere = s.area.spheres[e]
+    if sphere[3] > 0.0:
+        return sphere_integral(sphere, hit)
+    return -1.0
+
+
 @functools.cache
-def make_area_light(DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool, RECORD: bool = False):
-    """area_light(s, hit, k, v, out, rec, j): ``out`` plus the light of every area light at the hit, over
+def make_area_light(DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool, RECORD: bool = False, ANALYTIC: bool = False,
+                    SPREAD: bool = False):
+    """area_light(s, hit, k, v, out, rec, j, stratum): ``out`` plus the light of every area light at the hit, over
     its sample points, one shadow ray (the BVH's any-hit query) each where the point faces both ways
-    (make_area_sample_test); with RECORD, a bit per point seen set in ``rec``'s entry j (record_area_point)."""
+    (make_area_sample_test); with RECORD, a bit per point seen set in ``rec``'s entry j (record_area_point).
+    With SPREAD, over the points of the pixel sample's ``stratum`` only (render.light_spread: AreaLights).
+    With ANALYTIC, a polygonal or sphere light's diffuse term is its unshadowed closed form (closed_integral) times the ratio
+    estimate of its visibility over the points, sum_q vis_q f_q / sum_q f_q with f_q = n.L_q cos_q / r_q^2 each
+    point's unshadowed share (Heitz et al. 2018): exact where every point is seen, the points' own estimate in
+    a penumbra; 1 where no point faces the hit (the light then only grazes its horizon). The specular term
+    stays on the points, and so does the whole of a disk's, and of a sphere's where the horizon cuts it."""
     area_sample_test = make_area_sample_test(SHADOWS)
     _, area_term = make_light_terms(DIFFUSE, SPECULAR)
+    _, specular_term = make_light_terms(False, SPECULAR)
+    DIFFUSE_CLOSED = ANALYTIC and DIFFUSE
+
+    if not (ANALYTIC or SPREAD):
+        @wp.func(inline=True)
+        def area_light(s: SceneData, hit: Surface, k: Coefficients, v: wp.vec3, out: ShadeResult, rec: GradRecord,
+                       j: int, stratum: int) -> ShadeResult:
+            a = s.area
+            n = hit.n
+            for e in range(a.num):
+                L_e = a.radiance[e]
+                for q in range(a.first[e], a.first[e + 1]):
+                    t = area_sample_test(s, hit, q)
+                    out.shadow_rays += t.shadow_ray
+                    if wp.static(RECORD):
+                        if t.lit != 0:
+                            record_area_point(rec, j, q)
+                    if t.lit != 0:
+                        out.color = out.color + area_term(t, L_e, a.dA[q], k, s.shininess[hit.material], n, v)
+            return out
+
+        return area_light
 
     @wp.func(inline=True)
-    def area_light(s: SceneData, hit: Surface, k: Coefficients, v: wp.vec3, out: ShadeResult, rec: GradRecord,
-                   j: int) -> ShadeResult:
+    def area_light_split(s: SceneData, hit: Surface, k: Coefficients, v: wp.vec3, out: ShadeResult,
+                         rec: GradRecord, j: int, stratum: int) -> ShadeResult:
         a = s.area
         n = hit.n
         for e in range(a.num):
             L_e = a.radiance[e]
-            for q in range(a.first[e], a.first[e + 1]):
+            lo, hi = int(a.first[e]), int(a.first[e + 1])
+            if wp.static(SPREAD):
+                lo, hi = int(a.first[e * a.strata + stratum]), int(a.first[e * a.strata + stratum + 1])
+            closed = int(0)
+            U = float(0.0)
+            if wp.static(DIFFUSE_CLOSED):
+                U = closed_integral(s, e, hit)
+                closed = wp.where(U >= 0.0, 1, 0)
+            seen, facing = float(0.0), float(0.0)
+            for q in range(lo, hi):
                 t = area_sample_test(s, hit, q)
                 out.shadow_rays += t.shadow_ray
-                if wp.static(RECORD):
-                    if t.lit != 0:
-                        record_area_point(rec, j, q)
-                if t.lit != 0:
+                if closed != 0:
+                    if t.r2 > 0.0 and t.n_dot_l > 0.0 and t.cos_q > 0.0:
+                        f = t.n_dot_l * t.cos_q / t.r2
+                        facing += f
+                        if t.lit != 0:
+                            seen += f
+                    if wp.static(SPECULAR):
+                        if t.lit != 0:
+                            out.color = out.color + specular_term(t, L_e, a.dA[q], k, s.shininess[hit.material], n, v)
+                elif t.lit != 0:
                     out.color = out.color + area_term(t, L_e, a.dA[q], k, s.shininess[hit.material], n, v)
+            if closed != 0:
+                ratio = wp.where(facing > 0.0, seen / facing, 1.0)
+                out.color = out.color + wp.cw_mul(k.kd, L_e) * (U * ratio)
         return out
 
-    return area_light
+    return area_light_split
 
 
 @functools.cache
 def _make_shade(AMBIENT: bool, DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool, TEXTURE: bool, VERTEX_COLOR: bool,
-                GRID: bool = False, LIGHT_MODEL: bool = False, AREA: bool = False, RECORD: bool = False):
+                GRID: bool = False, LIGHT_MODEL: bool = False, AREA: bool = False, RECORD: bool = False,
+                ANALYTIC: bool = False, SPREAD: bool = False):
     coefficients = make_coefficients(TEXTURE, VERTEX_COLOR)
 
     # Disabled terms are absent from the generated code (wp.static).
     light_test = make_light_test(LIGHT_MODEL, SHADOWS, GRID)
     whitted_term, _ = make_light_terms(DIFFUSE, SPECULAR)
-    area_light = make_area_light(DIFFUSE, SPECULAR, SHADOWS, RECORD)
+    area_light = make_area_light(DIFFUSE, SPECULAR, SHADOWS, RECORD, ANALYTIC, SPREAD)
 
     @wp.func(inline=True)
-    def shade(s: SceneData, hit: Surface, v: wp.vec3, rec: GradRecord, j: int) -> ShadeResult:
+    def shade(s: SceneData, hit: Surface, v: wp.vec3, rec: GradRecord, j: int, stratum: int) -> ShadeResult:
         out = ShadeResult()
         out.color = wp.vec3(0.0)
         out.shadow_rays = 0
@@ -402,7 +535,7 @@ def _make_shade(AMBIENT: bool, DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool, TEX
             if wp.static(RECORD):
                 rec.visible[j] = seen
         if wp.static(AREA and (DIFFUSE or SPECULAR)):
-            out = area_light(s, hit, k, v, out, rec, j)
+            out = area_light(s, hit, k, v, out, rec, j, stratum)
         return out
 
     return shade

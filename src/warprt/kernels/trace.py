@@ -244,7 +244,7 @@ def make_local(fx, shadow_grid: bool, aovs: tuple, record: bool):
                 rec.emit[j] = emitter_met(s, h.face, r.ray.d)
             color = color + wp.cw_mul(r.weight, emitted(s, h.face, r.ray.d))
         # ---- local shading ----
-        lit = shade(s, hit, -r.ray.d, rec, j)
+        lit = shade(s, hit, -r.ray.d, rec, j, sample)  # the sample: its share of the area lights' points (spread)
         return color + wp.cw_mul(r.weight, lit.color), lit.shadow_rays
 
     return local

@@ -50,7 +50,7 @@ def make_shade_kernel(fx):
             hit = surface(s, f, uv[0], uv[1], query_normal(p0, p1, p2), d)
             if wp.static(AREA):
                 total = total + emitted(s, f, d)
-            r = shade(s, hit, -d, GradRecord(), 0)  # no record: a Z-buffer frame has no gradient
+            r = shade(s, hit, -d, GradRecord(), 0, sample)  # no record: a Z-buffer frame has no gradient
             total = total + r.color
         image[pixel] = total / float(samples)
 

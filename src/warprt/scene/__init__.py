@@ -11,7 +11,8 @@ alone (the camera basis, vertex normals, the effect set).
 from ..memo import ObjectCache
 from . import shapes
 from .area import (EMITTER_MATERIAL, EMITTER_MATERIAL_NAME, SHAPE_KINDS, drawn_objects, emitter_area,
-                   emitter_of_triangles, emitter_samples, local_coordinates, sample_coordinates, shape_frame)
+                   emitter_of_triangles, emitter_samples, local_coordinates, emitting_triangles, sample_coordinates,
+                   shape_frame, spread_strata)
 from .camera import CameraBasis, camera_basis, pixel_ray_directions
 from .dielectric import eye_medium, open_edges, signed_volume, winding_number
 from .dielectric_formats import DEFAULT_IOR, dielectric_from_gltf, dielectric_from_mtl, dielectric_from_usd
@@ -19,7 +20,7 @@ from .effects import EFFECTS, EffectSet, resolve_effects, scene_effects, switche
 from .load import input_kind, load_dict, load_scene, sets_in_place, with_overrides
 from .meshio import read_mesh_file
 from .mitsuba_xml import load_mitsuba_file, mitsuba_camera, read_mitsuba_xml, reads_mitsuba_light, reads_mitsuba_shape
-from .model import DEFAULT_MATERIAL, Camera, Light, Material, RenderSettings, Scene, SceneObject
+from .model import AREA_ESTIMATORS, DEFAULT_MATERIAL, Camera, Light, Material, RenderSettings, Scene, SceneObject
 from .normals import position_ids, vertex_normals
 from .placement import rotation
 from .reader import scene_from_dict
@@ -27,7 +28,7 @@ from .texture import Texture, srgb_to_linear
 from .toml_fields import TableReader, did_you_mean, read_toml
 from .validate import MAX_REACH, CheckedContent, check_setting, validate_camera, validate_scene, validate_view
 
-__all__ = ["EMITTER_MATERIAL", "EMITTER_MATERIAL_NAME", "SHAPE_KINDS", "local_coordinates", "drawn_objects", "emitter_area", "emitter_of_triangles",
+__all__ = ["AREA_ESTIMATORS", "EMITTER_MATERIAL", "EMITTER_MATERIAL_NAME", "SHAPE_KINDS", "local_coordinates", "drawn_objects", "emitter_area", "emitter_of_triangles", "emitting_triangles", "spread_strata",
            "emitter_samples", "sample_coordinates", "shape_frame", "Camera", "camera_basis", "CameraBasis", "CheckedContent", "check_setting", "DEFAULT_IOR", "DEFAULT_MATERIAL",
            "did_you_mean", "dielectric_from_gltf", "dielectric_from_mtl", "dielectric_from_usd", "EFFECTS", "EffectSet",
            "eye_medium", "input_kind", "Light", "load_dict", "load_mitsuba_file", "load_scene", "Material", "MAX_REACH", "ObjectCache", "open_edges",

@@ -232,3 +232,31 @@ def local_coordinates(light, k: int) -> tuple[np.ndarray, np.ndarray]:
 def emitter_area(scene, light) -> float:
     """The emitting area of an area light."""
     return float(emitter_samples(scene, light, 1)[2].sum())
+
+
+def emitting_triangles(scene, light) -> np.ndarray:
+    """The triangles an area light emits from, (T, 3, 3) float64 in world space, each wound counter-clockwise
+    about its emitting normal, as render.area_estimator = "analytic" integrates them in closed form: a
+    rectangle's two, an object light's own; none (0, 3, 3) for a disk or a sphere, which stay on their sample
+    points."""
+    if light.shape == "rectangle":
+        c, u, v = rectangle_axes(light)
+        corners = np.array([c - u - v, c + u - v, c + u + v, c - u + v])
+        return corners[[[0, 1, 2], [0, 2, 3]]]
+    if light.shape is not None:
+        return np.zeros((0, 3, 3))
+    return np.concatenate([o.vertices[o.faces] for o in scene.objects if o.name == light.object])
+
+
+def spread_strata(light, k: int, spp: int) -> np.ndarray:
+    """Per sample point of an area light (emitter_samples' order), the pixel sample that takes it under
+    render.light_spread: a shape light's k x k grid cell (i, j) goes to pixel-sample stratum (i mod m, j mod m)
+    of the m x m pixel samples, so that each pixel sample's share is itself a grid spread over the whole light;
+    an object light's Fibonacci point n (spread along the mesh's area already) to n mod spp. Every point goes
+    to exactly one pixel sample: the pixel's average is the full sum, each point weighted spp times."""
+    n = np.arange(k * k)
+    if light.shape is None:
+        return n % spp
+    m = math.isqrt(spp)
+    row, col = n // k, n % k
+    return (row % m) * m + col % m

@@ -37,6 +37,11 @@ class EffectSet:
     # Likewise: whether some light is an area light, integrated over its sample points (shading.py) and
     # whose emitting triangles show its radiance.
     area_lights: bool = False
+    # render.area_estimator = "analytic": a rectangle light's unshadowed diffuse term in closed form, its
+    # visibility the ratio estimate over its points (kernels/shading.py make_area_light).
+    area_analytic: bool = False
+    # render.light_spread with spp > 1: each pixel sample takes its own share of every light's points.
+    light_spread: bool = False
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -49,8 +54,10 @@ class EffectSet:
         diffuse, specular, shadows, reflection); the trace kernel's name adds its path, 'trace_adsSr_gshadow'."""
         letters = {"ambient": "a", "diffuse": "d", "specular": "s", "shadows": "S",
                    "reflection": "r", "supersampling": "x", "smooth": "n", "texture": "t", "vertex_color": "c",
-                   "refraction": "T", "absorption": "b", "light_model": "L", "culling": "C", "area_lights": "A"}
-        flags = ("light_model",) * self.light_model + ("culling",) * self.culling + ("area_lights",) * self.area_lights
+                   "refraction": "T", "absorption": "b", "light_model": "L", "culling": "C", "area_lights": "A",
+                   "area_analytic": "P", "light_spread": "X"}
+        flags = tuple(n for n in ("light_model", "culling", "area_lights", "area_analytic", "light_spread")
+                      if getattr(self, n))
         return "".join(letters[n] for n in self.names + flags) or "none"
 
     def __str__(self) -> str:
@@ -82,6 +89,8 @@ def scene_effects(scene) -> EffectSet:
         light_model=not all(light.seed_point for light in scene.whitted_lights),
         culling=not all(m.double_sided for m in mats),
         area_lights=bool(scene.area_lights),
+        area_analytic=bool(scene.area_lights) and scene.render.area_estimator == "analytic",
+        light_spread=bool(scene.area_lights) and scene.render.light_spread and scene.render.spp > 1,
     )
 
 
@@ -117,7 +126,8 @@ def resolve_effects(scene, allow=None, disable=()) -> EffectSet:
     keep = switched_on(scene, allow, disable)
     on = {n: getattr(fx, n) and n in keep for n in EFFECTS}
     on["shadows"] = on["shadows"] and (on["diffuse"] or on["specular"])  # shadows only dim those terms
-    return EffectSet(**on, light_model=fx.light_model, culling=fx.culling, area_lights=fx.area_lights)
+    return EffectSet(**on, light_model=fx.light_model, culling=fx.culling, area_lights=fx.area_lights,
+                     area_analytic=fx.area_analytic, light_spread=fx.light_spread and on["supersampling"])
 
 
 def zbuffer_effects(scene, effects=None, disable=()) -> EffectSet:

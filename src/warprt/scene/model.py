@@ -70,6 +70,10 @@ class RenderSettings:
     # > 0: Whitted's adaptive supersampling (image/adaptive.py): each pixel's centre traced, and the spp samples
     # only in pixels whose 3 x 3 neighbourhood of centres differs by more than this (a colour channel's step)
     adaptive: float = 0.0
+    # "samples": each point a point light; "analytic": a polygon's (rectangle, mesh) or an unclipped sphere's
+    # unshadowed diffuse term in closed form, times the points' ratio estimate of its visibility (kernels/shading.py)
+    area_estimator: str = "samples"
+    light_spread: bool = False  # with spp > 1: each pixel sample takes its own share of the light's points
 
     def __post_init__(self):
         _convert(self, vectors=("ambient", "background"), ints=("max_depth", "spp", "light_samples"))
@@ -80,6 +84,7 @@ class RenderSettings:
 
 
 LIGHT_TYPES = ("point", "spot", "directional", "area")
+AREA_ESTIMATORS = ("samples", "analytic")  # render.area_estimator
 FALLOFFS = ("none", "inverse_square")
 AREA_SHAPES = ("rectangle", "disk", "sphere")  # an area light's own shape; else it names an object (Light.object)
 

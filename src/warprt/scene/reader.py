@@ -14,7 +14,7 @@ from . import shapes
 from .camera import aspect_note, find_camera
 from .dielectric import warn_unclosed
 from .meshio import file_objects, read_mesh_file, warn_if_tiny, warn_if_unmapped
-from .model import AREA_SHAPES, DEFAULT_MATERIAL, FALLOFFS, LIGHT_TYPES, Camera, Light, Material, RenderSettings, Scene, SceneObject
+from .model import AREA_ESTIMATORS, AREA_SHAPES, DEFAULT_MATERIAL, FALLOFFS, LIGHT_TYPES, Camera, Light, Material, RenderSettings, Scene, SceneObject
 from .placement import PlacementOverflow, read_placement, read_smooth, shape_fields, up_rotation
 from .texture import affine, checker_texture, image_texture
 from .toml_fields import TableReader, did_you_mean
@@ -22,7 +22,8 @@ from .validate import check_setting, validate_camera, validate_scene
 
 SECTIONS = {"camera", "render", "lights", "materials", "objects"}
 _CAMERA_KEYS = {"eye", "center", "up", "fovy", "near", "width", "height"}
-_RENDER_KEYS = {"ambient", "background", "max_depth", "shadows", "spp", "effects", "light_samples", "adaptive"}
+_RENDER_KEYS = {"ambient", "background", "max_depth", "shadows", "spp", "effects", "light_samples",
+                "area_estimator", "light_spread", "adaptive"}
 _LIGHT_KEYS = {"type", "position", "color", "direction", "target", "cutoff_angle", "beam_width", "falloff"}
 _AREA_KEYS = {"type", "radiance", "shape", "object", "center", "normal", "u", "v", "size", "radius"}
 _SPOT_KEYS = ("target", "cutoff_angle", "beam_width")  # meaningful only for a spot
@@ -121,6 +122,8 @@ def read_render(source: str, t: dict) -> RenderSettings:
         light_samples=check_setting(source, "render.light_samples", "render.light_samples",
                                     r.integer("light_samples", d.light_samples)),
         adaptive=r.number("adaptive", d.adaptive, lo=0.0),
+        area_estimator=r.choice("area_estimator", AREA_ESTIMATORS, d.area_estimator),
+        light_spread=r.boolean("light_spread", d.light_spread),
     )
 
 

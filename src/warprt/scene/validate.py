@@ -11,7 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import SceneError, show
-from .model import AREA_SHAPES, FALLOFFS, LIGHT_TYPES, Camera, Light, Scene
+from .model import AREA_ESTIMATORS, AREA_SHAPES, FALLOFFS, LIGHT_TYPES, Camera, Light, Scene
 from .texture import Texture
 from .toml_fields import did_you_mean
 
@@ -367,6 +367,14 @@ def _check_render(src, r):
         check_setting(src, key, key, getattr(r, key.split(".")[1]))
     if not _is_real(r.adaptive) or not 0.0 <= r.adaptive < math.inf:
         raise SceneError(src, "render.adaptive", f"expected a number >= 0 (0: off), got {show(r.adaptive)}")
+    if r.area_estimator not in AREA_ESTIMATORS:
+        raise SceneError(src, "render.area_estimator",
+                         f"expected one of {', '.join(map(repr, AREA_ESTIMATORS))}, got {show(r.area_estimator)}")
+    if not isinstance(r.light_spread, bool):
+        raise SceneError(src, "render.light_spread", f"expected true or false, got {show(r.light_spread)}")
+    if r.light_spread and r.spp > r.light_samples:
+        raise SceneError(src, "render.light_spread", f"each pixel sample takes its own share of a light's points: it "
+                         f"needs render.light_samples >= render.spp, got {r.light_samples} points for {r.spp} samples")
     return ambient, background
 
 

@@ -1,0 +1,236 @@
+"""Soft shadows at equal error (issue 39): the warm time each renderer and setting takes to reach SSIM 0.995,
+0.998 and 0.999 and a mean relative error of 1% against Mitsuba's converged ``direct`` integrator on
+scenes/cornell_box.xml, in one run: warprt's area-light estimators (render.area_estimator "samples" and
+"analytic", each with and without render.light_spread) over samples per pixel x light samples, and Mitsuba's
+``direct`` integrator with each of its samplers (independent, stratified, multijitter, ldsampler) over spp.
+
+    python -m benchmarks.equal_error [--quick] [--size 240] [--ref-spp 4096] [-o benchmarks/results/equal_error.md]
+
+Error: SSIM (7x7 window, channels averaged) of linear RGB clamped to [0, 1] (reference/compare.py), and the
+mean relative error, mean |image - reference| over the reference's mean, both clamped. The reference's own
+noise is measured (a quarter of its samples at other seeds against it) and printed: a threshold near it
+cannot be resolved. Time to a threshold: the cheapest measured frame that reaches it (an upper bound: the
+settings step by 4x), and for Mitsuba also the time interpolated between the two frames around it on a log
+scale of the error (accuracy_cost.mitsuba_at).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import time
+from pathlib import Path
+
+import numpy as np
+import warp
+
+import warprt
+from benchmarks.accuracy_cost import CHEAP, DIRECT_PASS, mitsuba_at
+from benchmarks.output import save
+from benchmarks.timing import SCENES, cpu_name, ms, once
+from reference.compare import metrics
+from reference.mitsuba_direct import ALL_SAMPLERS, DirectRenderer
+from reference.mitsuba_whitted import mitsuba_variant
+from warprt.image import default_threads
+from warprt.kernels import init_warp
+
+ROOT = Path(__file__).resolve().parent
+SCENE = SCENES / "cornell_box.xml"
+SSIM_TARGETS = (0.995, 0.998, 0.999)
+REL_TARGET = 0.01  # mean relative error
+ESTIMATORS = (("samples", False), ("samples", True), ("analytic", False), ("analytic", True))
+
+# spp 9 and 36 too: at equal error warprt's pixel samples, not its light samples, set the cost (measured at 120x120:
+# 4 spp stops at SSIM 0.992 whatever the light samples); frames of more than 1024 shadow rays a pixel never won
+FULL = {"size": 240, "ref_spp": 4096, "spps": [1, 4, 9, 16, 36, 64], "light_samples": [1, 4, 9, 16, 36, 64, 256, 1024],
+        "max_rays": 1024, "mitsuba_spps": [1, 4, 16, 64, 256, 1024], "repeat": 3}
+QUICK = {"size": 48, "ref_spp": 256, "spps": [1, 4], "light_samples": [1, 4, 16], "max_rays": 64,
+         "mitsuba_spps": [1, 4, 16], "repeat": 1}
+
+
+def errors(image: np.ndarray, ref: np.ndarray) -> dict:
+    """SSIM and mean relative error (both images clamped to [0, 1], as metrics() clamps)."""
+    a, b = np.clip(image, 0.0, 1.0), np.clip(ref, 0.0, 1.0)
+    return {"ssim": metrics(image, ref)[0], "rel": float(np.abs(a - b).mean() / b.mean())}
+
+
+def warprt_settings(cfg: dict) -> list[dict]:
+    """Every (estimator, spread, spp, light samples) measured: shadow rays a pixel (spp x light samples, or
+    light samples alone when spread) up to cfg["max_rays"]; spread only where spp > 1 and the light samples are
+    at least the spp (each pixel sample at least one point)."""
+    out = []
+    for estimator, spread in ESTIMATORS:
+        for spp in cfg["spps"]:
+            for ls in cfg["light_samples"]:
+                if spread and (spp == 1 or ls < spp):
+                    continue
+                if (ls if spread else spp * ls) <= cfg["max_rays"]:
+                    out.append({"estimator": estimator, "spread": spread, "spp": spp, "light_samples": ls})
+    return out
+
+
+def describe(p: dict) -> str:
+    if "sampler" in p:
+        return f"Mitsuba direct, {p['sampler']}, {p['spp']} spp"
+    return (f"warprt {p['estimator']}{' spread' if p['spread'] else ''}, {p['spp']} spp, "
+            f"{p['light_samples']} light samples")
+
+
+def time_warprt(scene, p: dict, repeat: int) -> tuple[np.ndarray, float]:
+    """A setting's warm frame (kernels compiled, BVH built): the median of ``repeat`` where cheap."""
+    s = scene.with_render(spp=p["spp"], light_samples=p["light_samples"], area_estimator=p["estimator"],
+                          light_spread=p["spread"])
+    with warprt.Renderer(s) as r:
+        warm = once(r.render)[1]
+        timed = [once(r.render) for _ in range(repeat if warm < CHEAP else 1)]
+    return timed[-1][0].image, float(np.median([t for _, t in timed]))
+
+
+def time_mitsuba(render: DirectRenderer, spp: int, repeat: int) -> tuple[np.ndarray, float]:
+    """Mitsuba's warm frame at ``spp``: a first, untimed frame at that spp compiles its kernels; each timed
+    frame its own seed (none the reference's)."""
+    kw = {"samples_per_pass": DIRECT_PASS}
+    render(spp, seed=1000, **kw)
+    seeds = iter(range(1001, 2000))
+    image, t = once(lambda: render(spp, seed=next(seeds), **kw))
+    if t < CHEAP and repeat > 1:
+        t = float(np.median([t] + [once(lambda: render(spp, seed=next(seeds), **kw))[1] for _ in range(repeat - 1)]))
+    return image, t
+
+
+def reached(points: list[dict], key: str, target: float) -> dict | None:
+    """The cheapest point whose ``key`` error meets ``target`` (SSIM at least it; rel at most it), or None."""
+    ok = [p for p in points if (p[key] >= target if key == "ssim" else p[key] <= target)]
+    return min(ok, key=lambda p: p["seconds"]) if ok else None
+
+
+def interpolated(frames: list[dict], key: str, target: float) -> dict | None:
+    """Mitsuba's time to ``target`` between its measured frames (ascending spp), as accuracy_cost.mitsuba_at
+    does for SSIM; the mean relative error through the same log-scale interpolation (1 - rel as an 'SSIM')."""
+    if key == "ssim":
+        return mitsuba_at(frames, target)
+    return mitsuba_at([{**f, "ssim": 1.0 - f["rel"]} for f in frames], 1.0 - target)
+
+
+def targets(cfg: dict) -> list[tuple[str, float, str]]:
+    return [("ssim", t, f"SSIM {t}") for t in SSIM_TARGETS] + [("rel", REL_TARGET, f"mean rel. error {REL_TARGET:.0%}")]
+
+
+def run(quick: bool = False, size: int | None = None, ref_spp: int | None = None) -> dict:
+    init_warp()
+    mitsuba_variant()
+    t0 = time.perf_counter()
+    cfg = dict(QUICK if quick else FULL)
+    cfg["size"] = size or cfg["size"]
+    cfg["ref_spp"] = ref_spp or cfg["ref_spp"]
+    n = cfg["size"]
+    scene = warprt.load_scene(SCENE).with_camera(width=n, height=n)
+    direct = {sampler: DirectRenderer(SCENE, n, n, sampler) for sampler in ALL_SAMPLERS}
+    passes = min(DIRECT_PASS, cfg["ref_spp"])
+    ref, t_ref = once(lambda: direct["independent"](cfg["ref_spp"], seed=0, samples_per_pass=passes))
+    check = errors(direct["independent"](cfg["ref_spp"] // 4, seed=1, samples_per_pass=min(passes, cfg["ref_spp"] // 4)), ref)
+    print(f"  reference: Mitsuba direct, {cfg['ref_spp']} spp at {n}x{n}, {t_ref:.1f} s; a quarter of its samples "
+          f"against it: SSIM {check['ssim']:.5f}, mean rel. error {check['rel']:.4f}", flush=True)
+    points = []
+    for p in warprt_settings(cfg):
+        image, t = time_warprt(scene, p, cfg["repeat"])
+        points.append({**p, "seconds": t, **errors(image, ref)})
+        print(f"    {describe(p):<58} {ms(t):>9}  SSIM {points[-1]['ssim']:.5f}  rel {points[-1]['rel']:.4f}", flush=True)
+    frames = []
+    for sampler, render in direct.items():
+        for spp in cfg["mitsuba_spps"]:
+            if sampler == "ldsampler" and spp < 4:
+                continue  # Mitsuba's ldsampler renders at least 4 (it rounds 1 up, with a warning)
+            image, t = time_mitsuba(render, spp, cfg["repeat"])
+            frames.append({"sampler": sampler, "spp": spp, "seconds": t, **errors(image, ref)})
+            print(f"    {describe(frames[-1]):<58} {ms(t):>9}  SSIM {frames[-1]['ssim']:.5f}  rel {frames[-1]['rel']:.4f}",
+                  flush=True)
+    return {"machine": cpu_name(), "cores": os.cpu_count(), "threads": default_threads(), "warp": warp.config.version,
+            "quick": quick, "config": cfg, "reference": {"seconds": t_ref, "check": check}, "warprt": points,
+            "mitsuba": frames, "seconds": time.perf_counter() - t0}
+
+
+def methods(data: dict) -> list[tuple[str, list[dict]]]:
+    """Each method's frames: warprt's per estimator (every spp and light samples), Mitsuba's per sampler."""
+    out = [(f"warprt {e}{' + light_spread' if s else ''}", [p for p in data["warprt"] if p["estimator"] == e and p["spread"] == s])
+           for e, s in ESTIMATORS]
+    out += [(f"Mitsuba direct, {s}", [f for f in data["mitsuba"] if f["sampler"] == s]) for s in ALL_SAMPLERS]
+    return [(name, frames) for name, frames in out if frames]
+
+
+def cell(frames: list[dict], key: str, target: float, mitsuba: bool) -> str:
+    best = reached(frames, key, target)
+    if best is None:
+        return "not reached"
+    text = f"{ms(best['seconds'])} ({best['spp']} spp" + (f", {best['light_samples']} ls)" if not mitsuba else ")")
+    if mitsuba:
+        m = interpolated(frames, key, target)
+        if m is not None and not m["bound"]:
+            text += f"; interpolated {ms(m['seconds'])}"
+    return text
+
+
+def report(data: dict) -> str:
+    cfg, ref = data["config"], data["reference"]
+    n = cfg["size"]
+    lines = ["## Soft shadows at equal error", "",
+             f"Warm time to each error against Mitsuba's `direct` integrator at {cfg['ref_spp']} spp (independent sampler, box "
+             f"filter) on scenes/cornell_box.xml at {n}x{n}; {data['machine']}, {data['threads']} threads, Warp {data['warp']}. "
+             f"Regenerate: `python -m benchmarks.equal_error`" + (" (a --quick run: not for quoting)" if data["quick"] else "")
+             + ".", "",
+             f"- The reference's own noise: {cfg['ref_spp'] // 4} spp at other seeds against it, SSIM {ref['check']['ssim']:.5f}, "
+             f"mean relative error {ref['check']['rel']:.4f} (its error against the truth is about half of that); a target "
+             "near it cannot be resolved.",
+             "- warprt: spp " + ", ".join(map(str, cfg["spps"])) + " x light samples " + ", ".join(map(str, cfg["light_samples"]))
+             + f", up to {cfg['max_rays']} shadow rays a pixel; `light_spread`: each pixel sample takes light samples / spp "
+             "of the points. Mitsuba: spp " + ", ".join(map(str, cfg["mitsuba_spps"])) + ".",
+             "- Each cell: the cheapest measured frame that reaches the target (an upper bound, the settings step 4x); "
+             "for Mitsuba also the time interpolated on a log scale of the error between the frames around it.", "",
+             "| method | " + " | ".join(label for _, _, label in targets(cfg)) + " |",
+             "|---|" + "---|" * len(targets(cfg))]
+    for name, frames in methods(data):
+        mitsuba = name.startswith("Mitsuba")
+        lines.append(f"| {name} | " + " | ".join(cell(frames, k, t, mitsuba) for k, t, _ in targets(cfg)) + " |")
+    lines += ["", "Every frame measured:", "", "| setting | time | SSIM | mean rel. error |", "|---|---:|---:|---:|"]
+    for p in data["warprt"] + data["mitsuba"]:
+        lines.append(f"| {describe(p)} | {ms(p['seconds'])} | {p['ssim']:.5f} | {p['rel']:.4f} |")
+    return "\n".join(lines)
+
+
+GOAL = 0.5  # issue 39: warprt in at most half the time of Mitsuba's best sampler at SSIM 0.998 and 0.999
+
+
+def target_rows(data: dict) -> list[tuple[str, str, str]]:
+    """The Targets row: warprt's cheapest frame (any estimator) over Mitsuba's cheapest (any sampler), each
+    the cheapest measured frame that reaches the SSIM, at 0.998 and 0.999."""
+    ratios = []
+    for target in (0.998, 0.999):
+        ours, theirs = reached(data["warprt"], "ssim", target), reached(data["mitsuba"], "ssim", target)
+        ratios.append((target, None if ours is None or theirs is None else ours["seconds"] / theirs["seconds"], ours, theirs))
+    text = "; ".join(f"SSIM {t}: " + ("not reached" if r is None else f"{r:.2f}x ({describe(o)} against {describe(m)})")
+                     for t, r, o, m in ratios)
+    ok = all(r is not None and r <= GOAL for _, r, _, _ in ratios)
+    n = data["config"]["size"]
+    return [(f"Soft shadows at equal error: warprt <= {GOAL}x the time of Mitsuba's best sampler (direct integrator) "
+             f"at SSIM 0.998 and 0.999, scenes/cornell_box.xml at {n}x{n}", text, "met" if ok else "not met")]
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--quick", action="store_true", help="a 48x48 image, few settings, a 256-spp reference: a smoke run")
+    ap.add_argument("--size", type=int, default=None, help="the image's side in pixels (default 240; 48 with --quick)")
+    ap.add_argument("--ref-spp", type=int, default=None, help="the reference's samples per pixel (default 4096; 256 with --quick)")
+    ap.add_argument("-o", "--output", default=str(ROOT / "results" / "equal_error.md"), help="Markdown report; JSON beside it")
+    args = ap.parse_args(argv)
+    if args.size is not None and args.size < 16:
+        ap.error(f"--size: expected at least 16 pixels, got {args.size}")
+    if args.ref_spp is not None and (args.ref_spp < 4 or args.ref_spp & (args.ref_spp - 1)):
+        ap.error(f"--ref-spp: expected a power of two of at least 4, got {args.ref_spp}")
+    data = run(args.quick, args.size, args.ref_spp)
+    out = save(Path(args.output), data, report(data))
+    print(f"wrote {out} in {data['seconds']:.0f} s", flush=True)
+
+
+if __name__ == "__main__":
+    main()
