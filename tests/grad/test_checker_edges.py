@@ -25,8 +25,8 @@ from .converged import check_edges_term, gradient
 
 WIDTH, HEIGHT = 24, 18
 SPP = 256  # the gradient frame's: 16 x 16 strata (the differences': converged.FD_SPP)
-TOL = 0.02  # measured: 0.06% to 0.9% of the differences (CASES' comments)
-CONTROL = 0.3  # the interior derivative alone is off by more than this share of them (measured: in CASES')
+TOL = 0.02  # measured: 0.06% to 0.85% of the differences (CASES' comments)
+CONTROL = 0.3  # the interior derivative alone is off by more than this share of them (measured: 39% to 118%)
 CAMERA = {"eye": [0.3, 0.4, 4.0], "center": [0.0, 0.0, 0.0], "width": WIDTH, "height": HEIGHT, "fovy": 45.0}
 CHECKER = {"checker": [[0.9, 0.8, 0.7], [0.1, 0.2, 0.3]]}
 QUAD = [[-1.5, -1.2, -0.3], [1.4, -1.0, 0.2], [1.3, 1.1, -0.2], [-1.4, 1.2, 0.1]]
@@ -70,12 +70,12 @@ def weights():
 
 
 
-# measured (edges=True's error against the differences; edges=False's): quad camera.eye 0.3% (68%), vertices
-# 0.8% (65%), translation (h = 1e-2: at 4e-2 the cubic's differences are 1.2% off those at 1e-2) ...;
-# grid camera.eye 0.09% (39%), vertices 0.06% (118%)
+# measured (edges=True's error against the differences; edges=False's): quad camera.eye 0.33% (68%), vertices
+# 0.77% (65%), translation 0.85% (104%; h = 1e-2: at 4e-2 the cubic's differences are 1.2% off those at 1e-2);
+# grid vertices 0.06% (118%), camera.eye 0.09% (39%)
 CASES = [(quad_scene, "camera.eye", 5, 4e-2), (grid_scene, "objects.grid.vertices", 5, 4e-2),
          (quad_scene, "objects.quad.vertices", 5, 4e-2), (quad_scene, "objects.quad.translation", 5, 1e-2),
-         (grid_scene, "camera.eye", 5, 4e-2), (grid_scene, "objects.grid.translation", 7, 1e-2)]
+         (grid_scene, "camera.eye", 5, 4e-2)]
 QUICK = {0, 1}  # the rest: make test-exhaustive's alone (about 20 to 40 s each on 2 cores)
 
 
