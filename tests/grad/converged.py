@@ -61,11 +61,12 @@ def random_step(make, name: str, seed: int) -> np.ndarray:
     return np.random.default_rng(seed).standard_normal(shape) * 0.3
 
 
-def check_edges_term(make, name: str, seed: int, weights, h: float, tol: float, control: float):
-    """backward(edges=True) along a random_step against the differences (within ``tol`` of them, every pixel
-    kept); the control: the interior derivative alone (edges=False) is off them by more than ``control``."""
+def check_edges_term(make, name: str, seed: int, weights, h: float, tol: float, control: float, k: int = 2):
+    """backward(edges=True) along a random_step against the differences (step ``h``, ``k`` x ``k`` images a
+    pixel: within ``tol`` of them, every pixel kept); the control: the interior derivative alone (edges=False)
+    is off them by more than ``control``."""
     u = random_step(make, name, seed)
-    fd = differences(make, name, u, weights, h=h)
+    fd = differences(make, name, u, weights, h=h, k=k)
     with_edges = float((gradient(make, [name], weights, True)[name] * u).sum())
     interior = float((gradient(make, [name], weights, False)[name] * u).sum())
     assert abs(with_edges - fd) <= tol * abs(fd), (with_edges, fd)

@@ -12,6 +12,7 @@ from .._warp import wp
 from ..scene import camera_basis
 
 GAUSS_POINTS = 2  # per piece of an edge inside a pixel: exact for a cubic integrand; 4 agree within 4e-6 (gradient_cost's soft shadow)
+END_SLACK = 1e-9  # a segment ending on another (a checker line or a cone on a face's side) cuts it, its end rounded either way
 PAIR_TABLE = 1 << 24  # segments' pairs that _neighbours finds in a table (bytes), more by a sort
 EDGE_OFFSET_PX = 1e-3  # the two rays either side of an edge, this far from it in the image: at any depth, that
 # share of a pixel's footprint; above float32's resolution of a ray's direction (about 1e-4 of a pixel at 512 wide)
@@ -137,7 +138,7 @@ def _crossings(ends: np.ndarray, spans: np.ndarray, j: np.ndarray, k: np.ndarray
     safe = np.where(ok, det, 1.0)
     t = (r[:, 0] * (-d_f[:, 1]) + d_f[:, 0] * r[:, 1]) / safe
     s = (d[:, 0] * r[:, 1] - d[:, 1] * r[:, 0]) / safe
-    ok &= (s >= spans[k, 0]) & (s <= spans[k, 1]) & (t > spans[j, 0]) & (t < spans[j, 1])
+    ok &= (s >= spans[k, 0] - END_SLACK) & (s <= spans[k, 1] + END_SLACK) & (t > spans[j, 0]) & (t < spans[j, 1])
     return j[ok], t[ok]
 
 
