@@ -51,3 +51,23 @@ def gradient(make, names, weights, edges: bool, **options) -> dict:
     g = r.backward(weights, wrt=list(names), edges=edges)
     r.close()
     return g
+
+
+def random_step(make, name: str, seed: int) -> np.ndarray:
+    """A random direction for one parameter of ``make()``, of 0.3 a component."""
+    r = warprt.Renderer(make())
+    shape = np.shape(r.params[name])
+    r.close()
+    return np.random.default_rng(seed).standard_normal(shape) * 0.3
+
+
+def check_edges_term(make, name: str, seed: int, weights, h: float, tol: float, control: float, k: int = 2):
+    """backward(edges=True) along a random_step against the differences (step ``h``, ``k`` x ``k`` images a
+    pixel: within ``tol`` of them, every pixel kept); the control: the interior derivative alone (edges=False)
+    is off them by more than ``control``."""
+    u = random_step(make, name, seed)
+    fd = differences(make, name, u, weights, h=h, k=k)
+    with_edges = float((gradient(make, [name], weights, True)[name] * u).sum())
+    interior = float((gradient(make, [name], weights, False)[name] * u).sum())
+    assert abs(with_edges - fd) <= tol * abs(fd), (with_edges, fd)
+    assert abs(interior - fd) > control * abs(fd), (interior, fd)

@@ -12,6 +12,7 @@ from .._warp import wp
 from ..scene import camera_basis
 
 GAUSS_POINTS = 2  # per piece of an edge inside a pixel: exact for a cubic integrand; 4 agree within 4e-6 (gradient_cost's soft shadow)
+END_SLACK = 1e-9  # a segment ending on another (a checker line or a cone on a face's side) cuts it, its end rounded either way
 PAIR_TABLE = 1 << 24  # segments' pairs that _neighbours finds in a table (bytes), more by a sort
 EDGE_OFFSET_PX = 1e-3  # the two rays either side of an edge, this far from it in the image: at any depth, that
 # share of a pixel's footprint; above float32's resolution of a ray's direction (about 1e-4 of a pixel at 512 wide)
@@ -53,7 +54,7 @@ def _clip(q0: np.ndarray, q1: np.ndarray, z_e: np.ndarray) -> tuple:
     return q0 + (q1 - q0) * t0[:, None], q1 + (q0 - q1) * t1[:, None], front
 
 
-def _project(q: np.ndarray, b) -> np.ndarray:
+def project_points(q: np.ndarray, b) -> np.ndarray:
     """Where the points q (rows, relative to the eye, in front of it) lie in the image, in pixels from its
     lower-left corner: camera.camera_ray's d = -d_f z_e + h (y / H - 1/2) y_e + w (x / W - 1/2) x_e solved for
     (x, y)."""
@@ -120,7 +121,7 @@ def _segments(q0: np.ndarray, q1: np.ndarray, n: np.ndarray, b) -> tuple:
     normal = np.where(seen[:, None], grad / np.where(seen, size, 1.0)[:, None], 0.0)
     c0, c1, front = _clip(q0, q1, b.z_e)
     keep = seen & front
-    a, c = _project(c0[keep], b), _project(c1[keep], b)
+    a, c = project_points(c0[keep], b), project_points(c1[keep], b)
     t0, t1, inside = _frame_clip(a, c, b.width, b.height)
     rows = np.flatnonzero(keep)[inside]
     return normal, rows, np.stack([a[inside], c[inside]], axis=1), np.stack([t0[inside], t1[inside]], axis=1)
@@ -137,7 +138,7 @@ def _crossings(ends: np.ndarray, spans: np.ndarray, j: np.ndarray, k: np.ndarray
     safe = np.where(ok, det, 1.0)
     t = (r[:, 0] * (-d_f[:, 1]) + d_f[:, 0] * r[:, 1]) / safe
     s = (d[:, 0] * r[:, 1] - d[:, 1] * r[:, 0]) / safe
-    ok &= (s >= spans[k, 0]) & (s <= spans[k, 1]) & (t > spans[j, 0]) & (t < spans[j, 1])
+    ok &= (s >= spans[k, 0] - END_SLACK) & (s <= spans[k, 1] + END_SLACK) & (t > spans[j, 0]) & (t < spans[j, 1])
     return j[ok], t[ok]
 
 
@@ -301,12 +302,12 @@ def boundary_term(pts: EdgePoints, jump: np.ndarray, d: np.ndarray, speed: dict,
     geometry point it moves}; ``sources``: (per point its source, how many there are), whose speed is
     ``speed["light"]``."""
     w = pts.weight * np.einsum("ij,ij->i", d[pts.pixel], jump)
-    points = _add_at(n_points, list(vertices.values()), w, [speed[key] for key in vertices])
+    points = add_at(n_points, list(vertices.values()), w, [speed[key] for key in vertices])
     camera = {k: _sum(w, speed[k]) for k in ("eye", "center", "up")}
     camera["fovy"] = np.add.reduce(w[:, None] * speed["fovy"].reshape(len(w), -1), axis=0)
     term = BoundaryTerm(points, camera)
     if sources is not None:
-        term.sources = _add_at(sources[1], [sources[0]], w, [speed["light"]])
+        term.sources = add_at(sources[1], [sources[0]], w, [speed["light"]])
     return term
 
 
@@ -317,7 +318,7 @@ def _sum(w: np.ndarray, v: np.ndarray) -> np.ndarray:
     return np.array([np.bincount(first, w * v[:, k], minlength=1)[0] for k in range(3)])
 
 
-def _add_at(n: int, rows: list, w: np.ndarray, values: list) -> np.ndarray:
+def add_at(n: int, rows: list, w: np.ndarray, values: list) -> np.ndarray:
     """(n, 3): w times each list's ``values`` (rows) added at its ``rows``, the lists in order and each in its
     rows' order, one at a time: np.add.at's sums, to the bit (np.bincount adds its weights in their order
     too), a column at a time over the lists joined, ten times faster."""

@@ -1,6 +1,7 @@
 """The gradient's boundary term (backward(edges=True); docs/gradients.md): the edges camera rays see (the
 meshes' silhouettes and creases; with shadows, where a smooth mesh's shading is cut by its own shadow), with
-shadows the hard shadows' edges (grad_shadow_edges.py), all cut at the pixels together (grad_edge_points.py),
+shadows the hard shadows' edges (grad_shadow_edges.py), a checker's squares (grad_checker_edges.py) and a
+spot's hard cone (grad_spot_edges.py), all cut at the pixels together (grad_edge_points.py),
 each piece integrated at fixed Gauss-Legendre points with the radiance traced either side (kernels/edges.py)."""
 from __future__ import annotations
 
@@ -14,13 +15,15 @@ from ..errors import ArgumentError
 from ..kernels import edge_distances, empty_aov_buffers, empty_record, make_edge_sides_kernel
 from ..scene import drawn_objects
 from .grad_area_shape import SHAPE_KEYS, shape_edge_gradients, shape_table
+from .grad_checker_edges import CheckerSegments, checker_segments, checker_speeds, checker_term, has_checker
 from .grad_edge_launch import host_array, launch_points
 from .grad_edge_points import (BoundaryTerm, EdgePoints, add_terms, boundary_term, camera_adjoints, camera_copies,
                                segment_points, side_directions)
 from .grad_mesh_edges import MeshEdges, camera_edges, face_normals, facing, mesh_edges
 from .grad_mirror_edges import (MirroredSegments, frame_mirrors, mirror_terms,
                                 mirrored_segments)
-from .grad_shadow_edges import ShadowSources, shadow_segments, shadow_sources, shadow_term
+from .grad_shadow_edges import ShadowSources, receivers, shadow_segments, shadow_sources, shadow_term
+from .grad_spot_edges import Cones, SpotSegments, cones, hard_spots, on_cones, spot_segments, spot_term
 from .mirrors import empty_mirrors
 from .params import object_names
 from .zbuffer import empty_fragments
@@ -66,9 +69,9 @@ def moves_edges(name: str) -> bool:
 
 def edge_refusal(scene, geom, fx, wrt, mirrors=None) -> str | None:
     """Why backward(edges=True) would leave out an edge that the parameters ``wrt`` move (None: the camera
-    rays' edges, the hard shadows' and those seen in planar mirrors are all of them): glass's rays, a curved
-    mirror's or too many mirrors' (frame_mirrors, or ``mirrors()``: its answer kept), a checker's squares, a
-    spot's hard cone. (A reflectivity of 0
+    rays' edges, the hard shadows', a checker's squares' and those seen in planar mirrors are all of them):
+    glass's rays, a curved mirror's or too many mirrors' (frame_mirrors, or ``mirrors()``: its answer kept), a
+    checker's squares seen in a planar mirror, a spot's hard cone. (A reflectivity of 0
     whose mirror rays a frame records for its derivative reflects nothing: no edge is seen in it.)"""
     moving = [n for n in wrt if moves_edges(n)]
     if not moving:
@@ -77,16 +80,15 @@ def edge_refusal(scene, geom, fx, wrt, mirrors=None) -> str | None:
         return (f"{moving[0]} moves the edges seen through glass (its refracted and reflected rays), not "
                 f"differentiated yet: only those camera rays see, their shadows, and both seen in planar mirrors")
     reflects = scene.render.max_depth > 1 and fx.reflection
-    why = (mirrors or partial(frame_mirrors, scene, geom))()[3] if reflects else None
+    chains, why = (mirrors or partial(frame_mirrors, scene, geom))()[2:] if reflects else ((), None)
     if why is not None:
         return f"{moving[0]} moves the edges seen in {why}, not differentiated yet: only those seen in planar mirrors"
-    for m in geom.slot_materials(scene):
-        if any(getattr(m, k) is not None and getattr(m, k).checker is not None for k in
-               ("ka_texture", "kd_texture", "ks_texture")):
-            return f"{moving[0]} moves a checker texture's squares' edges, not differentiated yet"
-    for light in scene.whitted_lights:
-        if light.type == "spot" and light.beam >= light.cutoff_angle:
-            return f"{moving[0]} moves a spot light's hard cone edge, not differentiated yet"
+    if chains and has_checker(scene, geom):
+        return (f"{moving[0]} moves a checker texture's squares' edges seen in planar mirrors, not differentiated "
+                f"yet: only those camera rays see")
+    if chains and hard_spots(scene):
+        return (f"{moving[0]} moves a spot light's hard cone's edge seen in planar mirrors, not differentiated yet: "
+                f"only where camera rays see it")
     return None
 
 
@@ -138,8 +140,9 @@ def covered(name: str) -> bool:
 class Boundary:
     """A frame's boundary segments, cut at the pixels together (grad_edge_points.segment_points): the
     camera's edges (``edges``, their points ``camera``), with shadows the shadows' (``segments`` from
-    ``sources``, their points ``shadows``) and with mirror rays those seen in planar mirrors (``mirrored``,
-    their points within)."""
+    ``sources``, their points ``shadows``), with mirror rays those seen in planar mirrors (``mirrored``,
+    their points within), with a checker its lines (``checkers``, their points ``checker``) and with a hard spot
+    its cone's chords (``spots`` of ``cones``, their points ``spot``, moved onto the curves)."""
 
     edges: np.ndarray
     camera: EdgePoints
@@ -147,12 +150,18 @@ class Boundary:
     segments: object = None
     shadows: EdgePoints | None = None
     mirrored: MirroredSegments | None = None
+    checkers: CheckerSegments | None = None
+    checker: EdgePoints | None = None
+    cones: Cones | None = None
+    spots: SpotSegments | None = None
+    spot: EdgePoints | None = None
 
 
 def boundary(scene, geom, fx, eye: np.ndarray, mirrors=None) -> Boundary:
     """The Boundary of a frame seen from ``eye`` (relative to the frame origin): with shadows (fx.shadows),
     the sources (shadow_sources), the camera's edges and the shadows' (shadow_segments), with mirror rays
     (fx.reflection, render.max_depth > 1) those seen through each chain of planar mirrors (mirrored_segments),
+    with a checker its lines (checker_segments), with a hard spot its cone's chords (spot_segments, on_cones),
     each one's image cut where it crosses the others'. ``mirrors()``: the frame's frame_mirrors, kept (else
     made here; ``eye`` is then the frame's own)."""
     m = mesh_edges(scene, geom) if geom.triangle_count else None
@@ -164,6 +173,13 @@ def boundary(scene, geom, fx, eye: np.ndarray, mirrors=None) -> Boundary:
     if sources is not None:
         segments = shadow_segments(scene, geom, m, sources, eye)
         blocks.append((segments.q0 - eye, segments.q1 - eye, segments.plane))
+    checkers = checker_segments(scene, geom, m, edges, eye) if m is not None and has_checker(scene, geom) else None
+    if checkers is not None:
+        blocks.append((checkers.q0 - eye, checkers.q1 - eye, checkers.plane))
+    spots = None
+    if m is not None and fx.light_model and hard_spots(scene):
+        spots = (c := cones(scene, geom), spot_segments(scene, geom, receivers(scene, geom, eye), c))
+        blocks.append((spots[1].q0 - eye, spots[1].q1 - eye, spots[1].plane))
     if m is not None and fx.reflection and scene.render.max_depth > 1:
         group, planes, chains, _ = (mirrors or partial(frame_mirrors, scene, geom))()
         if chains:
@@ -174,7 +190,14 @@ def boundary(scene, geom, fx, eye: np.ndarray, mirrors=None) -> Boundary:
     part = lambda i, what=None: pts.part(start[i], start[i + 1], what)  # noqa: E731
     if mirrored is not None:  # the seams' points (the last block) only cut the others
         mirrored.camera, mirrored.shadow_points = part(len(blocks) - 3), part(len(blocks) - 2)
-    return Boundary(edges, part(0, edges), sources, segments, part(1) if segments is not None else None, mirrored)
+    out = Boundary(edges, part(0, edges), sources, segments, part(1) if segments is not None else None, mirrored)
+    at = 1 + (segments is not None)
+    if checkers is not None:
+        out.checkers, out.checker, at = checkers, part(at), at + 1
+    if spots is not None:
+        out.cones, out.spots = spots
+        out.spot = on_cones(scene, geom, *spots, part(at), eye)
+    return out
 
 
 def edge_gradients(scene, geom, frame: EdgeFrame, d: np.ndarray, wrt, device: str) -> dict:
@@ -201,6 +224,15 @@ def edge_gradients(scene, geom, frame: EdgeFrame, d: np.ndarray, wrt, device: st
     if b.shadows is not None and len(b.shadows.edge):
         terms.append(shadow_term(scene, geom, frame.fx, b.sources, b.segments, b.shadows, d3, device, frame.threads,
                                  keep))
+    if b.checker is not None and len(b.checker.edge):
+        terms.append(checker_term(geom, b.checkers, b.checker,
+                                  keep("checker sides", lambda: edge_sides(scene, geom, frame, b.checker, device)),
+                                  keep("checker speeds", lambda: checker_speeds(scene, geom, b.checkers, b.checker,
+                                                                                device, frame.threads)), d3))
+    lights = {}
+    if b.spot is not None and len(b.spot.edge):
+        term, lights = spot_term(scene, geom, frame.fx, b.cones, b.spots, b.spot, d3, device, frame.threads, keep)
+        terms.append(term)
     if b.mirrored is not None:
         seen = b.mirrored.camera
         jump = keep("mirrored sides", lambda: edge_sides(scene, geom, frame, seen, device)) if len(seen.edge) else None
@@ -211,7 +243,11 @@ def edge_gradients(scene, geom, frame: EdgeFrame, d: np.ndarray, wrt, device: st
         samples = None if term.sources is None else term.sources[len(scene.whitted_lights):]
         shapes = shape_edge_gradients(scene, geom, shape_table(scene, geom, device), samples, term.points,
                                       int(round(np.sqrt(scene.render.light_samples))), device)
-    return {name: g for name in wrt if (g := shapes.get(name, _by_name(scene, b.sources, term, name))) is not None}
+    out = {name: g for name in wrt if (g := shapes.get(name, _by_name(scene, b.sources, term, name))) is not None}
+    for name in wrt:
+        if name in lights:
+            out[name] = out[name] + lights[name] if name in out else lights[name]
+    return out
 
 
 def _by_name(scene, sources: ShadowSources | None, term: BoundaryTerm, name: str):

@@ -113,13 +113,13 @@ def receivers(scene, geom, eye: np.ndarray, basis=None) -> Receivers:
     faces = geom.indices_np.reshape(-1, 3).astype(np.int64)
     mats = geom.slot_materials(scene)
     dark = np.asarray([max(m.kd) <= 0.0 and max(m.ks) <= 0.0 for m in mats] or [True])
-    lit = ~dark[geom.tri_material_np] & _in_view(p[faces] - eye, camera_basis(scene.camera) if basis is None else basis)
+    lit = ~dark[geom.tri_material_np] & in_view(p[faces] - eye, camera_basis(scene.camera) if basis is None else basis)
     reach = max(float(np.abs(p).max(initial=0.0)), float(np.abs(eye).max()), 1e-30)
     return Receivers(p, faces, face_normals(p, faces), emitter_of_triangles(scene), lit, geom.tri_smooth_np == 0,
                      eye, reach)
 
 
-def _in_view(tri: np.ndarray, b) -> np.ndarray:
+def in_view(tri: np.ndarray, b) -> np.ndarray:
     """Per triangle (its corners relative to the eye) whether it may show in the frame: not wholly behind the
     eye nor beyond one side of the view's pyramid."""
     z = -(tri @ b.z_e)
@@ -292,9 +292,16 @@ def light_sides(scene, geom, fx, sources: ShadowSources, segments: ShadowSegment
     (kernels.make_light_sides_kernel): that source's jump, whatever other sources' shadows edge there too
     (a row of a rectangle light's sample points casts one line through an edge parallel to it). In bands on
     ``threads`` (grad_edge_launch.launch_points)."""
+    return source_sides(scene, geom, fx, sources.source[segments.source[pts.edge]], pts, device, threads, level)
+
+
+def source_sides(scene, geom, fx, source: np.ndarray, pts: EdgePoints, device: str, threads: int = 1,
+                 level: np.ndarray | None = None) -> np.ndarray:
+    """light_sides of the sources ``source`` (per point its light sides kernel's row: ShadowSources.source's):
+    (N, 3) float64, per point f_+ - f_- of that source alone (with the frame's shadow rays, fx.shadows)."""
     n = len(pts.edge)
     dirs = side_directions(pts, scene.camera)
-    source = np.tile(sources.source[segments.source[pts.edge]], (2, 1))
+    source = np.tile(source, (2, 1))
     level = np.tile(np.zeros(n, np.int32) if level is None else np.asarray(level, np.int32), 2)
     color = wp.zeros(2 * n, dtype=wp.vec3, device=device)
     launch_points(make_light_sides_kernel(fx), 2 * n,

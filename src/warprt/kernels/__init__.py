@@ -10,7 +10,8 @@
     derivative moves it), vertex_normals.py (smooth normals from moving points), edges.py (the edges camera
     rays see: their signed distance in the image and the radiance either side), shadow_edges.py (hard shadows'
     edges: their signed distance in the image and one light's term either side), mirror_edges.py (the edges
-    seen in planar mirrors: their signed distance in the image through the reflections), aov.py (what a first hit
+    seen in planar mirrors: their signed distance in the image through the reflections), spot_edges.py (a spot's
+    hard cone on a receiver: its signed distance in the image), aov.py (what a first hit
     records besides colour), clip.py and raster.py (the Z-buffer: Fragments), hybrid.py (where the Z-buffer's
     first hit is the tracer's), mirror.py (a reflection ray's first hit from a planar mirror's virtual
     camera), zbuffer_shade.py.
@@ -62,9 +63,9 @@ __all__ += ["AreaTest", "Coefficients", "LightArrival", "Surface", "absorbed", "
 from .record import NO_PARENT, NO_RAY, GradRecord, empty_record, make_entry  # noqa: E402 (what a grad=True frame's trace writes)
 
 __all__ += ["NO_PARENT", "NO_RAY", "GradRecord", "empty_record", "make_entry"]
-from .edges import edge_distance, edge_distances, make_edge_sides_kernel  # noqa: E402 (backward(edges=True))
+from .edges import checker_edge_distances, edge_distance, edge_distances, make_edge_sides_kernel  # noqa: E402 (backward(edges=True))
 
-__all__ += ["edge_distance", "edge_distances", "make_edge_sides_kernel"]
+__all__ += ["checker_edge_distances", "edge_distance", "edge_distances", "make_edge_sides_kernel"]
 from .edges import plane_distance  # noqa: E402
 from .shadow_edges import (SOURCE_LIGHT, SOURCE_SAMPLE, make_light_sides_kernel, shadow_edge_distances,  # noqa: E402
                            shadow_plane)
@@ -77,3 +78,6 @@ from .mirror_edges import (DIRECTIONAL_SHADOW, EDGE, POINT_SHADOW, make_mirror_f
 
 __all__ += ["MirrorEnd", "make_mirror_path", "DIRECTIONAL_SHADOW", "EDGE", "POINT_SHADOW", "make_mirror_faces_kernel",
             "make_mirrored_distances", "mirrored_direction", "mirrored_point"]  # and the edges seen in planar mirrors
+from .spot_edges import cone_distance, spot_edge_distances  # noqa: E402 (a spot's hard cone: backward(edges=True))
+
+__all__ += ["cone_distance", "spot_edge_distances"]

@@ -1,6 +1,7 @@
 """The edges seen by camera rays, for the gradient's boundary term (image/grad_edges.py launches them): an
 edge's signed distance in the image as a differentiable function of its vertices and the camera
-(edge_distance, edge_distances; plane_distance, that of any plane through the eye), the radiance either
+(edge_distance, edge_distances; plane_distance, that of any plane through the eye; checker_edge_distances,
+a checker's line on a triangle), the radiance either
 side of it by the forward's own walk (make_edge_sides_kernel), and a camera ray followed through the mirrors
 it meets to a given level's hit, as that walk follows it (make_mirror_path)."""
 
@@ -19,6 +20,21 @@ from .trace import TreeRay, make_first_hit, make_path
 
 
 @wp.func
+def image_frame(eye: wp.vec3, center: wp.vec3, up: wp.vec3, fovy: float, near: float, width: int, height: int,
+                x: float, y: float) -> wp.mat33:
+    """Rows d, d_x, d_y: the camera ray's image-plane point d(x) through the image point (x, y) (pixels from the
+    lower-left corner; image_plane_point) and its derivatives in x and y, per pixel (d is affine in x, so its
+    axes are differences of its points): what an edge function of the image is differentiated with."""
+    c = camera_of(eye, center, up, fovy, near, width, height)
+    px = x / float(width)
+    py = y / float(height)
+    d = image_plane_point(c, px, py)
+    d_x = (image_plane_point(c, 1.0, py) - image_plane_point(c, 0.0, py)) / float(width)
+    d_y = (image_plane_point(c, px, 1.0) - image_plane_point(c, px, 0.0)) / float(height)
+    return wp.mat33(d[0], d[1], d[2], d_x[0], d_x[1], d_x[2], d_y[0], d_y[1], d_y[2])
+
+
+@wp.func
 def plane_distance(n: wp.vec3, eye: wp.vec3, center: wp.vec3, up: wp.vec3, fovy: float, near: float, width: int,
                    height: int, x: float, y: float) -> float:
     """The signed distance, in pixels, of the image point (x, y) (pixels from the lower-left corner) from the
@@ -26,15 +42,10 @@ def plane_distance(n: wp.vec3, eye: wp.vec3, center: wp.vec3, up: wp.vec3, fovy:
     function g(x) = n . d(x) (d: image_plane_point, affine in x, so its axes are differences of its points),
     positive where g is. On the line (g = 0) its derivative in any parameter is d_theta g / |grad_x g|: the
     line's speed along its normal, the boundary term's v . n (docs/gradients.md)."""
-    c = camera_of(eye, center, up, fovy, near, width, height)
-    px = x / float(width)
-    py = y / float(height)
-    d = image_plane_point(c, px, py)
-    d_x = (image_plane_point(c, 1.0, py) - image_plane_point(c, 0.0, py)) / float(width)
-    d_y = (image_plane_point(c, px, 1.0) - image_plane_point(c, px, 0.0)) / float(height)
-    g_x = wp.dot(n, d_x)
-    g_y = wp.dot(n, d_y)
-    return wp.dot(n, d) / wp.sqrt(g_x * g_x + g_y * g_y)
+    f = image_frame(eye, center, up, fovy, near, width, height, x, y)
+    g_x = wp.dot(n, f[1])
+    g_y = wp.dot(n, f[2])
+    return wp.dot(n, f[0]) / wp.sqrt(g_x * g_x + g_y * g_y)
 
 
 @wp.func
@@ -55,6 +66,27 @@ def edge_distances(v0: wp.array(dtype=wp.vec3), v1: wp.array(dtype=wp.vec3), cam
     j = wp.tid()
     distance[j] = edge_distance(v0[j], v1[j], camera[3 * j], camera[3 * j + 1], camera[3 * j + 2], fovy[j], near,
                                 width, height, at[j][0], at[j][1])
+
+
+@wp.kernel(module="unique")
+def checker_edge_distances(corners: wp.array(dtype=wp.vec3), weights: wp.array(dtype=wp.vec3),
+                           camera: wp.array(dtype=wp.vec3), fovy: wp.array(dtype=float), near: float, width: int,
+                           height: int, at: wp.array(dtype=wp.vec2), distance: wp.array(dtype=float)):
+    """Per point j of a checker's line on a triangle, edge_distance of ``at[j]`` from the image of the
+    segment whose ends are fixed barycentric combinations of the triangle's corners (``corners[3 j:3 j + 3]``
+    weighted by ``weights[2 j]``, ``weights[2 j + 1]``: where the line u' = k or v' = k of its affine uv
+    crosses the triangle's sides), seen by the camera ``camera[3 j:3 j + 3]`` with fovy[j]: each point its own
+    copies, so that each adjoint is a point's alone and the host sums them in a fixed order."""
+    j = wp.tid()
+    p0 = corners[3 * j]
+    p1 = corners[3 * j + 1]
+    p2 = corners[3 * j + 2]
+    w0 = weights[2 * j]
+    w1 = weights[2 * j + 1]
+    q0 = p0 * w0[0] + p1 * w0[1] + p2 * w0[2]
+    q1 = p0 * w1[0] + p1 * w1[1] + p2 * w1[2]
+    distance[j] = edge_distance(q0, q1, camera[3 * j], camera[3 * j + 1], camera[3 * j + 2], fovy[j], near, width,
+                                height, at[j][0], at[j][1])
 
 
 @functools.cache

@@ -62,7 +62,7 @@ def make_light_sides_kernel(fx):
     directly or in mirrors."""
     mirror_path = make_mirror_path(fx)
     coefficients = make_coefficients(fx.texture, fx.vertex_color)
-    light_test = make_light_test(fx.light_model, True)
+    light_test = make_light_test(fx.light_model, fx.shadows)  # a hard spot's cone: its shadow rays if traced
     area_sample_test = make_area_sample_test(True)
     whitted_term, area_term = make_light_terms(fx.diffuse, fx.specular)
 
