@@ -12,15 +12,14 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-import warp as wp
 
 import warprt
 from warprt import SceneError
-from warprt.kernels import init_warp, make_trace_kernel
 from warprt.scene import EffectSet, resolve_effects
 
 from oracle.area import (corner_rectangle_irradiance, corner_rectangle_without_emitter_cosine,
                            disk_on_axis_irradiance, disk_on_axis_without_emitter_cosine)
+from scenekit import trace_kernel_source
 
 KD = 0.5
 L_E = 2.0
@@ -249,19 +248,11 @@ def test_only_scenes_with_area_lights_compile_the_area_light_variant():
     assert "area_lights" not in resolve_effects(area).names  # not an effect one names or disables
 
 
-def _generated_source(fx) -> str:
-    init_warp()
-    kernel = make_trace_kernel(fx)
-    wp.load_module(kernel.module, device="cpu")
-    (module_exec,) = kernel.module.execs.values()
-    return Path(module_exec.binary_path).with_suffix("").with_suffix(".cpp").read_text()
-
-
 def test_the_area_light_code_is_absent_from_the_other_variants():
     """A line of the area lights' sum and of the emitted radiance, as Warp quotes them in the C++."""
     markers = ("out = area_light(s, hit, k, v, out, rec, j)", "emitted(s, h.face, r.ray.d)")
-    assert not any(m in _generated_source(EffectSet()) for m in markers)
-    assert all(m in _generated_source(EffectSet(area_lights=True)) for m in markers)
+    assert not any(m in trace_kernel_source(EffectSet()) for m in markers)
+    assert all(m in trace_kernel_source(EffectSet(area_lights=True)) for m in markers)
 
 
 def test_the_light_samples_flag_sets_the_scenes_light_samples(tmp_path):

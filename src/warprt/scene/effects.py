@@ -37,6 +37,9 @@ class EffectSet:
     # Likewise: whether some light is an area light, integrated over its sample points (shading.py) and
     # whose emitting triangles show its radiance.
     area_lights: bool = False
+    # Likewise: whether the scene has an environment light, seen by the rays that meet nothing and lighting
+    # every point from its fixed directions (kernels/environment.py).
+    environment: bool = False
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -49,8 +52,10 @@ class EffectSet:
         diffuse, specular, shadows, reflection); the trace kernel's name adds its path, 'trace_adsSr_gshadow'."""
         letters = {"ambient": "a", "diffuse": "d", "specular": "s", "shadows": "S",
                    "reflection": "r", "supersampling": "x", "smooth": "n", "texture": "t", "vertex_color": "c",
-                   "refraction": "T", "absorption": "b", "light_model": "L", "culling": "C", "area_lights": "A"}
-        flags = ("light_model",) * self.light_model + ("culling",) * self.culling + ("area_lights",) * self.area_lights
+                   "refraction": "T", "absorption": "b", "light_model": "L", "culling": "C", "area_lights": "A",
+                   "environment": "E"}
+        flags = ("light_model",) * self.light_model + ("culling",) * self.culling + ("area_lights",) * self.area_lights \
+            + ("environment",) * self.environment
         return "".join(letters[n] for n in self.names + flags) or "none"
 
     def __str__(self) -> str:
@@ -62,7 +67,9 @@ def scene_effects(scene) -> EffectSet:
     used = {o.material for o in scene.objects}
     mats = [scene.materials[m] for m in used]
     amb = np.asarray(scene.render.ambient)
-    lit = any(max(l.radiance if l.area else l.color) > 0 for l in scene.whitted_lights + scene.area_lights)
+    env = scene.environment
+    lit = any(max(l.radiance if l.area else l.color) > 0 for l in scene.whitted_lights + scene.area_lights) or \
+        (env is not None and env.scale > 0 and (env.image.peak if env.image is not None else max(env.radiance)) > 0)
     kd = any(max(m.peak("kd")) > 0 for m in mats)
     ks = any(max(m.peak("ks")) > 0 for m in mats)
     return EffectSet(
@@ -82,6 +89,7 @@ def scene_effects(scene) -> EffectSet:
         light_model=not all(light.seed_point for light in scene.whitted_lights),
         culling=not all(m.double_sided for m in mats),
         area_lights=bool(scene.area_lights),
+        environment=env is not None,
     )
 
 
@@ -117,7 +125,8 @@ def resolve_effects(scene, allow=None, disable=()) -> EffectSet:
     keep = switched_on(scene, allow, disable)
     on = {n: getattr(fx, n) and n in keep for n in EFFECTS}
     on["shadows"] = on["shadows"] and (on["diffuse"] or on["specular"])  # shadows only dim those terms
-    return EffectSet(**on, light_model=fx.light_model, culling=fx.culling, area_lights=fx.area_lights)
+    return EffectSet(**on, light_model=fx.light_model, culling=fx.culling, area_lights=fx.area_lights,
+                     environment=fx.environment)
 
 
 def zbuffer_effects(scene, effects=None, disable=()) -> EffectSet:
