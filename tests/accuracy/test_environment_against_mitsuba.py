@@ -1,7 +1,7 @@
 """Environment lights against Mitsuba's ``direct`` integrator, converged, on the same files at 128 x 128:
 scenes/envmap.xml (an envmap with a bright sun, turned and scaled: read by warprt from the file), the same
 scene under Mitsuba's ``constant`` emitter (warprt: an environment light of that radiance), and the TOML twin
-(scenes/envmap.toml) against the XML file; with the wrong readings the comparisons must catch.
+(scenes/sky.toml) against the XML file; with the wrong readings the comparisons must catch.
 
 Both images are box-filtered pixel means (warprt: SPP stratified samples; Mitsuba: its stratified sampler,
 MITSUBA_SPP samples, box filter), so they differ by Mitsuba's noise (its image against another seed's: SSIM
@@ -134,17 +134,36 @@ def twin_agrees(ours, theirs) -> bool:
 
 
 def test_the_toml_twin_renders_as_the_xml_file(xml_image):
-    assert twin_agrees(render(warprt.load_scene(SCENES / "envmap.toml"), 64, 1), xml_image)
+    assert twin_agrees(render(warprt.load_scene(SCENES / "sky.toml"), 64, 1), xml_image)
 
 
 def test_the_toml_twin_turned_the_other_way_fails(xml_image):
-    twin = warprt.load_scene(SCENES / "envmap.toml")
+    twin = warprt.load_scene(SCENES / "sky.toml")
     assert not twin_agrees(render(with_environment(twin, rotate=(0.0, -60.0, 0.0)), 64, 1), xml_image)
 
 
 def test_the_xml_readers_texels_are_mitsubas(mi):
     """The file's envmap as warprt reads it from Mitsuba's loaded emitter and as warprt's own HDR reader reads
     textures/sky.hdr: the same texels, so either file gives the same light."""
-    xml, toml = warprt.load_scene(SCENE).environment, warprt.load_scene(SCENES / "envmap.toml").environment
+    xml, toml = warprt.load_scene(SCENE).environment, warprt.load_scene(SCENES / "sky.toml").environment
     assert np.array_equal(xml.image.image, toml.image.image) and xml.image.image.max() == 150.0
     assert toml.scale == pytest.approx(xml.scale) and np.allclose(toml.rotate, xml.rotate, atol=1e-5)
+
+
+def _environment_image(path) -> np.ndarray:
+    """The texels warprt reads from an image file as an environment light's, row 0 at the top."""
+    scene = warprt.load_dict({"lights": [{"type": "environment", "image": str(path)}], "objects": [{"shape": "plane"}]})
+    return scene.environment.image.image[::-1]
+
+
+def test_a_run_length_encoded_hdr_reads_as_mitsuba_reads_it(mi, tmp_path):
+    """Mitsuba writes a Radiance file run-length encoded (scenes/textures/sky.hdr is flat): warprt's reader
+    gives Mitsuba's own reading of it, texel for texel; the same image upside down does not."""
+    image = np.random.default_rng(3).random((12, 40, 3)).astype(np.float32) * np.float32(20.0)
+    image[:, 5:30] = 1.5  # runs
+    mi.Bitmap(image).write(str(tmp_path / "sky.hdr"))
+    mi.Bitmap(np.ascontiguousarray(image[::-1])).write(str(tmp_path / "flipped.hdr"))
+    theirs = np.asarray(mi.Bitmap(str(tmp_path / "sky.hdr")), np.float32)
+    assert (tmp_path / "sky.hdr").stat().st_size < image.size * 4 // 3  # run-length encoded: under 4 bytes a texel
+    assert np.array_equal(_environment_image(tmp_path / "sky.hdr"), theirs)
+    assert not np.allclose(_environment_image(tmp_path / "flipped.hdr"), theirs, rtol=0.1)
