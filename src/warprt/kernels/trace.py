@@ -192,9 +192,9 @@ def make_next_chain(MIRRORS: bool):
 
 @functools.cache
 def make_escaped(ABSORPTION: bool, ENVIRONMENT: bool = False):
-    """escaped(s, weight, medium, d): what a ray along d that meets nothing adds: the background, or with
-    ENVIRONMENT the environment's radiance along d, times its weight: with ABSORPTION, through its medium to
-    infinity (absorbed_forever); else as it is."""
+    """escaped(s, weight, medium, d): the colour a ray along d that meets nothing adds: its weight (with
+    ABSORPTION, through its medium to infinity: absorbed_forever) times the background, or with ENVIRONMENT
+    times the environment's radiance along d."""
 
     @wp.func(inline=True)
     def escaped(s: SceneData, weight: wp.vec3, medium: int, d: wp.vec3) -> wp.vec3:
