@@ -95,8 +95,9 @@ def compare(scene, *, effects=None, disable=(), threads: int | None = None, outp
     import warprt
     from warprt.scene import resolve_effects
 
-    from .mitsuba_whitted import Switches, mitsuba_scene, mitsuba_variant
+    from .mitsuba_whitted import Switches, mitsuba_scene, mitsuba_variant, refuse_environment
 
+    refuse_environment(scene)  # before warprt's render: the reference could not match it
     fx = resolve_effects(scene, effects, disable)
     switches = Switches.for_effects(fx, scene.render)
     t = time.perf_counter()

@@ -513,6 +513,15 @@ def whitted_lights(scene) -> list:
     return [light for light in scene.lights if light.type not in ("area", "environment")]
 
 
+def refuse_environment(scene):
+    """A SceneError naming ``lights`` where the scene has an environment light, which this reference has not."""
+    if any(light.type == "environment" for light in scene.lights):
+        from warprt import SceneError
+
+        raise SceneError(scene.source, "lights", "an environment light is not in the Whitted reference: Mitsuba's "
+                                                 "direct integrator on the scene's XML file is (reference/mitsuba_direct.py)")
+
+
 class MitsubaScene:
     """One warprt Scene converted to Mitsuba once (meshes, Embree BVH, tables); renders it with
     any camera and switches. The integrator object is reused, so a repeated render of the same
@@ -521,11 +530,7 @@ class MitsubaScene:
     def __init__(self, scene, smooth: bool = True):
         from warprt.scene import vertex_normals  # the scene's normals, as the scene defines them
 
-        if any(light.type == "environment" for light in scene.lights):
-            from warprt import SceneError
-
-            raise SceneError(scene.source, "lights", "an environment light is not in the Whitted reference: Mitsuba's "
-                                                     "direct integrator on the scene's XML file is (reference/mitsuba_direct.py)")
+        refuse_environment(scene)
         mi, dr = self.mi, self.dr = mitsuba()
         self.scene = scene
         self.smooth = smooth

@@ -215,3 +215,12 @@ def test_camera_rays_that_meet_nothing_see_mitsubas_envmap_eval(mi, random_sky):
     assert np.allclose(ours, theirs, rtol=1e-4, atol=1e-5)
     turned = with_environment(scene, rotate=tuple(-a for a in ANGLES))
     assert not np.allclose(warprt.render(turned).image, theirs, rtol=0.05)
+
+
+def test_the_whitted_reference_refuses_an_environment_in_one_line(mi):
+    """warprt compare's reference has no environment light: it says so rather than compare another image."""
+    from reference import compare
+
+    with pytest.raises(warprt.SceneError, match=r"lights: an environment light is not in the Whitted reference") as e:
+        compare(warprt.load_scene(SCENES / "sky.toml"))
+    assert "\n" not in str(e.value)
