@@ -95,8 +95,9 @@ def compare(scene, *, effects=None, disable=(), threads: int | None = None, outp
     import warprt
     from warprt.scene import resolve_effects
 
-    from .mitsuba_whitted import Switches, mitsuba_scene, mitsuba_variant
+    from .mitsuba_whitted import Switches, mitsuba_scene, mitsuba_variant, refuse_environment
 
+    refuse_environment(scene)  # before warprt's render: the reference could not match it
     fx = resolve_effects(scene, effects, disable)
     for on, field in ((fx.area_analytic, "render.area_estimator"), (fx.light_spread, "render.light_spread")):
         if on:  # the reference sums the same points as warprt's "samples"; the others are checked against Mitsuba's direct

@@ -510,7 +510,16 @@ def _mesh(mi, name: str, vertices: np.ndarray, faces: np.ndarray, normals: np.nd
 
 def whitted_lights(scene) -> list:
     """The scene's point, spot and directional lights (its area lights are integrated apart: area_light)."""
-    return [light for light in scene.lights if light.type != "area"]
+    return [light for light in scene.lights if light.type not in ("area", "environment")]
+
+
+def refuse_environment(scene):
+    """A SceneError naming ``lights`` where the scene has an environment light, which this reference has not."""
+    if any(light.type == "environment" for light in scene.lights):
+        from warprt import SceneError
+
+        raise SceneError(scene.source, "lights", "an environment light is not in the Whitted reference: Mitsuba's "
+                                                 "direct integrator on the scene's XML file is (reference/mitsuba_direct.py)")
 
 
 class MitsubaScene:
@@ -521,6 +530,7 @@ class MitsubaScene:
     def __init__(self, scene, smooth: bool = True):
         from warprt.scene import vertex_normals  # the scene's normals, as the scene defines them
 
+        refuse_environment(scene)
         mi, dr = self.mi, self.dr = mitsuba()
         self.scene = scene
         self.smooth = smooth

@@ -7,6 +7,7 @@ hand from its format's specification, not by the readers that load it.
     meshes/tile.glb      a box, baseColorFactor x an embedded PNG, COLOR_0 on one node, 2 nodes of one mesh
     meshes/cube_flat.usda  a cube with faceVarying normals, UsdPreviewSurface <- UsdUVTexture (bricks)
     meshes/smooth_vn.obj   a cylinder with its analytic normals (vn) on the side, s off on the caps
+    textures/sky.hdr     64 x 32 Radiance RGBE (flat), an equirectangular sky: blue above, brown ground, a sun
 """
 
 from __future__ import annotations
@@ -256,10 +257,36 @@ def write_smooth_vn(folder: Path, sections: int = 12):
     (folder / "smooth_vn.obj").write_text("\n".join(lines) + "\n")
 
 
+def sky(w: int = 64, h: int = 32) -> np.ndarray:
+    """Linear radiance, row 0 at the top (the +y pole): a sky brightening towards the horizon, a darker
+    ground, and a 2 x 2-pixel sun of radiance 150 (about four times the sky's irradiance) 40 degrees up."""
+    theta = (np.arange(h) + 0.5) / h * np.pi
+    up = np.cos(theta)[:, None, None]
+    sky = np.where(up > 0, np.array([0.25, 0.4, 0.8]) + (1 - up) * np.array([0.35, 0.3, 0.1]),
+                   np.array([0.25, 0.2, 0.15]) * np.ones_like(up))
+    img = np.broadcast_to(sky, (h, w, 3)).copy()
+    img[10:12, 20:22] = [150.0, 140.0, 120.0]
+    return img
+
+
+def hdr_bytes(rgb: np.ndarray) -> bytes:
+    """A flat (not run-length encoded) Radiance RGBE file: Ward's shared-exponent bytes, -Y H +X W."""
+    h, w = rgb.shape[:2]
+    peak = rgb.max(axis=2)
+    mantissa, exponent = np.frexp(peak)  # peak = mantissa 2^exponent, mantissa in [0.5, 1)
+    scale = np.where(peak > 1e-32, 256.0 / np.ldexp(1.0, exponent), 0.0)
+    rgbe = np.zeros((h, w, 4), np.uint8)
+    rgbe[..., :3] = np.floor(rgb * scale[..., None]).clip(0, 255)
+    rgbe[..., 3] = np.where(peak > 1e-32, exponent + 128, 0)
+    header = f"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y {h} +X {w}\n".encode()
+    return header + rgbe.tobytes()
+
+
 def main():
     (HERE / "textures").mkdir(exist_ok=True)
     (HERE / "textures" / "bricks.png").write_bytes(png_bytes(bricks()))
     (HERE / "textures" / "globe.png").write_bytes(png_bytes(globe()))
+    (HERE / "textures" / "sky.hdr").write_bytes(hdr_bytes(sky()))
     meshes = HERE / "meshes"
     write_crate(meshes)
     write_painted(meshes)

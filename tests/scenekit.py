@@ -104,3 +104,16 @@ def to_toml(doc: dict) -> str:
     lines: list[str] = []
     _table([], doc, lines)
     return "\n".join(lines) + "\n"
+
+
+def trace_kernel_source(fx) -> str:
+    """The C++ Warp generates for the trace kernel of EffectSet ``fx`` (what a variant's switches leave in)."""
+    import warp as wp
+
+    from warprt.kernels import init_warp, make_trace_kernel
+
+    init_warp()
+    kernel = make_trace_kernel(fx)
+    wp.load_module(kernel.module, device="cpu")
+    (module_exec,) = kernel.module.execs.values()
+    return Path(module_exec.binary_path).with_suffix("").with_suffix(".cpp").read_text()

@@ -242,7 +242,8 @@ def _rounded(v) -> list:
 
 def _describe_light(light, scene) -> str:
     """One line of `warprt info`: the light's name, type and key numbers; an area light's emitting area
-    and power (pi L_e A: a one-sided Lambertian emitter's radiant flux, per channel)."""
+    and power (pi L_e A: a one-sided Lambertian emitter's radiant flux, per channel); an environment's image
+    or radiance, scale and rotation."""
     from .scene import emitter_area
 
     kind = light.type
@@ -252,6 +253,9 @@ def _describe_light(light, scene) -> str:
         area = emitter_area(scene, light)
         power = [math.pi * c * area for c in light.radiance]
         return " ".join(words + [f"{over} radiance {_rounded(light.radiance)} area {area:.6g} power {_rounded(power)}"])
+    if kind == "environment":
+        shown = light.image.describe() if light.image is not None else f"radiance {_rounded(light.radiance)}"
+        return " ".join(words + [f"{shown} scale {light.scale:.6g} rotate {_rounded(light.rotate)}"])
     if light.position is not None:
         words.append(f"at {_rounded(light.position)}")
     if kind != "point" and light.direction is not None:

@@ -85,6 +85,10 @@ CASES = [
     ("texture not an image", ["render", "texture_not_image.toml"],
      "texture_not_image.toml: materials.tiles.kd_texture.image: notes.txt: not an image file read here (PNG, "
      "JPEG, TIFF, BMP, TGA, WebP, ... through Pillow; EXR)"),
+    ("environment image missing", ["render", "missing_sky.toml"],
+     "missing_sky.toml: lights[0].image: textures/nosky.hdr: texture file not found"),
+    ("environment image cut short", ["render", "short_sky.toml"],
+     "short_sky.toml: lights[0].image: short.hdr: cannot read HDR image: the pixel data is cut short or damaged"),
     ("checker of one colour", ["render", "bad_checker.toml"],
      "bad_checker.toml: materials.tiles.kd_texture.checker: expected two colours [[r, g, b], [r, g, b]], "
      "got [[1, 1, 1]]"),

@@ -5,10 +5,14 @@ crosses (where the spp frame differs from the centres': partial coverage of a fl
 is refined, and the control, a threshold above the quad's contrast, refines none and leaves those pixels wrong;
 the same image on any number of threads and bands; a gradient frame refused in one line; a bad value named."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
 import warprt
+
+SCENES = Path(__file__).resolve().parents[2] / "scenes"
 
 
 def _frames(scene, t: float, **options):
@@ -74,3 +78,19 @@ def test_a_gradient_frame_and_bad_values_are_refused_in_one_line():
     for bad in (-0.1, float("nan"), "x"):
         with pytest.raises(warprt.SceneError, match="render.adaptive"):
             warprt.Renderer(scene.with_render(adaptive=bad))
+
+
+def test_spread_lights_refine_as_the_spp_frame_spreads_them():
+    """With render.light_spread (each pixel sample its own share of an area light's points) the refined pixels
+    are still the spp frame's to the bit: the pixel kernel reads the frame's spread table, not the centre frame's
+    (whose one sample takes every point)."""
+    scene = warprt.load_scene(SCENES / "cornell_box.xml").with_camera(width=40, height=40).with_render(
+        spp=4, light_samples=16, light_spread=True, area_estimator="analytic")
+    adaptive, full, centres = _frames(scene, 0.01)
+    picked = warprt.image.refined_pixels(centres.image, 0.01)
+    assert len(picked) > 40
+    expected = centres.image.reshape(-1, 3).copy()
+    expected[picked] = full.image.reshape(-1, 3)[picked]
+    assert np.array_equal(adaptive.image, expected.reshape(adaptive.image.shape))
+    with pytest.raises(warprt.SceneError, match="render.light_spread"):  # fewer points than samples: refused
+        warprt.Renderer(scene.with_render(spp=16, light_samples=4))

@@ -302,7 +302,7 @@ def test_wrapped_bsdfs_are_read_through_with_one_warning_each(tmp_path):
     assert len(warned) == 2 and "mask: its opacity" in warned[0] and "normalmap" in warned[1]
 
 
-def test_area_emitters_are_lights_environment_maps_and_textured_radiance_one_warning_each(tmp_path):
+def test_area_emitters_and_environment_maps_are_lights_textured_radiance_one_warning(tmp_path):
     mi.Bitmap(np.ones((4, 8, 3), np.float32)).write(str(tmp_path / "sky.exr"))
     glow = {"type": "area", "radiance": {"type": "rgb", "value": [5.0, 4.0, 3.0]}}
     pattern = {"type": "area", "radiance": {"type": "checkerboard"}}
@@ -311,7 +311,9 @@ def test_area_emitters_are_lights_environment_maps_and_textured_radiance_one_war
          "a": {**mf.floor(mi), "emitter": glow}, "b": {**mf.floor(mi), "emitter": dict(glow)},
          "c": {**mf.floor(mi), "emitter": pattern}}
     scene, warned = read(mf.write(tmp_path, "glow.xml", d))
-    assert [(l.type, l.object, l.radiance) for l in scene.lights] == [("area", "a", (5.0, 4.0, 3.0)),
+    assert [(l.type, l.object, l.radiance) for l in scene.lights] == [("environment", None, None),
+                                                                       ("area", "a", (5.0, 4.0, 3.0)),
                                                                        ("area", "b", (5.0, 4.0, 3.0))]
+    assert scene.environment.image.image.shape == (4, 8, 3) and np.all(scene.environment.image.image == 1.0)
     assert len(scene.objects) == 3
-    assert len(warned) == 2 and "textured area emitter" in warned[0] and "not a Whitted light" in warned[1]
+    assert len(warned) == 1 and "textured area emitter" in warned[0]

@@ -12,15 +12,14 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-import warp as wp
 
 import warprt
 from warprt import SceneError
-from warprt.kernels import init_warp, make_trace_kernel
 from warprt.scene import EffectSet, resolve_effects
 
 from oracle.area import (corner_rectangle_irradiance, corner_rectangle_without_emitter_cosine,
                            disk_on_axis_irradiance, disk_on_axis_without_emitter_cosine)
+from scenekit import trace_kernel_source
 
 KD = 0.5
 L_E = 2.0
@@ -249,22 +248,14 @@ def test_only_scenes_with_area_lights_compile_the_area_light_variant():
     assert "area_lights" not in resolve_effects(area).names  # not an effect one names or disables
 
 
-def _generated_source(fx) -> str:
-    init_warp()
-    kernel = make_trace_kernel(fx)
-    wp.load_module(kernel.module, device="cpu")
-    (module_exec,) = kernel.module.execs.values()
-    return Path(module_exec.binary_path).with_suffix("").with_suffix(".cpp").read_text()
-
-
 def test_the_area_light_code_is_absent_from_the_other_variants():
     """A line of the area lights' sum and of the emitted radiance, as Warp quotes them in the C++."""
     markers = ("out = area_light(s, hit, k, v, out, rec, j, stratum)", "emitted(s, h.face, r.ray.d)")
-    assert not any(m in _generated_source(EffectSet()) for m in markers)
-    area = _generated_source(EffectSet(area_lights=True))
+    assert not any(m in trace_kernel_source(EffectSet()) for m in markers)
+    area = trace_kernel_source(EffectSet(area_lights=True))
     assert all(m in area for m in markers)
     # render.area_estimator = "analytic" and render.light_spread (issue 39) compile only where asked for
-    spread = _generated_source(EffectSet(area_lights=True, area_analytic=True, supersampling=True, light_spread=True))
+    spread = trace_kernel_source(EffectSet(area_lights=True, area_analytic=True, supersampling=True, light_spread=True))
     for marker in ("closed_integral(s, e, hit)", "a.first[e * a.strata + stratum]"):
         assert marker not in area and marker in spread
 

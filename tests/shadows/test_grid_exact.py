@@ -22,14 +22,14 @@ from warprt.scene import Light
 from shadows.probes import frame_counts, stress_counts, through_every_vertex_and_edge
 
 def at(path, width):
-    """The scene at ``width`` pixels; one with no lights (glass_slab) gets one above its objects, so that
-    every scene has shadow rays to check."""
+    """The scene at ``width`` pixels; one with no point lights (glass_slab; sky, lit by its environment alone)
+    gets one above its objects, so that every scene has shadow rays the grid answers to check."""
     scene = warprt.load_scene(path)
-    if not scene.lights:
+    if not scene.whitted_lights:
         lo = np.min([o.vertices.min(0) for o in scene.objects], 0)
         hi = np.max([o.vertices.max(0) for o in scene.objects], 0)
         above = (lo + hi) / 2 + [0.3 * (hi - lo).max(), 1.5 * (hi - lo).max(), 0.2 * (hi - lo).max()]
-        scene = replace(scene, lights=[Light(tuple(float(v) for v in above), (1.0, 1.0, 1.0))])
+        scene = replace(scene, lights=[*scene.lights, Light(tuple(float(v) for v in above), (1.0, 1.0, 1.0))])
     return at_width(scene, width)
 
 
@@ -171,7 +171,8 @@ def test_a_grid_over_its_memory_budget_is_not_built():
 def test_grid_shadows_give_the_traced_image_on_the_zbuffer_hard_cases(name):
     scene = case_scene(name)
     traced, grid = same_as_traced(scene, "shadow_query", "grid", primary_query="raytrace")
-    assert grid.stats.shadow_query == ("grid" if traced.stats.rays["shadow"] and scene.triangle_count else "bvh")
+    grid_lights = traced.stats.rays["shadow"] and scene.triangle_count and scene.whitted_lights
+    assert grid.stats.shadow_query == ("grid" if grid_lights else "bvh")  # an environment alone: no grid
 
 
 @pytest.mark.parametrize("path", SCENE_CASES)

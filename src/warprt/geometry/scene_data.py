@@ -15,7 +15,8 @@ from __future__ import annotations
 import numpy as np
 from .._warp import wp
 from ..scene import (EMITTER_MATERIAL, EMITTER_MATERIAL_NAME, drawn_objects, emitter_of_triangles, emitter_samples,
-                     eye_medium, emitting_triangles, spread_strata, vertex_normals)
+                     environment_samples, environment_texels, eye_medium, emitting_triangles, spread_strata,
+                     to_world, vertex_normals)
 from .bvh import build_mesh, eye_reach, frame_origin, objects_center, refit_mesh
 from .shadow_grid import ShadowGrid, empty_grid
 
@@ -145,6 +146,22 @@ class AreaLights:
 
 
 @wp.struct
+class Environment:
+    """The environment light (scene/environment.py), read only where a scene has one (EffectSet.environment):
+    its radiance texels (height rows of width, row 0 at the +y pole, the first column repeated last), the
+    rotation from world to its local directions, and its fixed directions (world, unit) with their weights
+    L / (pdf N)."""
+
+    texels: wp.array(dtype=wp.vec3)
+    width: int
+    height: int
+    to_local: wp.mat33
+    num: int
+    directions: wp.array(dtype=wp.vec3)
+    weights: wp.array(dtype=wp.vec3)
+
+
+@wp.struct
 class SceneData:
     mesh: wp.uint64
     points: wp.array(dtype=wp.vec3)
@@ -176,6 +193,7 @@ class SceneData:
     background: wp.vec3
     shadow_grid: ShadowGrid  # the light-space structure (shadow_grid.py), read where shadow rays use it
     area: AreaLights  # a stand-in of no lights where the scene has none
+    env: Environment  # a stand-in of a black environment where the scene has none
 
 
 def light_strata(scene, fx) -> int:
@@ -222,6 +240,7 @@ class Geometry:
         # Stand-ins and uploads kept for the next frames (scene_data, _textures), made on first use.
         self._no_grid = None  # the ShadowGrid of no grid
         self._no_area = None  # the AreaLights of no area lights
+        self._no_env = None  # the Environment of none
         self._no_uvs = None  # the uv array of a frame without textures
         self._texture_cache: dict = {}  # the last frame's images (and their ids) and their texels: uploaded once
         # A triangle's material is a slot: the objects' material names in order of first use, so the
@@ -363,7 +382,8 @@ class Geometry:
         # With glass, the medium the eye is in (eye_medium) depends on the eye too.
         key = (tuple(m), tuple(scene.lights), tuple(scene.render.ambient), tuple(scene.render.background),
                id(shadow_grid), tuple(scene.camera.eye) if dielectric else None,
-               (scene.render.light_samples, scene.render.area_estimator, strata) if area else None)
+               (scene.render.light_samples, scene.render.area_estimator, strata) if area else None,
+               scene.render.light_samples if scene.environment else None)
         if self._tables is not None and self._tables[0] == key:
             return self._tables[1]
         d, lights = self.device, scene.whitted_lights
@@ -399,6 +419,7 @@ class Geometry:
             self._no_grid = empty_grid(d)
         s.shadow_grid = shadow_grid if shadow_grid is not None else self._no_grid
         s.area = self._area_lights(scene, area, strata)
+        s.env = self._environment(scene.environment, scene.render.light_samples)
         self._tables = (key, s, shadow_grid, textures)  # the grid and images kept alive with their ids
         return s
 
@@ -444,6 +465,29 @@ class Geometry:
                    if l.shape == "sphere" and scene.render.area_estimator == "analytic" else [0.0] * 4 for l in area]
         a.spheres = wp.array(np.asarray(spheres, np.float32), dtype=wp.vec4, device=d)
         return a
+
+    def _environment(self, light, light_samples: int) -> Environment:
+        """The environment's table for a frame: its texels, rotation and light_samples directions; a black
+        stand-in (kept) for a scene without."""
+        d = self.device
+        e = Environment()
+        if light is None:
+            if self._no_env is None:
+                e.texels = wp.zeros(4, dtype=wp.vec3, device=d)
+                e.width, e.height, e.to_local, e.num = 2, 2, wp.mat33(np.eye(3)), 0
+                e.directions, e.weights = wp.zeros(1, dtype=wp.vec3, device=d), wp.zeros(1, dtype=wp.vec3, device=d)
+                self._no_env = e
+            return self._no_env
+        texels = environment_texels(light)
+        directions, weights = environment_samples(light, light_samples)
+        vec = lambda rows: wp.array(np.asarray(rows, np.float32).reshape(-1, 3), dtype=wp.vec3, device=d)
+        e.texels = vec(texels.reshape(-1, 3))
+        e.height, e.width = texels.shape[:2]
+        e.to_local = wp.mat33(to_world(light).T.astype(np.float32))
+        e.num = len(directions)
+        e.directions = vec(directions if len(directions) else np.zeros((1, 3)))
+        e.weights = vec(weights if len(weights) else np.zeros((1, 3)))
+        return e
 
     def uv_array(self):
         """Every vertex's texture coordinates, (0, 0) on objects without: what textured shading and the uv

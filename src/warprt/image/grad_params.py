@@ -32,6 +32,9 @@ def refusal(scene, fx, mirrored=()) -> str | None:
         return f"the gradient's replay shades every Phong term: {', '.join(off)} switched off is not differentiated yet"
     if (fx.reflection or mirrored) and not fx.refraction and scene.render.max_depth > MAX_GRAD_DEPTH:
         return f"at most {MAX_GRAD_DEPTH} ray levels (render.max_depth) are differentiated (Warp's unrolled loop)"
+    if fx.environment:
+        return ("an environment light is not differentiated yet: the gradient's replay has neither the light it "
+                "adds nor the background it shows, so no parameter's gradient would be right")
     if len(scene.whitted_lights) > MAX_GRAD_LIGHTS:
         return f"at most {MAX_GRAD_LIGHTS} lights are differentiated (Warp's unrolled loop)"
     if scene.render.adaptive > 0 and fx.supersampling:
@@ -79,7 +82,8 @@ def parameter_names(scene) -> list[str]:
     names += [f"materials.{name}.{k}" for name, m in scene.materials.items() for k in TEXTURE_KEYS
               if getattr(m, k) is not None and getattr(m, k).image is not None]
     names += [f"materials.{name}.emission" for name, m in scene.materials.items() if _emits(m)]
-    names += [f"lights.{i}.{k}" for i, light in enumerate(scene.lights) if not light.area for k in LIGHT_KEYS
+    names += [f"lights.{i}.{k}" for i, light in enumerate(scene.lights) if not (light.area or light.environment)
+              for k in LIGHT_KEYS
               if getattr(light, k) is not None]  # as r.params has them: no position for a directional light
     names += [f"lights.{i}.radiance" for i, light in enumerate(scene.lights) if light.area]
     names += [f"lights.{i}.{k}" for i, light in enumerate(scene.lights) for k in shape_keys(light)]
@@ -122,6 +126,8 @@ def area_sources(scene) -> list[str]:
 def _name_refusal(scene, name: str) -> str | None:
     """Why backward() cannot differentiate r.params' ``name`` in this scene (None: it can or it is unknown)."""
     section, owner, key = (name.split(".") + ["", "", ""])[:3]
+    if section == "lights" and owner.isdigit() and int(owner) < len(scene.lights) and scene.lights[int(owner)].environment:
+        return f"an environment light's {key or 'parameters'} is not differentiated yet (nor is any gradient of a scene with one)"
     if section == "objects" and owner in object_names(scene) and \
             scene.objects[object_names(scene)[owner]].name in _emitter_objects(scene):
         return ("the object is an area light: its sample points (the light's position and shape) are held fixed, "

@@ -42,8 +42,9 @@ from ..errors import SceneError
 MATERIAL_COLOURS = ("ka", "kd", "ks", "reflectivity")
 DIELECTRIC_COLOURS = ("transmittance", "absorption")
 TEXTURES = ("ka_texture", "kd_texture", "ks_texture")
-LIGHT_VECTORS = ("position", "color", "direction", "radiance", "center", "normal", "u", "v")
-LIGHT_SHAPES = {"size": (2,), "radius": ()}  # an area light's shape's other parameters, and their shapes
+LIGHT_VECTORS = ("position", "color", "direction", "radiance", "center", "normal", "u", "v", "rotate")
+LIGHT_SHAPES = {"size": (2,), "radius": (), "scale": ()}  # an area light's shape's other parameters (an
+# environment's scale), and their shapes
 CAMERA_VECTORS = ("eye", "center", "up")
 POSE_KEYS = ("translation", "rotation")
 SOURCE = "Renderer.params"
@@ -61,7 +62,7 @@ def _names(scene) -> list[str]:
             out.append(f"materials.{name}.emission")
     for i, light in enumerate(scene.lights):
         out += [f"lights.{i}.{k}" for k in (*LIGHT_VECTORS, *LIGHT_SHAPES) if getattr(light, k) is not None
-                and not (light.area and k == "color")]  # an area light's light is its radiance
+                and not ((light.area or light.environment) and k == "color")]  # its light is its radiance
     out += [f"objects.{name}.vertices" for name in object_names(scene)]
     out += [f"objects.{name}.{k}" for name in object_names(scene) for k in POSE_KEYS]
     out += [f"objects.{name}.colors" for name, i in object_names(scene).items() if scene.objects[i].colors is not None]

@@ -57,8 +57,9 @@ def shadows_from_grid(shadow_query: str, fx, geom: Geometry, lights: np.ndarray,
     lights on (``frames``: the LightHistory count, this frame included) when it costs less than
     GRID_HORIZON such frames save; a grid ``kept`` for these lights costs nothing. Either way the image
     is the traced one, to the bit. A scene with area lights traces every shadow ray: the grid is built
-    around point lights, and an area light's rays run to many points of it."""
-    if not fx.shadows or geom.triangle_count == 0 or shadow_query == "bvh" or fx.area_lights:
+    around point lights, and an area light's rays run to many points of it. One without point, spot or
+    directional lights (an environment light's alone) has nothing to build it around."""
+    if not fx.shadows or geom.triangle_count == 0 or shadow_query == "bvh" or fx.area_lights or not len(lights):
         return False
     if shadow_query == "grid":
         return True

@@ -13,6 +13,11 @@ Mitsuba's point emitter on a diffuse BSDF with kd = reflectance / pi): a Lambert
 under an area emitter of radiance L_e gives Mitsuba's (reflectance / pi) integral L_e cos cos' / r^2 dA.
 A shadow ray runs to each sample on the BVH, stopping SHADOW_EPSILON of the way short of the emitter
 (Mitsuba's spawn_ray_to does likewise), so that the emitter's own triangles do not block it.
+
+An environment light (compiled only for scenes with one: EffectSet.environment) adds over its fixed directions
+w_q (scene/environment.py), each with a shadow ray to infinity:
+    sum_q vis_q W_q (kd max(0, n.w_q) + ks max(0, r_q.v)^n),   W_q = L(w_q) / (pdf(w_q) N),
+kd and ks again BRDF values: a Lambertian kd = reflectance / pi under a constant radiance L gives reflectance x L.
 """
 
 from __future__ import annotations
@@ -143,7 +148,7 @@ def make_shade(fx, shadow_grid: bool = False, record: bool = False):
     (kernels/record.py); without, ``rec`` is never read. Inlined: its arguments are not copied."""
     return _make_shade(fx.ambient, fx.diffuse, fx.specular, fx.shadows, fx.texture, fx.vertex_color,
                        fx.shadows and shadow_grid, fx.light_model, fx.area_lights, record, fx.area_analytic,
-                       fx.light_spread)
+                       fx.light_spread, fx.environment)
 
 
 @wp.struct
@@ -502,10 +507,39 @@ def make_area_light(DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool, RECORD: bool =
 
 
 @functools.cache
+def make_environment_light(DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool):
+    """environment_light(s, hit, k, v, out) -> ``out`` plus the light of the environment's fixed directions at the
+    hit (the module docstring), a shadow ray each (the BVH's any-hit query, to infinity) where the direction
+    faces the hit's normal."""
+    occluded = make_occluded(False)
+    phong_lit = make_phong_lit(DIFFUSE, SPECULAR)
+
+    @wp.func(inline=True)
+    def environment_light(s: SceneData, hit: Surface, k: Coefficients, v: wp.vec3, out: ShadeResult) -> ShadeResult:
+        e = s.env
+        n = hit.n
+        shininess = s.shininess[hit.material]
+        for q in range(e.num):
+            w = e.directions[q]
+            n_dot_l = wp.dot(n, w)
+            if n_dot_l > 0.0:
+                visible = True
+                if wp.static(SHADOWS):
+                    out.shadow_rays += 1
+                    visible = not occluded(s, -1, spawn_ray(hit, w).o, w, FAR)
+                if visible:
+                    out.color = out.color + wp.cw_mul(e.weights[q], phong_lit(k, shininess, n, w, v, n_dot_l))
+        return out
+
+    return environment_light
+
+
+@functools.cache
 def _make_shade(AMBIENT: bool, DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool, TEXTURE: bool, VERTEX_COLOR: bool,
                 GRID: bool = False, LIGHT_MODEL: bool = False, AREA: bool = False, RECORD: bool = False,
-                ANALYTIC: bool = False, SPREAD: bool = False):
+                ANALYTIC: bool = False, SPREAD: bool = False, ENVIRONMENT: bool = False):
     coefficients = make_coefficients(TEXTURE, VERTEX_COLOR)
+    environment_light = make_environment_light(DIFFUSE, SPECULAR, SHADOWS)
 
     # Disabled terms are absent from the generated code (wp.static).
     light_test = make_light_test(LIGHT_MODEL, SHADOWS, GRID)
@@ -536,6 +570,8 @@ def _make_shade(AMBIENT: bool, DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool, TEX
                 rec.visible[j] = seen
         if wp.static(AREA and (DIFFUSE or SPECULAR)):
             out = area_light(s, hit, k, v, out, rec, j, stratum)
+        if wp.static(ENVIRONMENT and (DIFFUSE or SPECULAR)):
+            out = environment_light(s, hit, k, v, out)
         return out
 
     return shade

@@ -14,6 +14,7 @@ from ..geometry import SceneData
 from .aov import AovBuffers, make_record_first_hit
 from .camera import CameraData, camera_ray, sample_offset
 from .dielectric import absorbed, absorbed_forever, dielectric_children
+from .environment import environment_radiance
 from .hybrid import uncertain
 from .interaction import Ray, Surface, hit_point_error, make_surface, mirror_ray, offset_ray_origin, spawn_ray
 from .mirror import FROM_CAMERA, NO_CHAIN, Mirrors, mirror_chain, mirror_hit
@@ -190,15 +191,19 @@ def make_next_chain(MIRRORS: bool):
 
 
 @functools.cache
-def make_escaped(ABSORPTION: bool):
-    """escaped(s, weight, medium): the weight of a ray that meets nothing: with ABSORPTION, through its medium
-    to infinity (absorbed_forever); else as it is."""
+def make_escaped(ABSORPTION: bool, ENVIRONMENT: bool = False):
+    """escaped(s, weight, medium, d): the colour a ray along d that meets nothing adds: its weight (with
+    ABSORPTION, through its medium to infinity: absorbed_forever) times the background, or with ENVIRONMENT
+    times the environment's radiance along d."""
 
     @wp.func(inline=True)
-    def escaped(s: SceneData, weight: wp.vec3, medium: int) -> wp.vec3:
+    def escaped(s: SceneData, weight: wp.vec3, medium: int, d: wp.vec3) -> wp.vec3:
+        w = weight
         if wp.static(ABSORPTION):
-            return absorbed_forever(s, weight, medium)
-        return weight
+            w = absorbed_forever(s, weight, medium)
+        if wp.static(ENVIRONMENT):
+            return wp.cw_mul(w, environment_radiance(s.env, d))
+        return wp.cw_mul(w, s.background)
 
     return escaped
 
@@ -276,7 +281,7 @@ def make_path(fx, raster_primary: bool, stack: int, report_truncated: bool, aovs
     follows_mirror = make_follows_mirror(RECORD)
     record_hit = make_record_hit(TREE)
     children = make_children(TREE)
-    escaped = make_escaped(ABSORPTION)
+    escaped = make_escaped(ABSORPTION, fx.environment)
     next_chain = make_next_chain(MIRRORS)
     COUNTS_T = wp.vec4i if REFRACTION else wp.vec3i
 
@@ -301,7 +306,7 @@ def make_path(fx, raster_primary: bool, stack: int, report_truncated: bool, aovs
             if wp.static(RECORD):
                 j = record_hit(rec, r.depth, pixel * samples + sample, parent, r.medium, h.face, h.u, h.v)
             if h.face < 0:
-                color = color + wp.cw_mul(escaped(s, r.weight, r.medium), s.background)
+                color = color + escaped(s, r.weight, r.medium, r.ray.d)
             else:
                 hit = surface(s, h.face, h.u, h.v, h.normal, r.ray.d)
                 if wp.static(ABSORPTION):

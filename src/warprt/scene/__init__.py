@@ -16,6 +16,7 @@ from .area import (EMITTER_MATERIAL, EMITTER_MATERIAL_NAME, SHAPE_KINDS, drawn_o
 from .camera import CameraBasis, camera_basis, pixel_ray_directions
 from .dielectric import eye_medium, open_edges, signed_volume, winding_number
 from .dielectric_formats import DEFAULT_IOR, dielectric_from_gltf, dielectric_from_mtl, dielectric_from_usd
+from .environment import environment_samples, environment_texels, to_world
 from .effects import EFFECTS, EffectSet, resolve_effects, scene_effects, switched_on, zbuffer_effects
 from .load import input_kind, load_dict, load_scene, sets_in_place, with_overrides
 from .meshio import read_mesh_file
@@ -31,8 +32,8 @@ from .validate import MAX_REACH, CheckedContent, check_setting, validate_camera,
 __all__ = ["AREA_ESTIMATORS", "EMITTER_MATERIAL", "EMITTER_MATERIAL_NAME", "SHAPE_KINDS", "local_coordinates", "drawn_objects", "emitter_area", "emitter_of_triangles", "emitting_triangles", "spread_strata",
            "emitter_samples", "sample_coordinates", "shape_frame", "Camera", "camera_basis", "CameraBasis", "CheckedContent", "check_setting", "DEFAULT_IOR", "DEFAULT_MATERIAL",
            "did_you_mean", "dielectric_from_gltf", "dielectric_from_mtl", "dielectric_from_usd", "EFFECTS", "EffectSet",
-           "eye_medium", "input_kind", "Light", "load_dict", "load_mitsuba_file", "load_scene", "Material", "MAX_REACH", "ObjectCache", "open_edges",
+           "environment_samples", "environment_texels", "eye_medium", "input_kind", "Light", "load_dict", "load_mitsuba_file", "load_scene", "Material", "MAX_REACH", "ObjectCache", "open_edges",
            "pixel_ray_directions", "position_ids", "mitsuba_camera", "read_mesh_file", "read_toml", "read_mitsuba_xml", "reads_mitsuba_light", "reads_mitsuba_shape", "RenderSettings", "resolve_effects", "rotation", "Scene",
            "scene_effects", "scene_from_dict", "switched_on", "SceneObject", "sets_in_place", "shapes", "signed_volume",
-           "srgb_to_linear", "TableReader", "Texture", "validate_camera", "validate_scene", "validate_view", "vertex_normals", "winding_number",
+           "srgb_to_linear", "TableReader", "Texture", "to_world", "validate_camera", "validate_scene", "validate_view", "vertex_normals", "winding_number",
            "with_overrides", "zbuffer_effects"]

@@ -42,6 +42,9 @@ class EffectSet:
     area_analytic: bool = False
     # render.light_spread with spp > 1: each pixel sample takes its own share of every light's points.
     light_spread: bool = False
+    # Likewise: whether the scene has an environment light, seen by the rays that meet nothing and lighting
+    # every point from its fixed directions (kernels/environment.py).
+    environment: bool = False
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -55,9 +58,9 @@ class EffectSet:
         letters = {"ambient": "a", "diffuse": "d", "specular": "s", "shadows": "S",
                    "reflection": "r", "supersampling": "x", "smooth": "n", "texture": "t", "vertex_color": "c",
                    "refraction": "T", "absorption": "b", "light_model": "L", "culling": "C", "area_lights": "A",
-                   "area_analytic": "P", "light_spread": "X"}
-        flags = tuple(n for n in ("light_model", "culling", "area_lights", "area_analytic", "light_spread")
-                      if getattr(self, n))
+                   "area_analytic": "P", "light_spread": "X", "environment": "E"}
+        flags = tuple(n for n in ("light_model", "culling", "area_lights", "area_analytic", "light_spread",
+                                  "environment") if getattr(self, n))
         return "".join(letters[n] for n in self.names + flags) or "none"
 
     def __str__(self) -> str:
@@ -69,7 +72,9 @@ def scene_effects(scene) -> EffectSet:
     used = {o.material for o in scene.objects}
     mats = [scene.materials[m] for m in used]
     amb = np.asarray(scene.render.ambient)
-    lit = any(max(l.radiance if l.area else l.color) > 0 for l in scene.whitted_lights + scene.area_lights)
+    env = scene.environment
+    lit = any(max(l.radiance if l.area else l.color) > 0 for l in scene.whitted_lights + scene.area_lights) or \
+        (env is not None and env.scale > 0 and (env.image.peak if env.image is not None else max(env.radiance)) > 0)
     kd = any(max(m.peak("kd")) > 0 for m in mats)
     ks = any(max(m.peak("ks")) > 0 for m in mats)
     return EffectSet(
@@ -91,6 +96,7 @@ def scene_effects(scene) -> EffectSet:
         area_lights=bool(scene.area_lights),
         area_analytic=bool(scene.area_lights) and scene.render.area_estimator == "analytic",
         light_spread=bool(scene.area_lights) and scene.render.light_spread and scene.render.spp > 1,
+        environment=env is not None,
     )
 
 
@@ -127,7 +133,8 @@ def resolve_effects(scene, allow=None, disable=()) -> EffectSet:
     on = {n: getattr(fx, n) and n in keep for n in EFFECTS}
     on["shadows"] = on["shadows"] and (on["diffuse"] or on["specular"])  # shadows only dim those terms
     return EffectSet(**on, light_model=fx.light_model, culling=fx.culling, area_lights=fx.area_lights,
-                     area_analytic=fx.area_analytic, light_spread=fx.light_spread and on["supersampling"])
+                     area_analytic=fx.area_analytic, light_spread=fx.light_spread and on["supersampling"],
+                     environment=fx.environment)
 
 
 def zbuffer_effects(scene, effects=None, disable=()) -> EffectSet:

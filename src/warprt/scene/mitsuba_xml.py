@@ -33,9 +33,12 @@ from .texture import Texture
 #             ignored); dielectric, thindielectric -> glass, ior = int_ior / ext_ior; twosided -> its front
 #             BSDF; mask, bumpmap, normalmap -> the BSDF inside (warned); textures: bitmap (Mitsuba's own
 #             texels, to_uv), checkerboard; other BSDFs: one warning each, Mitsuba's default diffuse (0.5)
-#   emitters  point, spot, directional -> lights (inverse_square); constant -> background and ambient;
+#   emitters  point, spot, directional -> lights (inverse_square); constant -> background and ambient (as
+#             before the environment light: an unoccluded sky, which the files compared with Mitsuba's
+#             Whitted reference rely on; a TOML environment with a radiance is Mitsuba's occluded one);
+#             envmap -> an environment light (Mitsuba's texels, scale, to_world's rotation);
 #             area (an RGB radiance) -> an area light over its shape's triangles, emitting to the side
-#             their winding faces; a textured radiance, envmap and others: one warning each, not lights
+#             their winding faces; a textured radiance and others: one warning each, not lights
 # Not read: the integrator and sampler (warprt's spp and max_depth apply), media, film crop and filter,
 # bitmap filter and wrap modes (warprt's bilinear repeat), textured specular or conductor colours (their
 # defaults, warned), mesh attributes (vertex colours), a spot's texture (warned), several sensors (the first).
@@ -123,7 +126,8 @@ def read_mitsuba_xml(path, params: dict | None = None) -> Scene:
     lights, radiance = reader.emitters(ms.emitters())
     if not objects:
         raise SceneError(source, None, "no shape warprt can render (meshes, rectangle, cube, sphere, disk, cylinder)")
-    render = RenderSettings(ambient=tuple(math.pi * radiance), background=tuple(radiance))
+    background = (0.0, 0.0, 0.0) if any(light.environment for light in lights) else tuple(radiance)
+    render = RenderSettings(ambient=tuple(math.pi * radiance), background=background)
     # The Whitted lights first, in scene.emitters() order (reads_mitsuba_light), then the area lights.
     return Scene(camera=camera, render=render, lights=lights + area_lights, materials=materials, objects=objects,
                  source=source)
@@ -418,11 +422,45 @@ class _Reader:
                                     direction=tuple(m[:3, 2] / np.linalg.norm(m[:3, 2])), falloff="none", name=name))
             elif kind == "ConstantBackgroundEmitter":
                 radiance = radiance + np.array(_rgb(p["radiance.value"]))
+            elif kind == "EnvironmentMapEmitter":
+                lights.append(self.environment(e, p, name))
             elif kind == "AreaLight":
                 pass  # read with its shape (area_light)
             else:
                 self.warn_once(("emitter", kind), f"emitter {name}", f"{kind} is not a Whitted light: skipped")
+        if radiance.any() and any(light.environment for light in lights):
+            self.warn_once("constant", "emitter constant", "beside an envmap, a constant emitter is read as the "
+                                                           "ambient term alone (the background is the envmap's)")
         return lights, radiance
+
+    def environment(self, e, p, name: str) -> Light:
+        """An envmap: Mitsuba's own texels (its loaded data, the periodic columns left out), its scale and
+        its to_world's rotation as rotate angles (R = Rz Ry Rx); a to_world that is not a rotation is warned
+        about and its nearest rotation read."""
+        data = np.asarray(p["data"], np.float64)[..., :3]
+        width = re.search(r'res = "\[(\d+), ', str(e))
+        # Mitsuba pads the image with its periodic columns: 3.9 one either side, later ones a last one only.
+        data = data[:, 1:-1] if width and data.shape[1] == int(width[1]) + 2 else data[:, :-1]
+        found = re.search(r'filename = "([^"]*)"', str(e))
+        image = Texture(image=np.ascontiguousarray(data[::-1], np.float32), source=found[1] if found else name)
+        m = _matrix(p["to_world"])[:3, :3]
+        u, _, vt = np.linalg.svd(m)
+        r = u @ vt
+        if np.abs(r - m).max() > 1e-6 or np.linalg.det(r) < 0:
+            self.warn_once(("envmap", name), f"emitter {name}", "its to_world is not a rotation: its nearest "
+                                                                "rotation is read")
+            r = r if np.linalg.det(r) > 0 else u @ np.diag([1.0, 1.0, -1.0]) @ vt
+        return Light(type="environment", image=image, scale=_scalar(p["scale"]), rotate=euler_xyz(r), name=name)
+
+
+def euler_xyz(r: np.ndarray) -> tuple:
+    """The angles (degrees) about x, y and z whose rotation (placement.rotation: Rz Ry Rx) is ``r``."""
+    ay = math.asin(max(-1.0, min(1.0, -r[2, 0])))
+    if abs(r[2, 0]) < 1.0 - 1e-12:
+        ax, az = math.atan2(r[2, 1], r[2, 2]), math.atan2(r[1, 0], r[0, 0])
+    else:  # gimbal lock: x and z turn about the same axis
+        ax, az = 0.0, math.atan2(-r[0, 1], r[1, 1])
+    return tuple(math.degrees(a) for a in (ax, ay, az))
 
 
 class _Unread(Exception):

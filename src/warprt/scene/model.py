@@ -83,7 +83,7 @@ class RenderSettings:
             object.__setattr__(self, "effects", tuple(self.effects))
 
 
-LIGHT_TYPES = ("point", "spot", "directional", "area")
+LIGHT_TYPES = ("point", "spot", "directional", "area", "environment")
 AREA_ESTIMATORS = ("samples", "analytic")  # render.area_estimator
 FALLOFFS = ("none", "inverse_square")
 AREA_SHAPES = ("rectangle", "disk", "sphere")  # an area light's own shape; else it names an object (Light.object)
@@ -119,9 +119,21 @@ class Light:
     v: tuple | None = None
     size: tuple | None = None  # rectangle: (width, height) with normal
     radius: float | None = None  # disk
+    # An environment light (Mitsuba's ``envmap``, or its ``constant`` given a radiance): radiance from every
+    # direction at infinity, an equirectangular ``image`` (linear RGB; row 0 at v = 0, as textures keep it) or
+    # a constant ``radiance``, times ``scale``, turned by ``rotate`` (degrees about x, then y, then z, as an
+    # object's rotate: Mitsuba's to_world). Seen by the rays that meet nothing; lights every point.
+    image: Texture | None = None
+    scale: float | None = None  # environment only; None: 1
+    rotate: tuple | None = None  # environment only; None: no rotation
 
     def __post_init__(self):
-        _convert(self, vectors=("position", "color", "direction", "radiance", "center", "normal", "u", "v"))
+        _convert(self, vectors=("position", "color", "direction", "radiance", "center", "normal", "u", "v", "rotate"))
+        if self.type == "environment":
+            if self.scale is None:
+                object.__setattr__(self, "scale", 1.0)
+            if self.rotate is None:
+                object.__setattr__(self, "rotate", (0.0, 0.0, 0.0))
         if self.size is not None and not isinstance(self.size, (tuple, str)):
             v = self.size
             scalar = isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, (bool, np.bool_))
@@ -142,6 +154,10 @@ class Light:
     @property
     def area(self) -> bool:
         return self.type == "area"
+
+    @property
+    def environment(self) -> bool:
+        return self.type == "environment"
 
     @property
     def seed_point(self) -> bool:
@@ -328,7 +344,12 @@ class Scene:
     @property
     def whitted_lights(self) -> list:
         """The point, spot and directional lights, in the order of ``lights`` (the kernels' light table)."""
-        return [light for light in self.lights if not light.area]
+        return [light for light in self.lights if not (light.area or light.environment)]
+
+    @property
+    def environment(self):
+        """The environment light (validate.py allows one), or None."""
+        return next((light for light in self.lights if light.environment), None)
 
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
         v = np.concatenate([o.vertices for o in self.objects]) if self.objects else np.zeros((1, 3))

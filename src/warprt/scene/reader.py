@@ -26,6 +26,7 @@ _RENDER_KEYS = {"ambient", "background", "max_depth", "shadows", "spp", "effects
                 "area_estimator", "light_spread", "adaptive"}
 _LIGHT_KEYS = {"type", "position", "color", "direction", "target", "cutoff_angle", "beam_width", "falloff"}
 _AREA_KEYS = {"type", "radiance", "shape", "object", "center", "normal", "u", "v", "size", "radius"}
+_ENVIRONMENT_KEYS = {"type", "image", "radiance", "scale", "rotate"}
 _SPOT_KEYS = ("target", "cutoff_angle", "beam_width")  # meaningful only for a spot
 _MATERIAL_KEYS = {"ka", "kd", "ks", "shininess", "reflectivity", "ka_texture", "kd_texture", "ks_texture", "ior",
                   "transmittance", "absorption", "double_sided", "emission"}
@@ -127,11 +128,13 @@ def read_render(source: str, t: dict) -> RenderSettings:
     )
 
 
-def read_light(source: str, t: dict, i: int) -> Light:
+def read_light(source: str, t: dict, i: int, base: Path = Path(".")) -> Light:
     r = TableReader(source, t, f"lights[{i}]")
     kind = r.choice("type", LIGHT_TYPES, "point")
     if kind == "area":
         return read_area_light(r)
+    if kind == "environment":
+        return read_environment_light(r, base)
     r.check_keys(_LIGHT_KEYS)
     for key in _SPOT_KEYS:
         if key in t and kind != "spot":
@@ -171,6 +174,25 @@ def read_area_light(r: TableReader) -> Light:
                  object=r.string("object") if "object" in t else None,
                  size=r.vector("size", n=2, allow_scalar=True) if "size" in t else None,
                  radius=r.number("radius") if "radius" in t else None, **vectors)
+
+
+def read_environment_light(r: TableReader, base: Path) -> Light:
+    """A ``type = "environment"`` light: an equirectangular ``image`` (EXR or Radiance HDR, linear) or a
+    constant ``radiance``, with its ``scale`` and ``rotate``; exactly one of image and radiance."""
+    r.check_keys(_ENVIRONMENT_KEYS, "key for an environment light")
+    t = r.table
+    if ("image" in t) == ("radiance" in t):
+        r.fail("image", "an environment light takes an image (an equirectangular EXR or HDR file) or a "
+                        "constant radiance = [r, g, b], one of them")
+    image = None
+    if "image" in t:
+        name = r.string("image")
+        try:
+            image = image_texture(base / name, source=name)
+        except SceneError as e:
+            r.fail("image", str(e))
+    return Light(type="environment", image=image, radiance=r.vector("radiance", nonneg=True) if "radiance" in t else None,
+                 scale=r.number("scale", 1.0, lo=0.0), rotate=r.vector("rotate", (0.0, 0.0, 0.0)))
 
 
 def read_material(source: str, name: str, t, base: Path = Path(".")) -> Material:
@@ -310,7 +332,7 @@ def scene_from_dict(data: dict, source: str = "<scene>", base: Path | None = Non
         if note:
             warn(source, "camera.from", note)
     render = read_render(source, _table(source, data, "render"))
-    lights = [read_light(source, t, i) for i, t in enumerate(_array_of_tables(source, data, "lights"))]
+    lights = [read_light(source, t, i, base) for i, t in enumerate(_array_of_tables(source, data, "lights"))]
     materials = {"default": DEFAULT_MATERIAL}
     for name, t in _table(source, data, "materials").items():
         materials[name] = read_material(source, name, t, base)

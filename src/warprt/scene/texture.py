@@ -116,6 +116,8 @@ def _decode(data: bytes, srgb: bool | None, name: str, field) -> np.ndarray:
     """Bytes of an image file -> float32 linear RGB (H, W, 3), row 0 at v = 0."""
     if data[:4] == _MAGIC_EXR:
         rgb, is_float = _read_exr(data, name, field), True
+    elif data[:2] == b"#?":
+        rgb, is_float = _read_hdr(data, name, field), True
     else:
         from PIL import Image, UnidentifiedImageError
 
@@ -170,6 +172,41 @@ def _read_exr(data: bytes, name: str, field) -> np.ndarray:
     finally:
         os.unlink(tmp)
     return rgb
+
+
+def _read_hdr(data: bytes, name: str, field) -> np.ndarray:
+    """A Radiance RGBE (.hdr) image, flat or run-length encoded, -Y H +X W (the usual orientation), as float64."""
+    end = data.find(b"\n\n")
+    size = data.find(b"\n", end + 2)
+    if end < 0 or size < 0 or b"FORMAT=32-bit_rle_rgbe" not in data[:end]:
+        raise SceneError(name, field, "cannot read HDR image: not a 32-bit_rle_rgbe Radiance file")
+    parts = data[end + 2:size].split()
+    if len(parts) != 4 or parts[0] != b"-Y" or parts[2] != b"+X":
+        raise SceneError(name, field, f"cannot read HDR image: orientation {data[end + 2:size]!r} is not read (-Y H +X W)")
+    h, w = int(parts[1]), int(parts[3])
+    buf, pos = np.frombuffer(data, np.uint8), size + 1
+    out = np.empty((h, w, 4), np.uint8)
+    try:
+        for y in range(h):
+            if w < 8 or w > 0x7FFF or buf[pos] != 2 or buf[pos + 1] != 2:  # flat pixels from here to the end
+                out[y:] = buf[pos:pos + (h - y) * w * 4].reshape(h - y, w, 4)
+                break
+            pos += 4
+            for c in range(4):
+                x = 0
+                while x < w:
+                    n = int(buf[pos])
+                    if n > 128:
+                        out[y, x:x + n - 128, c] = buf[pos + 1]
+                        x, pos = x + n - 128, pos + 2
+                    else:
+                        out[y, x:x + n, c] = buf[pos + 1:pos + 1 + n]
+                        x, pos = x + n, pos + 1 + n
+    except (IndexError, ValueError):
+        raise SceneError(name, field, "cannot read HDR image: the pixel data is cut short or damaged") from None
+    e = out[..., 3].astype(np.int32)
+    scale = np.where(e > 0, np.ldexp(1.0, e - 136), 0.0)  # m / 256 * 2^(e - 128): Walter's rgbe.c, as Mitsuba reads it
+    return out[..., :3].astype(np.float64) * scale[..., None]
 
 
 def affine(scale=(1.0, 1.0), offset=(0.0, 0.0)) -> tuple:

@@ -172,6 +172,31 @@ def _check_area_light(source, where, light, eye, objects):
         raise SceneError(source, f"{where}.radius", f"expected a number > 0, got {_num(light.radius)}")
 
 
+def _check_environment_light(source, where, light) -> float:
+    """An environment light: an image or a radiance (one of them), a scale >= 0, a rotation, nothing of the
+    other lights'; returns the brightest radiance it gives (the image's or radiance's peak times scale)."""
+    for key in ("position", "direction", "beam_width", "shape", "object", "center", "normal", "u", "v", "size", "radius"):
+        if getattr(light, key) is not None:
+            raise SceneError(source, f"{where}.{key}", "an environment light has none: it lies at infinity all round")
+    for key, default in (("color", Light.color), ("falloff", Light.falloff), ("cutoff_angle", Light.cutoff_angle)):
+        if getattr(light, key) != default:
+            raise SceneError(source, f"{where}.{key}", "an environment light has none: its light is its image or radiance")
+    if (light.image is None) == (light.radiance is None):
+        raise SceneError(source, f"{where}.image", "an environment light takes an image or a radiance, one of them")
+    if light.image is not None:
+        _check_texture(source, f"{where}.image", light.image)
+        if light.image.image is None or light.image.image.shape[0] < 3 or light.image.image.shape[1] < 2:
+            raise SceneError(source, f"{where}.image", "expected an equirectangular image of at least 2 x 3 pixels")
+    else:
+        _check_vector(source, f"{where}.radiance", light.radiance, nonneg=True)
+    _check_number(source, f"{where}.scale", light.scale)
+    _check_vector(source, f"{where}.rotate", light.rotate)
+    peak = (light.image.peak if light.image is not None else max(light.radiance)) * float(light.scale)
+    if not peak < 1e30:
+        raise SceneError(source, f"{where}.scale", f"the radiance it gives ({peak:g}) overflows float32")
+    return peak
+
+
 def _check_light(source, where, light, eye, objects=()):
     """A light of LIGHT_TYPES: a position where it has one (within float32 reach), a direction where it has
     one (not zero), a spot's cone (0 < beam_width <= cutoff_angle < 180 degrees), a falloff of FALLOFFS."""
@@ -179,6 +204,11 @@ def _check_light(source, where, light, eye, objects=()):
         raise SceneError(source, f"{where}.type", f"expected one of {', '.join(map(repr, LIGHT_TYPES))}, got {show(light.type)}")
     if light.type == "area":
         return _check_area_light(source, where, light, eye, objects)
+    if light.type == "environment":
+        return _check_environment_light(source, where, light)
+    for key in ("image", "scale", "rotate"):
+        if getattr(light, key) is not None:
+            raise SceneError(source, f"{where}.{key}", f"only an environment light has it (this light's type is {light.type})")
     for key in ("radiance", "shape", "object", "center", "normal", "u", "v", "size", "radius"):
         if getattr(light, key) is not None:
             raise SceneError(source, f"{where}.{key}", f"only an area light has it (this light's type is {light.type})")
@@ -274,11 +304,18 @@ def validate_scene(scene: Scene) -> CheckedContent:
     ambient, background = _check_render(src, scene.render)
     light_max, lights = np.zeros(3), []
     for i, light in enumerate(scene.lights):
-        _check_light(src, f"lights[{i}]", light, eye, scene.objects)
+        peak = _check_light(src, f"lights[{i}]", light, eye, scene.objects)
         # inverse_square: C_l / r^2 has no bound short of the nearest surface; C_l is the bound at r >= 1.
-        # An area light's irradiance is at most pi L_e (the whole hemisphere), and its surface shows L_e.
+        # An area light's irradiance is at most pi L_e (the whole hemisphere), and its surface shows L_e;
+        # an environment's at most pi times its brightest radiance.
         light_max = light_max + (np.pi * np.asarray(light.radiance, np.float64) if light.type == "area"
+                                 else np.full(3, np.pi * peak) if light.environment
                                  else np.asarray(light.color, np.float64))
+        if light.environment and any(other.environment for other in scene.lights[:i]):
+            raise SceneError(src, f"lights[{i}].type", "a scene has at most one environment light")
+        if light.environment and any(background):
+            raise SceneError(src, "render.background", f"the environment light (lights[{i}]) is the background: "
+                                                       "leave render.background out")
         if light.position is not None:
             lights.append((i, np.asarray(light.position, np.float64)))
     # Vertex colours multiply ka and kd: the brightest of them scales what a material can reflect.
