@@ -1,8 +1,10 @@
-"""Soft shadows at equal error (issue 39): the warm time each renderer and setting takes to reach SSIM 0.995,
-0.998 and 0.999 and a mean relative error of 1% against Mitsuba's converged ``direct`` integrator on
-scenes/cornell_box.xml, in one run: warprt's area-light estimators (render.area_estimator "samples" and
-"analytic", each with and without render.light_spread) over samples per pixel x light samples, and Mitsuba's
-``direct`` integrator with each of its samplers (independent, stratified, multijitter, ldsampler) over spp.
+"""Soft shadows and sky light at equal error (issue 39): the warm time each renderer and setting takes to reach
+SSIM 0.995, 0.998 and 0.999 and a mean relative error of 1% against Mitsuba's converged ``direct`` integrator on
+scenes/cornell_box.xml (an area light) and scenes/envmap.xml (an environment light with a sun), in one run:
+warprt's area-light estimators (render.area_estimator "samples" and "analytic", each with and without
+render.light_spread) over samples per pixel x light samples, each spp also with render.adaptive (Whitted's adaptive
+supersampling: the spp samples only where the pixels' centres differ), and Mitsuba's ``direct`` integrator with
+each of its samplers (independent, stratified, multijitter, ldsampler) over spp.
 
     python -m benchmarks.equal_error [--quick] [--size 240] [--ref-spp 4096] [-o benchmarks/results/equal_error.md]
 
@@ -36,7 +38,7 @@ from warprt.image import default_threads
 from warprt.kernels import init_warp
 
 ROOT = Path(__file__).resolve().parent
-SCENE = SCENES / "cornell_box.xml"
+EQUAL_SCENES = {"cornell_box": SCENES / "cornell_box.xml", "envmap": SCENES / "envmap.xml"}
 SSIM_TARGETS = (0.995, 0.998, 0.999)
 REL_TARGET = 0.01  # mean relative error
 ESTIMATORS = (("samples", False), ("samples", True), ("analytic", False), ("analytic", True))
@@ -44,9 +46,10 @@ ESTIMATORS = (("samples", False), ("samples", True), ("analytic", False), ("anal
 # spp 9 and 36 too: at equal error warprt's pixel samples, not its light samples, set the cost (measured at 120x120:
 # 4 spp stops at SSIM 0.992 whatever the light samples); frames of more than 1024 shadow rays a pixel never won
 FULL = {"size": 240, "ref_spp": 4096, "spps": [1, 4, 9, 16, 36, 64], "light_samples": [1, 4, 9, 16, 36, 64, 256, 1024],
-        "max_rays": 1024, "mitsuba_spps": [1, 4, 16, 64, 256, 1024], "repeat": 3}
+        "max_rays": 1024, "mitsuba_spps": [1, 4, 16, 64, 256, 1024], "repeat": 3,
+        "adaptive": [0.002, 0.005], "adaptive_spps": [16, 64]}
 QUICK = {"size": 48, "ref_spp": 256, "spps": [1, 4], "light_samples": [1, 4, 16], "max_rays": 64,
-         "mitsuba_spps": [1, 4, 16], "repeat": 1}
+         "mitsuba_spps": [1, 4, 16], "repeat": 1, "adaptive": [0.005], "adaptive_spps": [4]}
 
 
 def errors(image: np.ndarray, ref: np.ndarray) -> dict:
@@ -55,32 +58,37 @@ def errors(image: np.ndarray, ref: np.ndarray) -> dict:
     return {"ssim": metrics(image, ref)[0], "rel": float(np.abs(a - b).mean() / b.mean())}
 
 
-def warprt_settings(cfg: dict) -> list[dict]:
-    """Every (estimator, spread, spp, light samples) measured: shadow rays a pixel (spp x light samples, or
-    light samples alone when spread) up to cfg["max_rays"]; spread only where spp > 1 and the light samples are
-    at least the spp (each pixel sample at least one point)."""
+def warprt_settings(cfg: dict, area: bool = True) -> list[dict]:
+    """Every (estimator, spread, spp, light samples, adaptive) measured: shadow rays a pixel (spp x light
+    samples, or light samples alone when spread) up to cfg["max_rays"]; spread only where spp > 1 and the light
+    samples are at least the spp (each pixel sample at least one point); render.adaptive at each of cfg["adaptive"]
+    for the spps of cfg["adaptive_spps"]. Without area lights (``area`` False: an environment light) the estimator
+    and spread change nothing: "samples" alone, not spread."""
     out = []
-    for estimator, spread in ESTIMATORS:
+    for estimator, spread in ESTIMATORS if area else ESTIMATORS[:1]:
         for spp in cfg["spps"]:
             for ls in cfg["light_samples"]:
                 if spread and (spp == 1 or ls < spp):
                     continue
                 if (ls if spread else spp * ls) <= cfg["max_rays"]:
-                    out.append({"estimator": estimator, "spread": spread, "spp": spp, "light_samples": ls})
+                    for t in [0.0] + (cfg["adaptive"] if spp in cfg["adaptive_spps"] else []):
+                        out.append({"estimator": estimator, "spread": spread, "spp": spp, "light_samples": ls,
+                                    "adaptive": t})
     return out
 
 
 def describe(p: dict) -> str:
     if "sampler" in p:
         return f"Mitsuba direct, {p['sampler']}, {p['spp']} spp"
-    return (f"warprt {p['estimator']}{' spread' if p['spread'] else ''}, {p['spp']} spp, "
+    adaptive = f" adaptive {p['adaptive']:g}" if p.get("adaptive") else ""
+    return (f"warprt {p['estimator']}{' spread' if p['spread'] else ''}, {p['spp']} spp{adaptive}, "
             f"{p['light_samples']} light samples")
 
 
 def time_warprt(scene, p: dict, repeat: int) -> tuple[np.ndarray, float]:
     """A setting's warm frame (kernels compiled, BVH built): the median of ``repeat`` where cheap."""
     s = scene.with_render(spp=p["spp"], light_samples=p["light_samples"], area_estimator=p["estimator"],
-                          light_spread=p["spread"])
+                          light_spread=p["spread"], adaptive=p.get("adaptive", 0.0))
     with warprt.Renderer(s) as r:
         warm = once(r.render)[1]
         timed = [once(r.render) for _ in range(repeat if warm < CHEAP else 1)]
@@ -117,26 +125,37 @@ def targets(cfg: dict) -> list[tuple[str, float, str]]:
     return [("ssim", t, f"SSIM {t}") for t in SSIM_TARGETS] + [("rel", REL_TARGET, f"mean rel. error {REL_TARGET:.0%}")]
 
 
-def run(quick: bool = False, size: int | None = None, ref_spp: int | None = None) -> dict:
+def run(quick: bool = False, size: int | None = None, ref_spp: int | None = None, scenes=None) -> dict:
     init_warp()
     mitsuba_variant()
     t0 = time.perf_counter()
     cfg = dict(QUICK if quick else FULL)
     cfg["size"] = size or cfg["size"]
     cfg["ref_spp"] = ref_spp or cfg["ref_spp"]
+    out = {}
+    for name in scenes or EQUAL_SCENES:
+        print(f"  {name}:", flush=True)
+        out[name] = run_scene(EQUAL_SCENES[name], cfg)
+    return {"machine": cpu_name(), "cores": os.cpu_count(), "threads": default_threads(), "warp": warp.config.version,
+            "quick": quick, "config": cfg, "scenes": out, "seconds": time.perf_counter() - t0}
+
+
+def run_scene(path: Path, cfg: dict) -> dict:
+    """One scene's reference (Mitsuba's direct, independent sampler, cfg["ref_spp"]), its noise, warprt's frames
+    (warprt_settings) and Mitsuba's (every sampler at cfg["mitsuba_spps"]), each with its time and error."""
     n = cfg["size"]
-    scene = warprt.load_scene(SCENE).with_camera(width=n, height=n)
-    direct = {sampler: DirectRenderer(SCENE, n, n, sampler) for sampler in ALL_SAMPLERS}
+    scene = warprt.load_scene(path).with_camera(width=n, height=n)
+    direct = {sampler: DirectRenderer(path, n, n, sampler) for sampler in ALL_SAMPLERS}
     passes = min(DIRECT_PASS, cfg["ref_spp"])
     ref, t_ref = once(lambda: direct["independent"](cfg["ref_spp"], seed=0, samples_per_pass=passes))
     check = errors(direct["independent"](cfg["ref_spp"] // 4, seed=1, samples_per_pass=min(passes, cfg["ref_spp"] // 4)), ref)
     print(f"  reference: Mitsuba direct, {cfg['ref_spp']} spp at {n}x{n}, {t_ref:.1f} s; a quarter of its samples "
           f"against it: SSIM {check['ssim']:.5f}, mean rel. error {check['rel']:.4f}", flush=True)
     points = []
-    for p in warprt_settings(cfg):
+    for p in warprt_settings(cfg, area=bool(scene.area_lights)):
         image, t = time_warprt(scene, p, cfg["repeat"])
         points.append({**p, "seconds": t, **errors(image, ref)})
-        print(f"    {describe(p):<58} {ms(t):>9}  SSIM {points[-1]['ssim']:.5f}  rel {points[-1]['rel']:.4f}", flush=True)
+        print(f"    {describe(p):<66} {ms(t):>9}  SSIM {points[-1]['ssim']:.5f}  rel {points[-1]['rel']:.4f}", flush=True)
     frames = []
     for sampler, render in direct.items():
         for spp in cfg["mitsuba_spps"]:
@@ -144,17 +163,20 @@ def run(quick: bool = False, size: int | None = None, ref_spp: int | None = None
                 continue  # Mitsuba's ldsampler renders at least 4 (it rounds 1 up, with a warning)
             image, t = time_mitsuba(render, spp, cfg["repeat"])
             frames.append({"sampler": sampler, "spp": spp, "seconds": t, **errors(image, ref)})
-            print(f"    {describe(frames[-1]):<58} {ms(t):>9}  SSIM {frames[-1]['ssim']:.5f}  rel {frames[-1]['rel']:.4f}",
+            print(f"    {describe(frames[-1]):<66} {ms(t):>9}  SSIM {frames[-1]['ssim']:.5f}  rel {frames[-1]['rel']:.4f}",
                   flush=True)
-    return {"machine": cpu_name(), "cores": os.cpu_count(), "threads": default_threads(), "warp": warp.config.version,
-            "quick": quick, "config": cfg, "reference": {"seconds": t_ref, "check": check}, "warprt": points,
-            "mitsuba": frames, "seconds": time.perf_counter() - t0}
+    return {"file": path.name, "reference": {"seconds": t_ref, "check": check}, "warprt": points, "mitsuba": frames}
 
 
 def methods(data: dict) -> list[tuple[str, list[dict]]]:
-    """Each method's frames: warprt's per estimator (every spp and light samples), Mitsuba's per sampler."""
-    out = [(f"warprt {e}{' + light_spread' if s else ''}", [p for p in data["warprt"] if p["estimator"] == e and p["spread"] == s])
-           for e, s in ESTIMATORS]
+    """Each method's frames (``data``: a scene's): warprt's per estimator (every spp and light samples), with
+    render.adaptive apart; Mitsuba's per sampler."""
+    out = []
+    for e, s in ESTIMATORS:
+        for adaptive in (False, True):
+            out.append((f"warprt {e}{' + light_spread' if s else ''}{' + adaptive' if adaptive else ''}",
+                        [p for p in data["warprt"] if p["estimator"] == e and p["spread"] == s
+                         and bool(p.get("adaptive")) == adaptive]))
     out += [(f"Mitsuba direct, {s}", [f for f in data["mitsuba"] if f["sampler"] == s]) for s in ALL_SAMPLERS]
     return [(name, frames) for name, frames in out if frames]
 
@@ -163,7 +185,8 @@ def cell(frames: list[dict], key: str, target: float, mitsuba: bool) -> str:
     best = reached(frames, key, target)
     if best is None:
         return "not reached"
-    text = f"{ms(best['seconds'])} ({best['spp']} spp" + (f", {best['light_samples']} ls)" if not mitsuba else ")")
+    adaptive = f", adaptive {best['adaptive']:g}" if best.get("adaptive") else ""
+    text = f"{ms(best['seconds'])} ({best['spp']} spp" + (f"{adaptive}, {best['light_samples']} ls)" if not mitsuba else ")")
     if mitsuba:
         m = interpolated(frames, key, target)
         if m is not None and not m["bound"]:
@@ -172,29 +195,34 @@ def cell(frames: list[dict], key: str, target: float, mitsuba: bool) -> str:
 
 
 def report(data: dict) -> str:
-    cfg, ref = data["config"], data["reference"]
+    cfg = data["config"]
     n = cfg["size"]
-    lines = ["## Soft shadows at equal error", "",
+    lines = ["## Soft shadows and sky light at equal error", "",
              f"Warm time to each error against Mitsuba's `direct` integrator at {cfg['ref_spp']} spp (independent sampler, box "
-             f"filter) on scenes/cornell_box.xml at {n}x{n}; {data['machine']}, {data['threads']} threads, Warp {data['warp']}. "
+             f"filter) at {n}x{n}; {data['machine']}, {data['threads']} threads, Warp {data['warp']}. "
              f"Regenerate: `python -m benchmarks.equal_error`" + (" (a --quick run: not for quoting)" if data["quick"] else "")
              + ".", "",
-             f"- The reference's own noise: {cfg['ref_spp'] // 4} spp at other seeds against it, SSIM {ref['check']['ssim']:.5f}, "
-             f"mean relative error {ref['check']['rel']:.4f} (its error against the truth is about half of that); a target "
-             "near it cannot be resolved.",
              "- warprt: spp " + ", ".join(map(str, cfg["spps"])) + " x light samples " + ", ".join(map(str, cfg["light_samples"]))
              + f", up to {cfg['max_rays']} shadow rays a pixel; `light_spread`: each pixel sample takes light samples / spp "
-             "of the points. Mitsuba: spp " + ", ".join(map(str, cfg["mitsuba_spps"])) + ".",
+             "of the points; `adaptive`: render.adaptive " + ", ".join(f"{t:g}" for t in cfg["adaptive"]) + " at spp "
+             + ", ".join(map(str, cfg["adaptive_spps"])) + " (the spp samples only in pixels whose 3x3 neighbourhood of "
+             "centres differs by more than that). Mitsuba: spp " + ", ".join(map(str, cfg["mitsuba_spps"])) + ".",
              "- Each cell: the cheapest measured frame that reaches the target (an upper bound, the settings step 4x); "
-             "for Mitsuba also the time interpolated on a log scale of the error between the frames around it.", "",
-             "| method | " + " | ".join(label for _, _, label in targets(cfg)) + " |",
-             "|---|" + "---|" * len(targets(cfg))]
-    for name, frames in methods(data):
-        mitsuba = name.startswith("Mitsuba")
-        lines.append(f"| {name} | " + " | ".join(cell(frames, k, t, mitsuba) for k, t, _ in targets(cfg)) + " |")
-    lines += ["", "Every frame measured:", "", "| setting | time | SSIM | mean rel. error |", "|---|---:|---:|---:|"]
-    for p in data["warprt"] + data["mitsuba"]:
-        lines.append(f"| {describe(p)} | {ms(p['seconds'])} | {p['ssim']:.5f} | {p['rel']:.4f} |")
+             "for Mitsuba also the time interpolated on a log scale of the error between the frames around it."]
+    for scene in data["scenes"].values():
+        ref = scene["reference"]
+        lines += ["", f"### scenes/{scene['file']}", "",
+                  f"The reference's own noise: {cfg['ref_spp'] // 4} spp at other seeds against it, SSIM "
+                  f"{ref['check']['ssim']:.5f}, mean relative error {ref['check']['rel']:.4f} (its error against the truth "
+                  "is about half of that); a target near it cannot be resolved.", "",
+                  "| method | " + " | ".join(label for _, _, label in targets(cfg)) + " |",
+                  "|---|" + "---|" * len(targets(cfg))]
+        for method, frames in methods(scene):
+            mitsuba = method.startswith("Mitsuba")
+            lines.append(f"| {method} | " + " | ".join(cell(frames, k, t, mitsuba) for k, t, _ in targets(cfg)) + " |")
+        lines += ["", "Every frame measured:", "", "| setting | time | SSIM | mean rel. error |", "|---|---:|---:|---:|"]
+        for p in scene["warprt"] + scene["mitsuba"]:
+            lines.append(f"| {describe(p)} | {ms(p['seconds'])} | {p['ssim']:.5f} | {p['rel']:.4f} |")
     return "\n".join(lines)
 
 
@@ -202,18 +230,21 @@ GOAL = 0.5  # issue 39: warprt in at most half the time of Mitsuba's best sample
 
 
 def target_rows(data: dict) -> list[tuple[str, str, str]]:
-    """The Targets row: warprt's cheapest frame (any estimator) over Mitsuba's cheapest (any sampler), each
-    the cheapest measured frame that reaches the SSIM, at 0.998 and 0.999."""
-    ratios = []
-    for target in (0.998, 0.999):
-        ours, theirs = reached(data["warprt"], "ssim", target), reached(data["mitsuba"], "ssim", target)
-        ratios.append((target, None if ours is None or theirs is None else ours["seconds"] / theirs["seconds"], ours, theirs))
-    text = "; ".join(f"SSIM {t}: " + ("not reached" if r is None else f"{r:.2f}x ({describe(o)} against {describe(m)})")
-                     for t, r, o, m in ratios)
-    ok = all(r is not None and r <= GOAL for _, r, _, _ in ratios)
-    n = data["config"]["size"]
-    return [(f"Soft shadows at equal error: warprt <= {GOAL}x the time of Mitsuba's best sampler (direct integrator) "
-             f"at SSIM 0.998 and 0.999, scenes/cornell_box.xml at {n}x{n}", text, "met" if ok else "not met")]
+    """The Targets rows, a scene each: warprt's cheapest frame (any estimator and setting) over Mitsuba's
+    cheapest (any sampler), each the cheapest measured frame that reaches the SSIM, at 0.998 and 0.999."""
+    rows, n = [], data["config"]["size"]
+    for scene in data["scenes"].values():
+        ratios = []
+        for target in (0.998, 0.999):
+            ours, theirs = reached(scene["warprt"], "ssim", target), reached(scene["mitsuba"], "ssim", target)
+            ratios.append((target, None if ours is None or theirs is None else ours["seconds"] / theirs["seconds"], ours,
+                           theirs))
+        text = "; ".join(f"SSIM {t}: " + ("not reached" if r is None else f"{r:.2f}x ({describe(o)} against {describe(m)})")
+                         for t, r, o, m in ratios)
+        ok = all(r is not None and r <= GOAL for _, r, _, _ in ratios)
+        rows.append((f"Equal error: warprt <= {GOAL}x the time of Mitsuba's best sampler (direct integrator) at SSIM "
+                     f"0.998 and 0.999, scenes/{scene['file']} at {n}x{n}", text, "met" if ok else "not met"))
+    return rows
 
 
 def main(argv=None):
@@ -221,13 +252,14 @@ def main(argv=None):
     ap.add_argument("--quick", action="store_true", help="a 48x48 image, few settings, a 256-spp reference: a smoke run")
     ap.add_argument("--size", type=int, default=None, help="the image's side in pixels (default 240; 48 with --quick)")
     ap.add_argument("--ref-spp", type=int, default=None, help="the reference's samples per pixel (default 4096; 256 with --quick)")
+    ap.add_argument("--scenes", default=None, help="which of " + ", ".join(EQUAL_SCENES) + " (default: both)")
     ap.add_argument("-o", "--output", default=str(ROOT / "results" / "equal_error.md"), help="Markdown report; JSON beside it")
     args = ap.parse_args(argv)
     if args.size is not None and args.size < 16:
         ap.error(f"--size: expected at least 16 pixels, got {args.size}")
     if args.ref_spp is not None and (args.ref_spp < 4 or args.ref_spp & (args.ref_spp - 1)):
         ap.error(f"--ref-spp: expected a power of two of at least 4, got {args.ref_spp}")
-    data = run(args.quick, args.size, args.ref_spp)
+    data = run(args.quick, args.size, args.ref_spp, args.scenes.split(",") if args.scenes else None)
     out = save(Path(args.output), data, report(data))
     print(f"wrote {out} in {data['seconds']:.0f} s", flush=True)
 

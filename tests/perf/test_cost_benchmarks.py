@@ -160,23 +160,32 @@ def test_accuracy_cost_measures_what_light_samples_buy_against_mitsubas_direct_i
 
 @slow
 def test_equal_error_quick_run_times_every_method_to_each_target(tmp_path):
-    """benchmarks/equal_error.py --quick: a row per warprt estimator and Mitsuba sampler, a column per target;
-    the physics, not the timer: more light samples bring each warprt estimator closer at 1 spp, the analytic
-    estimator is closer than the samples at 1 light sample, and each Mitsuba sampler's error falls with spp."""
+    """benchmarks/equal_error.py --quick: per scene (the Cornell box, the environment map) a row per warprt
+    estimator (render.adaptive apart) and Mitsuba sampler, a column per target; the physics, not the timer: more
+    light samples bring each warprt estimator closer at 1 spp, the analytic estimator is closer than the samples at 1
+    light sample, each Mitsuba sampler's error falls with spp, and render.adaptive's frame is within the plain
+    frame's reach at its spp."""
     equal_error.main(["--quick", "-o", str(tmp_path / "equal_error.md")])
     data = json.loads((tmp_path / "equal_error.json").read_text())
     text = (tmp_path / "equal_error.md").read_text()
-    at = {(p["estimator"], p["spread"], p["spp"], p["light_samples"]): p for p in data["warprt"]}
+    assert set(data["scenes"]) == {"cornell_box", "envmap"}
+    box = data["scenes"]["cornell_box"]
+    at = {(p["estimator"], p["spread"], p["spp"], p["light_samples"], p["adaptive"]): p for p in box["warprt"]}
     for estimator in ("samples", "analytic"):
-        assert at[(estimator, False, 1, 1)]["rel"] > at[(estimator, False, 1, 4)]["rel"] > at[(estimator, False, 1, 16)]["rel"]
-    assert at[("analytic", False, 1, 1)]["ssim"] > at[("samples", False, 1, 1)]["ssim"]
-    for sampler in ("independent", "stratified", "multijitter", "ldsampler"):
-        errs = [f["rel"] for f in data["mitsuba"] if f["sampler"] == sampler]
-        assert errs == sorted(errs, reverse=True) and len(errs) >= 2
-        assert f"| Mitsuba direct, {sampler} |" in text
-    assert "| warprt analytic + light_spread |" in text and "SSIM 0.999 | mean rel. error 1% |" in text
-    (row,) = equal_error.target_rows(data)  # the report's Targets row: met only where both ratios are <= 0.5
-    assert row[2] in ("met", "not met") and "SSIM 0.998" in row[1] and "SSIM 0.999" in row[1]
+        assert (at[(estimator, False, 1, 1, 0.0)]["rel"] > at[(estimator, False, 1, 4, 0.0)]["rel"]
+                > at[(estimator, False, 1, 16, 0.0)]["rel"])
+    assert at[("analytic", False, 1, 1, 0.0)]["ssim"] > at[("samples", False, 1, 1, 0.0)]["ssim"]
+    assert at[("analytic", False, 4, 16, 0.005)]["ssim"] > at[("analytic", False, 1, 16, 0.0)]["ssim"]
+    for scene in data["scenes"].values():
+        for sampler in ("independent", "stratified", "multijitter", "ldsampler"):
+            errs = [f["rel"] for f in scene["mitsuba"] if f["sampler"] == sampler]
+            assert errs == sorted(errs, reverse=True) and len(errs) >= 2
+    for row in ("| Mitsuba direct, ldsampler |", "| warprt analytic + light_spread |", "| warprt samples + adaptive |",
+                "### scenes/envmap.xml", "SSIM 0.999 | mean rel. error 1% |"):
+        assert row in text, row
+    rows = equal_error.target_rows(data)  # the report's Targets rows: met only where both ratios are <= 0.5
+    assert len(rows) == 2 and all(r[2] in ("met", "not met") and "SSIM 0.998" in r[1] and "SSIM 0.999" in r[1]
+                                  for r in rows)
 
 
 def _targets_row(text: str, start: str) -> list[str]:
