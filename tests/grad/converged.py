@@ -51,3 +51,14 @@ def gradient(make, names, weights, edges: bool, **options) -> dict:
     g = r.backward(weights, wrt=list(names), edges=edges)
     r.close()
     return g
+
+
+def check_against_differences(make, name: str, u: np.ndarray, weights, h: float, tol: float, control: float,
+                              k: int = 2):
+    """edges=True along u within ``tol`` of the differences (``k``: theirs), every pixel kept; the control: the
+    interior derivative alone (edges=False) more than ``control`` of them off."""
+    fd = differences(make, name, u, weights, h=h, k=k)
+    with_edges = float((gradient(make, [name], weights, True)[name] * u).sum())
+    interior = float((gradient(make, [name], weights, False)[name] * u).sum())
+    assert abs(with_edges - fd) <= tol * abs(fd), (with_edges, fd)
+    assert abs(interior - fd) > control * abs(fd), (interior, fd)

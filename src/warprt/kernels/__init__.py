@@ -10,7 +10,9 @@
     derivative moves it), vertex_normals.py (smooth normals from moving points), edges.py (the edges camera
     rays see: their signed distance in the image and the radiance either side), shadow_edges.py (hard shadows'
     edges: their signed distance in the image and one light's term either side), mirror_edges.py (the edges
-    seen in planar mirrors: their signed distance in the image through the reflections), aov.py (what a first hit
+    seen in planar mirrors: their signed distance in the image through the reflections), glass_edges.py (the
+    edges seen through glass: a camera ray's tree signature, and a boundary's function through the
+    refractions), aov.py (what a first hit
     records besides colour), clip.py and raster.py (the Z-buffer: Fragments), hybrid.py (where the Z-buffer's
     first hit is the tracer's), mirror.py (a reflection ray's first hit from a planar mirror's virtual
     camera), zbuffer_shade.py.
@@ -77,3 +79,8 @@ from .mirror_edges import (DIRECTIONAL_SHADOW, EDGE, POINT_SHADOW, make_mirror_f
 
 __all__ += ["MirrorEnd", "make_mirror_path", "DIRECTIONAL_SHADOW", "EDGE", "POINT_SHADOW", "make_mirror_faces_kernel",
             "make_mirrored_distances", "mirrored_direction", "mirrored_point"]  # and the edges seen in planar mirrors
+from .glass_edges import (DIRECTIONAL_WEDGE, FACE_EDGE, MIRRORED, POINT_WEDGE, REFLECTED, TRANSMITTED,  # noqa: E402
+                          bounce, make_tree_distances, make_tree_kernel)
+
+__all__ += ["DIRECTIONAL_WEDGE", "FACE_EDGE", "MIRRORED", "POINT_WEDGE", "REFLECTED", "TRANSMITTED", "bounce",
+            "make_tree_distances", "make_tree_kernel"]  # and the edges seen through glass
