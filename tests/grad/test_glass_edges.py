@@ -25,6 +25,7 @@ from warprt.kernels import stack_size
 from warprt.scene import resolve_effects
 
 from .converged import check_against_differences, gradient
+from .test_mirror_edges import step
 
 WIDTH, HEIGHT = 24, 18
 SPP = 256
@@ -113,13 +114,6 @@ def test_the_crossings_agree_with_the_camera_edges_term(weights):
         assert np.abs(t.points - want["objects.tri.vertices"]).max() > 0.3 * np.abs(want["objects.tri.vertices"]).max()
     assert _crossing_terms(s, r, weights, True) == []
     r.close()
-
-
-def step(make, name: str, seed: int) -> np.ndarray:
-    r = warprt.Renderer(make())
-    shape = np.shape(r.params[name])
-    r.close()
-    return np.random.default_rng(seed).standard_normal(shape) * 0.3
 
 
 # (scene, name, seed, step h), each with its measured |edges=True - fd| / |fd| and the interior's (edges=False); the
