@@ -40,6 +40,31 @@ def make_shadow_blocker(LIGHT_MODEL: bool):
 
 
 @functools.cache
+def make_blocked_lights(fx, DETAIL: bool):
+    """blocked_lights(s, hit, k, blocker, blocker_at) -> bits: a bit per Whitted light whose shadow ray from the hit
+    is blocked (light_test's, the forward's own test); with DETAIL each such light's nearest blocker's face and
+    (u, v) written at node row k (shadow_blocker)."""
+    light_test = make_light_test(fx.light_model, fx.shadows)
+    shadow_blocker = make_shadow_blocker(fx.light_model)
+
+    @wp.func
+    def blocked_lights(s: SceneData, hit: Surface, k: int, blocker: wp.array(dtype=int),
+                       blocker_at: wp.array(dtype=wp.vec2)) -> int:
+        bits = int(0)
+        for l in range(s.num_lights):
+            t = light_test(s, hit, l)
+            if t.shadow_ray != 0 and t.lit == 0:
+                bits = bits | (1 << l)
+                if wp.static(DETAIL):
+                    q = shadow_blocker(s, hit, t.arrival.L, l)
+                    blocker[k * s.num_lights + l] = wp.where(q.result, q.face, -1)
+                    blocker_at[k * s.num_lights + l] = wp.vec2(q.u, q.v)
+        return bits
+
+    return blocked_lights
+
+
+@functools.cache
 def make_tree_kernel(fx, stack: int, nodes: int, DETAIL: bool):
     """The kernel that walks camera rays along ``dirs`` through their Whitted tree as trace.make_path walks it
     (the BVH's nearest hits, Beer's law, a mirror bounce where k_r > 0, else a dielectric's children where they
@@ -49,8 +74,7 @@ def make_tree_kernel(fx, stack: int, nodes: int, DETAIL: bool):
     (origin, direction), its hit's (u, v, distance), and per light the nearest blocker's face and (u, v)."""
     first_hit = make_first_hit(False, False, fx.culling)
     surface = make_surface(fx.smooth, fx.texture, fx.vertex_color)
-    light_test = make_light_test(fx.light_model, fx.shadows)
-    shadow_blocker = make_shadow_blocker(fx.light_model)
+    blocked_lights = make_blocked_lights(fx, DETAIL)
     RayRows, waiting, resumed = make_ray_stack(max(stack, 1))
     NodeRows = wp.types.vector(length=max(stack, 1), dtype=int)
     REFLECTION, REFRACTION, ABSORPTION = fx.reflection, fx.refraction, fx.absorption
@@ -84,16 +108,7 @@ def make_tree_kernel(fx, stack: int, nodes: int, DETAIL: bool):
                 if wp.static(ABSORPTION):
                     r.weight = absorbed(s, r.weight, r.medium, r.start, hit)
                 if wp.static(SHADOWS):
-                    bits = int(0)
-                    for l in range(s.num_lights):
-                        t = light_test(s, hit, l)
-                        if t.shadow_ray != 0 and t.lit == 0:
-                            bits = bits | (1 << l)
-                            if wp.static(DETAIL):
-                                q = shadow_blocker(s, hit, t.arrival.L, l)
-                                blocker[k * s.num_lights + l] = wp.where(q.result, q.face, -1)
-                                blocker_at[k * s.num_lights + l] = wp.vec2(q.u, q.v)
-                    blocked[k] = bits
+                    blocked[k] = blocked_lights(s, hit, k, blocker, blocker_at)
                 level = r.depth + 1
                 if wp.static(REFLECTION):
                     kr = s.kr[hit.material]
