@@ -63,9 +63,14 @@ def random_step(make, name: str, seed: int) -> np.ndarray:
 
 def check_edges_term(make, name: str, seed: int, weights, h: float, tol: float, control: float, k: int = 2):
     """backward(edges=True) along a random_step against the differences (step ``h``, ``k`` x ``k`` images a
-    pixel: within ``tol`` of them, every pixel kept); the control: the interior derivative alone (edges=False)
-    is off them by more than ``control``."""
-    u = random_step(make, name, seed)
+    pixel): check_against_differences."""
+    check_against_differences(make, name, random_step(make, name, seed), weights, h, tol, control, k)
+
+
+def check_against_differences(make, name: str, u: np.ndarray, weights, h: float, tol: float, control: float,
+                              k: int = 2):
+    """edges=True along u within ``tol`` of the differences (step ``h``, ``k`` x ``k`` images a pixel), every pixel
+    kept; the control: the interior derivative alone (edges=False) more than ``control`` of them off."""
     fd = differences(make, name, u, weights, h=h, k=k)
     with_edges = float((gradient(make, [name], weights, True)[name] * u).sum())
     interior = float((gradient(make, [name], weights, False)[name] * u).sum())

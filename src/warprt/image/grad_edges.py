@@ -12,13 +12,14 @@ import numpy as np
 
 from .._warp import wp
 from ..errors import ArgumentError
-from ..kernels import edge_distances, empty_aov_buffers, empty_record, make_edge_sides_kernel
+from ..kernels import edge_distances
 from ..scene import drawn_objects
 from .grad_area_shape import SHAPE_KEYS, shape_edge_gradients, shape_table
 from .grad_checker_edges import CheckerSegments, checker_segments, checker_speeds, checker_term, has_checker
 from .grad_edge_launch import host_array, launch_points
-from .grad_edge_points import (BoundaryTerm, EdgePoints, add_terms, boundary_term, camera_adjoints, camera_copies,
-                               segment_points, side_directions)
+from .grad_edge_points import (EDGE_OFFSET_PX, BoundaryTerm, EdgePoints, add_terms, boundary_term, camera_adjoints, camera_copies,
+                               segment_points)
+from .grad_glass_edges import glass_crossings, glass_refusal, glass_terms, traced_colours
 from .grad_mesh_edges import MeshEdges, camera_edges, face_normals, facing, mesh_edges
 from .grad_mirror_edges import (MirroredSegments, frame_mirrors, mirror_terms,
                                 mirrored_segments)
@@ -26,7 +27,6 @@ from .grad_shadow_edges import ShadowSources, receivers, shadow_segments, shadow
 from .grad_spot_edges import Cones, SpotSegments, cones, hard_spots, on_cones, spot_segments, spot_term
 from .mirrors import empty_mirrors
 from .params import object_names
-from .zbuffer import empty_fragments
 
 
 @dataclass(frozen=True)
@@ -69,16 +69,23 @@ def moves_edges(name: str) -> bool:
 
 def edge_refusal(scene, geom, fx, wrt, mirrors=None) -> str | None:
     """Why backward(edges=True) would leave out an edge that the parameters ``wrt`` move (None: the camera
-    rays' edges, the hard shadows', a checker's squares' and those seen in planar mirrors are all of them):
-    glass's rays, a curved mirror's or too many mirrors' (frame_mirrors, or ``mirrors()``: its answer kept), a
-    checker's squares seen in a planar mirror, a spot's hard cone. (A reflectivity of 0
+    rays' edges, the hard shadows', a checker's squares', a spot's hard cone, and those seen in planar mirrors and
+    through glass are all of them): glass's that the crossings do not cover (grad_glass_edges.glass_refusal), a
+    checker's squares or a spot's hard cone seen through glass or in a planar mirror, a curved mirror's or too many
+    mirrors' (frame_mirrors, or ``mirrors()``: its answer kept). (A reflectivity of 0
     whose mirror rays a frame records for its derivative reflects nothing: no edge is seen in it.)"""
     moving = [n for n in wrt if moves_edges(n)]
     if not moving:
         return None
     if scene.render.max_depth > 1 and fx.refraction:
-        return (f"{moving[0]} moves the edges seen through glass (its refracted and reflected rays), not "
-                f"differentiated yet: only those camera rays see, their shadows, and both seen in planar mirrors")
+        why = glass_refusal(scene, geom, fx, moving)
+        if why is not None:
+            return f"{moving[0]} moves the edges seen through glass {why}, not differentiated yet"
+        seen = "a checker texture's squares'" if has_checker(scene, geom) else "a spot light's hard cone's" \
+            if hard_spots(scene) else None
+        if seen is not None:  # the crossings' signature has faces and shadow answers, not squares or cones
+            return (f"{moving[0]} moves {seen} edges seen through glass, not differentiated yet: only where camera "
+                    f"rays see them")
     reflects = scene.render.max_depth > 1 and fx.reflection
     chains, why = (mirrors or partial(frame_mirrors, scene, geom))()[2:] if reflects else ((), None)
     if why is not None:
@@ -94,15 +101,10 @@ def edge_refusal(scene, geom, fx, wrt, mirrors=None) -> str | None:
 
 def edge_sides(scene, geom, frame: EdgeFrame, pts: EdgePoints, device: str) -> np.ndarray:
     """(N, 3) float64: per point f_+ - f_-, the colours of camera rays EDGE_OFFSET_PX either side of the edge
-    (towards its normal, then away), traced with the frame's walk (kernels.edges.make_edge_sides_kernel)."""
-    dirs = side_directions(pts, scene.camera)
+    (towards its normal, then away), traced with the frame's walk (grad_glass_edges.traced_colours)."""
+    offset = EDGE_OFFSET_PX * pts.normal[pts.edge]
+    c = traced_colours(scene, geom, frame, np.concatenate([pts.at + offset, pts.at - offset]), device)
     n = len(pts.edge)
-    color = wp.zeros(2 * n, dtype=wp.vec3, device=device)
-    launch_points(make_edge_sides_kernel(frame.fx, frame.stack), 2 * n,
-                  [geom.scene_data(scene), wp.vec3(*geom.eye_offset(scene.camera.eye)), frame.max_depth,
-                   empty_fragments(device), empty_mirrors(device), empty_aov_buffers(device), empty_record(device),
-                   host_array(dirs, wp.vec3, device), color], [0] * 7 + [1, 1], frame.threads, device)
-    c = color.numpy().astype(np.float64)
     return c[:n] - c[n:]
 
 
@@ -237,6 +239,9 @@ def edge_gradients(scene, geom, frame: EdgeFrame, d: np.ndarray, wrt, device: st
         seen = b.mirrored.camera
         jump = keep("mirrored sides", lambda: edge_sides(scene, geom, frame, seen, device)) if len(seen.edge) else None
         terms += mirror_terms(scene, geom, frame.fx, b.mirrored, b.sources, jump, d3, device, keep)
+    if frame.fx.refraction and frame.max_depth > 1:
+        terms += glass_terms(keep("glass", lambda: glass_crossings(scene, geom, frame, device)), d3,
+                             len(geom.points_np))
     term = add_terms(terms, len(geom.points_np))
     shapes = {}
     if any(n.startswith("lights.") and n.endswith(tuple(f".{k}" for k in SHAPE_KEYS)) for n in wrt):

@@ -11,7 +11,8 @@
     rays see: their signed distance in the image and the radiance either side), shadow_edges.py (hard shadows'
     edges: their signed distance in the image and one light's term either side), mirror_edges.py (the edges
     seen in planar mirrors: their signed distance in the image through the reflections), spot_edges.py (a spot's
-    hard cone on a receiver: its signed distance in the image), aov.py (what a first hit
+    hard cone on a receiver: its signed distance in the image), glass_edges.py (the edges seen through glass: a
+    camera ray's tree signature, and a boundary's function through the refractions), aov.py (what a first hit
     records besides colour), clip.py and raster.py (the Z-buffer: Fragments), hybrid.py (where the Z-buffer's
     first hit is the tracer's), mirror.py (a reflection ray's first hit from a planar mirror's virtual
     camera), zbuffer_shade.py.
@@ -81,3 +82,9 @@ __all__ += ["MirrorEnd", "make_mirror_path", "DIRECTIONAL_SHADOW", "EDGE", "POIN
 from .spot_edges import cone_distance, spot_edge_distances  # noqa: E402 (a spot's hard cone: backward(edges=True))
 
 __all__ += ["cone_distance", "spot_edge_distances"]
+
+from .glass_edges import (DIRECTIONAL_WEDGE, FACE_EDGE, MIRRORED, POINT_WEDGE, REFLECTED, TRANSMITTED,  # noqa: E402
+                          bounce, make_tree_distances, make_tree_kernel)
+
+__all__ += ["DIRECTIONAL_WEDGE", "FACE_EDGE", "MIRRORED", "POINT_WEDGE", "REFLECTED", "TRANSMITTED", "bounce",
+            "make_tree_distances", "make_tree_kernel"]  # and the edges seen through glass

@@ -1,0 +1,343 @@
+"""The boundary term of the edges seen through glass (backward(edges=True); docs/gradients.md, "Edges seen through
+glass"): a refracted edge is no straight segment of any scene, so instead of enumerating edges the image is
+crossed by fixed lines (LINES a pixel each way), each walked with the forward's ray tree (kernels/glass_edges.py
+make_tree_kernel) at STEPS points a pixel; where neighbours' tree signatures part below a dielectric's split, the
+crossing is found by bisection, the radiance traced either side, and its speed along the line taken from the
+parting node's boundary function by implicit differentiation (make_tree_distances, on Warp's adjoint). Each line's
+Leibniz rule, horizontal and vertical lines weighted by the crossing's image normal, gives the term."""
+from __future__ import annotations
+
+import numpy as np
+
+from .._warp import wp
+from ..kernels import (DIRECTIONAL_WEDGE, FACE_EDGE, MIRRORED, NO_RAY, POINT_WEDGE, REFLECTED, TRANSMITTED,
+                       empty_aov_buffers, empty_record, make_edge_sides_kernel, make_tree_distances, make_tree_kernel)
+from ..scene import camera_basis
+from .grad_edge_launch import host_array, launch_points
+from .grad_edge_points import EDGE_OFFSET_PX, EdgePoints, boundary_term, camera_adjoints, camera_copies, \
+    ray_directions
+from .grad_shadow_edges import shadow_sources
+from .mirrors import empty_mirrors
+from .params import object_names
+from .zbuffer import empty_fragments
+
+LINES = 16  # sample lines a pixel, each way
+STEPS = 8  # points a pixel along a line, where neighbours' signatures are compared
+STRIP = 8  # points along the boundary's piece a crossing stands for, where the image adjoint is read
+BISECTIONS = 14
+MAX_CROSSINGS = 8  # signature changes found between two neighbouring points  # a crossing found within 2^-14 of a step (8e-6 of a pixel)
+MAX_GLASS_DEPTH = 6  # ray levels: 63 tree nodes a point
+POINTS_A_WALK = 1 << 18  # points walked at once (their signatures' memory: nodes x 8 bytes each)
+
+
+def glass_refusal(scene, geom, fx, moving: list) -> str | None:
+    """Why the crossings would miss an edge seen through glass that the parameters ``moving`` move (None: they
+    cover them): the words after "the edges seen through glass"."""
+    if scene.render.max_depth > MAX_GLASS_DEPTH:
+        return f"at more than {MAX_GLASS_DEPTH} ray levels (render.max_depth)"
+    if fx.area_lights:
+        return "with area lights (their sample points' shadow edges share lines)"
+    if any(n.startswith("materials.") and n.endswith(".ior") for n in moving):
+        return "as its ior bends them"
+    camera = [n for n in moving if n.startswith("camera.")]
+    if camera:
+        return f"as the camera moves the glass's own outline and what it bends ({camera[0]})"
+    glass = np.array([m.ior is not None for m in geom.slot_materials(scene)])[geom.tri_material_np]
+    for name, i in object_names(scene).items():
+        if np.any(glass[geom.tri_object_np == i]) and any(n.startswith(f"objects.{name}.") for n in moving):
+            return f"as a glass object's own vertices or pose move its outline and what it bends (objects.{name})"
+    return None
+
+
+def traced_colours(scene, geom, frame, at: np.ndarray, device: str) -> np.ndarray:
+    """(N, 3) float64: the colours of camera rays through the image points ``at`` (pixels from the lower-left
+    corner), traced with the frame's walk (kernels.edges.make_edge_sides_kernel: full Whitted shading)."""
+    dirs = ray_directions(at, camera_basis(scene.camera))
+    color = wp.zeros(len(at), dtype=wp.vec3, device=device)
+    launch_points(make_edge_sides_kernel(frame.fx, frame.stack), len(at),
+                  [geom.scene_data(scene), wp.vec3(*geom.eye_offset(scene.camera.eye)), frame.max_depth,
+                   empty_fragments(device), empty_mirrors(device), empty_aov_buffers(device), empty_record(device),
+                   host_array(dirs, wp.vec3, device), color], [0] * 7 + [1, 1], frame.threads, device)
+    return color.numpy().astype(np.float64)
+
+
+def tree_walk(scene, geom, frame, at: np.ndarray, device: str, detail: bool = False) -> dict:
+    """The tree signatures of camera rays through ``at`` (make_tree_kernel): ``face`` and ``blocked`` (N, nodes);
+    with ``detail`` also ``below``, ``ray`` (N, nodes, 2, 3), ``hit`` (N, nodes, 3: u, v, distance), ``blocker``
+    (N, nodes, lights) and ``blocker_at`` (N, nodes, lights, 2)."""
+    nodes, n = 2 ** frame.max_depth - 1, len(at)
+    data = geom.scene_data(scene)
+    lights = max(int(data.num_lights), 1)
+    k = nodes if detail else 0
+    out = {"face": np.empty(n * nodes, np.int32), "blocked": np.empty(n * nodes, np.int32),
+           "below": np.zeros(max(n * k, 1), np.int32), "ray": np.zeros((max(n * k, 1) * 2, 3), np.float32),
+           "hit": np.zeros((max(n * k, 1), 3), np.float32), "blocker": np.full(max(n * k * lights, 1), -1, np.int32),
+           "blocker_at": np.zeros((max(n * k * lights, 1), 2), np.float32)}
+    types = {"face": int, "blocked": int, "below": int, "ray": wp.vec3, "hit": wp.vec3, "blocker": int,
+             "blocker_at": wp.vec2}
+    arrays = {name: host_array(v, types[name], device) for name, v in out.items()}
+    dirs = host_array(ray_directions(at, camera_basis(scene.camera)), wp.vec3, device)
+    launch_points(make_tree_kernel(frame.fx, frame.stack, nodes, detail), n,
+                  [data, wp.vec3(*geom.eye_offset(scene.camera.eye)), frame.max_depth, empty_fragments(device),
+                   empty_mirrors(device), dirs, *arrays.values()],
+                  [0] * 5 + [1, nodes, nodes, k, 2 * k, k, k * lights, k * lights], frame.threads, device)
+    got = {name: a.numpy() for name, a in arrays.items()}
+    shapes = {"face": (n, nodes), "blocked": (n, nodes), "below": (n, nodes), "ray": (n, nodes, 2, 3),
+              "hit": (n, nodes, 3), "blocker": (n, nodes, lights), "blocker_at": (n, nodes, lights, 2)}
+    return {name: v.reshape(shapes[name]) for name, v in got.items() if detail or name in ("face", "blocked")}
+
+
+def line_points(cam, axis: int) -> np.ndarray:
+    """(lines, points, 2): the sample lines along ``axis`` (0: horizontal, x varying), LINES a pixel across it at
+    the strata's centres, each at STEPS points a pixel from one side of the frame to the other."""
+    size = (cam.width, cam.height)
+    across = (np.arange(size[1 - axis] * LINES) + 0.5) / LINES
+    along = np.arange(size[axis] * STEPS + 1) / STEPS
+    at = np.empty((len(across), len(along), 2))
+    at[:, :, axis] = along[None, :]
+    at[:, :, 1 - axis] = across[:, None]
+    return at
+
+
+def _same(a: dict, b: dict) -> np.ndarray:
+    """Per point whether two signatures agree in every node."""
+    return np.all(a["face"] == b["face"], axis=1) & np.all(a["blocked"] == b["blocked"], axis=1)
+
+
+def _smoothly(geom, fx, a: np.ndarray, b: np.ndarray, blocked: np.ndarray) -> np.ndarray:
+    """Per row of two signatures' faces (a, b: (N, nodes)) and whether their blocked lights agree, whether every
+    node where they differ passes between two smooth faces of one object that share a corner: the radiance is
+    continuous there (the interpolated normals are), and no crossing need be looked for; a tessellated glass
+    ball's inner edges, seen at every level of its tree, would otherwise be most of the crossings."""
+    if not fx.smooth:
+        return np.zeros(len(a), bool)
+    corners = geom.indices_np.reshape(-1, 3)
+    fa, fb = np.maximum(a, 0), np.maximum(b, 0)
+    near = np.any(corners[fa][..., :, None] == corners[fb][..., None, :], axis=(-1, -2))
+    smooth = (geom.tri_smooth_np[fa] != 0) & (geom.tri_smooth_np[fb] != 0) & (a >= 0) & (b >= 0)
+    same = geom.tri_object_np[fa] == geom.tri_object_np[fb]
+    return blocked & np.all((a == b) | (smooth & same & near), axis=1)
+
+
+def _pairs(scene, geom, frame, at: np.ndarray, device: str) -> tuple:
+    """(lo, hi): neighbouring points of the lines ``at`` whose signatures differ, walked POINTS_A_WALK at a
+    time."""
+    lines, points = at.shape[:2]
+    per = max(1, POINTS_A_WALK // points)
+    lo, hi = [], []
+    for first in range(0, lines, per):
+        part = at[first:first + per]
+        sig = tree_walk(scene, geom, frame, part.reshape(-1, 2), device)
+        face, blocked = (sig[k].reshape(len(part), points, -1) for k in ("face", "blocked"))
+        differ = np.any(face[:, 1:] != face[:, :-1], axis=2) | np.any(blocked[:, 1:] != blocked[:, :-1], axis=2)
+        line, i = np.nonzero(differ)
+        keep = ~_smoothly(geom, frame.fx, face[line, i], face[line, i + 1],
+                          np.all(blocked[line, i] == blocked[line, i + 1], axis=1))
+        line, i = line[keep], i[keep]
+        lo.append(part[line, i])
+        hi.append(part[line, i + 1])
+    return np.concatenate(lo), np.concatenate(hi)
+
+
+def _crossings(scene, geom, frame, a: np.ndarray, b: np.ndarray, device: str) -> tuple:
+    """(lo, hi): every place between the pairs a b where the signature changes, as _bisect finds one, then
+    again past it while the signature there is not b's (an interval may hold several: a triangle's inner edge
+    at one level of the tree and an object's silhouette at another), MAX_CROSSINGS an interval at most."""
+    end = tree_walk(scene, geom, frame, b, device)
+    los, his = [], []
+    for _ in range(MAX_CROSSINGS):
+        if not len(a):
+            break
+        lo, hi = _bisect(scene, geom, frame, a, b, device)
+        los.append(lo)
+        his.append(hi)
+        past = tree_walk(scene, geom, frame, hi, device)
+        more = ~_same(past, end) & ~_smoothly(geom, frame.fx, past["face"], end["face"],
+                                              np.all(past["blocked"] == end["blocked"], axis=1))
+        a, b, end = hi[more], b[more], {k: v[more] for k, v in end.items()}
+    return np.concatenate(los), np.concatenate(his)
+
+
+def _bisect(scene, geom, frame, lo: np.ndarray, hi: np.ndarray, device: str) -> tuple:
+    """(lo, hi) BISECTIONS halvings closer, each lo keeping its start's signature (or one it passes to
+    smoothly: _smoothly) and each hi another."""
+    start = tree_walk(scene, geom, frame, lo, device)
+    for _ in range(BISECTIONS):
+        mid = 0.5 * (lo + hi)
+        sig = tree_walk(scene, geom, frame, mid, device)
+        same = (_same(sig, start) | _smoothly(geom, frame.fx, sig["face"], start["face"],
+                                               np.all(sig["blocked"] == start["blocked"], axis=1)))[:, None]
+        lo, hi = np.where(same, mid, lo), np.where(same, hi, mid)
+    return lo, hi
+
+
+def _edge_of(geom, face: np.ndarray, uv: np.ndarray) -> np.ndarray:
+    """(C, 2) point indices: the edge of each face nearest its hit at Warp's barycentrics (u, v) (weights on its
+    first and second corner): the one opposite its smallest weight's corner."""
+    corners = geom.indices_np.reshape(-1, 3).astype(np.int64)[np.maximum(face, 0)]
+    weights = np.stack([uv[:, 0], uv[:, 1], 1.0 - uv[:, 0] - uv[:, 1]], axis=1)
+    c = np.argmin(weights, axis=1)
+    rows = np.arange(len(face))
+    return np.stack([corners[rows, (c + 1) % 3], corners[rows, (c + 2) % 3]], axis=1)
+
+
+def _parting(scene, geom, frame, lo: np.ndarray, hi: np.ndarray, through: bool, device: str) -> dict:
+    """Per crossing (lo, hi its two sides) the first tree node (in the tree's level order) where the two
+    signatures part (faces both traced and different, or the lights its shadow rays find blocked), what parts
+    them (``kind``: FACE_EDGE, or a wedge of light ``light``) and its edge (``edge``: the nearer face's edge
+    nearest its hit, or the blocker's nearest its shadow ray's hit), the lo side's faces (``faces``) and
+    ``keep``: a parting found, and with ``through`` below a dielectric's split (a camera ray's own node, or one
+    only mirrors lead to, is the camera's, shadows' and mirrors' terms')."""
+    a, b = tree_walk(scene, geom, frame, lo, device, True), tree_walk(scene, geom, frame, hi, device, True)
+    rows = np.arange(len(lo))
+    both = (a["face"] != NO_RAY) & (b["face"] != NO_RAY)
+    faces_part = both & (a["face"] != b["face"])
+    differ = faces_part | (both & (a["blocked"] != b["blocked"]))
+    node = np.argmax(differ, axis=1)
+    keep = differ.any(axis=1)
+    if through:
+        keep &= (node > 0) & (a["below"][rows, node] != 0)
+    fa, fb = a["face"][rows, node], b["face"][rows, node]
+    use_a = (fb < 0) | ((fa >= 0) & (a["hit"][rows, node, 2] <= b["hit"][rows, node, 2]))
+    face = np.where(use_a, fa, fb)
+    uv = np.where(use_a[:, None], a["hit"][rows, node, :2], b["hit"][rows, node, :2])
+    bits = (a["blocked"][rows, node] ^ b["blocked"][rows, node]).astype(np.int64)
+    light = np.where(faces_part[rows, node], 0, np.log2(np.maximum(bits & -bits, 1)).astype(np.int64))
+    shadow = ~faces_part[rows, node]
+    if shadow.any():
+        lit_a = ((a["blocked"][rows, node] >> light) & 1) != 0
+        blocker = np.where(lit_a, a["blocker"][rows, node, light], b["blocker"][rows, node, light])
+        at = np.where(lit_a[:, None], a["blocker_at"][rows, node, light], b["blocker_at"][rows, node, light])
+        face, uv = np.where(shadow, blocker, face), np.where(shadow[:, None], at, uv)
+    keep &= face >= 0
+    return {"node": node, "kind": np.where(shadow, POINT_WEDGE, FACE_EDGE), "light": light,
+            "edge": _edge_of(geom, face, uv), "faces": a["face"], "keep": keep}
+
+
+def _path(scene, geom, frame, x: dict) -> tuple:
+    """Per crossing the faces its parting node's ray came through (C, LEVELS: the root's first, then at its own
+    level the node's face, a shadow's receiver), how it left each (REFLECTED, TRANSMITTED, MIRRORED), each one's
+    ior (0: none) and the node's level."""
+    levels, c = frame.max_depth, len(x["node"])
+    rows = np.arange(c)
+    level = np.array([int(n + 1).bit_length() - 1 for n in x["node"]], np.int64)
+    faces = np.zeros((c, levels), np.int64)
+    faces[rows, level] = np.maximum(x["faces"][rows, x["node"]], 0)
+    branch, eta = np.zeros((c, levels), np.int32), np.zeros((c, levels), np.float32)
+    mats = geom.slot_materials(scene)
+    mirror = np.array([max(m.reflectivity) > 0.0 and frame.fx.reflection for m in mats], bool)
+    ior = np.array([m.ior or 0.0 for m in mats], np.float32)
+    node = x["node"].copy()
+    for step in range(levels - 1):
+        up = node > 0
+        parent = np.where(up, (node - 1) // 2, 0)
+        at = np.maximum(level - 1 - step, 0)
+        f = np.maximum(x["faces"][rows, parent], 0)
+        slot = geom.tri_material_np[f]
+        how = np.where(mirror[slot], MIRRORED, np.where((node - 1) % 2 == 0, REFLECTED, TRANSMITTED))
+        faces[up, at[up]], branch[up, at[up]], eta[up, at[up]] = f[up], how[up], ior[slot][up]
+        node = parent
+    return faces, branch, eta, level
+
+
+def _speeds(scene, geom, frame, x: dict, sources, at: np.ndarray, device: str) -> dict:
+    """Per crossing the adjoint of its boundary function g (make_tree_distances) in each of its inputs: ``p<k><i>``
+    corner i of the path's face at level k, ``v0`` and ``v1`` the edge, ``light``, the camera's (camera_adjoints)
+    and ``at`` (the image point: g's gradient in x and y); ``points``: the geometry points the inputs are."""
+    levels, c = frame.max_depth, len(at)
+    faces, branch, eta, level = _path(scene, geom, frame, x)
+    corners = geom.indices_np.reshape(-1, 3).astype(np.int64)[faces]  # (C, levels, 3)
+    p = geom.points_np.astype(np.float32)
+    smooth = (geom.tri_smooth_np[faces] != 0) & bool(frame.fx.smooth)
+    normals = geom.normals.numpy()[corners] * smooth[:, :, None, None]
+    light = np.zeros((c, 3), np.float32)
+    kind = x["kind"].astype(np.int32)
+    if sources is not None:
+        light = sources.at[x["light"]].astype(np.float32)
+        kind = np.where(kind != FACE_EDGE, np.where(sources.directional[x["light"]], DIRECTIONAL_WEDGE, POINT_WEDGE),
+                        kind).astype(np.int32)
+    grad = lambda v: host_array(np.asarray(v, np.float32).reshape(-1, 3), wp.vec3, device, True)  # noqa: E731
+    path, edge, light_a = grad(p[corners]), grad(p[x["edge"]]), grad(light)
+    camera, fovy = camera_copies(scene, geom, c, device)
+    point = host_array(at.astype(np.float32), wp.vec2, device, True)
+    ints = lambda v: host_array(np.asarray(v, np.int32).reshape(-1), int, device)  # noqa: E731
+    cam = scene.camera
+    launch_points(make_tree_distances(levels), c,
+                  [path, edge, light_a, host_array(normals.reshape(-1, 3).astype(np.float32), wp.vec3, device),
+                   ints(branch), host_array(eta.reshape(-1), float, device), ints(level), ints(kind), camera, fovy,
+                   float(cam.near), cam.width, cam.height, point, wp.zeros(c, dtype=float, device=device)],
+                  [3 * levels, 2, 1, 3 * levels, levels, levels, 1, 1, 3, 1, 0, 0, 0, 1, 1], frame.threads, device,
+                  [path.grad, edge.grad, light_a.grad] + [None] * 5 + [camera.grad, fovy.grad] + [None] * 3 +
+                  [point.grad, host_array(np.ones(c, np.float32), float, device)])
+    rows = path.grad.numpy().astype(np.float64).reshape(c, levels, 3, 3)
+    e = edge.grad.numpy().astype(np.float64).reshape(c, 2, 3)
+    speed = {f"p{k}{i}": rows[:, k, i] for k in range(levels) for i in range(3)}
+    points = {f"p{k}{i}": corners[:, k, i] for k in range(levels) for i in range(3)}
+    speed.update(v0=e[:, 0], v1=e[:, 1], light=light_a.grad.numpy().astype(np.float64),
+                 at=point.grad.numpy().astype(np.float64), **camera_adjoints(camera, fovy, c))
+    points.update(v0=x["edge"][:, 0], v1=x["edge"][:, 1])
+    return {"speed": speed, "points": points}
+
+
+def _axis_crossings(scene, geom, frame, sources, axis: int, through: bool, device: str) -> tuple:
+    """(EdgePoints, jump, speed, points, light rows) of the crossings of the lines along ``axis``: per crossing
+    its place, its pixel, its weight -sign(g_axis) / (LINES (|g_x| + |g_y|)) (the line's Leibniz term
+    dx_c/dtheta = -g_theta / g_axis, times the line's share |g_axis| / (|g_x| + |g_y|), over the lines' spacing)
+    and f_- - f_+ (the colours EDGE_OFFSET_PX before and after it along the line)."""
+    lo, hi = _pairs(scene, geom, frame, line_points(scene.camera, axis), device)
+    if len(lo):
+        lo, hi = _crossings(scene, geom, frame, lo, hi, device)
+        x = _parting(scene, geom, frame, lo, hi, through, device)
+        keep = x.pop("keep")
+        x, lo, hi = {k: v[keep] for k, v in x.items()}, lo[keep], hi[keep]
+    if not len(lo):
+        return None
+    at = 0.5 * (lo + hi)
+    step = np.zeros(2)
+    step[axis] = EDGE_OFFSET_PX
+    colours = traced_colours(scene, geom, frame, np.concatenate([at - step, at + step]), device)
+    jump = colours[:len(at)] - colours[len(at):]
+    s = _speeds(scene, geom, frame, x, sources, at, device)
+    g = s["speed"].pop("at")
+    size = np.abs(g[:, 0]) + np.abs(g[:, 1])
+    weight = np.where(size > 0.0, -np.sign(g[:, axis]) / (LINES * np.where(size > 0.0, size, 1.0)), 0.0)
+    pixel = _strip_pixels(scene.camera, at, g, axis)
+    spread = lambda v: np.repeat(v, STRIP, axis=0)  # noqa: E731
+    pts = EdgePoints(None, np.arange(len(at) * STRIP), spread(at), spread(weight) / STRIP, pixel.reshape(-1),
+                     np.zeros((len(at) * STRIP, 2)))
+    jump, speed = spread(jump), {k: spread(v) for k, v in s["speed"].items()}
+    return pts, jump, speed, {k: spread(v) for k, v in s["points"].items()}, spread(x["light"])
+
+
+def _strip_pixels(cam, at: np.ndarray, g: np.ndarray, axis: int) -> np.ndarray:
+    """(C, STRIP) the pixels of STRIP points along the boundary's piece each crossing stands for (the strip of
+    1 / LINES across its line, which pixels' rows or columns never cut), its tangent from g's gradient: the image
+    adjoint averaged over them, not read at the crossing alone, so that a pixel border the piece crosses costs
+    the sum a 1 / (LINES STRIP) share of a line's error, not 1 / LINES."""
+    across = ((np.arange(STRIP) + 0.5) / STRIP - 0.5) / LINES
+    g_along = g[:, axis]
+    slope = np.where(g_along != 0.0, -g[:, 1 - axis] / np.where(g_along != 0.0, g_along, 1.0), 0.0)
+    p = np.repeat(at[:, None, :], STRIP, axis=1)
+    p[:, :, 1 - axis] += across[None, :]
+    p[:, :, axis] += slope[:, None] * across[None, :]
+    col = np.clip(np.floor(p[:, :, 0]).astype(np.int64), 0, cam.width - 1)
+    row = cam.height - 1 - np.clip(np.floor(p[:, :, 1]).astype(np.int64), 0, cam.height - 1)
+    return row * cam.width + col
+
+
+def glass_crossings(scene, geom, frame, device: str, through: bool = True) -> list:
+    """The crossings of both sets of lines (_axis_crossings; with ``through`` only those below a dielectric's
+    split): what the frame alone decides of the term, kept for its next backward."""
+    sources = shadow_sources(scene, geom) if frame.fx.shadows else None
+    parts = [_axis_crossings(scene, geom, frame, sources, axis, through, device) for axis in (0, 1)]
+    return [(p, sources) for p in parts if p is not None]
+
+
+def glass_terms(crossings: list, d: np.ndarray, n_points: int) -> list:
+    """The BoundaryTerms of ``crossings`` (glass_crossings) for the image adjoint ``d`` ((pixels, 3), float64),
+    summed in the crossings' order (boundary_term)."""
+    out = []
+    for (pts, jump, speed, points, light), sources in crossings:
+        rows = None if sources is None else (light, len(sources.at))
+        out.append(boundary_term(pts, jump, d, speed, points, n_points, rows))
+    return out

@@ -1,0 +1,222 @@
+"""The edges seen through glass's ray tree, for the gradient's boundary term (image/grad_glass_edges.py launches
+them): a camera ray's tree signature (each node's face and the lights its shadow rays find blocked, walked as the
+forward walks it: make_tree_kernel), and the boundary function of the node where two signatures part, as a
+differentiable function of the image point and the parameters through the refractions and reflections above it,
+their faces held (make_tree_distances)."""
+
+import functools  # no "from __future__ import annotations": a kernel factory's types are its locals
+
+from .._warp import wp
+from ..geometry import LIGHT_DIRECTIONAL, SceneData
+from .dielectric import absorbed, dielectric_children, refract
+from .interaction import Ray, Surface, make_surface, mirror_ray, reflect, spawn_ray
+from .camera import camera_of, image_plane_point
+from .mirror import FROM_CAMERA, Mirrors
+from .raster import Fragments
+from .record import NO_RAY
+from .shading import make_light_test
+from .trace import TreeRay, make_first_hit, make_ray_stack
+
+REFLECTED, TRANSMITTED, MIRRORED = 0, 1, 2  # how a node's ray leaves its parent's hit
+FACE_EDGE, POINT_WEDGE, DIRECTIONAL_WEDGE = 0, 1, 2  # what parts two signatures: a face, a shadow ray's answer
+
+
+@functools.cache
+def make_shadow_blocker(LIGHT_MODEL: bool):
+    """shadow_blocker(s, hit, L, l): the nearest hit of the shadow ray light_test casts from the hit towards light
+    l (L: the unit direction to it; the same origin and direction, so that a ray grazing an edge meets what the
+    test's any-hit query met)."""
+
+    @wp.func
+    def shadow_blocker(s: SceneData, hit: Surface, L: wp.vec3, l: int) -> wp.MeshQueryRay:
+        o = spawn_ray(hit, L).o
+        d = wp.normalize(s.light_pos[l] - o)
+        if wp.static(LIGHT_MODEL):
+            if s.light_shape[l].kind == wp.static(LIGHT_DIRECTIONAL):
+                d = L
+        return wp.mesh_query_ray(s.mesh, o, d, 1.0e30)
+
+    return shadow_blocker
+
+
+@functools.cache
+def make_blocked_lights(fx, DETAIL: bool):
+    """blocked_lights(s, hit, k, blocker, blocker_at) -> bits: a bit per Whitted light whose shadow ray from the hit
+    is blocked (light_test's, the forward's own test); with DETAIL each such light's nearest blocker's face and
+    (u, v) written at node row k (shadow_blocker)."""
+    light_test = make_light_test(fx.light_model, fx.shadows)
+    shadow_blocker = make_shadow_blocker(fx.light_model)
+
+    @wp.func
+    def blocked_lights(s: SceneData, hit: Surface, k: int, blocker: wp.array(dtype=int),
+                       blocker_at: wp.array(dtype=wp.vec2)) -> int:
+        bits = int(0)
+        for l in range(s.num_lights):
+            t = light_test(s, hit, l)
+            if t.shadow_ray != 0 and t.lit == 0:
+                bits = bits | (1 << l)
+                if wp.static(DETAIL):
+                    q = shadow_blocker(s, hit, t.arrival.L, l)
+                    blocker[k * s.num_lights + l] = wp.where(q.result, q.face, -1)
+                    blocker_at[k * s.num_lights + l] = wp.vec2(q.u, q.v)
+        return bits
+
+    return blocked_lights
+
+
+@functools.cache
+def make_tree_kernel(fx, stack: int, nodes: int, DETAIL: bool):
+    """The kernel that walks camera rays along ``dirs`` through their Whitted tree as trace.make_path walks it
+    (the BVH's nearest hits, Beer's law, a mirror bounce where k_r > 0, else a dielectric's children where they
+    carry weight) and writes per point and tree node (``nodes`` of them: node i's reflected or mirror child is
+    2 i + 1, its transmitted child 2 i + 2) the face hit (NO_RAY: no ray; -1: none) and a bit per Whitted light
+    whose shadow ray is blocked. With DETAIL also whether the node lies below a dielectric's split, its ray
+    (origin, direction), its hit's (u, v, distance), and per light the nearest blocker's face and (u, v)."""
+    first_hit = make_first_hit(False, False, fx.culling)
+    surface = make_surface(fx.smooth, fx.texture, fx.vertex_color)
+    blocked_lights = make_blocked_lights(fx, DETAIL)
+    RayRows, waiting, resumed = make_ray_stack(max(stack, 1))
+    NodeRows = wp.types.vector(length=max(stack, 1), dtype=int)
+    REFLECTION, REFRACTION, ABSORPTION = fx.reflection, fx.refraction, fx.absorption
+    SHADOWS = fx.shadows and (fx.diffuse or fx.specular)
+
+    @wp.kernel(module="unique", enable_backward=False)
+    def tree(s: SceneData, eye: wp.vec3, max_depth: int, frags: Fragments, mir: Mirrors, dirs: wp.array(dtype=wp.vec3),
+             face: wp.array(dtype=int), blocked: wp.array(dtype=int), below: wp.array(dtype=int),
+             ray: wp.array(dtype=wp.vec3), hit_at: wp.array(dtype=wp.vec3), blocker: wp.array(dtype=int),
+             blocker_at: wp.array(dtype=wp.vec2)):
+        j = wp.tid()
+        base = j * nodes
+        for i in range(nodes):
+            face[base + i] = NO_RAY
+            blocked[base + i] = 0
+        r = TreeRay(Ray(eye, dirs[j]), wp.vec3(1.0), eye, 0, s.eye_medium, FROM_CAMERA, -1)
+        node, under, top = int(0), int(0), int(0)
+        rows, node_rows, under_rows = RayRows(), NodeRows(), NodeRows()
+        while r.depth < max_depth:
+            h = first_hit(s, frags, mir, r, 0, 0, 0, 0, 0)
+            k = base + node
+            face[k] = h.face
+            if wp.static(DETAIL):
+                below[k] = under
+                ray[2 * k] = r.ray.o
+                ray[2 * k + 1] = r.ray.d
+            if h.face >= 0:
+                hit = surface(s, h.face, h.u, h.v, h.normal, r.ray.d)
+                if wp.static(DETAIL):
+                    hit_at[k] = wp.vec3(h.u, h.v, wp.length(hit.p - r.ray.o))
+                if wp.static(ABSORPTION):
+                    r.weight = absorbed(s, r.weight, r.medium, r.start, hit)
+                if wp.static(SHADOWS):
+                    blocked[k] = blocked_lights(s, hit, k, blocker, blocker_at)
+                level = r.depth + 1
+                if wp.static(REFLECTION):
+                    kr = s.kr[hit.material]
+                    if level < max_depth and wp.max(kr) > 0.0:
+                        r = TreeRay(mirror_ray(hit, r.ray.d), wp.cw_mul(r.weight, kr), hit.p, level, r.medium,
+                                    FROM_CAMERA, h.face)
+                        node = 2 * node + 1
+                        continue
+                if wp.static(REFRACTION):
+                    eta = s.ior[hit.material]
+                    if eta > 0.0 and level < max_depth:
+                        ch = dielectric_children(s, h.face, hit, r.ray.d, r.weight, eta)
+                        if ch.has_r or ch.has_t:
+                            r = TreeRay(spawn_ray(hit, ch.d_r), ch.w_r, hit.p, level, ch.medium_r, FROM_CAMERA, -1)
+                            child = 2 * node + 1
+                            if ch.has_t:
+                                if ch.has_r:
+                                    rows[top] = waiting(r)
+                                    node_rows[top] = child
+                                    under_rows[top] = 1
+                                    top += 1
+                                r = TreeRay(spawn_ray(hit, ch.d_t), ch.w_t, hit.p, level, ch.medium_t, FROM_CAMERA, -1)
+                                child = 2 * node + 2
+                            node = child
+                            under = 1
+                            continue
+            if wp.static(REFRACTION):
+                if top > 0:
+                    top -= 1
+                    r = resumed(rows[top])
+                    node, under = node_rows[top], under_rows[top]
+                    continue
+            break
+
+    return tree
+
+
+@wp.func
+def bounce(o: wp.vec3, d: wp.vec3, p0: wp.vec3, p1: wp.vec3, p2: wp.vec3, n0: wp.vec3, n1: wp.vec3, n2: wp.vec3,
+           branch: int, eta: float):
+    """The hit of the ray (o, d) on the plane of face p0 p1 p2 and the ray it spawns there, as the forward's
+    walk spawns it (without its origin's offset): a mirror's bounce about the shading normal (the vertex
+    normals n0 n1 n2 interpolated where they are not 0, else the face's), or a dielectric's reflected or
+    refracted ray (dielectric_children's normal, Fresnel's side and Snell's eta)."""
+    e = wp.cross(p1 - p0, p2 - p0)
+    winding = wp.normalize(e)
+    p = o + (wp.dot(p0 - o, winding) / wp.dot(d, winding)) * d
+    side = wp.where(wp.dot(winding, d) > 0.0, -1.0, 1.0)
+    ng = winding * side
+    n = ng
+    if wp.length(n0) + wp.length(n1) + wp.length(n2) > 0.0:
+        ee = wp.dot(e, e)
+        u = wp.dot(wp.cross(p1 - p, p2 - p), e) / ee
+        v = wp.dot(wp.cross(p2 - p, p0 - p), e) / ee
+        ns = n0 * u + n1 * v + n2 * (1.0 - u - v)
+        if wp.length(ns) > 0.0:
+            n = wp.normalize(ns) * side
+    out = wp.normalize(reflect(d, n))
+    if branch != wp.static(MIRRORED):
+        m = n
+        if wp.dot(m, ng) < 0.0:
+            m = -m
+        if not (wp.dot(d, m) * wp.dot(d, ng) > 0.0):
+            m = ng
+        out = wp.normalize(reflect(d, m))
+        if branch == wp.static(TRANSMITTED):
+            eta_rel = wp.where(side > 0.0, eta, 1.0 / eta)  # entering where the ray meets the winding's side
+            t, transmits = refract(d, m, eta_rel)
+            out = wp.normalize(t)
+    return p, out
+
+
+@functools.cache
+def make_tree_distances(LEVELS: int):
+    """The kernel of the boundary functions g of crossings (one a thread): the camera ray through the image
+    point ``at[c]`` (pixels from the lower-left corner) of the camera ``camera[3 c:3 c + 3]`` and ``fovy[c]``,
+    bounced off ``level[c]`` faces in turn (``path``: LEVELS faces' corners a crossing, ``normals`` their vertex
+    normals or 0, ``branch`` and ``eta`` how it leaves each: bounce), then per ``kind[c]`` FACE_EDGE's
+    det(v0 - o, v1 - o, d) of its ray (o, d) and the edge ``edge[2 c:2 c + 2]``, or a shadow wedge's N . (y - v0),
+    N = (v0 - L) x (v1 - v0) (POINT_WEDGE, L = ``light[c]``) or L x (v1 - v0) (DIRECTIONAL_WEDGE, L the direction of
+    travel), y the ray's hit on the face path[LEVELS c + level]. Differentiable in the path, the edge, the light, the
+    camera and the image point; each crossing reads copies of its own."""
+
+    @wp.kernel(module="unique")
+    def tree_distances(path: wp.array(dtype=wp.vec3), edge: wp.array(dtype=wp.vec3), light: wp.array(dtype=wp.vec3),
+                       normals: wp.array(dtype=wp.vec3), branch: wp.array(dtype=int), eta: wp.array(dtype=float),
+                       level: wp.array(dtype=int), kind: wp.array(dtype=int), camera: wp.array(dtype=wp.vec3),
+                       fovy: wp.array(dtype=float), near: float, width: int, height: int, at: wp.array(dtype=wp.vec2),
+                       distance: wp.array(dtype=float)):
+        c = wp.tid()
+        cam = camera_of(camera[3 * c], camera[3 * c + 1], camera[3 * c + 2], fovy[c], near, width, height)
+        d = wp.normalize(image_plane_point(cam, at[c][0] / float(width), at[c][1] / float(height)))
+        o = camera[3 * c]
+        for k in range(wp.static(LEVELS - 1)):
+            if k < level[c]:
+                f = 3 * (LEVELS * c + k)
+                o, d = bounce(o, d, path[f], path[f + 1], path[f + 2], normals[f], normals[f + 1], normals[f + 2],
+                              branch[LEVELS * c + k], eta[LEVELS * c + k])
+        v0, v1 = edge[2 * c], edge[2 * c + 1]
+        g = wp.dot(wp.cross(v0 - o, v1 - o), d)
+        if kind[c] != wp.static(FACE_EDGE):
+            f = 3 * (LEVELS * c + level[c])
+            e = wp.cross(path[f + 1] - path[f], path[f + 2] - path[f])
+            y = o + (wp.dot(path[f] - o, e) / wp.dot(d, e)) * d
+            n = wp.cross(light[c], v1 - v0)
+            if kind[c] == wp.static(POINT_WEDGE):
+                n = wp.cross(v0 - light[c], v1 - v0)
+            g = wp.dot(n, y - v0)
+        distance[c] = g
+
+    return tree_distances
