@@ -149,9 +149,12 @@ CASES = [(triangle_scene, "objects.occ.vertices", 4, 4e-2, 2), (triangle_scene, 
          (area_scene, "lights.0.normal", [0.0, 0.0, 0.3], 5e-2, 2), (seen_area_scene, "lights.0.size", 24, 1e-2, 4)]
 QUICK = {0}  # the rest: slow (about 20 to 60 s each on 2 cores, the last 150 s)
 # make test-exhaustive's alone (tests/marks.py): the receiver's vertices under an area light (the triangle's floor
-# checks a receiver's) and the seen light's size (its centre and an area light's normal check its outline and
-# its points' shadows moving): 75 s and 175 s of the suite's time
-EXHAUSTIVE = {12, 16}
+# checks a receiver's) and the seen light's size (its centre checks its outline and its points' shadows moving):
+# 75 s and 175 s of the suite's time; and, for the suite's 20 minutes on 2 cores, an area light's centre and its
+# normal (the seen light's centre moves its points, its outline and their shadows) and the occluder under the
+# aligned light (the area occluder's case checks the soft shadow; test_the_forwards_jump_is_its_sources_jumps_summed
+# the aligned sources): 59 s, 49 s and 44 s
+EXHAUSTIVE = {10, 12, 13, 15, 16}
 
 
 @pytest.mark.parametrize("make, name, seed, h, k", [
