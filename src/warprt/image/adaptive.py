@@ -8,8 +8,8 @@ side are within t; what is finer than a pixel between the centres (a sliver, a t
 can by any sampler that looks before it refines. A refined pixel is the render.spp frame's, to the bit (the trace
 kernel's walk at the same strata, kernels.make_pixels_kernel); the others are their centres' colour, which a
 smooth shading's box-filtered pixel is to second order. Deterministic: the same image on every run and for any
-number of threads. AOVs are the centre frame's (one sample a pixel). What it is for: the samples go where the edges are (an area-lit box's 240 x 240 frame at 16
-spp refines 3% of its pixels at t = 0.005: docs/accuracy.md)."""
+number of threads. AOVs are the centre frame's (one sample a pixel). What it is for: the samples go where the edges are (benchmarks/REPORT.md, "Soft shadows and sky light at
+equal error": the sampled estimator's frames at equal error in half the time)."""
 
 from __future__ import annotations
 
