@@ -369,6 +369,14 @@ def make_path(fx, raster_primary: bool, stack: int, report_truncated: bool, aovs
     return path
 
 
+@wp.func(inline=True)  # inlined: Warp passes the structs by value (make_path's note)
+def camera_tree_ray(s: SceneData, c: CameraData, x: int, row: int, offset: wp.vec2) -> TreeRay:
+    """The camera ray through ``offset`` of pixel (x, row) as the walk takes it (make_path): weight 1, at level 0, in
+    the eye's medium, from the camera: the trace kernel's and the pixel-list kernel's (make_pixels_kernel) alike."""
+    return TreeRay(Ray(c.eye, camera_ray(c, x, row, offset[0], offset[1])), wp.vec3(1.0), c.eye, 0, s.eye_medium,
+                   FROM_CAMERA, -1)
+
+
 @functools.cache
 def make_trace_kernel(fx, raster_primary: bool = False, stack: int = 0, report_truncated: bool = False,
                       aovs: tuple = (), shadow_grid: bool = False, mirrors: bool = False, record: bool = False):
@@ -412,10 +420,8 @@ def make_trace_kernel(fx, raster_primary: bool = False, stack: int = 0, report_t
             offset = wp.vec2(0.5, 0.5)  # the pixel's centre, or with supersampling a k x k grid
             if wp.static(SUPERSAMPLING):
                 offset = sample_offset(sample, k)
-            r = TreeRay(Ray(c.eye, camera_ray(c, x, row, offset[0], offset[1])), wp.vec3(1.0), c.eye, 0,
-                        s.eye_medium, FROM_CAMERA, -1)
-            color, truncated, rays = path(s, frags, mir, aov, rec, r, max_depth, i, pixel, samples, sample, x, row,
-                                          truncated, rays)
+            color, truncated, rays = path(s, frags, mir, aov, rec, camera_tree_ray(s, c, x, row, offset), max_depth, i,
+                                          pixel, samples, sample, x, row, truncated, rays)
             total = total + color
         image[pixel] = total / float(samples)
         if wp.static(TRUNCATED):
@@ -451,10 +457,8 @@ def make_pixels_kernel(fx, stack: int = 0, shadow_grid: bool = False):
         samples = k * k
         for sample in range(samples):
             offset = sample_offset(sample, k)
-            r = TreeRay(Ray(c.eye, camera_ray(c, x, row, offset[0], offset[1])), wp.vec3(1.0), c.eye, 0,
-                        s.eye_medium, FROM_CAMERA, -1)
-            color, truncated, rays = path(s, frags, mir, aov, rec, r, max_depth, i, pixel, samples, sample, x, row,
-                                          truncated, rays)
+            color, truncated, rays = path(s, frags, mir, aov, rec, camera_tree_ray(s, c, x, row, offset), max_depth, i,
+                                          pixel, samples, sample, x, row, truncated, rays)
             total = total + color
         image[i] = total / float(samples)
         rays[0] = samples
