@@ -2,11 +2,16 @@
 SSIM 0.995, 0.998 and 0.999 and a mean relative error of 1% against Mitsuba's converged ``direct`` integrator on
 scenes/cornell_box.xml (an area light) and scenes/envmap.xml (an environment light with a sun), in one run:
 warprt's area-light estimators (render.area_estimator "samples" and "analytic", each with and without
-render.light_spread) over samples per pixel x light samples, each spp also with render.adaptive (Whitted's adaptive
-supersampling: the spp samples only where the pixels' centres differ), and Mitsuba's ``direct`` integrator with
-each of its samplers (independent, stratified, multijitter, ldsampler) over spp.
+render.light_spread) over samples per pixel x light samples (an environment's directions, with and without
+render.light_spread), each spp also with render.adaptive (Whitted's adaptive supersampling: the spp samples only
+where the pixels' centres differ), and Mitsuba's ``direct`` integrator with each of its samplers (independent,
+stratified, multijitter, ldsampler) over spp.
 
-    python -m benchmarks.equal_error [--quick] [--size 240] [--ref-spp 4096] [-o benchmarks/results/equal_error.md]
+    python -m benchmarks.equal_error [--quick] [--size 240] [--ref-spp 16384] [-o benchmarks/results/equal_error.md]
+
+The reference: Mitsuba's ``direct`` with its multijitter sampler (REF_SAMPLER). With the independent sampler at
+4096 spp the environment map's reference was too noisy to resolve any target (a quarter of its samples against
+it: SSIM 0.957), where two multijitter renders of 4096 spp at other seeds agree to SSIM 0.9994.
 
 Error: SSIM (7x7 window, channels averaged) of linear RGB clamped to [0, 1] (reference/compare.py), and the
 mean relative error, mean |image - reference| over the reference's mean, both clamped. The reference's own
@@ -46,11 +51,14 @@ ESTIMATORS = (("samples", False), ("samples", True), ("analytic", False), ("anal
 # At equal error warprt's pixel samples, not its light samples, set the cost (measured at 120x120: 4 spp stops at SSIM
 # 0.992 whatever the light samples): render.adaptive puts them where the pixels differ; frames of more than 1024 shadow
 # rays a pixel never won
-FULL = {"size": 240, "ref_spp": 4096, "spps": [1, 4, 16, 64], "light_samples": [4, 16, 64],
-        "max_rays": 1024, "mitsuba_spps": [4, 16, 64, 256, 1024], "repeat": 3,
-        "adaptive": [0.002, 0.005], "adaptive_spps": [16, 64]}
-QUICK = {"size": 48, "ref_spp": 256, "spps": [1, 4], "light_samples": [1, 4, 16], "max_rays": 64,
-         "mitsuba_spps": [1, 4, 16], "repeat": 1, "adaptive": [0.005], "adaptive_spps": [4]}
+# An environment needs more directions than an area light points (its sun a few of them: at 16 spp and 256
+# spread directions SSIM 0.997 on envmap.xml, 0.999 at 1024).
+FULL = {"size": 240, "ref_spp": 16384, "spps": [1, 4, 16, 64], "light_samples": [4, 16, 64],
+        "env_light_samples": [16, 64, 256, 1024], "max_rays": 1024, "mitsuba_spps": [4, 16, 64, 256, 1024],
+        "repeat": 3, "adaptive": [0.002, 0.005], "adaptive_spps": [16, 64]}
+QUICK = {"size": 48, "ref_spp": 256, "spps": [1, 4], "light_samples": [1, 4, 16], "env_light_samples": [4, 16],
+         "max_rays": 64, "mitsuba_spps": [1, 4, 16], "repeat": 1, "adaptive": [0.005], "adaptive_spps": [4]}
+REF_SAMPLER = "multijitter"
 
 
 def errors(image: np.ndarray, ref: np.ndarray) -> dict:
@@ -64,11 +72,11 @@ def warprt_settings(cfg: dict, area: bool = True) -> list[dict]:
     samples, or light samples alone when spread) up to cfg["max_rays"]; spread only where spp > 1 and the light
     samples are at least the spp (each pixel sample at least one point); render.adaptive at each of cfg["adaptive"]
     for the spps of cfg["adaptive_spps"]. Without area lights (``area`` False: an environment light) the estimator
-    and spread change nothing: "samples" alone, not spread."""
+    changes nothing: "samples" alone, with and without spread, over cfg["env_light_samples"] directions."""
     out = []
-    for estimator, spread in ESTIMATORS if area else ESTIMATORS[:1]:
+    for estimator, spread in ESTIMATORS if area else ESTIMATORS[:2]:
         for spp in cfg["spps"]:
-            for ls in cfg["light_samples"]:
+            for ls in cfg["light_samples"] if area else cfg["env_light_samples"]:
                 if spread and (spp == 1 or ls < spp):
                     continue
                 if (ls if spread else spp * ls) <= cfg["max_rays"]:
@@ -142,15 +150,15 @@ def run(quick: bool = False, size: int | None = None, ref_spp: int | None = None
 
 
 def run_scene(path: Path, cfg: dict) -> dict:
-    """One scene's reference (Mitsuba's direct, independent sampler, cfg["ref_spp"]), its noise, warprt's frames
+    """One scene's reference (Mitsuba's direct, REF_SAMPLER, cfg["ref_spp"]), its noise, warprt's frames
     (warprt_settings) and Mitsuba's (every sampler at cfg["mitsuba_spps"]), each with its time and error."""
     n = cfg["size"]
     scene = warprt.load_scene(path).with_camera(width=n, height=n)
     direct = {sampler: DirectRenderer(path, n, n, sampler) for sampler in ALL_SAMPLERS}
     passes = min(DIRECT_PASS, cfg["ref_spp"])
-    ref, t_ref = once(lambda: direct["independent"](cfg["ref_spp"], seed=0, samples_per_pass=passes))
-    check = errors(direct["independent"](cfg["ref_spp"] // 4, seed=1, samples_per_pass=min(passes, cfg["ref_spp"] // 4)), ref)
-    print(f"  reference: Mitsuba direct, {cfg['ref_spp']} spp at {n}x{n}, {t_ref:.1f} s; a quarter of its samples "
+    ref, t_ref = once(lambda: direct[REF_SAMPLER](cfg["ref_spp"], seed=0, samples_per_pass=passes))
+    check = errors(direct[REF_SAMPLER](cfg["ref_spp"] // 4, seed=1, samples_per_pass=min(passes, cfg["ref_spp"] // 4)), ref)
+    print(f"  reference: Mitsuba direct, {REF_SAMPLER}, {cfg['ref_spp']} spp at {n}x{n}, {t_ref:.1f} s; a quarter of its samples "
           f"against it: SSIM {check['ssim']:.5f}, mean rel. error {check['rel']:.4f}", flush=True)
     points = []
     for p in warprt_settings(cfg, area=bool(scene.area_lights)):
@@ -199,13 +207,14 @@ def report(data: dict) -> str:
     cfg = data["config"]
     n = cfg["size"]
     lines = ["## Soft shadows and sky light at equal error", "",
-             f"Warm time to each error against Mitsuba's `direct` integrator at {cfg['ref_spp']} spp (independent sampler, box "
+             f"Warm time to each error against Mitsuba's `direct` integrator at {cfg['ref_spp']} spp ({REF_SAMPLER} sampler, box "
              f"filter) at {n}x{n}; {data['machine']}, {data['threads']} threads, Warp {data['warp']}. "
              f"Regenerate: `python -m benchmarks.equal_error`" + (" (a --quick run: not for quoting)" if data["quick"] else "")
              + ".", "",
              "- warprt: spp " + ", ".join(map(str, cfg["spps"])) + " x light samples " + ", ".join(map(str, cfg["light_samples"]))
+             + " (an environment's directions: " + ", ".join(map(str, cfg["env_light_samples"])) + ")"
              + f", up to {cfg['max_rays']} shadow rays a pixel; `light_spread`: each pixel sample takes light samples / spp "
-             "of the points; `adaptive`: render.adaptive " + ", ".join(f"{t:g}" for t in cfg["adaptive"]) + " at spp "
+             "of the points (or directions); `adaptive`: render.adaptive " + ", ".join(f"{t:g}" for t in cfg["adaptive"]) + " at spp "
              + ", ".join(map(str, cfg["adaptive_spps"])) + " (the spp samples only in pixels whose 3x3 neighbourhood of "
              "centres differs by more than that). Mitsuba: spp " + ", ".join(map(str, cfg["mitsuba_spps"])) + ".",
              "- Each cell: the cheapest measured frame that reaches the target (an upper bound, the settings step 4x); "
@@ -252,7 +261,7 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--quick", action="store_true", help="a 48x48 image, few settings, a 256-spp reference: a smoke run")
     ap.add_argument("--size", type=int, default=None, help="the image's side in pixels (default 240; 48 with --quick)")
-    ap.add_argument("--ref-spp", type=int, default=None, help="the reference's samples per pixel (default 4096; 256 with --quick)")
+    ap.add_argument("--ref-spp", type=int, default=None, help="the reference's samples per pixel (default 16384; 256 with --quick)")
     ap.add_argument("--scenes", default=None, help="which of " + ", ".join(EQUAL_SCENES) + " (default: both)")
     ap.add_argument("-o", "--output", default=str(ROOT / "results" / "equal_error.md"), help="Markdown report; JSON beside it")
     args = ap.parse_args(argv)

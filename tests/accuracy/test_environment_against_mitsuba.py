@@ -49,8 +49,9 @@ def mean_rel(ours, theirs) -> float:
     return float(np.abs(a - b).mean() / b.mean())
 
 
-def render(scene, light_samples: int, spp: int, **kw) -> np.ndarray:
-    return warprt.render(scene.with_render(light_samples=light_samples, spp=spp), **kw).image.astype(np.float64)
+def render(scene, light_samples: int, spp: int, spread: bool = False, **kw) -> np.ndarray:
+    scene = scene.with_render(light_samples=light_samples, spp=spp, light_spread=spread)
+    return warprt.render(scene, **kw).image.astype(np.float64)
 
 
 def with_environment(scene, **changes):
@@ -76,6 +77,13 @@ def envmap(mi):
 def test_the_envmap_scene_is_mitsubas_direct_render(envmap):
     scene, theirs = envmap
     assert agrees(render(scene, 256, 9), theirs, "envmap, 256 directions, 9 spp")
+
+
+def test_the_envmap_spread_over_the_pixel_samples_is_mitsubas_direct_render(envmap):
+    """render.light_spread: each of the 16 pixel samples takes 64 of the 1,024 directions, a sixteenth of the
+    shadow rays of every sample taking them all (measured: SSIM 0.9988, mean |diff| 0.26%)."""
+    scene, theirs = envmap
+    assert agrees(render(scene, 1024, 16, spread=True), theirs, "envmap, 1024 directions spread over 16 spp")
 
 
 def test_the_envmap_turned_the_other_way_fails(envmap):

@@ -80,12 +80,13 @@ def test_a_gradient_frame_and_bad_values_are_refused_in_one_line():
             warprt.Renderer(scene.with_render(adaptive=bad))
 
 
-def test_spread_lights_refine_as_the_spp_frame_spreads_them():
-    """With render.light_spread (each pixel sample its own share of an area light's points) the refined pixels
-    are still the spp frame's to the bit: the pixel kernel reads the frame's spread table, not the centre frame's
-    (whose one sample takes every point)."""
-    scene = warprt.load_scene(SCENES / "cornell_box.xml").with_camera(width=40, height=40).with_render(
-        spp=4, light_samples=16, light_spread=True, area_estimator="analytic")
+@pytest.mark.parametrize("file, estimator", [("cornell_box.xml", "analytic"), ("envmap.xml", "samples")])
+def test_spread_lights_refine_as_the_spp_frame_spreads_them(file, estimator):
+    """With render.light_spread (each pixel sample its own share of an area light's points, or of an environment's
+    directions) the refined pixels are still the spp frame's to the bit: the pixel kernel reads the frame's spread
+    table, not the centre frame's (whose one sample takes every point)."""
+    scene = warprt.load_scene(SCENES / file).with_camera(width=40, height=40).with_render(
+        spp=4, light_samples=16, light_spread=True, area_estimator=estimator)
     adaptive, full, centres = _frames(scene, 0.01)
     picked = warprt.image.refined_pixels(centres.image, 0.01)
     assert len(picked) > 40

@@ -31,15 +31,19 @@ DISK = {"shape": "cylinder", "radius": R, "height": 0.001, "sections": 256, "tra
 TILT = [25.0, 0.0, 10.0]
 
 
-def plane_point(samples: int, rotate=(0.0, 0.0, 0.0), objects=(), sky=SKY, **render) -> float:
-    """The radiance of a 2 x 2 plane of reflectance RHO at the origin, turned by ``rotate``: the one pixel of a
-    camera looking at its centre from above and aside, below every blocker."""
-    scene = warprt.load_dict({
-        "camera": {"eye": [0.0, 0.5, 3.0], "center": [0.0, 0.0, 0.0], "width": 1, "height": 1},
-        "render": {"ambient": [0.0] * 3, "light_samples": samples, "max_depth": 1},
+def plane_scene(samples: int, rotate=(0.0, 0.0, 0.0), objects=(), sky=SKY, spp: int = 1, spread: bool = False):
+    """A 2 x 2 plane of reflectance RHO at the origin, turned by ``rotate``, and a one-pixel camera looking at its
+    centre from above and aside (a 2 degree field: every pixel sample meets the plane), below every blocker."""
+    return warprt.load_dict({
+        "camera": {"eye": [0.0, 0.5, 3.0], "center": [0.0, 0.0, 0.0], "fovy": 2.0, "width": 1, "height": 1},
+        "render": {"ambient": [0.0] * 3, "light_samples": samples, "max_depth": 1, "spp": spp, "light_spread": spread},
         "lights": [sky], "materials": MATERIALS,
         "objects": [{"shape": "plane", "size": [2.0, 2.0], "rotate": list(rotate), "material": "floor"}, *objects]})
-    image, _ = warprt.render(scene, **render)
+
+
+def plane_point(samples: int, rotate=(0.0, 0.0, 0.0), objects=(), sky=SKY, **render) -> float:
+    """The radiance of plane_scene's one pixel."""
+    image, _ = warprt.render(plane_scene(samples, rotate, objects, sky), **render)
     return float(image[0, 0, 1])
 
 
@@ -71,6 +75,26 @@ def test_a_sky_two_percent_brighter_is_caught():
     """The negative control: the tolerance above tells a 2% error from the right answer."""
     expected = RHO / math.pi * sky_irradiance(L)
     assert abs(plane_point(1024, TILT, sky={**SKY, "scale": 1.02}) / expected - 1.0) > 10 * 5e-4
+
+
+def test_directions_spread_over_the_pixel_samples_keep_the_closed_form():
+    """render.light_spread: each of 16 pixel samples takes every 16th direction of the lattice (64 of 1,024), its
+    weights 16 times theirs; over an open plane (the same light at every sample) the pixel is the whole lattice's
+    sum, as close to rho L as every sample taking all 1,024; the control, one sample's share alone (a lattice of
+    64 directions), is not."""
+    expected = RHO / math.pi * sky_irradiance(L)
+    spread = warprt.render(plane_scene(1024, TILT, spp=16, spread=True))
+    every = warprt.render(plane_scene(1024, TILT, spp=16))
+    errors = [abs(float(x.image[0, 0, 1]) / expected - 1.0) for x in (spread, every)]
+    print(f"spread {errors[0]:.2e}, every {errors[1]:.2e}, 64 alone {abs(plane_point(64, TILT) / expected - 1.0):.2e}")
+    assert max(errors) < 5e-4 < abs(plane_point(64, TILT) / expected - 1.0)
+
+
+def test_directions_spread_over_the_pixel_samples_trace_a_sixteenth_of_the_shadow_rays():
+    """That spread is on: a sixteenth of the shadow rays."""
+    spread = warprt.render(plane_scene(1024, TILT, spp=16, spread=True)).stats.rays["shadow"]
+    every = warprt.render(plane_scene(1024, TILT, spp=16)).stats.rays["shadow"]
+    assert 0 < spread and abs(spread / every - 1 / 16) < 1e-3
 
 
 # (b) the disk overhead: its shadow ---------------------------------------------------------------
@@ -158,7 +182,7 @@ def test_only_scenes_with_an_environment_compile_its_variant():
 
 def test_the_environment_code_is_absent_from_the_other_variants():
     """A line of the environment's sum and of its radiance on a miss, as Warp quotes them in the C++."""
-    markers = ("out = environment_light(s, hit, k, v, out)", "environment_radiance(s.env, d)")
+    markers = ("out = environment_light(s, hit, k, v, out, stratum)", "environment_radiance(s.env, d)")
     assert not any(m in trace_kernel_source(EffectSet()) for m in markers)
     assert all(m in trace_kernel_source(EffectSet(environment=True)) for m in markers)
 

@@ -150,7 +150,9 @@ class Environment:
     """The environment light (scene/environment.py), read only where a scene has one (EffectSet.environment):
     its radiance texels (height rows of width, row 0 at the +y pole, the first column repeated last), the
     rotation from world to its local directions, and its fixed directions (world, unit) with their weights
-    L / (pdf N)."""
+    L / (pdf N). With render.light_spread, the directions ordered by the pixel sample that takes them (lattice
+    point n to n mod ``strata``: each share itself a lattice over the whole sky), each weight times ``strata``,
+    and ``first`` the start of each pixel sample's share (``strata`` of them, then the total)."""
 
     texels: wp.array(dtype=wp.vec3)
     width: int
@@ -159,6 +161,7 @@ class Environment:
     num: int
     directions: wp.array(dtype=wp.vec3)
     weights: wp.array(dtype=wp.vec3)
+    first: wp.array(dtype=wp.int32)
 
 
 @wp.struct
@@ -197,9 +200,10 @@ class SceneData:
 
 
 def light_strata(scene, fx) -> int:
-    """The pixel samples an area light's points are spread over in a frame of effect set ``fx``: spp where it
-    spreads them (fx.light_spread: render.light_spread, spp > 1 and supersampling on), else 1 (every pixel
-    sample takes every point). The table's layout (AreaLights) and the kernel's switch agree by this."""
+    """The pixel samples an area light's points (and an environment's directions) are spread over in a frame of
+    effect set ``fx``: spp where it spreads them (fx.light_spread: render.light_spread, spp > 1 and supersampling
+    on), else 1 (every pixel sample takes every point). The tables' layouts (AreaLights, Environment) and the
+    kernel's switch agree by this."""
     return scene.render.spp if fx.light_spread else 1
 
 
@@ -383,7 +387,7 @@ class Geometry:
         key = (tuple(m), tuple(scene.lights), tuple(scene.render.ambient), tuple(scene.render.background),
                id(shadow_grid), tuple(scene.camera.eye) if dielectric else None,
                (scene.render.light_samples, scene.render.area_estimator, strata) if area else None,
-               scene.render.light_samples if scene.environment else None)
+               (scene.render.light_samples, strata) if scene.environment else None)
         if self._tables is not None and self._tables[0] == key:
             return self._tables[1]
         d, lights = self.device, scene.whitted_lights
@@ -419,7 +423,7 @@ class Geometry:
             self._no_grid = empty_grid(d)
         s.shadow_grid = shadow_grid if shadow_grid is not None else self._no_grid
         s.area = self._area_lights(scene, area, strata)
-        s.env = self._environment(scene.environment, scene.render.light_samples)
+        s.env = self._environment(scene.environment, scene.render.light_samples, strata)
         self._tables = (key, s, shadow_grid, textures)  # the grid and images kept alive with their ids
         return s
 
@@ -466,9 +470,9 @@ class Geometry:
         a.spheres = wp.array(np.asarray(spheres, np.float32), dtype=wp.vec4, device=d)
         return a
 
-    def _environment(self, light, light_samples: int) -> Environment:
-        """The environment's table for a frame: its texels, rotation and light_samples directions; a black
-        stand-in (kept) for a scene without."""
+    def _environment(self, light, light_samples: int, strata: int = 1) -> Environment:
+        """The environment's table for a frame: its texels, rotation and light_samples directions, spread over
+        ``strata`` pixel samples (light_strata); a black stand-in (kept) for a scene without."""
         d = self.device
         e = Environment()
         if light is None:
@@ -476,10 +480,15 @@ class Geometry:
                 e.texels = wp.zeros(4, dtype=wp.vec3, device=d)
                 e.width, e.height, e.to_local, e.num = 2, 2, wp.mat33(np.eye(3)), 0
                 e.directions, e.weights = wp.zeros(1, dtype=wp.vec3, device=d), wp.zeros(1, dtype=wp.vec3, device=d)
+                e.first = wp.zeros(2, dtype=wp.int32, device=d)
                 self._no_env = e
             return self._no_env
         texels = environment_texels(light)
         directions, weights = environment_samples(light, light_samples)
+        share = np.arange(len(directions)) % strata
+        order = np.argsort(share, kind="stable")
+        directions, weights = directions[order], weights[order] * strata
+        first = np.concatenate([[0], np.cumsum(np.bincount(share, minlength=strata))])
         vec = lambda rows: wp.array(np.asarray(rows, np.float32).reshape(-1, 3), dtype=wp.vec3, device=d)
         e.texels = vec(texels.reshape(-1, 3))
         e.height, e.width = texels.shape[:2]
@@ -487,6 +496,7 @@ class Geometry:
         e.num = len(directions)
         e.directions = vec(directions if len(directions) else np.zeros((1, 3)))
         e.weights = vec(weights if len(weights) else np.zeros((1, 3)))
+        e.first = wp.array(first.astype(np.int32), dtype=wp.int32, device=d)
         return e
 
     def uv_array(self):

@@ -507,19 +507,24 @@ def make_area_light(DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool, RECORD: bool =
 
 
 @functools.cache
-def make_environment_light(DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool):
-    """environment_light(s, hit, k, v, out) -> ``out`` plus the light of the environment's fixed directions at the
-    hit (the module docstring), a shadow ray each (the BVH's any-hit query, to infinity) where the direction
-    faces the hit's normal."""
+def make_environment_light(DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool, SPREAD: bool = False):
+    """environment_light(s, hit, k, v, out, stratum) -> ``out`` plus the light of the environment's fixed
+    directions at the hit (the module docstring), a shadow ray each (the BVH's any-hit query, to infinity) where
+    the direction faces the hit's normal. With SPREAD, over the directions of the pixel sample's ``stratum``
+    only (render.light_spread: Environment.first)."""
     occluded = make_occluded(False)
     phong_lit = make_phong_lit(DIFFUSE, SPECULAR)
 
     @wp.func(inline=True)
-    def environment_light(s: SceneData, hit: Surface, k: Coefficients, v: wp.vec3, out: ShadeResult) -> ShadeResult:
+    def environment_light(s: SceneData, hit: Surface, k: Coefficients, v: wp.vec3, out: ShadeResult,
+                          stratum: int) -> ShadeResult:
         e = s.env
         n = hit.n
         shininess = s.shininess[hit.material]
-        for q in range(e.num):
+        lo, hi = int(0), int(e.num)
+        if wp.static(SPREAD):
+            lo, hi = int(e.first[stratum]), int(e.first[stratum + 1])
+        for q in range(lo, hi):
             w = e.directions[q]
             n_dot_l = wp.dot(n, w)
             if n_dot_l > 0.0:
@@ -539,7 +544,7 @@ def _make_shade(AMBIENT: bool, DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool, TEX
                 GRID: bool = False, LIGHT_MODEL: bool = False, AREA: bool = False, RECORD: bool = False,
                 ANALYTIC: bool = False, SPREAD: bool = False, ENVIRONMENT: bool = False):
     coefficients = make_coefficients(TEXTURE, VERTEX_COLOR)
-    environment_light = make_environment_light(DIFFUSE, SPECULAR, SHADOWS)
+    environment_light = make_environment_light(DIFFUSE, SPECULAR, SHADOWS, SPREAD)
 
     # Disabled terms are absent from the generated code (wp.static).
     light_test = make_light_test(LIGHT_MODEL, SHADOWS, GRID)
@@ -571,7 +576,7 @@ def _make_shade(AMBIENT: bool, DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool, TEX
         if wp.static(AREA and (DIFFUSE or SPECULAR)):
             out = area_light(s, hit, k, v, out, rec, j, stratum)
         if wp.static(ENVIRONMENT and (DIFFUSE or SPECULAR)):
-            out = environment_light(s, hit, k, v, out)
+            out = environment_light(s, hit, k, v, out, stratum)
         return out
 
     return shade

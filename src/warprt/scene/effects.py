@@ -40,7 +40,8 @@ class EffectSet:
     # render.area_estimator = "analytic": a rectangle light's unshadowed diffuse term in closed form, its
     # visibility the ratio estimate over its points (kernels/shading.py make_area_light).
     area_analytic: bool = False
-    # render.light_spread with spp > 1: each pixel sample takes its own share of every light's points.
+    # render.light_spread with spp > 1: each pixel sample takes its own share of every area light's points and
+    # of the environment's directions.
     light_spread: bool = False
     # Likewise: whether the scene has an environment light, seen by the rays that meet nothing and lighting
     # every point from its fixed directions (kernels/environment.py).
@@ -95,7 +96,7 @@ def scene_effects(scene) -> EffectSet:
         culling=not all(m.double_sided for m in mats),
         area_lights=bool(scene.area_lights),
         area_analytic=bool(scene.area_lights) and scene.render.area_estimator == "analytic",
-        light_spread=bool(scene.area_lights) and scene.render.light_spread and scene.render.spp > 1,
+        light_spread=bool(scene.area_lights or env is not None) and scene.render.light_spread and scene.render.spp > 1,
         environment=env is not None,
     )
 
