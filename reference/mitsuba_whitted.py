@@ -631,6 +631,7 @@ class MitsubaFileScene(MitsubaScene):
     def __init__(self, scene, path, smooth: bool = True):
         from warprt.scene import load_mitsuba_file, mitsuba_camera, reads_mitsuba_light, reads_mitsuba_shape
 
+        refuse_environment(scene)  # an envmap or constant emitter: the file's light this integrator has not
         mi, dr = self.mi, self.dr = mitsuba()
         self.scene, self.smooth = scene, smooth
         self.mi_scene = load_mitsuba_file(path)
@@ -647,7 +648,7 @@ class MitsubaFileScene(MitsubaScene):
         self.integrator = mi.load_dict({"type": INTEGRATOR})
         own = any(m.textures for m in scene.materials.values())
         # The file's own point, spot and directional emitters, in the order the reader reads them into
-        # scene.lights (its area lights follow them; constant and other emitters are not lights).
+        # scene.lights (its area lights follow them; other emitters are not lights).
         emitters = [e for e in self.mi_scene.emitters() if reads_mitsuba_light(e)]
         if len(emitters) != len(whitted_lights(scene)):
             raise ValueError(f"{path}: Mitsuba loads {len(emitters)} Whitted lights, the scene has {len(whitted_lights(scene))}")

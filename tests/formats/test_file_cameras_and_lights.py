@@ -298,7 +298,7 @@ def test_usd_lux_lights(tmp_path):
     point.CreateTreatAsPointAttr(True)
     UsdGeom.Xformable(point).AddTranslateOp().Set(Gf.Vec3d(0.0, 9.0, 0.0))
     UsdLux.RectLight.Define(stage, "/World/Panel")
-    UsdLux.DomeLight.Define(stage, "/World/Sky")
+    UsdLux.PortalLight.Define(stage, "/World/Sky")  # a DomeLight is an environment light (test_dome_light.py)
     stage.GetRootLayer().Save()
 
     with pytest.warns(UserWarning) as w:
@@ -306,7 +306,7 @@ def test_usd_lux_lights(tmp_path):
     messages = [str(x.message) for x in w]
     assert not any("/World/Bulb" in m for m in messages)  # a sphere light now (radius 0.1)
     assert not any("/World/Panel" in m for m in messages)  # an area light now (test_usd_area_lights)
-    assert sum("/World/Sky" in m and "DomeLight is not a Whitted light: skipped" in m for m in messages) == 1
+    assert sum("/World/Sky" in m and "PortalLight is not a Whitted light: skipped" in m for m in messages) == 1
     assert not any("/World/Dot" in m for m in messages)
     bulb, sun, lamp, dot, panel = lights
     assert (panel.type, panel.shape) == ("area", "rectangle")

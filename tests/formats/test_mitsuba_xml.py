@@ -198,7 +198,7 @@ def test_textures_are_mitsubas_texels_and_uv_maps(tmp_path):
 def test_spot_directional_and_constant_emitters(tmp_path):
     scene, _ = read(mf.write(tmp_path, "spot.xml", mf.spot_lit_floor(mi)))
     s = mf.SPOT
-    spot, sun = scene.lights
+    spot, sun, sky = scene.lights
     axis = np.subtract(s["target"], s["origin"])
     assert spot.type == "spot" and spot.falloff == "inverse_square" and spot.name == "lamp"
     assert np.allclose(spot.position, s["origin"], atol=1e-6)
@@ -208,8 +208,22 @@ def test_spot_directional_and_constant_emitters(tmp_path):
     assert sun.type == "directional" and sun.position is None and sun.falloff == "none"
     assert np.allclose(sun.direction, np.divide(s["sun"], np.linalg.norm(s["sun"])), atol=1e-6)
     assert np.allclose(sun.color, s["irradiance"])
-    # A constant sky L: the background, and C_amb = pi L so that C_amb kd = reflectance x L.
-    assert np.allclose(scene.render.background, s["sky"]) and np.allclose(scene.render.ambient, np.multiply(s["sky"], math.pi))
+    # A constant sky L: an environment light of radiance L (its background and its occluded light), no ambient.
+    assert sky.type == "environment" and sky.image is None and sky.name == "sky" and np.allclose(sky.radiance, s["sky"])
+    assert scene.render.background == (0.0, 0.0, 0.0) and scene.render.ambient == (0.0, 0.0, 0.0)
+
+
+def test_a_constant_beside_an_envmap_is_mitsubas_refusal_in_one_line(tmp_path):
+    """Mitsuba takes one environment emitter a scene: a constant and an envmap together are its error."""
+    import OpenEXR
+
+    with OpenEXR.File({"type": OpenEXR.scanlineimage}, {"RGB": np.ones((4, 8, 3), np.float32)}) as f:
+        f.write(str(tmp_path / "sky.exr"))
+    mf.write(tmp_path, "two.xml", {**mf.spot_lit_floor(mi), "map": {"type": "envmap", "filename": str(tmp_path / "sky.exr")}})
+    r = warprt_cli("render", "two.xml", "-o", "out.png", cwd=tmp_path)
+    lines = r.stderr.strip().split("\n")
+    assert r.returncode == 2 and len(lines) == 1
+    assert lines[0].startswith("warprt: error: two.xml: Mitsuba rejects it: ") and "Only one environment emitter" in lines[0]
 
 
 def warprt_cli(*args, cwd, env_extra=""):

@@ -14,13 +14,14 @@ import numpy as np
 from ..diagnostics import warn
 from ..errors import SceneError, one_line
 from .model import Camera, Light, Material, RenderSettings, Scene, SceneObject
+from .placement import euler_xyz, nearest_rotation
 from .texture import Texture
 
 # Units. Mitsuba's diffuse BRDF is reflectance / pi and its point and spot lights give radiant intensity
 # (directional: irradiance), so kd = reflectance / pi and C_l = the emitter's intensity with inverse-square
 # falloff: a diffuse surface under a point light is then the radiance Mitsuba computes, not pi times it.
-# A `constant` emitter of radiance L is the background (L) and the ambient C_amb = pi L (C_amb kd = the
-# light an unoccluded diffuse surface reflects from it, reflectance x L).
+# No ambient term (C_amb = 0): a `constant` emitter is an environment light of its radiance, occluded as
+# Mitsuba's is (a scene has at most one: Mitsuba refuses a second environment emitter, an envmap included).
 #
 # What is read:
 #   sensor    perspective (thinlens as a pinhole, warned): to_world, Mitsuba's x_fov (whatever fov_axis
@@ -33,10 +34,9 @@ from .texture import Texture
 #             ignored); dielectric, thindielectric -> glass, ior = int_ior / ext_ior; twosided -> its front
 #             BSDF; mask, bumpmap, normalmap -> the BSDF inside (warned); textures: bitmap (Mitsuba's own
 #             texels, to_uv), checkerboard; other BSDFs: one warning each, Mitsuba's default diffuse (0.5)
-#   emitters  point, spot, directional -> lights (inverse_square); constant -> background and ambient (as
-#             before the environment light: an unoccluded sky, which the files compared with Mitsuba's
-#             Whitted reference rely on; a TOML environment with a radiance is Mitsuba's occluded one);
-#             envmap -> an environment light (Mitsuba's texels, scale, to_world's rotation);
+#   emitters  point, spot, directional -> lights (inverse_square); constant -> an environment light of its
+#             radiance (the background, and light through shadow rays); envmap -> an environment light
+#             (Mitsuba's texels, scale, to_world's rotation);
 #             area (an RGB radiance) -> an area light over its shape's triangles, emitting to the side
 #             their winding faces; a textured radiance and others: one warning each, not lights
 # Not read: the integrator and sampler (warprt's spp and max_depth apply), media, film crop and filter,
@@ -123,11 +123,10 @@ def read_mitsuba_xml(path, params: dict | None = None) -> Scene:
             light = reader.area_light(shape, obj.name)
             if light is not None:
                 area_lights.append(light)
-    lights, radiance = reader.emitters(ms.emitters())
+    lights = reader.emitters(ms.emitters())
     if not objects:
         raise SceneError(source, None, "no shape warprt can render (meshes, rectangle, cube, sphere, disk, cylinder)")
-    background = (0.0, 0.0, 0.0) if any(light.environment for light in lights) else tuple(radiance)
-    render = RenderSettings(ambient=tuple(math.pi * radiance), background=background)
+    render = RenderSettings(ambient=(0.0, 0.0, 0.0))
     # The Whitted lights first, in scene.emitters() order (reads_mitsuba_light), then the area lights.
     return Scene(camera=camera, render=render, lights=lights + area_lights, materials=materials, objects=objects,
                  source=source)
@@ -399,8 +398,8 @@ class _Reader:
         return tuple(float(x) for x in (a[0, 0], a[0, 1], a[0, 2], a[1, 0], a[1, 1], a[1, 2]))
 
     # ---- emitters ----
-    def emitters(self, emitters) -> tuple[list[Light], np.ndarray]:
-        lights, radiance = [], np.zeros(3)
+    def emitters(self, emitters) -> list[Light]:
+        lights = []
         for i, e in enumerate(emitters):
             kind = _class(e)
             name = e.id() or f"emitter_{i}"
@@ -421,17 +420,14 @@ class _Reader:
                 lights.append(Light(color=_rgb(p["irradiance.value"]), type="directional",
                                     direction=tuple(m[:3, 2] / np.linalg.norm(m[:3, 2])), falloff="none", name=name))
             elif kind == "ConstantBackgroundEmitter":
-                radiance = radiance + np.array(_rgb(p["radiance.value"]))
+                lights.append(Light(type="environment", radiance=_rgb(p["radiance.value"]), name=name))
             elif kind == "EnvironmentMapEmitter":
                 lights.append(self.environment(e, p, name))
             elif kind == "AreaLight":
                 pass  # read with its shape (area_light)
             else:
                 self.warn_once(("emitter", kind), f"emitter {name}", f"{kind} is not a Whitted light: skipped")
-        if radiance.any() and any(light.environment for light in lights):
-            self.warn_once("constant", "emitter constant", "beside an envmap, a constant emitter is read as the "
-                                                           "ambient term alone (the background is the envmap's)")
-        return lights, radiance
+        return lights
 
     def environment(self, e, p, name: str) -> Light:
         """An envmap: Mitsuba's own texels (its loaded data, the periodic columns left out), its scale and
@@ -443,24 +439,11 @@ class _Reader:
         data = data[:, 1:-1] if width and data.shape[1] == int(width[1]) + 2 else data[:, :-1]
         found = re.search(r'filename = "([^"]*)"', str(e))
         image = Texture(image=np.ascontiguousarray(data[::-1], np.float32), source=found[1] if found else name)
-        m = _matrix(p["to_world"])[:3, :3]
-        u, _, vt = np.linalg.svd(m)
-        r = u @ vt
-        if np.abs(r - m).max() > 1e-6 or np.linalg.det(r) < 0:
+        r, exact = nearest_rotation(_matrix(p["to_world"])[:3, :3])
+        if not exact:
             self.warn_once(("envmap", name), f"emitter {name}", "its to_world is not a rotation: its nearest "
                                                                 "rotation is read")
-            r = r if np.linalg.det(r) > 0 else u @ np.diag([1.0, 1.0, -1.0]) @ vt
         return Light(type="environment", image=image, scale=_scalar(p["scale"]), rotate=euler_xyz(r), name=name)
-
-
-def euler_xyz(r: np.ndarray) -> tuple:
-    """The angles (degrees) about x, y and z whose rotation (placement.rotation: Rz Ry Rx) is ``r``."""
-    ay = math.asin(max(-1.0, min(1.0, -r[2, 0])))
-    if abs(r[2, 0]) < 1.0 - 1e-12:
-        ax, az = math.atan2(r[2, 1], r[2, 2]), math.atan2(r[1, 0], r[0, 0])
-    else:  # gimbal lock: x and z turn about the same axis
-        ax, az = 0.0, math.atan2(-r[0, 1], r[1, 1])
-    return tuple(math.degrees(a) for a in (ax, ay, az))
 
 
 class _Unread(Exception):

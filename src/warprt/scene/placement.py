@@ -4,6 +4,7 @@ One module for the scene file's objects, the mesh files they name and SceneObjec
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -38,6 +39,26 @@ def rotation(degrees) -> np.ndarray:
     ry = np.array([[cy, 0, sy], [0, 1, 0], [-sy, 0, cy]])
     rz = np.array([[cz, -sz, 0], [sz, cz, 0], [0, 0, 1]])
     return rz @ ry @ rx
+
+
+def euler_xyz(r: np.ndarray) -> tuple:
+    """The angles (degrees) about x, y and z whose rotation (rotation(): Rz Ry Rx) is ``r``."""
+    ay = math.asin(max(-1.0, min(1.0, -r[2, 0])))
+    if abs(r[2, 0]) < 1.0 - 1e-12:
+        ax, az = math.atan2(r[2, 1], r[2, 2]), math.atan2(r[1, 0], r[0, 0])
+    else:  # gimbal lock: x and z turn about the same axis
+        ax, az = 0.0, math.atan2(-r[0, 1], r[1, 1])
+    return tuple(math.degrees(a) for a in (ax, ay, az))
+
+
+def nearest_rotation(m: np.ndarray) -> tuple[np.ndarray, bool]:
+    """The rotation (det +1) nearest the 3 x 3 ``m`` (its polar factor, a reflection's last axis turned
+    back), and whether ``m`` was that rotation already (to 1e-6): an environment's to_world may turn it,
+    nothing more."""
+    u, _, vt = np.linalg.svd(m)
+    r = u @ vt
+    exact = bool(np.abs(r - m).max() <= 1e-6 and np.linalg.det(r) > 0)
+    return (r if np.linalg.det(r) > 0 else u @ np.diag([1.0, 1.0, -1.0]) @ vt), exact
 
 
 class PlacementOverflow(OverflowError):

@@ -25,6 +25,7 @@ from ...errors import SceneError, one_line
 from ..dielectric_formats import dielectric_from_usd
 from ..camera import FileCamera, look_from_matrix
 from ..model import Light, Material
+from ..placement import euler_xyz, nearest_rotation
 from ..shapes import cylinder
 from ..texture import Texture, image_texture
 from .usdcrate import MAGIC as CRATE_MAGIC, check_crate
@@ -32,6 +33,7 @@ from . import MeshFile, MeshPart, dedupe, fan_corners, unique_name, unit_rows, w
 
 _USD_GREY = (0.18, 0.18, 0.18)  # UsdPreviewSurface's diffuseColor when not authored
 CYLINDER_LIGHT_SECTORS = 128  # a CylinderLight's tube: its area 1 - 1e-4 of the true cylinder's
+_POLE_Z = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])  # +90 about x: a dome's +y pole to +z
 
 
 def read_usd(path: Path) -> MeshFile:
@@ -219,6 +221,8 @@ class _Stage:
             and not UsdLux.SphereLight(prim).GetTreatAsPointAttr().Get(t))
         if prim.IsA(UsdLux.RectLight) or sized:
             return self._area_light(prim, m, c_l, name)
+        if prim.IsA(UsdLux.DomeLight) or prim.IsA(UsdLux.DomeLight_1):
+            return self._dome_light(prim, m, c_l, name)
         if not (prim.IsA(UsdLux.SphereLight) or prim.IsA(UsdLux.DiskLight)):
             warn(self.src, where, f"a {prim.GetTypeName()} is not a Whitted light: skipped")
             return None
@@ -230,6 +234,41 @@ class _Stage:
         softness = min(max(float(shaping.GetShapingConeSoftnessAttr().Get(t) or 0.0), 0.0), 1.0)
         return Light(position=position, color=c_l, type="spot", direction=direction, cutoff_angle=float(angle),
                      beam_width=float(angle) * (1.0 - softness), falloff="inverse_square", name=name)
+
+    def _dome_light(self, prim, m: np.ndarray, c_l: tuple, name: str) -> Light:
+        """A DomeLight or DomeLight_1 as an environment light: its latlong texture times C_l, or C_l alone
+        without one. UsdLux places the image as OpenEXR's latlong map (pixel (0, 0) at latitude +pi/2,
+        longitude +pi; latitude +pi/2 the +y direction, longitude 0 +z, pi/2 +x), which is Mitsuba's envmap
+        mapping, warprt's environment's (environment.py), but for where a column's centre sits (OpenEXR
+        x / (W - 1) of the turn, Mitsuba (x + 1/2) / W: at most half a texel apart). DomeLight_1's poleAxis
+        Z (or "scene" on a Z-up stage) turns that pole from +y to +z (longitude 0 to -y: +90 degrees about
+        x) before the prim's world rotation; lights stay in the stage's own space, as the others here do."""
+        from pxr import UsdLux
+
+        where, t = str(prim.GetPath()), self.time
+        dome = UsdLux.DomeLight_1(prim) if prim.IsA(UsdLux.DomeLight_1) else UsdLux.DomeLight(prim)
+        asset, image = dome.GetTextureFileAttr().Get(t), None
+        if asset is not None and asset.path:
+            layout = str(dome.GetTextureFormatAttr().Get(t))
+            if layout not in ("automatic", "latlong"):
+                raise SceneError(self.src, f"{where}.inputs:texture:format", f"a {layout} dome texture is not read: "
+                                                                             "only latlong (equirectangular) maps")
+            path = asset.resolvedPath or str(Path(self.src).parent / asset.path)
+            try:
+                texture = image_texture(path, source=path)
+            except SceneError as e:
+                raise SceneError(self.src, f"{where}.inputs:texture:file", str(e)) from None
+            image = Texture(image=np.ascontiguousarray(texture.image * np.float32(c_l), np.float32), source=path)
+        r, exact = nearest_rotation(m[:3, :3])
+        if not exact:
+            warn(self.src, where, "the dome's transform is not a rotation: its nearest rotation is read")
+        pole = str(dome.GetPoleAxisAttr().Get(t)) if prim.IsA(UsdLux.DomeLight_1) else "Y"  # DomeLight: +y always
+        if pole == "scene":
+            pole = self.up or "Y"
+        if pole == "Z":
+            r = r @ _POLE_Z
+        return Light(type="environment", image=image, radiance=c_l if image is None else None, rotate=euler_xyz(r),
+                     name=name)
 
     def _cylinder_light(self, prim) -> MeshPart | None:
         """A CylinderLight (UsdLux: length along its x, radius, emitting outwards from its side, not its
