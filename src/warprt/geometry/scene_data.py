@@ -151,8 +151,8 @@ class Environment:
     its radiance texels (height rows of width, row 0 at the +y pole, the first column repeated last), the
     rotation from world to its local directions, and its fixed directions (world, unit) with their weights
     L / (pdf N). With render.light_spread, the directions ordered by the pixel sample that takes them (lattice
-    point n to n mod ``strata``: each share itself a lattice over the whole sky), each weight times ``strata``,
-    and ``first`` the start of each pixel sample's share (``strata`` of them, then the total)."""
+    point n to n mod ``strata``: each share itself a lattice over the whole sky), each weight times ``strata``:
+    share s is num // strata directions, one more where s < num mod strata (environment_share)."""
 
     texels: wp.array(dtype=wp.vec3)
     width: int
@@ -161,7 +161,7 @@ class Environment:
     num: int
     directions: wp.array(dtype=wp.vec3)
     weights: wp.array(dtype=wp.vec3)
-    first: wp.array(dtype=wp.int32)
+    strata: int
 
 
 @wp.struct
@@ -480,15 +480,13 @@ class Geometry:
                 e.texels = wp.zeros(4, dtype=wp.vec3, device=d)
                 e.width, e.height, e.to_local, e.num = 2, 2, wp.mat33(np.eye(3)), 0
                 e.directions, e.weights = wp.zeros(1, dtype=wp.vec3, device=d), wp.zeros(1, dtype=wp.vec3, device=d)
-                e.first = wp.zeros(2, dtype=wp.int32, device=d)
+                e.strata = 1
                 self._no_env = e
             return self._no_env
         texels = environment_texels(light)
         directions, weights = environment_samples(light, light_samples)
-        share = np.arange(len(directions)) % strata
-        order = np.argsort(share, kind="stable")
+        order = np.argsort(np.arange(len(directions)) % strata, kind="stable")
         directions, weights = directions[order], weights[order] * strata
-        first = np.concatenate([[0], np.cumsum(np.bincount(share, minlength=strata))])
         vec = lambda rows: wp.array(np.asarray(rows, np.float32).reshape(-1, 3), dtype=wp.vec3, device=d)
         e.texels = vec(texels.reshape(-1, 3))
         e.height, e.width = texels.shape[:2]
@@ -496,7 +494,7 @@ class Geometry:
         e.num = len(directions)
         e.directions = vec(directions if len(directions) else np.zeros((1, 3)))
         e.weights = vec(weights if len(weights) else np.zeros((1, 3)))
-        e.first = wp.array(first.astype(np.int32), dtype=wp.int32, device=d)
+        e.strata = strata
         return e
 
     def uv_array(self):

@@ -506,12 +506,22 @@ def make_area_light(DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool, RECORD: bool =
     return area_light_split
 
 
+@wp.func
+def environment_share(num: int, strata: int, s: int):
+    """[lo, hi) of the directions pixel-sample stratum ``s`` takes under render.light_spread: the lattice's
+    points n = s mod strata, ordered by stratum (geometry.scene_data's Environment), num // strata of them, one
+    more where s < num mod strata."""
+    q, r = num // strata, num % strata
+    lo = s * q + wp.min(s, r)
+    return lo, lo + q + wp.where(s < r, 1, 0)
+
+
 @functools.cache
 def make_environment_light(DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool, SPREAD: bool = False):
     """environment_light(s, hit, k, v, out, stratum) -> ``out`` plus the light of the environment's fixed
     directions at the hit (the module docstring), a shadow ray each (the BVH's any-hit query, to infinity) where
     the direction faces the hit's normal. With SPREAD, over the directions of the pixel sample's ``stratum``
-    only (render.light_spread: Environment.first)."""
+    only (render.light_spread: environment_share)."""
     occluded = make_occluded(False)
     phong_lit = make_phong_lit(DIFFUSE, SPECULAR)
 
@@ -522,8 +532,8 @@ def make_environment_light(DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool, SPREAD:
         n = hit.n
         shininess = s.shininess[hit.material]
         lo, hi = int(0), int(e.num)
-        if wp.static(SPREAD):
-            lo, hi = int(e.first[stratum]), int(e.first[stratum + 1])
+        if wp.static(SPREAD):  # share s: directions s, s + strata, ... of the lattice, stored together
+            lo, hi = environment_share(e.num, e.strata, stratum)
         for q in range(lo, hi):
             w = e.directions[q]
             n_dot_l = wp.dot(n, w)
