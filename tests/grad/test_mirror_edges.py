@@ -21,7 +21,7 @@ import warprt
 from marks import exhaustive, slow
 from oracle import image_point, line_distance, mirror_point, shadow_point
 from warprt.image import MAX_CHAINS, EdgeFrame, boundary, chain_faces, edge_sides, mirrored_speeds, shadow_rows
-from warprt.kernels import DIRECTIONAL_SHADOW, EDGE, POINT_SHADOW, make_mirrored_distances
+from warprt.kernels import CONE, DIRECTIONAL_SHADOW, EDGE, POINT_SHADOW, make_mirrored_distances
 from warprt.scene import resolve_effects
 
 from .converged import check_against_differences, gradient
@@ -244,15 +244,38 @@ def test_the_mirrored_edge_speed_is_the_reflections_projection(make):
     r.close()
 
 
+def _on_cone(cam, axis, light, receiver, mirrors, cos: float) -> np.ndarray:
+    """An image point of the curve where the cone (light, axis, cos) meets the receiver's plane, all seen through
+    the mirror faces ``mirrors`` (unfolded, float64): the first of its rays that meets the plane in front of the
+    eye."""
+    apex, tip = _unfolded(light, mirrors), _unfolded(light + axis, mirrors)
+    p = np.stack([_unfolded(q, mirrors) for q in receiver])
+    u = (tip - apex) / np.linalg.norm(tip - apex)
+    a = np.cross(u, [1.0, 0.0, 0.0])
+    a /= np.linalg.norm(a)
+    normal = np.cross(p[1] - p[0], p[2] - p[0])
+    for phi in np.linspace(0.0, 2.0 * np.pi, 64, endpoint=False):
+        ray = cos * u + np.sqrt(1.0 - cos * cos) * (np.cos(phi) * a + np.sin(phi) * np.cross(u, a))
+        t = ((p[0] - apex) @ normal) / (ray @ normal)
+        y = apex + t * ray
+        if t > 0.0 and (y - np.asarray(cam.eye)) @ (np.asarray(cam.center) - np.asarray(cam.eye)) > 0.0:
+            return image_point(cam, y)
+    raise AssertionError("no ray of the cone meets the receiver in front of the eye")
+
+
 def test_the_mirrored_distance_passes_warps_gradcheck():
     """make_mirrored_distances' adjoints (edge, light, receiver, the mirror faces, eye, center, up, fovy; mesh
-    edges, point and directional shadows, through one mirror and two) against Warp's own finite differences."""
-    n, levels = 6, 2
+    edges, point and directional shadows, a spot's cone, through one mirror and two) against Warp's own finite
+    differences."""
+    n, levels = 8, 2
     rng = np.random.default_rng(5)
     cam = floor_scene(1).camera
     v = rng.uniform(-1, 1, (n, 2, 3)) * [1.0, 0.2, 1.0] + [0.0, 4.0, 0.0]
-    light = np.where(np.arange(n)[:, None] % 3 == 2, rng.uniform(-0.3, 0.3, (n, 3)) + [0.0, 1.0, 0.0],
+    kind = np.arange(n) % 4
+    light = np.where(kind[:, None] == 2, rng.uniform(-0.3, 0.3, (n, 3)) + [0.0, 1.0, 0.0],
                      rng.uniform(-1, 1, (n, 3)))
+    axis = rng.uniform(-0.2, 0.2, (n, 3)) + [0.0, 1.0, 0.0]  # a cone's (CONE: v0), towards the receiver
+    v[:, 0] = np.where(kind[:, None] == 3, axis / np.linalg.norm(axis, axis=1, keepdims=True), v[:, 0])
     receiver = rng.uniform(-1, 1, (n, 3, 3)) * [2.0, 0.1, 2.0] + [0.0, 5.0, 0.0]
     floor = np.array([[-3.0, 0.0, -3.0], [0.0, 0.0, 3.0], [3.0, 0.0, -3.0]])
     tilted = np.array([[-2.5, 1.5, -4.0], [5.5, 9.5, -4.2], [5.6, 9.6, 4.0]])
@@ -260,13 +283,17 @@ def test_the_mirrored_distance_passes_warps_gradcheck():
     geometry = np.concatenate([v, light[:, None], receiver], axis=1).reshape(-1, 3)
     camera = np.tile(np.stack([cam.eye, cam.center, cam.up]), (n, 1))
     at = rng.uniform(0, 1, (n, 2)) * [cam.width, cam.height]
+    level = 1 + np.arange(n) // 4 % 2
+    for j in np.flatnonzero(kind == 3):  # a cone's points on its curve (far off it, float32's differences are noise)
+        at[j] = _on_cone(cam, v[j, 0], light[j], receiver[j], mirrors[j, :level[j]], 0.9)
     vec = lambda a: wp.array(np.asarray(a, np.float32).reshape(-1, 3), dtype=wp.vec3, requires_grad=True)  # noqa: E731
     ints = lambda a: wp.array(np.asarray(a, np.int32), dtype=int)  # noqa: E731
-    inputs = [vec(geometry), vec(mirrors), ints(np.arange(n) % 3), ints(1 + np.arange(n) // 3 % 2), vec(camera),
+    cos = wp.array(np.full(n, 0.9, np.float32), dtype=float)
+    inputs = [vec(geometry), vec(mirrors), ints(kind), ints(level), cos, vec(camera),
               wp.array(np.full(n, cam.fovy, np.float32), dtype=float, requires_grad=True), float(cam.near), cam.width,
               cam.height, wp.array(at.astype(np.float32), dtype=wp.vec2)]
     out = wp.zeros(n, dtype=float, requires_grad=True)
-    assert [EDGE, POINT_SHADOW, DIRECTIONAL_SHADOW] == [0, 1, 2]
+    assert [EDGE, POINT_SHADOW, DIRECTIONAL_SHADOW, CONE] == [0, 1, 2, 3]
     assert warp.autograd.gradcheck(make_mirrored_distances(levels), dim=n, inputs=inputs, outputs=[out], eps=1e-3,
                                    atol=2e-2, rtol=2e-2, show_summary=False, raise_exception=False)
 

@@ -200,16 +200,8 @@ def test_the_edges_gradient_is_the_same_on_every_run_and_thread_count(weights):
             assert np.array_equal(runs[0][name], other[name]), name
 
 
-HARD_SPOT = {"type": "spot", "position": [1.0, 3.0, 3.0], "target": [0.0, 0.0, 0.0], "cutoff_angle": 20.0,
-             "beam_width": 20.0, "color": [1.0, 1.0, 1.0]}
-REFUSED = {"glass": ({"max_depth": 7, "crate": {"ior": 1.5, "transmittance": [0.9] * 3}}, "glass"),
-           # a checker seen in a planar mirror (its squares seen directly are covered: test_checker_edges.py)
-           "checker in a mirror": ({"max_depth": 2, "wall_kr": (0.6, 0.6, 0.6),
-                                    "crate": {"kd_texture": {"checker": [[1, 1, 1], [0.2, 0.2, 0.2]], "scale": 4.0}}},
-                                   "checker texture's squares' edges seen in planar mirrors"),
-           # a hard spot's cone seen in a planar mirror (seen directly: covered, test_spot_edges.py)
-           "hard spot in a mirror": ({"lights": [HARD_SPOT], "max_depth": 2, "wall_kr": (0.6, 0.6, 0.6)},
-                                     "hard cone's edge seen in planar mirrors")}
+REFUSED = {"glass": ({"max_depth": 7, "crate": {"ior": 1.5, "transmittance": [0.9] * 3}}, "glass")}
+# (a checker's squares and a hard spot's cone seen in a planar mirror: covered, test_mirror_checker_spot.py)
 
 
 @pytest.mark.parametrize("shadows", [False, True], ids=["no shadows", "shadows"])

@@ -48,15 +48,16 @@ class CheckerSegments:
     plane: np.ndarray
 
 
-def checker_segments(scene, geom, m: MeshEdges, edges: np.ndarray, eye: np.ndarray) -> CheckerSegments:
-    """The CheckerSegments of the faces in view whose material has a checker, seen from ``eye``: each line
+def checker_segments(scene, geom, m: MeshEdges, edges: np.ndarray, eye: np.ndarray, basis=None) -> CheckerSegments:
+    """The CheckerSegments of the faces in view whose material has a checker, seen from ``eye`` along ``basis``
+    (the camera's, or a virtual camera's: grad_mirror_edges.MirrorChain.basis): each line
     crossing a face's inside (_lines), and each line lying along an inner mesh edge that is not a camera edge
     (``edges``: camera_edges'; _edge_lines), where no camera edge carries its jump. Where two checker maps draw
     the same line on a face it is taken once (its jump is the two checkers' at once)."""
     p = geom.points_np.astype(np.float64)
     faces = geom.indices_np.reshape(-1, 3).astype(np.int64)
     uv = np.concatenate([geom.uv_array().numpy().astype(np.float64), np.ones((len(p), 1))], axis=1)
-    seen = in_view(p[faces] - eye, camera_basis(scene.camera))
+    seen = in_view(p[faces] - eye, camera_basis(scene.camera) if basis is None else basis)
     face, weights, line = [np.zeros(0, np.int64)], [np.zeros((0, 2, 3))], [np.zeros((0, 3))]
     for slot, material in enumerate(geom.slot_materials(scene)):
         which = np.flatnonzero(seen & (geom.tri_material_np == slot))

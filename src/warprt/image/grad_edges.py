@@ -21,8 +21,8 @@ from .grad_edge_points import (EDGE_OFFSET_PX, BoundaryTerm, EdgePoints, add_ter
                                segment_points)
 from .grad_glass_edges import glass_crossings, glass_refusal, glass_terms, traced_colours
 from .grad_mesh_edges import MeshEdges, camera_edges, face_normals, facing, mesh_edges
-from .grad_mirror_edges import (MirroredSegments, frame_mirrors, mirror_terms,
-                                mirrored_segments)
+from .grad_mirror_edges import (BLOCKS, MirroredSegments, frame_mirrors, mirror_terms, mirrored_segments,
+                                on_mirrored_cones)
 from .grad_shadow_edges import ShadowSources, receivers, shadow_segments, shadow_sources, shadow_term
 from .grad_spot_edges import Cones, SpotSegments, cones, hard_spots, on_cones, spot_segments, spot_term
 from .mirrors import empty_mirrors
@@ -71,8 +71,8 @@ def edge_refusal(scene, geom, fx, wrt, mirrors=None) -> str | None:
     """Why backward(edges=True) would leave out an edge that the parameters ``wrt`` move (None: the camera
     rays' edges, the hard shadows', a checker's squares', a spot's hard cone, and those seen in planar mirrors and
     through glass are all of them): glass's that the crossings do not cover (grad_glass_edges.glass_refusal), a
-    checker's squares or a spot's hard cone seen through glass or in a planar mirror, a curved mirror's or too many
-    mirrors' (frame_mirrors, or ``mirrors()``: its answer kept). (A reflectivity of 0
+    checker's squares or a spot's hard cone seen through glass, a curved mirror's or too many mirrors'
+    (frame_mirrors, or ``mirrors()``: its answer kept). (A reflectivity of 0
     whose mirror rays a frame records for its derivative reflects nothing: no edge is seen in it.)"""
     moving = [n for n in wrt if moves_edges(n)]
     if not moving:
@@ -90,12 +90,6 @@ def edge_refusal(scene, geom, fx, wrt, mirrors=None) -> str | None:
     chains, why = (mirrors or partial(frame_mirrors, scene, geom))()[2:] if reflects else ((), None)
     if why is not None:
         return f"{moving[0]} moves the edges seen in {why}, not differentiated yet: only those seen in planar mirrors"
-    if chains and has_checker(scene, geom):
-        return (f"{moving[0]} moves a checker texture's squares' edges seen in planar mirrors, not differentiated "
-                f"yet: only those camera rays see")
-    if chains and hard_spots(scene):
-        return (f"{moving[0]} moves a spot light's hard cone's edge seen in planar mirrors, not differentiated yet: "
-                f"only where camera rays see it")
     return None
 
 
@@ -185,13 +179,16 @@ def boundary(scene, geom, fx, eye: np.ndarray, mirrors=None) -> Boundary:
     if m is not None and fx.reflection and scene.render.max_depth > 1:
         group, planes, chains, _ = (mirrors or partial(frame_mirrors, scene, geom))()
         if chains:
-            mirrored = mirrored_segments(scene, geom, fx, m, sources, eye, group, chains)
+            mirrored = mirrored_segments(scene, geom, fx, m, sources, eye, group, chains, checkers is not None,
+                                         spots[0] if spots is not None else None)
             blocks += mirrored.blocks(eye)
     start = np.cumsum([0] + [len(q) for q, _, _ in blocks])
     pts = segment_points(*(np.concatenate([block[k] for block in blocks]) for k in range(3)), scene.camera)
     part = lambda i, what=None: pts.part(start[i], start[i + 1], what)  # noqa: E731
-    if mirrored is not None:  # the seams' points (the last block) only cut the others
-        mirrored.camera, mirrored.shadow_points = part(len(blocks) - 3), part(len(blocks) - 2)
+    if mirrored is not None:  # its blocks the last (BLOCKS)
+        mirrored.take([part(i) for i in range(len(blocks) - len(BLOCKS), len(blocks))])
+        if mirrored.spot_points is not None:
+            mirrored.spot_points = on_mirrored_cones(scene, geom, mirrored, mirrored.spot_points)
     out = Boundary(edges, part(0, edges), sources, segments, part(1) if segments is not None else None, mirrored)
     at = 1 + (segments is not None)
     if checkers is not None:
@@ -236,9 +233,11 @@ def edge_gradients(scene, geom, frame: EdgeFrame, d: np.ndarray, wrt, device: st
         term, lights = spot_term(scene, geom, frame.fx, b.cones, b.spots, b.spot, d3, device, frame.threads, keep)
         terms.append(term)
     if b.mirrored is not None:
-        seen = b.mirrored.camera
-        jump = keep("mirrored sides", lambda: edge_sides(scene, geom, frame, seen, device)) if len(seen.edge) else None
-        terms += mirror_terms(scene, geom, frame.fx, b.mirrored, b.sources, jump, d3, device, keep)
+        mirrored, seen = mirror_terms(scene, geom, frame.fx, b.mirrored, b.sources,
+                                      partial(edge_sides, scene, geom, frame, device=device), d3, device, keep)
+        terms += mirrored
+        for name, g in seen.items():
+            lights[name] = lights[name] + g if name in lights else g
     if frame.fx.refraction and frame.max_depth > 1:
         terms += glass_terms(keep("glass", lambda: glass_crossings(scene, geom, frame, device)), d3,
                              len(geom.points_np))

@@ -1,24 +1,28 @@
 """The boundary term of the edges seen in planar mirrors (backward(edges=True) with render.max_depth > 1;
 docs/gradients.md, "Edges seen in mirrors"): what the eye sees through a chain of planar mirrors is the scene
 reflected across their planes (unfolded), so the edges the camera sees of that scene and its shadows' edges are
-straight segments in the image, cut at the pixels with the rest (grad_edge_points), their jump traced by the
-forward's walk through the mirrors, their speed on a wp.Tape through the reflections to the vertices, the
-lights, the receivers, the mirrors' own vertices and the camera (kernels/mirror_edges.py)."""
+straight segments in the image, as are a checker's lines (grad_checker_edges) and a hard spot's cone's chords
+(grad_spot_edges) found from the virtual eye, cut at the pixels with the rest (grad_edge_points), their jump
+traced by the forward's walk through the mirrors, their speed on a wp.Tape through the reflections to the
+vertices, the lights, the receivers, the mirrors' own vertices and the camera (kernels/mirror_edges.py)."""
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields, replace
 
 import numpy as np
 
 from .._warp import wp
 from ..geometry import planar_groups
 from ..geometry.planar import clip_in_front, reflect_points
-from ..kernels import DIRECTIONAL_SHADOW, EDGE, POINT_SHADOW, make_mirror_faces_kernel, make_mirrored_distances
+from ..kernels import (CONE, DIRECTIONAL_SHADOW, EDGE, POINT_SHADOW, SOURCE_LIGHT, make_mirror_faces_kernel,
+                       make_mirrored_distances)
 from ..scene import camera_basis
+from .grad_checker_edges import CheckerSegments, checker_segments
 from .grad_edge_points import BoundaryTerm, EdgePoints, boundary_term, ray_directions, tape_speeds
 from .grad_mesh_edges import MeshEdges, camera_edges
-from .grad_shadow_edges import (SHADOW_KEYS, ShadowSegments, ShadowSources, light_sides, shadow_rows, shadow_segments,
-                                shadow_vertices)
+from .grad_shadow_edges import (SHADOW_KEYS, ShadowSegments, ShadowSources, light_sides, receivers, shadow_rows,
+                                shadow_segments, shadow_vertices, source_sides)
+from .grad_spot_edges import Cones, SpotSegments, on_cones, spot_segments, spot_sums
 from .mirrors import empty_mirrors, tiles_seen
 from .zbuffer import empty_fragments
 
@@ -154,7 +158,10 @@ class MirroredSegments:
     ends and planes unfolded, ``shadow_chain``); ``seams``: (q0, q1, plane) of the lines where a ray's mirror
     face changes within a group (mirror_seams, seen directly and through each chain), where the points are cut
     (their speed in a face's vertices changes there) but that add no term; ``camera`` and ``shadow_points``:
-    the edges' and shadows' EdgePoints (grad_edges.boundary)."""
+    the edges' and shadows' EdgePoints (grad_edges.boundary). With a checker, its lines (``checkers``:
+    CheckerSegments, their ends unfolded; ``checker_chain``, ``checker_points``); with hard spots (``cones``),
+    their cones' chords (``spots``: SpotSegments, their ends and planes unfolded; ``spot_chain``,
+    ``spot_points``, moved onto the curves: on_mirrored_cones)."""
 
     chains: list
     group: np.ndarray
@@ -166,11 +173,31 @@ class MirroredSegments:
     seams: tuple
     camera: EdgePoints | None = None
     shadow_points: EdgePoints | None = None
+    checkers: CheckerSegments | None = None
+    checker_chain: np.ndarray | None = None
+    checker_points: EdgePoints | None = None
+    cones: Cones | None = None
+    spots: SpotSegments | None = None
+    spot_chain: np.ndarray | None = None
+    spot_points: EdgePoints | None = None
 
     def blocks(self, eye: np.ndarray) -> list:
-        """The (q0, q1, plane) of the edges, the shadows and the seams, relative to ``eye`` (segment_points')."""
-        return [(q0 - eye, q1 - eye, plane) for q0, q1, plane in
-                (self.edge_lines, (self.shadows.q0, self.shadows.q1, self.shadows.plane), self.seams)]
+        """The (q0, q1, plane) of the edges, the shadows, the checkers' lines, the cones' chords and the seams
+        (BLOCKS; a kind absent: no rows), relative to ``eye`` (segment_points')."""
+        none = np.zeros((0, 3))
+        lines = [(x.q0, x.q1, x.plane) if x is not None else (none, none, none)
+                 for x in (self.shadows, self.checkers, self.spots)]
+        return [(q0 - eye, q1 - eye, plane) for q0, q1, plane in (self.edge_lines, *lines, self.seams)]
+
+    def take(self, parts: list):
+        """Keep the points of blocks()' blocks (``parts``: theirs, in BLOCKS' order; the seams' only cut the
+        others)."""
+        self.camera, self.shadow_points = parts[:2]
+        self.checker_points = parts[2] if self.checkers is not None else None
+        self.spot_points = parts[3] if self.spots is not None else None
+
+
+BLOCKS = ("edges", "shadows", "checkers", "spots", "seams")  # MirroredSegments.blocks', in order
 
 
 def mirror_seams(m: MeshEdges, group: np.ndarray) -> np.ndarray:
@@ -193,17 +220,20 @@ def _through(chain: MirrorChain | None, a: np.ndarray, b: np.ndarray, eye: np.nd
 
 
 def mirrored_segments(scene, geom, fx, m: MeshEdges, sources: ShadowSources | None, eye: np.ndarray,
-                      group: np.ndarray, chains: list) -> MirroredSegments:
+                      group: np.ndarray, chains: list, checker: bool = False,
+                      cones: Cones | None = None) -> MirroredSegments:
     """The MirroredSegments of ``chains`` seen from ``eye`` (relative to the frame origin): per chain, the
     edges camera_edges finds from its virtual eye and, with ``sources``, the shadows' edges shadow_segments
     finds from there (its receivers in the virtual camera's view), each cut to its part on the side of the last
-    mirror its rays see, then unfolded (_through); and the mirrors' seams."""
+    mirror its rays see, then unfolded (_through); and the mirrors' seams. With ``checker`` the checkers' lines,
+    with ``cones`` the hard spots' chords, seen through each chain (_lines_through)."""
     p = geom.points_np.astype(np.float64)
     tol = ON_MIRROR * float(np.ptp(p, axis=0).max(initial=0.0))
     basis, seam = camera_basis(scene.camera), mirror_seams(m, group)
-    edges, shadows, seams = [], [], [_through(None, p[seam[:, 0]], p[seam[:, 1]], eye, tol)[1:]]
+    edges, shadows, seams, pairs = [], [], [_through(None, p[seam[:, 0]], p[seam[:, 1]], eye, tol)[1:]], []
     for c, chain in enumerate(chains):
         pair = camera_edges(scene, geom, fx, chain.eye, sources, m)
+        pairs.append(pair)
         keep, *line = _through(chain, p[pair[:, 0]], p[pair[:, 1]], eye, tol)
         edges.append((pair[keep], np.full(keep.sum(), c), *line))
         seams.append(_through(chain, p[seam[:, 0]], p[seam[:, 1]], eye, tol)[1:])
@@ -214,10 +244,58 @@ def mirrored_segments(scene, geom, fx, m: MeshEdges, sources: ShadowSources | No
                                            seg.plane[keep] @ chain.unfold[:3, :3].T), np.full(keep.sum(), c)))
     stack = lambda parts: tuple(np.concatenate([x[k] for x in parts]) for k in range(len(parts[0])))  # noqa: E731
     pair, chain_of, *line = stack(edges)  # chains: one at least (grad_edges.boundary asks for none else)
-    return MirroredSegments(chains, group, pair, chain_of, tuple(line),
-                            ShadowSegments.concatenate([x for x, _ in shadows]),
-                            np.concatenate([c for _, c in shadows]) if shadows else np.zeros(0, np.int64),
-                            stack(seams))
+    out = MirroredSegments(chains, group, pair, chain_of, tuple(line),
+                           ShadowSegments.concatenate([x for x, _ in shadows]),
+                           np.concatenate([c for _, c in shadows]) if shadows else np.zeros(0, np.int64),
+                           stack(seams))
+    if checker or cones is not None:
+        _lines_through(scene, geom, m, out, eye, tol, checker, cones, pairs)
+    return out
+
+
+def _joined(parts: list, cls):
+    """(segments, chain): the (``cls`` segments, chain index) pairs ``parts`` joined, field by field."""
+    return (cls(*(np.concatenate([getattr(x, f.name) for x, _ in parts]) for f in fields(cls))),
+            np.concatenate([np.full(len(x.face), c) for x, c in parts]).astype(np.int64))
+
+
+def _lines_through(scene, geom, m: MeshEdges, mb: MirroredSegments, eye: np.ndarray, tol: float, checker: bool,
+                   cones: Cones | None, pairs: list):
+    """Into ``mb``: per chain, with ``checker`` the checkers' lines checker_segments finds from its virtual eye
+    (``pairs``: per chain its camera edges there, where no line is taken), with ``cones`` the cones' chords spot_segments finds there (its
+    receivers in the virtual camera's view), each cut to its part on the side of the last mirror its rays see,
+    then unfolded (_through); a chord's plane is mapped as a normal (the cone's inside stays on its side)."""
+    basis = camera_basis(scene.camera)
+    lines, chords = [], []
+    for c, chain in enumerate(mb.chains):
+        seen = chain.basis(basis)
+        if checker:
+            seg = checker_segments(scene, geom, m, pairs[c], chain.eye, seen)
+            keep, *line = _through(chain, seg.q0, seg.q1, eye, tol)
+            lines.append((CheckerSegments(seg.face[keep], seg.weights[keep], *line), c))
+        if cones is not None:
+            seg = spot_segments(scene, geom, receivers(scene, geom, chain.eye, seen), cones, seen)
+            keep, q0, q1, _ = _through(chain, seg.q0, seg.q1, eye, tol)
+            chords.append((SpotSegments(seg.spot[keep], seg.face[keep], q0, q1,
+                                        seg.plane[keep] @ chain.unfold[:3, :3].T), c))
+    if checker:
+        mb.checkers, mb.checker_chain = _joined(lines, CheckerSegments)
+    if cones is not None:
+        mb.cones, (mb.spots, mb.spot_chain) = cones, _joined(chords, SpotSegments)
+
+
+def on_mirrored_cones(scene, geom, mb: MirroredSegments, pts: EdgePoints) -> EdgePoints:
+    """The cones' chords' points ``pts`` moved onto the true curves as seen through their chains
+    (grad_spot_edges.on_cones from each chain's virtual eye along its virtual camera's axes)."""
+    at, weight, chain = pts.at.copy(), pts.weight.copy(), mb.spot_chain[pts.edge]
+    basis = camera_basis(scene.camera)
+    for c, ch in enumerate(mb.chains):
+        sel = np.flatnonzero(chain == c)
+        if len(sel):
+            part = replace(pts, edge=pts.edge[sel], at=pts.at[sel], weight=pts.weight[sel], pixel=pts.pixel[sel])
+            moved = on_cones(scene, geom, mb.cones, mb.spots, part, ch.eye, ch.basis(basis))
+            at[sel], weight[sel] = moved.at, moved.weight
+    return replace(pts, at=at, weight=weight)
 
 
 @dataclass
@@ -258,13 +336,15 @@ def chain_faces(scene, geom, fx, group: np.ndarray, chains: list, chain: np.ndar
 
 
 def mirrored_speeds(scene, geom, rows: np.ndarray, kind: np.ndarray, cf: ChainFaces, pts: EdgePoints,
-                    device: str) -> dict:
+                    device: str, cos_cutoff: np.ndarray | None = None) -> dict:
     """Per point, the derivative of its signed distance from its edge's image through its mirrors
     (kernels.make_mirrored_distances, on a wp.Tape: tape_speeds; float64 rows): SHADOW_KEYS for what ``rows``
-    (N, 6, 3) holds (the edge's v0 and v1; for a shadow's edge, ``kind``, also its source and receiver: shadow_rows),
+    (N, 6, 3) holds (the edge's v0 and v1; for a shadow's edge, ``kind``, also its source and receiver: shadow_rows;
+    for a cone's, CONE, v0 its spot's axis, ``light`` its position, the receiver, and ``cos_cutoff`` per point),
     ``m<i><c>`` for corner c of the mirror face its ray meets at bounce i (``cf``), and the camera's."""
     corners = geom.points_np.astype(np.float64)[geom.indices_np.reshape(-1, 3)[cf.faces]]  # (N, L, 3, 3)
     extras = [wp.array(np.asarray(a, np.int32), dtype=int, device=device) for a in (kind, cf.level)]
+    extras.append(wp.array(np.zeros(len(kind)) if cos_cutoff is None else cos_cutoff, dtype=float, device=device))
     (g, m), camera = tape_speeds(scene, geom, pts, make_mirrored_distances(cf.faces.shape[1]), [rows, corners],
                                  extras, device)
     mirrors = {f"m{i}{c}": m[:, i, c] for i in range(cf.faces.shape[1]) for c in range(3)}
@@ -277,11 +357,12 @@ def mirror_vertices(geom, cf: ChainFaces) -> dict:
     return {f"m{i}{c}": faces[:, i, c] for i in range(cf.faces.shape[1]) for c in range(3)}
 
 
-def mirror_terms(scene, geom, fx, mb: MirroredSegments, sources: ShadowSources | None,
-                 camera_jump: np.ndarray | None, d: np.ndarray, device: str, keep=None) -> list:
-    """The BoundaryTerms of the edges seen in mirrors: per point d at its pixel · its jump (the mirrored mesh
-    edges' ``camera_jump``: the forward walk's either side, grad_edges.edge_sides; the shadows': light_sides,
-    its source's light at its ray's hit through its chain, times the mirrors' k_r), 0 where its ray does not
+def mirror_terms(scene, geom, fx, mb: MirroredSegments, sources: ShadowSources | None, sides, d: np.ndarray,
+                 device: str, keep=None) -> tuple[list, dict]:
+    """The BoundaryTerms of the edges seen in mirrors, and the hard spots' positions' and directions' sums
+    (mirrored_spot_term's): per point d at its pixel · its jump (the mirrored mesh edges' and checkers' lines':
+    ``sides(pts)``, the forward walk's either side, grad_edges.edge_sides; the shadows': light_sides, its
+    source's light at its ray's hit through its chain, times the mirrors' k_r), 0 where its ray does not
     follow its chain (chain_faces), times its weight and its speed (mirrored_speeds), into the edges' and the
     receivers' vertices, the mirrors' (their faces the rays meet), the camera and the sources. ``keep(name,
     make)``: where what is the frame's alone (the chains' faces, jumps and speeds) is kept for its next backward
@@ -296,10 +377,11 @@ def mirror_terms(scene, geom, fx, mb: MirroredSegments, sources: ShadowSources |
             cf = chain_faces(scene, geom, fx, mb.group, mb.chains, mb.edge_chain, pts, device)
             rows = np.zeros((len(pts.edge), 6, 3))
             rows[:, :2] = p[mb.edges[pts.edge]]
-            return cf, mirrored_speeds(scene, geom, rows, np.full(len(pts.edge), EDGE), cf, pts, device)
-        cf, speed = keep("mirrored edges", seen)
+            return (cf, sides(pts) * cf.follows[:, None],
+                    mirrored_speeds(scene, geom, rows, np.full(len(pts.edge), EDGE), cf, pts, device))
+        cf, jump, speed = keep("mirrored edges", seen)
         vertices = {"v0": mb.edges[pts.edge, 0], "v1": mb.edges[pts.edge, 1], **mirror_vertices(geom, cf)}
-        terms.append(boundary_term(pts, camera_jump * cf.follows[:, None], d, speed, vertices, n_points))
+        terms.append(boundary_term(pts, jump, d, speed, vertices, n_points))
     if mb.shadow_points is not None and len(mb.shadow_points.edge):
         pts, seg = mb.shadow_points, mb.shadows
 
@@ -311,4 +393,58 @@ def mirror_terms(scene, geom, fx, mb: MirroredSegments, sources: ShadowSources |
         cf, jump, speed = keep("mirrored shadows", shadows)
         terms.append(boundary_term(pts, jump, d, speed, {**shadow_vertices(geom, seg, pts), **mirror_vertices(geom, cf)},
                                    n_points, (seg.source[pts.edge], len(sources.at))))
-    return terms
+    if mb.checker_points is not None and len(mb.checker_points.edge):
+        terms.append(mirrored_checker_term(scene, geom, fx, mb, sides, d, device, keep))
+    lights = {}
+    if mb.spot_points is not None and len(mb.spot_points.edge):
+        term, lights = mirrored_spot_term(scene, geom, fx, mb, d, device, keep)
+        terms.append(term)
+    return terms, lights
+
+
+def mirrored_checker_term(scene, geom, fx, mb: MirroredSegments, sides, d: np.ndarray, device: str,
+                          keep) -> BoundaryTerm:
+    """The checkers' lines seen in mirrors: their jump ``sides(pts)`` (the forward walk's) where the ray follows
+    its chain, their speed that of the segment between the line's ends (EDGE: the ends fixed barycentric
+    combinations of the face's corners, so a corner's speed is the ends' weighted by its weights), into the
+    faces' corners, the mirrors' and the camera."""
+    pts, seg = mb.checker_points, mb.checkers
+    corners = geom.indices_np.reshape(-1, 3).astype(np.int64)[seg.face[pts.edge]]
+    w = seg.weights[pts.edge]  # (N, 2, 3)
+
+    def made():
+        cf = chain_faces(scene, geom, fx, mb.group, mb.chains, mb.checker_chain, pts, device)
+        rows = np.zeros((len(pts.edge), 6, 3))
+        rows[:, :2] = np.einsum("nec,ncx->nex", w, geom.points_np.astype(np.float64)[corners])
+        speed = mirrored_speeds(scene, geom, rows, np.full(len(pts.edge), EDGE), cf, pts, device)
+        for c in range(3):
+            speed[f"p{c}"] = w[:, 0, c, None] * speed["v0"] + w[:, 1, c, None] * speed["v1"]
+        return cf, sides(pts) * cf.follows[:, None], speed
+    cf, jump, speed = keep("mirrored checkers", made)
+    vertices = {"p0": corners[:, 0], "p1": corners[:, 1], "p2": corners[:, 2], **mirror_vertices(geom, cf)}
+    return boundary_term(pts, jump, d, speed, vertices, len(geom.points_np))
+
+
+def mirrored_spot_term(scene, geom, fx, mb: MirroredSegments, d: np.ndarray, device: str,
+                       keep) -> tuple[BoundaryTerm, dict]:
+    """The hard cones' chords seen in mirrors: their jump the spot's own light either side at its ray's hit
+    through its chain, times the mirrors' k_r (source_sides of that level), where the ray follows its chain;
+    their speed the cone's curve's through the reflections (CONE), into the receivers' corners, the mirrors'
+    and the camera; and per spot its position's and direction's sums (as grad_spot_edges.spot_term's)."""
+    pts, seg, c = mb.spot_points, mb.spots, mb.cones
+    spot = seg.spot[pts.edge]
+    corners = geom.indices_np.reshape(-1, 3).astype(np.int64)[seg.face[pts.edge]]
+
+    def made():
+        cf = chain_faces(scene, geom, fx, mb.group, mb.chains, mb.spot_chain, pts, device)
+        source = np.stack([np.full(len(spot), SOURCE_LIGHT), c.l[spot], np.full(len(spot), -1)], axis=1)
+        jump = source_sides(scene, geom, fx, source.astype(np.int32), pts, device, level=cf.level)
+        rows = np.zeros((len(spot), 6, 3))
+        rows[:, 0], rows[:, 2], rows[:, 3:] = c.axis[spot], c.at[spot], geom.points_np.astype(np.float64)[corners]
+        speed = mirrored_speeds(scene, geom, rows, np.full(len(spot), CONE), cf, pts, device, c.cos[spot])
+        return cf, jump * cf.follows[:, None], speed
+    cf, jump, speed = keep("mirrored spots", made)
+    vertices = {"p0": corners[:, 0], "p1": corners[:, 1], "p2": corners[:, 2], **mirror_vertices(geom, cf)}
+    term = boundary_term(pts, jump, d, speed, vertices, len(geom.points_np))
+    return term, spot_sums(c, spot, pts.weight * np.einsum("ij,ij->i", d[pts.pixel], jump), speed["light"],
+                           speed["v0"])

@@ -91,11 +91,12 @@ def _curve(c: Cones, s: int, corner: np.ndarray, phi: np.ndarray) -> tuple:
     return y, inside
 
 
-def spot_segments(scene, geom, r: Receivers, c: Cones) -> SpotSegments:
+def spot_segments(scene, geom, r: Receivers, c: Cones, basis=None) -> SpotSegments:
     """The SpotSegments of every hard spot on the faces it may light in view (Receivers.lit, a flat face on the
-    side the eye sees), all chords at most about CHORD_PX long in the image: a coarse ring of COARSE angles
-    finds the arcs on each face (_arcs)."""
-    b = camera_basis(scene.camera)
+    side the eye sees), all chords at most about CHORD_PX long in the image seen from r.eye along ``basis`` (the
+    camera's, or a virtual camera's: grad_mirror_edges.MirrorChain.basis): a coarse ring of COARSE angles finds
+    the arcs on each face (_arcs)."""
+    b = camera_basis(scene.camera) if basis is None else basis
     parts = []
     for s in range(len(c.l)):
         toward = np.sign(np.einsum("ij,ij->i", r.normal, c.at[s] - r.p[r.faces[:, 0]]))
@@ -161,11 +162,14 @@ def _cone_values(c: Cones, spot: np.ndarray, corner: np.ndarray, at: np.ndarray,
     return np.einsum("ij,ij->i", to, c.axis[spot]) / np.linalg.norm(to, axis=1) - c.cos[spot]
 
 
-def on_cones(scene, geom, c: Cones, segments: SpotSegments, pts: EdgePoints, eye: np.ndarray) -> EdgePoints:
+def on_cones(scene, geom, c: Cones, segments: SpotSegments, pts: EdgePoints, eye: np.ndarray,
+             basis=None) -> EdgePoints:
     """``pts`` (the Gauss points of the chords' pieces) moved onto the true curves: NEWTON steps along the
     image gradient of g (_cone_values; central differences of 1e-4 pixel), each weight times |grad g| / |grad g .
-    n| (n: its chord's image normal), the curve's length per length of its chord there."""
-    b = camera_basis(scene.camera)
+    n| (n: its chord's image normal), the curve's length per length of its chord there. The rays from ``eye``
+    along ``basis``: the camera's, or a virtual camera's, whose straight rays are the camera rays' last leg
+    through a chain of mirrors (grad_mirror_edges.MirrorChain.basis)."""
+    b = camera_basis(scene.camera) if basis is None else basis
     spot, corner = segments.spot[pts.edge], geom.points_np.astype(np.float64)[
         geom.indices_np.reshape(-1, 3)[segments.face[pts.edge]]]
     at, h = pts.at.astype(np.float64), 1e-4
@@ -228,10 +232,16 @@ def spot_term(scene, geom, fx, c: Cones, segments: SpotSegments, pts: EdgePoints
     term = boundary_term(pts, jump, d, speed, {"p0": corners[:, 0], "p1": corners[:, 1], "p2": corners[:, 2]},
                          len(geom.points_np))
     w = pts.weight * np.einsum("ij,ij->i", d[pts.pixel], jump)
-    spot = segments.spot[pts.edge]
-    position, axis = (add_at(len(c.l), [spot], w, [speed[key]]) for key in ("light", "axis"))
+    return term, spot_sums(c, segments.spot[pts.edge], w, speed["light"], speed["axis"])
+
+
+def spot_sums(c: Cones, spot: np.ndarray, w: np.ndarray, position: np.ndarray, axis: np.ndarray) -> dict:
+    """{lights.<i>.position | direction: (3,)}: per spot the sum over its points (``spot``: per point its row of
+    ``c``) of their weights ``w`` times their speeds in its position and axis, in their order; the direction's
+    projected as Light keeps it unit ((I - u u^T))."""
+    sums = [add_at(len(c.l), [spot], w, [v]) for v in (position, axis)]
     lights = {}
     for s, i in enumerate(c.i):
-        lights[f"lights.{i}.position"] = position[s]
-        lights[f"lights.{i}.direction"] = axis[s] - c.axis[s] * (c.axis[s] @ axis[s])
-    return term, lights
+        lights[f"lights.{i}.position"] = sums[0][s]
+        lights[f"lights.{i}.direction"] = sums[1][s] - c.axis[s] * (c.axis[s] @ sums[1][s])
+    return lights

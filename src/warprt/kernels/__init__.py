@@ -74,10 +74,10 @@ from .shadow_edges import (SOURCE_LIGHT, SOURCE_SAMPLE, make_light_sides_kernel,
 __all__ += ["plane_distance", "SOURCE_LIGHT", "SOURCE_SAMPLE", "make_light_sides_kernel", "shadow_edge_distances",
             "shadow_plane"]  # and hard shadows' edges
 from .edges import MirrorEnd, make_mirror_path  # noqa: E402
-from .mirror_edges import (DIRECTIONAL_SHADOW, EDGE, POINT_SHADOW, make_mirror_faces_kernel,  # noqa: E402
+from .mirror_edges import (CONE, DIRECTIONAL_SHADOW, EDGE, POINT_SHADOW, make_mirror_faces_kernel,  # noqa: E402
                            make_mirrored_distances, mirrored_direction, mirrored_point)
 
-__all__ += ["MirrorEnd", "make_mirror_path", "DIRECTIONAL_SHADOW", "EDGE", "POINT_SHADOW", "make_mirror_faces_kernel",
+__all__ += ["MirrorEnd", "make_mirror_path", "CONE", "DIRECTIONAL_SHADOW", "EDGE", "POINT_SHADOW", "make_mirror_faces_kernel",
             "make_mirrored_distances", "mirrored_direction", "mirrored_point"]  # and the edges seen in planar mirrors
 from .spot_edges import cone_distance, spot_edge_distances  # noqa: E402 (a spot's hard cone: backward(edges=True))
 
