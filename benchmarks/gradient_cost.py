@@ -77,11 +77,14 @@ class PeakMemory:
 
 
 def warm(fn, repeat: int, before=None, compiled=None) -> tuple[float, int, object, int]:
-    """(median seconds, peak bytes of the last call, its value, calls that compiled) of ``repeat`` calls of
+    """(median seconds, peak bytes, the last timed call's value, calls that compiled) of ``repeat`` calls of
     ``fn`` after two untimed calls; ``before`` runs ahead of each (untimed: Dr.Jit's cache flush);
     ``compiled``: the seconds the last call spent compiling kernels (Dr.Jit's kernel history), taken out of
     its time: Dr.Jit here compiles a few of its kernels again now and then (about one warm call in five,
-    1 s of 0.45 on seed at 512x384, measured), which is not the cost of its AD."""
+    1 s of 0.45 on seed at 512x384, measured), which is not the cost of its AD. The peak is one more call's,
+    untimed: PeakMemory hands the freed heap back first (malloc_trim), which a caller's loop does not, and
+    the pages faulted in again cost an allocating call time (the edges' backward: 3.32x the forward frame
+    timed under it, 2.2-2.5x in a loop, measured)."""
     for _ in range(2):  # Dr.Jit may still compile a kernel on a second call
         (before or (lambda: None))()
         out = fn()
@@ -89,13 +92,16 @@ def warm(fn, repeat: int, before=None, compiled=None) -> tuple[float, int, objec
     times, recompiled = [], 0
     for _ in range(max(1, repeat)):
         (before or (lambda: None))()
-        with PeakMemory() as peak:
-            t = time.perf_counter()
-            out = fn()
-            seconds = time.perf_counter() - t
+        t = time.perf_counter()
+        out = fn()
+        seconds = time.perf_counter() - t
         spent = (compiled or (lambda: 0.0))()
         recompiled += spent > 0.05
         times.append(seconds - spent)
+    (before or (lambda: None))()
+    with PeakMemory() as peak:
+        fn()
+    (compiled or (lambda: 0.0))()
     return statistics.median(times), peak.bytes, out, recompiled
 
 
@@ -304,9 +310,10 @@ def report(data: dict) -> str:
         "seconds Dr.Jit spent compiling kernels again during a timed call "
         f"({sum(sum(r['mitsuba']['recompiled']) for r in rows)} of {2 * cfg['repeat'] * len(rows)} timed calls did: "
         "Dr.Jit here compiles a few kernels again now and then, about a second each time). "
-        "Peak memory: the resident set's peak during the call above its size before it (Linux's VmHWM, reset "
-        "first; Dr.Jit's allocator cache and the C heap's free memory handed back before), the gradient frame's "
-        "from before `render(grad=True)` to the end of `backward`.",
+        "Peak memory: the resident set's peak during one more, untimed call above its size before it (Linux's "
+        "VmHWM, reset first; Dr.Jit's allocator cache and the C heap's free memory handed back before: timed so, "
+        "the pages an allocating call faults in again cost it time that a caller's loop does not pay), the "
+        "gradient frame's from before `render(grad=True)` to the end of `backward`.",
         "",
         "| scene | levels | params | forward | grad frame | backward | backward / forward | Mitsuba forward | "
         "Mitsuba AD | warprt grad / Mitsuba AD | peak memory: warprt grad | Mitsuba AD | per pixel and level: warprt | Mitsuba |",
