@@ -72,6 +72,25 @@ def spot_scene(spp: int = SPP, unfolded: bool = False):
                   {"wall": {"kd": [0.7, 0.7, 0.6], "ks": [0.0] * 3}}, {"material": "wall"}, unfolded)
 
 
+def two_mirrors_spot_scene(spp: int = SPP):
+    """A cone seen in a mirror seen in a mirror (three ray levels, test_mirror_edges.py's two mirrors): the floor
+    mirror fills the frame, a tilted mirror above the camera turns its rays sideways to a wall, where a hard spot
+    draws its cone: the curve is seen at the third level only."""
+    floor = [[-3.0, 0.0, -3.0], [3.0, 0.0, -3.0], [3.0, 0.0, 3.0], [-3.0, 0.0, 3.0]]
+    return warprt.load_dict({
+        "camera": {"width": WIDTH, "height": HEIGHT, "eye": [0.2, 2.5, 0.3], "center": [0.0, 0.0, 0.0], "fovy": 30.0},
+        "render": {"ambient": [0.1] * 3, "max_depth": 3, "shadows": False, "spp": spp, "background": [0.1, 0.2, 0.3]},
+        "lights": [{"type": "spot", "position": [7.0, 6.0, 0.5], "target": [10.0, 6.5, 0.0], "cutoff_angle": 25.0,
+                    "beam_width": 25.0, "color": [3.0, 3.0, 3.0]}],
+        "materials": {"mirror": MIRROR, "wall": {"kd": [0.6, 0.6, 0.5], "ks": [0.0] * 3}},
+        "objects": [{"shape": "triangles", "name": "floor", "vertices": floor, "faces": [[0, 2, 1], [0, 3, 2]],
+                     "material": "mirror"},
+                    {"shape": "triangles", "name": "tilted", "faces": QUAD, "material": "mirror",
+                     "vertices": [[-2.5, 1.5, -4.0], [5.5, 9.5, -4.2], [5.6, 9.6, 4.0], [-2.5, 1.5, 4.1]]},
+                    {"shape": "triangles", "name": "wall", "faces": QUAD, "material": "wall",
+                     "vertices": [[10.0, -1.0, -6.0], [10.2, 13.0, -6.0], [10.0, 13.0, 6.0], [9.9, -1.0, 6.0]]}]})
+
+
 SPOT = spot_scene().lights[0]
 
 
@@ -106,7 +125,9 @@ CASES = [(spot_scene, "lights.0.direction", 5, 4e-2, 1, "weights"),  # 0.71% (10
          (spot_scene, "objects.mirror.translation", 6, 2e-2, 2, "weights"),  # 0.26% (87%)
          (checker_scene, "objects.back.translation", 8, 4e-2, 3, "positive"),  # 0.48% (105%)
          # at h = 4e-2 3.8% off (the differences' slopes at h and h / 2 8% apart at 128 x 128: not settled)
-         (checker_scene, "camera.eye", 7, 8e-2, 3, "positive")]  # 1.6% (54%)
+         (checker_scene, "camera.eye", 7, 8e-2, 3, "positive"),  # 1.6% (54%)
+         (two_mirrors_spot_scene, "lights.0.direction", 5, 4e-2, 2, "weights"),  # 0.57% (100%; 3.0% at k = 1)
+         (two_mirrors_spot_scene, "lights.0.position", 5, 4e-2, 2, "weights")]  # 1.4% (104%)
 QUICK = {0}  # the rest: make test-exhaustive's alone (30 to 60 s each on 2 shared cores)
 
 
