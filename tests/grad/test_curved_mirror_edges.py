@@ -85,7 +85,7 @@ def test_a_flat_mirror_seen_as_curved_gives_the_unfolded_term(positive):
 
 
 # (scene, name, seed, step h), each with its measured |edges=True - fd| / |fd| and the interior's (edges=False); the
-# differences at 64 x 64 strata a pixel (k = 1), about 45 s a case on 2 cores: make test-exhaustive's.
+# differences at 64 x 64 strata a pixel (k = 1), about 30 s a case on 2 cores: make test-exhaustive's.
 CASES = [(ball_scene, "objects.occ.vertices", 4, 2e-2),  # 1.9% (interior 28%)
          (ball_scene, "lights.0.position", 5, 2e-2)]  # 0.59% (interior 23%)
 
