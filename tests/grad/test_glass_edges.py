@@ -166,29 +166,30 @@ def test_what_the_crossings_leave_out_is_refused_in_one_line(weights, case):
     a glass object's own vertices and pose (they move the glass's outline and what it bends at once): one line
     naming ``edges`` and why; an occluder's vertices are not refused, and edges=False never is."""
     make, name, why = REFUSED[case]
-    r = warprt.Renderer(make(1))
-    r.render(grad=True)
-    with pytest.raises(warprt.SceneError, match="edges") as e:
-        r.backward(weights, wrt=[name], edges=True)
-    assert why in str(e.value) and "\n" not in str(e.value)
-    r.backward(weights, wrt=[name], edges=False)
-    r.backward(weights, wrt=["objects.occ.vertices"], edges=True)
-    r.close()
+    assert_refused(make(1), weights, name, [why], ["objects.occ.vertices"])
 
 
-def _with_checker_wall(spp: int):
-    s = slab_scene(spp)
+def checker_wall(s):
+    """``s`` with a checker on its wall."""
     mats = dict(s.materials)
     mats["wall"] = replace(mats["wall"], kd_texture=Texture(checker=((1.0, 1.0, 1.0), (0.3, 0.3, 0.3)),
                                                             uv_transform=(4.0, 0.0, 0.0, 0.0, 4.0, 0.0)))
     return replace(s, materials=mats)
 
 
-def _with_hard_spot(spp: int):
-    s = slab_scene(spp)
-    spot = warprt.Light(type="spot", position=(1.0, 2.5, 3.0), direction=(-0.3, -0.6, -1.0), cutoff_angle=25.0,
+def hard_spot(s, direction: tuple):
+    """``s`` with its light a hard spot along ``direction``."""
+    spot = warprt.Light(type="spot", position=s.lights[0].position, direction=direction, cutoff_angle=25.0,
                         beam_width=25.0)
     return replace(s, lights=[spot])
+
+
+def _with_checker_wall(spp: int):
+    return checker_wall(slab_scene(spp))
+
+
+def _with_hard_spot(spp: int):
+    return hard_spot(slab_scene(spp), (-0.3, -0.6, -1.0))
 
 
 @pytest.mark.parametrize("make, why", [(_with_checker_wall, "checker texture's squares'"),
@@ -197,10 +198,18 @@ def test_a_checker_or_a_hard_cone_seen_through_glass_is_refused_in_one_line(weig
     """The crossings' signature holds the faces and the shadow rays' answers, not a checker's squares or a spot's
     cone: with either in a glass scene an occluder's vertices are refused in one line naming it (seen directly both
     are covered: test_checker_edges.py, test_spot_edges.py); edges=False is not refused."""
-    r = warprt.Renderer(make(1))
+    assert_refused(make(1), weights, "objects.occ.vertices", [why, "through glass"])
+
+
+def assert_refused(scene, weights, name: str, words: list, covered: tuple = ()):
+    """backward(edges=True) in ``name`` at a grad frame of ``scene`` raises one line naming ``edges`` and holding
+    each of ``words``; edges=False does not, nor edges=True in the ``covered`` parameters."""
+    r = warprt.Renderer(scene)
     r.render(grad=True)
     with pytest.raises(warprt.SceneError, match="edges") as e:
-        r.backward(weights, wrt=["objects.occ.vertices"], edges=True)
-    assert why in str(e.value) and "through glass" in str(e.value) and "\n" not in str(e.value)
-    r.backward(weights, wrt=["objects.occ.vertices"], edges=False)
+        r.backward(weights, wrt=[name], edges=True)
+    assert all(w in str(e.value) for w in words) and "\n" not in str(e.value), str(e.value)
+    r.backward(weights, wrt=[name], edges=False)
+    if covered:
+        r.backward(weights, wrt=list(covered), edges=True)
     r.close()

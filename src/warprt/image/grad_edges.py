@@ -19,7 +19,7 @@ from .grad_checker_edges import CheckerSegments, checker_segments, checker_speed
 from .grad_edge_launch import host_array, launch_points
 from .grad_edge_points import (EDGE_OFFSET_PX, BoundaryTerm, EdgePoints, add_terms, boundary_term, camera_adjoints, camera_copies,
                                segment_points)
-from .grad_glass_edges import glass_crossings, glass_refusal, glass_terms, traced_colours
+from .grad_glass_edges import crossed_surfaces, crossing_refusal, glass_crossings, glass_terms, traced_colours
 from .grad_mesh_edges import MeshEdges, camera_edges, face_normals, facing, mesh_edges
 from .grad_mirror_edges import (BLOCKS, MirroredSegments, frame_mirrors, mirror_terms, mirrored_segments,
                                 on_mirrored_cones)
@@ -69,27 +69,30 @@ def moves_edges(name: str) -> bool:
 
 def edge_refusal(scene, geom, fx, wrt, mirrors=None) -> str | None:
     """Why backward(edges=True) would leave out an edge that the parameters ``wrt`` move (None: the camera
-    rays' edges, the hard shadows', a checker's squares', a spot's hard cone, and those seen in planar mirrors and
-    through glass are all of them): glass's that the crossings do not cover (grad_glass_edges.glass_refusal), a
-    checker's squares or a spot's hard cone seen through glass, a curved mirror's or too many mirrors'
-    (frame_mirrors, or ``mirrors()``: its answer kept). (A reflectivity of 0
+    rays' edges, the hard shadows', a checker's squares', a spot's hard cone, and those seen in mirrors and
+    through glass are all of them): glass's and curved mirrors' that the crossings do not cover
+    (grad_glass_edges.crossing_refusal), a checker's squares or a spot's hard cone seen through glass or in a
+    curved mirror, too many planar mirrors' (frame_mirrors, or ``mirrors()``: its answer kept). (A reflectivity of 0
     whose mirror rays a frame records for its derivative reflects nothing: no edge is seen in it.)"""
     moving = [n for n in wrt if moves_edges(n)]
     if not moving:
         return None
-    if scene.render.max_depth > 1 and fx.refraction:
-        why = glass_refusal(scene, geom, fx, moving)
+    surfaces = crossed_surfaces(scene, geom, fx)
+    if any(on.any() for on in surfaces.values()):
+        why = crossing_refusal(scene, geom, fx, moving)
         if why is not None:
-            return f"{moving[0]} moves the edges seen through glass {why}, not differentiated yet"
+            return f"{moving[0]} moves {why}, not differentiated yet"
         seen = "a checker texture's squares'" if has_checker(scene, geom) else "a spot light's hard cone's" \
             if hard_spots(scene) else None
+        where = " or ".join(w for w, k in (("through glass", "glass"), ("in curved mirrors", "curved mirror"))
+                            if surfaces[k].any())
         if seen is not None:  # the crossings' signature has faces and shadow answers, not squares or cones
-            return (f"{moving[0]} moves {seen} edges seen through glass, not differentiated yet: only where camera "
+            return (f"{moving[0]} moves {seen} edges seen {where}, not differentiated yet: only where camera "
                     f"rays see them")
     reflects = scene.render.max_depth > 1 and fx.reflection
     chains, why = (mirrors or partial(frame_mirrors, scene, geom))()[2:] if reflects else ((), None)
     if why is not None:
-        return f"{moving[0]} moves the edges seen in {why}, not differentiated yet: only those seen in planar mirrors"
+        return f"{moving[0]} moves the edges seen in {why}, not differentiated yet"
     return None
 
 
@@ -238,7 +241,7 @@ def edge_gradients(scene, geom, frame: EdgeFrame, d: np.ndarray, wrt, device: st
         terms += mirrored
         for name, g in seen.items():
             lights[name] = lights[name] + g if name in lights else g
-    if frame.fx.refraction and frame.max_depth > 1:
+    if any(on.any() for on in keep("crossed", lambda: crossed_surfaces(scene, geom, frame.fx)).values()):
         terms += glass_terms(keep("glass", lambda: glass_crossings(scene, geom, frame, device)), d3,
                              len(geom.points_np))
     term = add_terms(terms, len(geom.points_np))

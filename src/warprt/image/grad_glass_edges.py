@@ -1,7 +1,8 @@
-"""The boundary term of the edges seen through glass (backward(edges=True); docs/gradients.md, "Edges seen through
-glass"): a refracted edge is no straight segment of any scene, so instead of enumerating edges the image is
-crossed by fixed lines (LINES a pixel each way), each walked with the forward's ray tree (kernels/glass_edges.py
-make_tree_kernel) at STEPS points a pixel; where neighbours' tree signatures part below a dielectric's split, the
+"""The boundary term of the edges seen through glass and in curved mirrors (backward(edges=True); docs/gradients.md,
+"Edges seen through glass"): a refracted edge, or one a curved mirror reflects, is no straight segment of any scene,
+so instead of enumerating edges the image is crossed by fixed lines (LINES a pixel each way), each walked with the
+forward's ray tree (kernels/glass_edges.py make_tree_kernel) at STEPS points a pixel; where neighbours' tree
+signatures part below a dielectric's split or a curved mirror's bounce (crossed_surfaces), the
 crossing is found by bisection, the radiance traced either side, and its speed along the line taken from the
 parting node's boundary function by implicit differentiation (make_tree_distances, on Warp's adjoint). Each line's
 Leibniz rule, horizontal and vertical lines weighted by the crossing's image normal, gives the term."""
@@ -16,6 +17,7 @@ from ..scene import camera_basis
 from .grad_edge_launch import host_array, launch_points
 from .grad_edge_points import EDGE_OFFSET_PX, EdgePoints, boundary_term, camera_adjoints, camera_copies, \
     ray_directions
+from .grad_mirror_edges import mirror_planes
 from .grad_shadow_edges import shadow_sources
 from .mirrors import empty_mirrors
 from .params import object_names
@@ -28,11 +30,38 @@ BISECTIONS = 14
 MAX_CROSSINGS = 8  # signature changes found between two neighbouring points  # a crossing found within 2^-14 of a step (8e-6 of a pixel)
 MAX_GLASS_DEPTH = 6  # ray levels: 63 tree nodes a point
 POINTS_A_WALK = 1 << 18  # points walked at once (their signatures' memory: nodes x 8 bytes each)
+TURNS = {"glass": "bends", "curved mirror": "reflects"}  # what each crossed surface does to what is seen in it
 
 
-def glass_refusal(scene, geom, fx, moving: list) -> str | None:
-    """Why the crossings would miss an edge seen through glass that the parameters ``moving`` move (None: they
-    cover them): the words after "the edges seen through glass"."""
+def crossed_surfaces(scene, geom, fx) -> dict:
+    """Per kind of surface below whose rays the crossings follow the edges ("glass": a dielectric's split,
+    "curved mirror": a bounce off a reflective triangle in no planar group, grad_mirror_edges.mirror_planes;
+    a planar mirror's are unfolded), per triangle whether it is one, where the frame traces those rays."""
+    n = geom.triangle_count
+    glass = np.zeros(n, bool)
+    curved = np.zeros(n, bool)
+    if scene.render.max_depth > 1 and fx.refraction:
+        glass = np.array([m.ior is not None for m in geom.slot_materials(scene)])[geom.tri_material_np[:n]]
+    if scene.render.max_depth > 1 and fx.reflection:
+        curved = mirror_planes(scene, geom)[2]
+    return {"glass": glass, "curved mirror": curved}
+
+
+def crossing_refusal(scene, geom, fx, moving: list) -> str | None:
+    """Why the crossings would miss an edge seen through glass or in a curved mirror that the parameters
+    ``moving`` move (None: they cover them, or there are none): "the edges seen through glass" (or "in curved
+    mirrors") and why."""
+    surfaces = crossed_surfaces(scene, geom, fx)
+    kinds = [kind for kind, on in surfaces.items() if on.any()]
+    if not kinds:
+        return None
+    seen = " and ".join({"glass": "through glass", "curved mirror": "in curved mirrors"}[k] for k in kinds)
+    why = _crossing_refusal(scene, geom, fx, moving, surfaces, kinds)
+    return None if why is None else f"the edges seen {seen} {why}"
+
+
+def _crossing_refusal(scene, geom, fx, moving: list, surfaces: dict, kinds: list) -> str | None:
+    """crossing_refusal's why, in the words after "the edges seen through glass"."""
     if scene.render.max_depth > MAX_GLASS_DEPTH:
         return f"at more than {MAX_GLASS_DEPTH} ray levels (render.max_depth)"
     if fx.area_lights:
@@ -41,11 +70,13 @@ def glass_refusal(scene, geom, fx, moving: list) -> str | None:
         return "as its ior bends them"
     camera = [n for n in moving if n.startswith("camera.")]
     if camera:
-        return f"as the camera moves the glass's own outline and what it bends ({camera[0]})"
-    glass = np.array([m.ior is not None for m in geom.slot_materials(scene)])[geom.tri_material_np]
+        return f"as the camera moves the {kinds[0]}'s own outline and what it {TURNS[kinds[0]]} ({camera[0]})"
+    tri_object = geom.tri_object_np[:geom.triangle_count]
     for name, i in object_names(scene).items():
-        if np.any(glass[geom.tri_object_np == i]) and any(n.startswith(f"objects.{name}.") for n in moving):
-            return f"as a glass object's own vertices or pose move its outline and what it bends (objects.{name})"
+        for kind in kinds:
+            if np.any(surfaces[kind][tri_object == i]) and any(n.startswith(f"objects.{name}.") for n in moving):
+                return (f"as a {kind} object's own vertices or pose move its outline and what it {TURNS[kind]} "
+                        f"(objects.{name})")
     return None
 
 
@@ -181,13 +212,14 @@ def _edge_of(geom, face: np.ndarray, uv: np.ndarray) -> np.ndarray:
     return np.stack([corners[rows, (c + 1) % 3], corners[rows, (c + 2) % 3]], axis=1)
 
 
-def _parting(scene, geom, frame, lo: np.ndarray, hi: np.ndarray, through: bool, device: str) -> dict:
+def _parting(scene, geom, frame, lo: np.ndarray, hi: np.ndarray, curved: np.ndarray | None, device: str) -> dict:
     """Per crossing (lo, hi its two sides) the first tree node (in the tree's level order) where the two
     signatures part (faces both traced and different, or the lights its shadow rays find blocked), what parts
     them (``kind``: FACE_EDGE, or a wedge of light ``light``) and its edge (``edge``: the nearer face's edge
     nearest its hit, or the blocker's nearest its shadow ray's hit), the lo side's faces (``faces``) and
-    ``keep``: a parting found, and with ``through`` below a dielectric's split (a camera ray's own node, or one
-    only mirrors lead to, is the camera's, shadows' and mirrors' terms')."""
+    ``keep``: a parting found, and unless ``curved`` is None below a dielectric's split or a bounce off a curved
+    mirror (``curved``: per triangle; _bounced): a camera ray's own node, or one only planar mirrors lead to, is the
+    camera's, shadows' and mirrors' terms'."""
     a, b = tree_walk(scene, geom, frame, lo, device, True), tree_walk(scene, geom, frame, hi, device, True)
     rows = np.arange(len(lo))
     both = (a["face"] != NO_RAY) & (b["face"] != NO_RAY)
@@ -195,8 +227,8 @@ def _parting(scene, geom, frame, lo: np.ndarray, hi: np.ndarray, through: bool, 
     differ = faces_part | (both & (a["blocked"] != b["blocked"]))
     node = np.argmax(differ, axis=1)
     keep = differ.any(axis=1)
-    if through:
-        keep &= (node > 0) & (a["below"][rows, node] != 0)
+    if curved is not None:
+        keep &= (node > 0) & ((a["below"][rows, node] != 0) | _bounced(a["face"], node, curved))
     fa, fb = a["face"][rows, node], b["face"][rows, node]
     use_a = (fb < 0) | ((fa >= 0) & (a["hit"][rows, node, 2] <= b["hit"][rows, node, 2]))
     face = np.where(use_a, fa, fb)
@@ -212,6 +244,20 @@ def _parting(scene, geom, frame, lo: np.ndarray, hi: np.ndarray, through: bool, 
     keep &= face >= 0
     return {"node": node, "kind": np.where(shadow, POINT_WEDGE, FACE_EDGE), "light": light,
             "edge": _edge_of(geom, face, uv), "faces": a["face"], "keep": keep}
+
+
+def _bounced(faces: np.ndarray, node: np.ndarray, curved: np.ndarray) -> np.ndarray:
+    """Per row whether its tree's node ``node`` (faces: (N, nodes), the tree's) lies below a bounce off a face
+    ``curved`` marks: one of its ancestors' faces is (a reflective face's child is its mirror ray)."""
+    rows = np.arange(len(node))
+    out = np.zeros(len(node), bool)
+    node = node.copy()
+    while np.any(node > 0):
+        up = node > 0
+        node = np.where(up, (node - 1) // 2, 0)
+        f = faces[rows, node]
+        out |= up & (f >= 0) & curved[np.maximum(f, 0)]
+    return out
 
 
 def _path(scene, geom, frame, x: dict) -> tuple:
@@ -279,7 +325,7 @@ def _speeds(scene, geom, frame, x: dict, sources, at: np.ndarray, device: str) -
     return {"speed": speed, "points": points}
 
 
-def _axis_crossings(scene, geom, frame, sources, axis: int, through: bool, device: str) -> tuple:
+def _axis_crossings(scene, geom, frame, sources, axis: int, curved: np.ndarray | None, device: str) -> tuple:
     """(EdgePoints, jump, speed, points, light rows) of the crossings of the lines along ``axis``: per crossing
     its place, its pixel, its weight -sign(g_axis) / (LINES (|g_x| + |g_y|)) (the line's Leibniz term
     dx_c/dtheta = -g_theta / g_axis, times the line's share |g_axis| / (|g_x| + |g_y|), over the lines' spacing)
@@ -287,7 +333,7 @@ def _axis_crossings(scene, geom, frame, sources, axis: int, through: bool, devic
     lo, hi = _pairs(scene, geom, frame, line_points(scene.camera, axis), device)
     if len(lo):
         lo, hi = _crossings(scene, geom, frame, lo, hi, device)
-        x = _parting(scene, geom, frame, lo, hi, through, device)
+        x = _parting(scene, geom, frame, lo, hi, curved, device)
         keep = x.pop("keep")
         x, lo, hi = {k: v[keep] for k, v in x.items()}, lo[keep], hi[keep]
     if not len(lo):
@@ -327,9 +373,11 @@ def _strip_pixels(cam, at: np.ndarray, g: np.ndarray, axis: int) -> np.ndarray:
 
 def glass_crossings(scene, geom, frame, device: str, through: bool = True) -> list:
     """The crossings of both sets of lines (_axis_crossings; with ``through`` only those below a dielectric's
-    split): what the frame alone decides of the term, kept for its next backward."""
+    split or a curved mirror's bounce: crossed_surfaces): what the frame alone decides of the term, kept for its
+    next backward."""
     sources = shadow_sources(scene, geom) if frame.fx.shadows else None
-    parts = [_axis_crossings(scene, geom, frame, sources, axis, through, device) for axis in (0, 1)]
+    curved = crossed_surfaces(scene, geom, frame.fx)["curved mirror"] if through else None
+    parts = [_axis_crossings(scene, geom, frame, sources, axis, curved, device) for axis in (0, 1)]
     return [(p, sources) for p in parts if p is not None]
 
 

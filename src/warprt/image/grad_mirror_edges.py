@@ -69,21 +69,16 @@ def reflection(plane: np.ndarray) -> np.ndarray:
     return out
 
 
-def mirror_planes(scene, geom) -> tuple[np.ndarray, np.ndarray, str | None]:
-    """(group per triangle, planes, why not): the planar mirror groups of the frame's reflective triangles
-    (geometry.planar_groups: k_r > 0 in float32, as the kernels read it), and why the edges seen in its mirrors
-    cannot all be followed through planes (a reflective triangle in no group: a smooth, curved mirror, or more
-    planes than planar_groups keeps), None where they can."""
+def mirror_planes(scene, geom) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(group per triangle, planes, curved): the planar mirror groups of the frame's reflective triangles
+    (geometry.planar_groups: k_r > 0 in float32, as the kernels read it), and per triangle whether it reflects
+    in no group (a smooth, curved mirror, or past the planes planar_groups keeps): the edges seen in those cannot
+    be followed through planes, and are the crossings' (grad_glass_edges: below a curved mirror's bounce)."""
     kr = np.asarray([m.reflectivity for m in geom.slot_materials(scene)] or [[0.0] * 3], np.float32).reshape(-1, 3)
     reflective = kr.max(axis=1) > 0.0
     group, planes = planar_groups(geom, reflective)
     n = geom.triangle_count
-    curved = reflective[geom.tri_material_np[:n]] & (group[:n] < 0)
-    if not curved.any():
-        return group, planes, None
-    name = geom.material_names[geom.tri_material_np[:n][curved][0]]
-    why = "a smooth (curved) mirror" if geom.tri_smooth_np[:n][curved].any() else "more mirror planes than followed"
-    return group, planes, f"{why}, materials.{name}"
+    return group, planes, reflective[geom.tri_material_np[:n]] & (group[:n] < 0)
 
 
 def mirror_chains(scene, geom, eye: np.ndarray, group: np.ndarray, planes: np.ndarray) -> list[MirrorChain]:
@@ -108,12 +103,12 @@ def mirror_chains(scene, geom, eye: np.ndarray, group: np.ndarray, planes: np.nd
 
 def frame_mirrors(scene, geom) -> tuple:
     """(group, planes, chains, why not) of a frame's mirrors, seen from its eye: mirror_planes' groups and
-    planes, mirror_chains' chains (none where a curved mirror refuses them), and what backward(edges=True)
-    cannot follow the edges seen in them through (None: nothing): a curved mirror (mirror_planes), or more than
-    MAX_CHAINS chains of mirrors. Made once a frame (grad_edges.kept_part): the refusal and the boundary read it."""
-    group, planes, why = mirror_planes(scene, geom)
-    chains = [] if why is not None else mirror_chains(scene, geom, geom.eye_offset(scene.camera.eye).astype(np.float64),
-                                                      group, planes)
+    planes, mirror_chains' chains of the planar ones (a curved mirror's reflections are the crossings'), and what
+    backward(edges=True) cannot follow the edges seen in them through (None: nothing): more than MAX_CHAINS
+    chains of mirrors. Made once a frame (grad_edges.kept_part): the refusal and the boundary read it."""
+    group, planes, _ = mirror_planes(scene, geom)
+    chains = mirror_chains(scene, geom, geom.eye_offset(scene.camera.eye).astype(np.float64), group, planes)
+    why = None
     if len(chains) > MAX_CHAINS:
         why = f"more than {MAX_CHAINS} chains of mirrors within render.max_depth {scene.render.max_depth}"
     return group, planes, chains, why
