@@ -15,7 +15,7 @@ import sys
 import tomllib
 from pathlib import Path
 
-from . import __version__, diagnostics
+from . import __version__, diagnostics, interrupt
 from .errors import ArgumentError, SceneError, one_line
 from .options import DEVICES, RenderOptions
 from .scene import AREA_ESTIMATORS, EFFECTS, input_kind
@@ -498,6 +498,7 @@ def run():
     command makes is written, renamed into place and closed by then; finalizing Warp's and LLVM's
     native state and every module only delays the prompt (0.11 s of a 0.57 s cold render of the
     default scene, measured with `python -m warprt render -q`)."""
+    interrupt.install()  # a Ctrl-C Python drops is noted and raised again by the band loop (interrupt.py)
     try:
         code = main()
     except SystemExit as e:  # argparse's --help, --version and usage errors; sys.exit's meaning kept

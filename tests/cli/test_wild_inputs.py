@@ -15,6 +15,7 @@ import subprocess
 import sys
 import textwrap
 import threading
+import time
 from pathlib import Path
 
 import numpy as np
@@ -554,6 +555,32 @@ def test_a_sigint_during_a_render_stops_its_bands():
         signal.signal(signal.SIGINT, previous)
     assert later == at_raise
     assert at_raise <= 3
+
+
+def test_a_ctrl_c_that_python_dropped_is_raised_again_by_the_band_loop():
+    """The command line's SIGINT handler notes the signal before it raises (warprt/interrupt.py); where Python
+    drops that raise (inside a __del__: what a loaded full run met, the render then going on to its end), the
+    band loop raises it at its next poll. Here the note alone, made at the first band's end with no signal
+    sent, stops the render as a delivered SIGINT does; the control, the same render without it, finishes."""
+    pending = warprt.cli.interrupt.PENDING
+
+    def note(n):  # the bands that end meanwhile wait until the loop has taken the note, as the SIGINT test's
+        if n == 1:
+            pending.set()
+        deadline = time.monotonic() + 60
+        while pending.is_set() and time.monotonic() < deadline:
+            time.sleep(0.001)
+        assert not pending.is_set(), "the band loop never took the note"
+
+    try:
+        at_raise, later = _interrupted(BandCounter(note))
+    finally:
+        pending.clear()
+    assert later == at_raise and at_raise <= 3
+    counter = BandCounter()
+    scene = warprt.load_scene(Path(__file__).parents[2] / "scenes" / "cornell.toml").with_camera(width=96, height=72)
+    warprt.render(scene, threads=2, bands=16, progress=counter, primary_query="raytrace")
+    assert counter.done == 16
 
 
 # --- What the fuzzing found (tests/cli/test_fuzz.py), each as its smallest file -------------------------

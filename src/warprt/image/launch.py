@@ -10,6 +10,7 @@ from concurrent.futures import FIRST_EXCEPTION, ThreadPoolExecutor, wait
 import numpy as np
 
 from .._warp import wp
+from ..interrupt import raise_pending
 
 
 def default_threads() -> int:
@@ -99,6 +100,7 @@ def run_bands(run_band, n_items: int, threads: int, bands: int, device: str, poo
 
     if threads <= 1 or len(ranges) <= 1 or device != "cpu":
         for r in ranges:
+            raise_pending()
             run(r)
     elif pool is not None:
         _run_bands(pool, run, ranges, stop)
@@ -122,6 +124,7 @@ def _run_bands(pool: ThreadPoolExecutor, run, ranges, stop: threading.Event):
         # the whole frame (measured: 1 time in 12 when it came at the end of the first band).
         while True:
             done, running = wait(futures, timeout=POLL_SECONDS, return_when=FIRST_EXCEPTION)
+            raise_pending()  # a Ctrl-C the command line noted that Python dropped (interrupt.py)
             failed = next((f for f in done if f.exception() is not None), None)
             if failed is not None:
                 failed.result()
