@@ -1,7 +1,7 @@
 """Ctrl-C that Python dropped. The command line's SIGINT handler (cli.run) notes the signal here before it
 raises KeyboardInterrupt in the main thread; Python drops an exception raised while the main thread runs a
-__del__ ("Exception ignored in": freeing a Warp array, say), and the render then went on to its end (exit 0
-after 52 s of a 4096 x 3072 frame, tests/cli/test_wild_inputs.py, on a loaded run). The frame's band loop
+__del__ ("Exception ignored in": freeing a Warp array, say, as a loaded full run met in
+tests/cli/test_wild_inputs.py's in-process SIGINT test), and the render then goes on to its end. The frame's band loop
 (image/launch.py) reads the note at each of its polls and raises the interrupt again. A library caller's own
 handler (Python's, a notebook's) is left alone: nothing is noted, and nothing changes."""
 from __future__ import annotations
