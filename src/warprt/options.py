@@ -55,7 +55,9 @@ class RenderOptions:
                                         "zbuffer (hybrid: the Z-buffer's triangle wherever it is certain, the rest traced)",
                                 choices=PRIMARY_QUERIES)
     shadow_query: str = option("auto", "what answers the shadow rays, the image being the same: auto (default: the "
-                                       "light-space grid where it is the cheaper), bvh (Warp's any-hit query), or grid",
+                                       "light-space grid where it is the cheaper; an area light's rays skipped where "
+                                       "a hit is proven to see it whole), bvh (Warp's any-hit query, every ray), or "
+                                       "grid",
                                choices=SHADOW_QUERIES)
     reflection_query: str = option("auto", "what answers the reflection rays, the image being the same: auto (default: "
                                            "the planar mirrors' virtual cameras from a static view's second frame, where "

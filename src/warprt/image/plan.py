@@ -124,13 +124,15 @@ def plan_frame(scene, o: RenderOptions) -> FramePlan:
 @dataclass(frozen=True)
 class Shortcuts:
     """The shortcuts a frame takes, each with the reason in words (the stats report them): first hits
-    from the Z-buffer, shadow rays from the light-space grid, reflection rays from the virtual cameras;
+    from the Z-buffer, shadow rays from the light-space grid (or, to area lights, skipped where proven clear:
+    kernels/clearance.py), reflection rays from the virtual cameras;
     ``lights`` (the kernels' light positions) and ``view`` (view_key, or None) are what the grid and
     the virtual cameras were chosen for, and ``grid_kept`` / ``mirrors_kept`` whether the caches had them."""
 
     raster: bool
     shadow_grid: bool
     mirrors: bool
+    area_clear: bool  # area lights' shadow rays skipped where a hit is proven to see the whole light
     lights: np.ndarray
     view: tuple | None
     grid_kept: bool
@@ -155,8 +157,11 @@ def choose_shortcuts(scene, o: RenderOptions, plan: FramePlan, geom: Geometry, c
                              grid_kept)
     reasons["shadows"] = (f"shadow_query={o.shadow_query}" + (f", frame {frames} with these lights" if traces_shadows
                                                                else ", no shadow rays"))
+    area_clear = traces_shadows and plan.fx.area_lights and o.shadow_query != "bvh"
     if traces_shadows and plan.fx.area_lights:
-        reasons["shadows"] += ", traced: the grid serves point lights, and the scene has area lights"
+        reasons["shadows"] += (", traced: the grid serves point lights, and the scene has area lights"
+                               + (", whose rays are skipped where a hit is proven to see the whole light"
+                                  if area_clear else ""))
     mirrors, view, mirrors_kept = False, None, False
     if plan.mirrors:
         view = view_key(scene, geom, plan.fx)
@@ -169,4 +174,4 @@ def choose_shortcuts(scene, o: RenderOptions, plan: FramePlan, geom: Geometry, c
         reasons["reflections"] = (f"reflection_query={o.reflection_query}" if plan.fx.reflection and not plan.fx.culling
                                   else "single-sided materials: reflections traced" if plan.fx.culling
                                   else "no reflection rays")
-    return Shortcuts(raster, grid, mirrors, lights, view, grid_kept, mirrors_kept, reasons)
+    return Shortcuts(raster, grid, mirrors, area_clear, lights, view, grid_kept, mirrors_kept, reasons)

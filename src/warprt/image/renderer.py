@@ -272,7 +272,8 @@ class Renderer:
                 geom, geometry_info = self._frame_geometry(scene)
             shortcuts = choose_shortcuts(scene, o, plan, geom, self.caches)
             grid = self._shadow_grid(geom, shortcuts, times)
-            data = geom.scene_data(scene, grid.grid if grid is not None else None, light_strata(scene, plan.fx))
+            data = geom.scene_data(scene, grid.grid if grid is not None else None, light_strata(scene, plan.fx),
+                                   shortcuts.area_clear)
             mirrors = self._virtual_cameras(scene, plan, geom, data, shortcuts, times, pool)
             used = mirrors if mirrors is not None and mirrors.mirrors is not None else None  # None: no chain rasterized
             variant = TraceVariant(plan.fx, shortcuts.raster, plan.stack, o.report_truncated, o.aovs,
@@ -303,7 +304,7 @@ class Renderer:
             if refine_k:
                 with timed(times, "refine"):  # the frame's own effect set: its spread lights' table too
                     fine = data if not effects.light_spread else geom.scene_data(
-                        self._scene, strata=light_strata(self._scene, effects))
+                        self._scene, strata=light_strata(self._scene, effects), clearance=shortcuts.area_clear)
                     image, extra, refined = refine(self._scene, replace(plan, fx=effects), geom, fine, result[0],
                                                    refine_k, o.device, pool)
                 result, frame = (image, result[1]), replace(frame, per_kind=frame.per_kind + extra)

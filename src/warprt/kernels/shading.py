@@ -27,6 +27,7 @@ import math
 
 from .._warp import wp
 from ..geometry import LIGHT_DIRECTIONAL, LIGHT_SPOT, LightShape, SceneData
+from .clearance import SHADOW_EPSILON, light_clear
 from .interaction import Surface, reflect, spawn_ray
 from .record import GradRecord, record_area_point
 from .shadow import make_occluded
@@ -51,7 +52,6 @@ def phong_specular(ks: wp.vec3, shininess: float, n: wp.vec3, l: wp.vec3, v: wp.
 
 
 FAR = 1.0e30  # a shadow ray towards a directional light ends nowhere (the tracer's no-limit convention)
-SHADOW_EPSILON = 1.0e-3  # the share of an area light's shadow ray left short of its sample point
 
 
 @wp.func
@@ -288,17 +288,18 @@ def area_arrival(s: SceneData, hit: Surface, q: int) -> AreaTest:
 
 @functools.cache
 def make_area_sample_test(SHADOWS: bool):
-    """area_sample_test(s, hit, q): whether the area lights' sample point q lights the hit (AreaTest): its
+    """area_sample_test(s, hit, q, clear): whether the area lights' sample point q lights the hit (AreaTest): its
     arrival and, where the point and the hit face each other, the shadow ray (SHADOWS, the BVH's any-hit
-    query), stopping SHADOW_EPSILON of the way short of the point."""
+    query), stopping SHADOW_EPSILON of the way short of the point; with ``clear`` 1 (kernels/clearance.py: no
+    triangle can stop it) seen without it."""
     occluded = make_occluded(False)
 
     @wp.func
-    def area_sample_test(s: SceneData, hit: Surface, q: int) -> AreaTest:
+    def area_sample_test(s: SceneData, hit: Surface, q: int, clear: int) -> AreaTest:
         out = area_arrival(s, hit, q)
         if out.r2 > 0.0 and out.n_dot_l > 0.0 and out.cos_q > 0.0:
             visible = True
-            if wp.static(SHADOWS):
+            if wp.static(SHADOWS) and clear == 0:
                 o = spawn_ray(hit, out.L).o
                 to_q_o = s.area.points[q] - o
                 dist = wp.length(to_q_o)
@@ -442,11 +443,15 @@ def make_area_light(DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool, RECORD: bool =
     estimate of its visibility over the points, sum_q vis_q f_q / sum_q f_q with f_q = n.L_q cos_q / r_q^2 each
     point's unshadowed share (Heitz et al. 2018): exact where every point is seen, the points' own estimate in
     a penumbra; 1 where no point faces the hit (the light then only grazes its horizon). The specular term
-    stays on the points, and so does the whole of a disk's, and of a sphere's where the horizon cuts it."""
+    stays on the points, and so does the whole of a disk's, and of a sphere's where the horizon cuts it.
+    Without RECORD, a light the hit is proven to see whole (kernels/clearance.py light_clear, where the frame
+    asked for it: AreaLights.hulled) has its points' shadow rays skipped, and with ANALYTIC and no specular
+    term its points too: the ratio is then 1 exactly."""
     area_sample_test = make_area_sample_test(SHADOWS)
     _, area_term = make_light_terms(DIFFUSE, SPECULAR)
     _, specular_term = make_light_terms(False, SPECULAR)
     DIFFUSE_CLOSED = ANALYTIC and DIFFUSE
+    CLEAR = SHADOWS and not RECORD
 
     if not (ANALYTIC or SPREAD):
         @wp.func(inline=True)
@@ -456,8 +461,11 @@ def make_area_light(DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool, RECORD: bool =
             n = hit.n
             for e in range(a.num):
                 L_e = a.radiance[e]
+                clear = int(0)
+                if wp.static(CLEAR):
+                    clear = light_clear(s, hit, e)
                 for q in range(a.first[e], a.first[e + 1]):
-                    t = area_sample_test(s, hit, q)
+                    t = area_sample_test(s, hit, q, clear)
                     out.shadow_rays += t.shadow_ray
                     if wp.static(RECORD):
                         if t.lit != 0:
@@ -483,9 +491,15 @@ def make_area_light(DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool, RECORD: bool =
             if wp.static(DIFFUSE_CLOSED):
                 U = closed_integral(s, e, hit)
                 closed = wp.where(U >= 0.0, 1, 0)
+            clear = int(0)
+            if wp.static(CLEAR):
+                clear = light_clear(s, hit, e)
+                if wp.static(not SPECULAR):
+                    if closed != 0 and clear != 0:
+                        hi = lo  # every point seen: the ratio is 1, the closed form alone
             seen, facing = float(0.0), float(0.0)
             for q in range(lo, hi):
-                t = area_sample_test(s, hit, q)
+                t = area_sample_test(s, hit, q, clear)
                 out.shadow_rays += t.shadow_ray
                 if closed != 0:
                     if t.r2 > 0.0 and t.n_dot_l > 0.0 and t.cos_q > 0.0:

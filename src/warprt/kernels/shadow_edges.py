@@ -82,7 +82,7 @@ def make_light_sides_kernel(fx):
                 if t.lit != 0:
                     c = whitted_term(t.arrival, k, shininess, hit.n, -end.d)
             else:
-                a = area_sample_test(s, hit, src[1])
+                a = area_sample_test(s, hit, src[1], 0)
                 if a.lit != 0:
                     c = area_term(a, s.area.radiance[src[2]], s.area.dA[src[1]], k, shininess, hit.n, -end.d)
             c = wp.cw_mul(end.weight, c)

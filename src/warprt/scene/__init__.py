@@ -11,7 +11,7 @@ alone (the camera basis, vertex normals, the effect set).
 from ..memo import ObjectCache
 from . import shapes
 from .area import (EMITTER_MATERIAL, EMITTER_MATERIAL_NAME, SHAPE_KINDS, drawn_objects, emitter_area,
-                   emitter_of_triangles, emitter_samples, local_coordinates, emitting_triangles, sample_coordinates,
+                   emitter_of_triangles, emitter_samples, local_coordinates, emitting_triangles, light_hull, sample_coordinates,
                    shape_frame, spread_strata)
 from .camera import CameraBasis, camera_basis, pixel_ray_directions
 from .dielectric import eye_medium, open_edges, signed_volume, winding_number
@@ -29,7 +29,7 @@ from .texture import Texture, srgb_to_linear
 from .toml_fields import TableReader, did_you_mean, read_toml
 from .validate import MAX_REACH, CheckedContent, check_setting, validate_camera, validate_scene, validate_view
 
-__all__ = ["AREA_ESTIMATORS", "EMITTER_MATERIAL", "EMITTER_MATERIAL_NAME", "SHAPE_KINDS", "local_coordinates", "drawn_objects", "emitter_area", "emitter_of_triangles", "emitting_triangles", "spread_strata",
+__all__ = ["AREA_ESTIMATORS", "EMITTER_MATERIAL", "EMITTER_MATERIAL_NAME", "SHAPE_KINDS", "local_coordinates", "drawn_objects", "emitter_area", "emitter_of_triangles", "emitting_triangles", "light_hull", "spread_strata",
            "emitter_samples", "sample_coordinates", "shape_frame", "Camera", "camera_basis", "CameraBasis", "CheckedContent", "check_setting", "DEFAULT_IOR", "DEFAULT_MATERIAL",
            "did_you_mean", "dielectric_from_gltf", "dielectric_from_mtl", "dielectric_from_usd", "EFFECTS", "EffectSet",
            "environment_samples", "environment_texels", "eye_medium", "input_kind", "Light", "load_dict", "load_mitsuba_file", "load_scene", "Material", "MAX_REACH", "ObjectCache", "open_edges",

@@ -248,6 +248,34 @@ def emitting_triangles(scene, light) -> np.ndarray:
     return np.concatenate([o.vertices[o.faces] for o in scene.objects if o.name == light.object])
 
 
+FLAT = 1.0e-6  # how far, relative to its extent, a mesh light's vertices may leave its plane to count as flat
+
+
+def light_hull(scene, light) -> np.ndarray | None:
+    """A planar quadrilateral holding every point an area light is sampled at, (4, 3) float64 in world space,
+    corners in order around it (kernels/clearance.py proves shadow rays clear of the pyramid over it): a
+    rectangle's own corners, a disk's circumscribed square, a flat object light's bounding rectangle in its
+    plane; None for a sphere or an object light that is not flat."""
+    if light.shape in ("rectangle", "disk"):
+        c, u, v = shape_frame(light)
+        return np.array([c - u - v, c + u - v, c + u + v, c - u + v])
+    if light.shape is not None:
+        return None
+    points = emitting_triangles(scene, light).reshape(-1, 3)
+    if not len(points):
+        return None
+    centre = points.mean(axis=0)
+    _, sv, vt = np.linalg.svd(points - centre)
+    n = vt[2]
+    extent = float(np.ptp(points, axis=0).max())
+    if extent == 0.0 or np.abs((points - centre) @ n).max() > FLAT * extent:
+        return None
+    s, t = coordinate_system(n)
+    a, b = (points - centre) @ s, (points - centre) @ t
+    corners = [(a.min(), b.min()), (a.max(), b.min()), (a.max(), b.max()), (a.min(), b.max())]
+    return np.array([centre + x * s + y * t for x, y in corners])
+
+
 def spread_strata(light, k: int, spp: int) -> np.ndarray:
     """Per sample point of an area light (emitter_samples' order), the pixel sample that takes it under
     render.light_spread: a shape light's k x k grid cell (i, j) goes to pixel-sample stratum (i mod m, j mod m)
