@@ -28,6 +28,10 @@ from .triangle import triangle
 SHADOW_EPSILON = 1.0e-3  # the share of an area light's shadow ray left short of its sample point
 CLEAR_MARGIN = 1.0e-5  # a plane's margin, relative to the distance from the hit to the light
 RISE = 1.0e-3  # the least n_g . (c - p) / |c - p| of the hull's corners for the hit's own plane to part them
+# The fewest points of a light a hit traces for the proof to be tried: it costs about two shadow rays (measured on
+# scenes/cornell_box.xml, 240x240, one thread: with one point a hit, light_spread at 16 spp and 16 light samples,
+# trying it took 307 ms against 221 ms; with four, at 64 light samples, 445 ms against 575 ms).
+CLEAR_MIN_POINTS = 4
 
 
 @wp.struct

@@ -27,7 +27,7 @@ import math
 
 from .._warp import wp
 from ..geometry import LIGHT_DIRECTIONAL, LIGHT_SPOT, LightShape, SceneData
-from .clearance import SHADOW_EPSILON, light_clear
+from .clearance import CLEAR_MIN_POINTS, SHADOW_EPSILON, light_clear
 from .interaction import Surface, reflect, spawn_ray
 from .record import GradRecord, record_area_point
 from .shadow import make_occluded
@@ -445,7 +445,8 @@ def make_area_light(DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool, RECORD: bool =
     a penumbra; 1 where no point faces the hit (the light then only grazes its horizon). The specular term
     stays on the points, and so does the whole of a disk's, and of a sphere's where the horizon cuts it.
     Without RECORD, a light the hit is proven to see whole (kernels/clearance.py light_clear, where the frame
-    asked for it: AreaLights.hulled) has its points' shadow rays skipped, and with ANALYTIC and no specular
+    asked for it, AreaLights.hulled, and the hit takes CLEAR_MIN_POINTS of its points or more: the proof costs
+    about two shadow rays) has its points' shadow rays skipped, and with ANALYTIC and no specular
     term its points too: the ratio is then 1 exactly."""
     area_sample_test = make_area_sample_test(SHADOWS)
     _, area_term = make_light_terms(DIFFUSE, SPECULAR)
@@ -463,7 +464,8 @@ def make_area_light(DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool, RECORD: bool =
                 L_e = a.radiance[e]
                 clear = int(0)
                 if wp.static(CLEAR):
-                    clear = light_clear(s, hit, e)
+                    if a.first[e + 1] - a.first[e] >= wp.static(CLEAR_MIN_POINTS):
+                        clear = light_clear(s, hit, e)
                 for q in range(a.first[e], a.first[e + 1]):
                     t = area_sample_test(s, hit, q, clear)
                     out.shadow_rays += t.shadow_ray
@@ -493,7 +495,8 @@ def make_area_light(DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool, RECORD: bool =
                 closed = wp.where(U >= 0.0, 1, 0)
             clear = int(0)
             if wp.static(CLEAR):
-                clear = light_clear(s, hit, e)
+                if hi - lo >= wp.static(CLEAR_MIN_POINTS):
+                    clear = light_clear(s, hit, e)
                 if wp.static(not SPECULAR):
                     if closed != 0 and clear != 0:
                         hi = lo  # every point seen: the ratio is 1, the closed form alone
