@@ -88,3 +88,22 @@ def test_a_proof_that_skipped_every_ray_would_be_seen():
     (traced, _), _ = both(scene)
     unshadowed = warprt.render(scene, primary_query="raytrace", disable=["shadows"]).image
     assert (traced != unshadowed).any(axis=-1).sum() > 100
+
+
+def test_a_gradient_frames_record_is_the_traced_ones():
+    """render(grad=True) takes the proof too (the record's bit per point seen is the same whether the ray was
+    traced or the light proven clear): the image, and the derivative of a loss in the light's radiance and the
+    box's vertices (edges included), are the ones with every shadow ray traced, to the bit."""
+    scene = room("rectangle")
+    weights = np.random.default_rng(3).uniform(0.0, 1.0, (30, 40, 3)).astype(np.float32)
+    got = []
+    for query in ("bvh", "auto"):
+        r = warprt.Renderer(scene, primary_query="raytrace", shadow_query=query)
+        names = [n for n in r.params if n.endswith(".radiance") or n == "objects.4.vertices"]
+        result = r.render(grad=True)
+        got.append((result.image, result.stats.rays["shadow"], r.backward(weights, wrt=names)))
+    (traced, traced_rays, g_traced), (proven, proven_rays, g_proven) = got
+    assert len(g_traced) == 2 and proven_rays < 0.9 * traced_rays
+    assert np.array_equal(traced, proven)
+    for name in g_traced:
+        assert np.array_equal(g_traced[name], g_proven[name]) and np.abs(g_traced[name]).max() > 0.0, name

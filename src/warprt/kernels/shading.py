@@ -444,7 +444,7 @@ def make_area_light(DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool, RECORD: bool =
     point's unshadowed share (Heitz et al. 2018): exact where every point is seen, the points' own estimate in
     a penumbra; 1 where no point faces the hit (the light then only grazes its horizon). The specular term
     stays on the points, and so does the whole of a disk's, and of a sphere's where the horizon cuts it.
-    Without RECORD, a light the hit is proven to see whole (kernels/clearance.py light_clear, where the frame
+    A light the hit is proven to see whole (kernels/clearance.py light_clear, where the frame
     asked for it, AreaLights.hulled, and the hit takes CLEAR_MIN_POINTS of its points or more: the proof costs
     about two shadow rays) has its points' shadow rays skipped, and with ANALYTIC and no specular
     term its points too: the ratio is then 1 exactly."""
@@ -452,7 +452,6 @@ def make_area_light(DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool, RECORD: bool =
     _, area_term = make_light_terms(DIFFUSE, SPECULAR)
     _, specular_term = make_light_terms(False, SPECULAR)
     DIFFUSE_CLOSED = ANALYTIC and DIFFUSE
-    CLEAR = SHADOWS and not RECORD
 
     if not (ANALYTIC or SPREAD):
         @wp.func(inline=True)
@@ -463,7 +462,7 @@ def make_area_light(DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool, RECORD: bool =
             for e in range(a.num):
                 L_e = a.radiance[e]
                 clear = int(0)
-                if wp.static(CLEAR):
+                if wp.static(SHADOWS):
                     if a.first[e + 1] - a.first[e] >= wp.static(CLEAR_MIN_POINTS):
                         clear = light_clear(s, hit, e)
                 for q in range(a.first[e], a.first[e + 1]):
@@ -494,7 +493,7 @@ def make_area_light(DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool, RECORD: bool =
                 U = closed_integral(s, e, hit)
                 closed = wp.where(U >= 0.0, 1, 0)
             clear = int(0)
-            if wp.static(CLEAR):
+            if wp.static(SHADOWS):
                 if hi - lo >= wp.static(CLEAR_MIN_POINTS):
                     clear = light_clear(s, hit, e)
                 if wp.static(not SPECULAR):
