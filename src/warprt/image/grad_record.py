@@ -5,6 +5,7 @@ tools and tests)."""
 from __future__ import annotations
 
 import math
+import threading
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -17,6 +18,8 @@ from .launch import bands_of, launch_bands
 from .memory import available_memory, human
 from .mirrors import empty_mirrors
 from .zbuffer import empty_fragments
+
+_BANDS_LOCK = threading.Lock()  # Record.for_band's: its copies made once
 
 # Bytes of an entry of the record (face, barycentrics, the lights seen: 4 + 8 + 4; with glass its parent, camera ray
 # and medium, 12); with area lights the emitter met (4) and a bit per sample point (in 4-byte words). And of the
@@ -125,12 +128,19 @@ class Record:
         """The GradRecord a launch of the band starting at pixel ``first`` writes through (its regions' row)."""
         if not self.tree:
             return self.rec
-        if self._bands is None:  # made once a frame: the bands' copies, differing only in ``band``
-            self._bands = {}
-            for b, (f, _) in enumerate(self.bands):
-                self._bands[f] = r = _copy(self.rec)
-                r.band = b
-        return self._bands[first]
+        bands = self._bands
+        if bands is None:  # made once a frame: the bands' copies, differing only in ``band``
+            # Band threads ask at once: one makes them, and they are published whole. (Published as they were
+            # made, a second thread found the dict while the first filled it: KeyError in a loaded full run.)
+            with _BANDS_LOCK:
+                if self._bands is None:
+                    made = {}
+                    for b, (f, _) in enumerate(self.bands):
+                        made[f] = r = _copy(self.rec)
+                        r.band = b
+                    self._bands = made
+                bands = self._bands
+        return bands[first]
 
     def used(self) -> np.ndarray:
         """Glass: per (band, level) the entries the frame's rays took (past the capacity too)."""
