@@ -10,7 +10,8 @@ image/grad_glass_edges.py): a deterministic screen-space crossing estimator. Che
   (tests/grad/converged.py, no pixel masked), each with the control that the interior derivative alone
   (edges=False) is far off;
 - the sum the same to the bit on every run and thread count;
-- what the crossings do not cover refused in one line naming ``edges``.
+- what the crossings do not cover refused in one line naming ``edges`` (a checker's squares seen through glass
+  among them; a hard spot's cone seen through glass is covered: test_glass_spot_edges.py).
 """
 
 from __future__ import annotations
@@ -177,10 +178,10 @@ def checker_wall(s):
     return replace(s, materials=mats)
 
 
-def hard_spot(s, direction: tuple):
-    """``s`` with its light a hard spot along ``direction``."""
-    spot = warprt.Light(type="spot", position=s.lights[0].position, direction=direction, cutoff_angle=25.0,
-                        beam_width=25.0)
+def hard_spot(s, direction: tuple, cutoff: float = 25.0):
+    """``s`` with its light a hard spot along ``direction`` (``cutoff`` degrees, no ramp)."""
+    spot = warprt.Light(type="spot", position=s.lights[0].position, direction=direction, cutoff_angle=cutoff,
+                        beam_width=cutoff)
     return replace(s, lights=[spot])
 
 
@@ -188,17 +189,13 @@ def _with_checker_wall(spp: int):
     return checker_wall(slab_scene(spp))
 
 
-def _with_hard_spot(spp: int):
-    return hard_spot(slab_scene(spp), (-0.3, -0.6, -1.0))
-
-
-@pytest.mark.parametrize("make, why", [(_with_checker_wall, "checker texture's squares'"),
-                                        (_with_hard_spot, "spot light's hard cone's")], ids=["checker", "hard spot"])
-def test_a_checker_or_a_hard_cone_seen_through_glass_is_refused_in_one_line(weights, make, why):
-    """The crossings' signature holds the faces and the shadow rays' answers, not a checker's squares or a spot's
-    cone: with either in a glass scene an occluder's vertices are refused in one line naming it (seen directly both
-    are covered: test_checker_edges.py, test_spot_edges.py); edges=False is not refused."""
-    assert_refused(make(1), weights, "objects.occ.vertices", [why, "through glass"])
+def test_a_checker_seen_through_glass_is_refused_in_one_line(weights):
+    """The crossings' signature holds the faces, the shadow rays' answers and the hard cones (a hard spot's cone
+    seen through glass is covered: test_glass_spot_edges.py), not a checker's squares: with one in a glass scene an
+    occluder's vertices are refused in one line naming it (seen directly it is covered: test_checker_edges.py);
+    edges=False is not refused."""
+    assert_refused(_with_checker_wall(1), weights, "objects.occ.vertices", ["checker texture's squares'",
+                                                                            "through glass"])
 
 
 def assert_refused(scene, weights, name: str, words: list, covered: tuple = ()):

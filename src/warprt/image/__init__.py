@@ -42,6 +42,8 @@ __all__ += ["Boundary", "MeshEdges", "ShadowSegments", "ShadowSources", "boundar
             "segment_points", "shadow_rows", "shadow_segments", "shadow_sources", "shadow_speeds"]  # and hard shadows' edges
 __all__ += ["MAX_CHAINS", "ChainFaces", "MirrorChain", "MirroredSegments", "chain_faces", "mirror_chains", "mirror_planes",
             "mirrored_speeds"]  # and both seen in planar mirrors
-from .grad_glass_edges import LINES, MAX_GLASS_DEPTH, glass_crossings, glass_terms, tree_walk  # noqa: E402
+from .grad_glass_edges import (LINES, MAX_GLASS_DEPTH, glass_cone_lights, glass_crossings, glass_terms,  # noqa: E402
+                               tree_walk)
 
-__all__ += ["LINES", "MAX_GLASS_DEPTH", "glass_crossings", "glass_terms", "tree_walk"]  # and those seen through glass
+__all__ += ["LINES", "MAX_GLASS_DEPTH", "glass_cone_lights", "glass_crossings", "glass_terms",
+            "tree_walk"]  # and those seen through glass

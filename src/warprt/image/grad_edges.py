@@ -19,7 +19,8 @@ from .grad_checker_edges import CheckerSegments, checker_segments, checker_speed
 from .grad_edge_launch import host_array, launch_points
 from .grad_edge_points import (EDGE_OFFSET_PX, BoundaryTerm, EdgePoints, add_terms, boundary_term, camera_adjoints, camera_copies,
                                segment_points)
-from .grad_glass_edges import crossed_surfaces, crossing_refusal, glass_crossings, glass_terms, traced_colours
+from .grad_glass_edges import (crossed_surfaces, crossing_refusal, glass_cone_lights, glass_crossings, glass_terms,
+                               traced_colours)
 from .grad_mesh_edges import MeshEdges, camera_edges, face_normals, facing, mesh_edges
 from .grad_mirror_edges import (BLOCKS, MirroredSegments, frame_mirrors, mirror_terms, mirrored_segments,
                                 on_mirrored_cones)
@@ -32,13 +33,15 @@ from .params import object_names
 @dataclass(frozen=True)
 class EdgeFrame:
     """What the edges' rays need of the frame: its effect set, ray stack and ray levels (FramePlan's), the
-    CPU threads its per-point launches run on (grad_edge_launch.launch_points), and what its backward calls
-    keep for the next (``kept``: kept_part's)."""
+    CPU threads its per-point launches run on (grad_edge_launch.launch_points), what its backward calls
+    keep for the next (``kept``: kept_part's), and whether the crossings' tree signatures hold the hard cones
+    (``cone_bits``; False only as a check's control: grad_glass_edges.tree_walk)."""
 
     fx: object
     stack: int
     max_depth: int
     threads: int = 1
+    cone_bits: bool = True
     kept: dict = field(default_factory=dict, compare=False, repr=False)
 
 
@@ -71,8 +74,8 @@ def edge_refusal(scene, geom, fx, wrt, mirrors=None) -> str | None:
     """Why backward(edges=True) would leave out an edge that the parameters ``wrt`` move (None: the camera
     rays' edges, the hard shadows', a checker's squares', a spot's hard cone, and those seen in mirrors and
     through glass are all of them): glass's and curved mirrors' that the crossings do not cover
-    (grad_glass_edges.crossing_refusal), a checker's squares or a spot's hard cone seen through glass or in a
-    curved mirror, too many planar mirrors' (frame_mirrors, or ``mirrors()``: its answer kept). (A reflectivity of 0
+    (grad_glass_edges.crossing_refusal), a checker's squares seen through glass or in a curved mirror, too many
+    planar mirrors' (frame_mirrors, or ``mirrors()``: its answer kept). (A reflectivity of 0
     whose mirror rays a frame records for its derivative reflects nothing: no edge is seen in it.)"""
     moving = [n for n in wrt if moves_edges(n)]
     if not moving:
@@ -82,13 +85,11 @@ def edge_refusal(scene, geom, fx, wrt, mirrors=None) -> str | None:
         why = crossing_refusal(scene, geom, fx, moving)
         if why is not None:
             return f"{moving[0]} moves {why}, not differentiated yet"
-        seen = "a checker texture's squares'" if has_checker(scene, geom) else "a spot light's hard cone's" \
-            if hard_spots(scene) else None
         where = " or ".join(w for w, k in (("through glass", "glass"), ("in curved mirrors", "curved mirror"))
                             if surfaces[k].any())
-        if seen is not None:  # the crossings' signature has faces and shadow answers, not squares or cones
-            return (f"{moving[0]} moves {seen} edges seen {where}, not differentiated yet: only where camera "
-                    f"rays see them")
+        if has_checker(scene, geom):  # the crossings' signature has faces, shadow answers and hard cones, not squares
+            return (f"{moving[0]} moves a checker texture's squares' edges seen {where}, not differentiated yet: "
+                    f"only where camera rays see them")
     reflects = scene.render.max_depth > 1 and fx.reflection
     chains, why = (mirrors or partial(frame_mirrors, scene, geom))()[2:] if reflects else ((), None)
     if why is not None:
@@ -242,8 +243,10 @@ def edge_gradients(scene, geom, frame: EdgeFrame, d: np.ndarray, wrt, device: st
         for name, g in seen.items():
             lights[name] = lights[name] + g if name in lights else g
     if any(on.any() for on in keep("crossed", lambda: crossed_surfaces(scene, geom, frame.fx)).values()):
-        terms += glass_terms(keep("glass", lambda: glass_crossings(scene, geom, frame, device)), d3,
-                             len(geom.points_np))
+        crossings = keep("glass", lambda: glass_crossings(scene, geom, frame, device))
+        terms += glass_terms(crossings, d3, len(geom.points_np))
+        for name, g in glass_cone_lights(crossings, d3).items():
+            lights[name] = lights[name] + g if name in lights else g
     term = add_terms(terms, len(geom.points_np))
     shapes = {}
     if any(n.startswith("lights.") and n.endswith(tuple(f".{k}" for k in SHAPE_KEYS)) for n in wrt):

@@ -11,14 +11,16 @@ from __future__ import annotations
 import numpy as np
 
 from .._warp import wp
-from ..kernels import (DIRECTIONAL_WEDGE, FACE_EDGE, MIRRORED, NO_RAY, POINT_WEDGE, REFLECTED, TRANSMITTED,
-                       empty_aov_buffers, empty_record, make_edge_sides_kernel, make_tree_distances, make_tree_kernel)
+from ..kernels import (DIRECTIONAL_WEDGE, FACE_EDGE, MIRRORED, NO_RAY, POINT_WEDGE, REFLECTED, SPOT_CONE,
+                       TRANSMITTED, empty_aov_buffers, empty_record, make_edge_sides_kernel, make_tree_distances,
+                       make_tree_kernel)
 from ..scene import camera_basis
 from .grad_edge_launch import host_array, launch_points
 from .grad_edge_points import EDGE_OFFSET_PX, EdgePoints, boundary_term, camera_adjoints, camera_copies, \
     ray_directions
 from .grad_mirror_edges import mirror_planes
 from .grad_shadow_edges import shadow_sources
+from .grad_spot_edges import cones, hard_spots, spot_sums
 from .mirrors import empty_mirrors
 from .params import object_names
 from .zbuffer import empty_fragments
@@ -31,6 +33,7 @@ MAX_CROSSINGS = 8  # signature changes found between two neighbouring points  # 
 MAX_GLASS_DEPTH = 6  # ray levels: 63 tree nodes a point
 POINTS_A_WALK = 1 << 18  # points walked at once (their signatures' memory: nodes x 8 bytes each)
 TURNS = {"glass": "bends", "curved mirror": "reflects"}  # what each crossed surface does to what is seen in it
+SIGNATURE = ("face", "blocked", "cone")  # a tree's signature: per node its face, blocked lights, hard cones holding it
 
 
 def crossed_surfaces(scene, geom, fx) -> dict:
@@ -93,29 +96,35 @@ def traced_colours(scene, geom, frame, at: np.ndarray, device: str) -> np.ndarra
 
 
 def tree_walk(scene, geom, frame, at: np.ndarray, device: str, detail: bool = False) -> dict:
-    """The tree signatures of camera rays through ``at`` (make_tree_kernel): ``face`` and ``blocked`` (N, nodes);
-    with ``detail`` also ``below``, ``ray`` (N, nodes, 2, 3), ``hit`` (N, nodes, 3: u, v, distance), ``blocker``
-    (N, nodes, lights) and ``blocker_at`` (N, nodes, lights, 2)."""
+    """The tree signatures of camera rays through ``at`` (make_tree_kernel): ``face``, ``blocked`` and, where the
+    frame has a hard spot (and EdgeFrame.cone_bits), ``cone`` (N, nodes; its bits the hard spots whose cone holds
+    each hit: absent, the walk is the one without); with ``detail`` also ``below``, ``ray`` (N, nodes, 2, 3), ``hit`` (N, nodes, 3: u,
+    v, distance), ``blocker`` (N, nodes, lights) and ``blocker_at`` (N, nodes, lights, 2)."""
     nodes, n = 2 ** frame.max_depth - 1, len(at)
     data = geom.scene_data(scene)
     lights = max(int(data.num_lights), 1)
     k = nodes if detail else 0
+    spots = bool(frame.fx.light_model and hard_spots(scene) and frame.cone_bits)
     out = {"face": np.empty(n * nodes, np.int32), "blocked": np.empty(n * nodes, np.int32),
            "below": np.zeros(max(n * k, 1), np.int32), "ray": np.zeros((max(n * k, 1) * 2, 3), np.float32),
            "hit": np.zeros((max(n * k, 1), 3), np.float32), "blocker": np.full(max(n * k * lights, 1), -1, np.int32),
-           "blocker_at": np.zeros((max(n * k * lights, 1), 2), np.float32)}
+           "blocker_at": np.zeros((max(n * k * lights, 1), 2), np.float32),
+           "cone": np.zeros(n * nodes if spots else 1, np.int32)}
     types = {"face": int, "blocked": int, "below": int, "ray": wp.vec3, "hit": wp.vec3, "blocker": int,
-             "blocker_at": wp.vec2}
+             "blocker_at": wp.vec2, "cone": int}
     arrays = {name: host_array(v, types[name], device) for name, v in out.items()}
     dirs = host_array(ray_directions(at, camera_basis(scene.camera)), wp.vec3, device)
-    launch_points(make_tree_kernel(frame.fx, frame.stack, nodes, detail), n,
+    launch_points(make_tree_kernel(frame.fx, frame.stack, nodes, detail, spots), n,
                   [data, wp.vec3(*geom.eye_offset(scene.camera.eye)), frame.max_depth, empty_fragments(device),
                    empty_mirrors(device), dirs, *arrays.values()],
-                  [0] * 5 + [1, nodes, nodes, k, 2 * k, k, k * lights, k * lights], frame.threads, device)
+                  [0] * 5 + [1, nodes, nodes, k, 2 * k, k, k * lights, k * lights, nodes * spots], frame.threads,
+                  device)
     got = {name: a.numpy() for name, a in arrays.items()}
     shapes = {"face": (n, nodes), "blocked": (n, nodes), "below": (n, nodes), "ray": (n, nodes, 2, 3),
-              "hit": (n, nodes, 3), "blocker": (n, nodes, lights), "blocker_at": (n, nodes, lights, 2)}
-    return {name: v.reshape(shapes[name]) for name, v in got.items() if detail or name in ("face", "blocked")}
+              "hit": (n, nodes, 3), "blocker": (n, nodes, lights), "blocker_at": (n, nodes, lights, 2),
+              "cone": (n, nodes)}
+    return {name: v.reshape(shapes[name]) for name, v in got.items()
+            if (detail or name in SIGNATURE) and (spots or name != "cone")}
 
 
 def line_points(cam, axis: int) -> np.ndarray:
@@ -132,11 +141,18 @@ def line_points(cam, axis: int) -> np.ndarray:
 
 def _same(a: dict, b: dict) -> np.ndarray:
     """Per point whether two signatures agree in every node."""
-    return np.all(a["face"] == b["face"], axis=1) & np.all(a["blocked"] == b["blocked"], axis=1)
+    return np.all(a["face"] == b["face"], axis=1) & _lit_alike(a, b)
 
 
-def _smoothly(geom, fx, a: np.ndarray, b: np.ndarray, blocked: np.ndarray) -> np.ndarray:
-    """Per row of two signatures' faces (a, b: (N, nodes)) and whether their blocked lights agree, whether every
+def _lit_alike(a: dict, b: dict) -> np.ndarray:
+    """Per point whether two signatures' lights agree in every node: the blocked ones and the hard cones (where
+    the signatures hold them: tree_walk)."""
+    alike = np.all(a["blocked"] == b["blocked"], axis=1)
+    return alike & np.all(a["cone"] == b["cone"], axis=1) if "cone" in a else alike
+
+
+def _smoothly(geom, fx, a: np.ndarray, b: np.ndarray, lit: np.ndarray) -> np.ndarray:
+    """Per row of two signatures' faces (a, b: (N, nodes)) and whether their lights agree (_lit_alike), whether every
     node where they differ passes between two smooth faces of one object that share a corner: the radiance is
     continuous there (the interpolated normals are), and no crossing need be looked for; a tessellated glass
     ball's inner edges, seen at every level of its tree, would otherwise be most of the crossings."""
@@ -147,7 +163,7 @@ def _smoothly(geom, fx, a: np.ndarray, b: np.ndarray, blocked: np.ndarray) -> np
     near = np.any(corners[fa][..., :, None] == corners[fb][..., None, :], axis=(-1, -2))
     smooth = (geom.tri_smooth_np[fa] != 0) & (geom.tri_smooth_np[fb] != 0) & (a >= 0) & (b >= 0)
     same = geom.tri_object_np[fa] == geom.tri_object_np[fb]
-    return blocked & np.all((a == b) | (smooth & same & near), axis=1)
+    return lit & np.all((a == b) | (smooth & same & near), axis=1)
 
 
 def _pairs(scene, geom, frame, at: np.ndarray, device: str) -> tuple:
@@ -158,12 +174,14 @@ def _pairs(scene, geom, frame, at: np.ndarray, device: str) -> tuple:
     lo, hi = [], []
     for first in range(0, lines, per):
         part = at[first:first + per]
-        sig = tree_walk(scene, geom, frame, part.reshape(-1, 2), device)
-        face, blocked = (sig[k].reshape(len(part), points, -1) for k in ("face", "blocked"))
-        differ = np.any(face[:, 1:] != face[:, :-1], axis=2) | np.any(blocked[:, 1:] != blocked[:, :-1], axis=2)
+        sig = {k: v.reshape(len(part), points, -1) for k, v in
+               tree_walk(scene, geom, frame, part.reshape(-1, 2), device).items()}
+        differ = np.zeros((len(part), points - 1), bool)
+        for v in sig.values():
+            differ |= np.any(v[:, 1:] != v[:, :-1], axis=2)
         line, i = np.nonzero(differ)
-        keep = ~_smoothly(geom, frame.fx, face[line, i], face[line, i + 1],
-                          np.all(blocked[line, i] == blocked[line, i + 1], axis=1))
+        a, b = ({k: v[line, i + j] for k, v in sig.items()} for j in (0, 1))
+        keep = ~_smoothly(geom, frame.fx, a["face"], b["face"], _lit_alike(a, b))
         line, i = line[keep], i[keep]
         lo.append(part[line, i])
         hi.append(part[line, i + 1])
@@ -183,8 +201,7 @@ def _crossings(scene, geom, frame, a: np.ndarray, b: np.ndarray, device: str) ->
         los.append(lo)
         his.append(hi)
         past = tree_walk(scene, geom, frame, hi, device)
-        more = ~_same(past, end) & ~_smoothly(geom, frame.fx, past["face"], end["face"],
-                                              np.all(past["blocked"] == end["blocked"], axis=1))
+        more = ~_same(past, end) & ~_smoothly(geom, frame.fx, past["face"], end["face"], _lit_alike(past, end))
         a, b, end = hi[more], b[more], {k: v[more] for k, v in end.items()}
     return np.concatenate(los), np.concatenate(his)
 
@@ -197,7 +214,7 @@ def _bisect(scene, geom, frame, lo: np.ndarray, hi: np.ndarray, device: str) -> 
         mid = 0.5 * (lo + hi)
         sig = tree_walk(scene, geom, frame, mid, device)
         same = (_same(sig, start) | _smoothly(geom, frame.fx, sig["face"], start["face"],
-                                               np.all(sig["blocked"] == start["blocked"], axis=1)))[:, None]
+                                               _lit_alike(sig, start)))[:, None]
         lo, hi = np.where(same, mid, lo), np.where(same, hi, mid)
     return lo, hi
 
@@ -214,9 +231,11 @@ def _edge_of(geom, face: np.ndarray, uv: np.ndarray) -> np.ndarray:
 
 def _parting(scene, geom, frame, lo: np.ndarray, hi: np.ndarray, curved: np.ndarray | None, device: str) -> dict:
     """Per crossing (lo, hi its two sides) the first tree node (in the tree's level order) where the two
-    signatures part (faces both traced and different, or the lights its shadow rays find blocked), what parts
-    them (``kind``: FACE_EDGE, or a wedge of light ``light``) and its edge (``edge``: the nearer face's edge
-    nearest its hit, or the blocker's nearest its shadow ray's hit), the lo side's faces (``faces``) and
+    signatures part (faces both traced and different, the hard cones holding the hit, or the lights its shadow
+    rays find blocked), what parts them (``kind``: FACE_EDGE, SPOT_CONE of the spot ``light``, or a wedge of light
+    ``light``; a cone's before a wedge's: outside a cone no shadow ray is traced, so its edge in a shadow parts
+    both) and its edge (``edge``: the nearer face's edge nearest its hit, or the blocker's nearest its shadow ray's
+    hit; a cone's unread), the lo side's faces (``faces``) and
     ``keep``: a parting found, and unless ``curved`` is None below a dielectric's split or a bounce off a curved
     mirror (``curved``: per triangle; _bounced): a camera ray's own node, or one only planar mirrors lead to, is the
     camera's, shadows' and mirrors' terms'."""
@@ -224,7 +243,8 @@ def _parting(scene, geom, frame, lo: np.ndarray, hi: np.ndarray, curved: np.ndar
     rows = np.arange(len(lo))
     both = (a["face"] != NO_RAY) & (b["face"] != NO_RAY)
     faces_part = both & (a["face"] != b["face"])
-    differ = faces_part | (both & (a["blocked"] != b["blocked"]))
+    cone_a, cone_b = (x.get("cone", np.zeros_like(x["face"])) for x in (a, b))
+    differ = faces_part | (both & ((a["blocked"] != b["blocked"]) | (cone_a != cone_b)))
     node = np.argmax(differ, axis=1)
     keep = differ.any(axis=1)
     if curved is not None:
@@ -233,16 +253,19 @@ def _parting(scene, geom, frame, lo: np.ndarray, hi: np.ndarray, curved: np.ndar
     use_a = (fb < 0) | ((fa >= 0) & (a["hit"][rows, node, 2] <= b["hit"][rows, node, 2]))
     face = np.where(use_a, fa, fb)
     uv = np.where(use_a[:, None], a["hit"][rows, node, :2], b["hit"][rows, node, :2])
-    bits = (a["blocked"][rows, node] ^ b["blocked"][rows, node]).astype(np.int64)
+    parted = (cone_a[rows, node] ^ cone_b[rows, node]).astype(np.int64)
+    cone = ~faces_part[rows, node] & (parted != 0)
+    bits = np.where(cone, parted, a["blocked"][rows, node] ^ b["blocked"][rows, node]).astype(np.int64)
     light = np.where(faces_part[rows, node], 0, np.log2(np.maximum(bits & -bits, 1)).astype(np.int64))
-    shadow = ~faces_part[rows, node]
+    shadow = ~faces_part[rows, node] & ~cone
     if shadow.any():
         lit_a = ((a["blocked"][rows, node] >> light) & 1) != 0
         blocker = np.where(lit_a, a["blocker"][rows, node, light], b["blocker"][rows, node, light])
         at = np.where(lit_a[:, None], a["blocker_at"][rows, node, light], b["blocker_at"][rows, node, light])
         face, uv = np.where(shadow, blocker, face), np.where(shadow[:, None], at, uv)
     keep &= face >= 0
-    return {"node": node, "kind": np.where(shadow, POINT_WEDGE, FACE_EDGE), "light": light,
+    kind = np.select([shadow, cone], [POINT_WEDGE, SPOT_CONE], FACE_EDGE)
+    return {"node": node, "kind": kind, "light": light,
             "edge": _edge_of(geom, face, uv), "faces": a["face"], "keep": keep}
 
 
@@ -286,47 +309,58 @@ def _path(scene, geom, frame, x: dict) -> tuple:
     return faces, branch, eta, level
 
 
-def _speeds(scene, geom, frame, x: dict, sources, at: np.ndarray, device: str) -> dict:
+def _speeds(scene, geom, frame, x: dict, sources, spots, at: np.ndarray, device: str) -> dict:
     """Per crossing the adjoint of its boundary function g (make_tree_distances) in each of its inputs: ``p<k><i>``
-    corner i of the path's face at level k, ``v0`` and ``v1`` the edge, ``light``, the camera's (camera_adjoints)
-    and ``at`` (the image point: g's gradient in x and y); ``points``: the geometry points the inputs are."""
+    corner i of the path's face at level k, ``v0`` and ``v1`` the edge, ``light`` (a shadow's source), a hard
+    cone's ``position`` and ``axis`` (0 where the crossing is no cone's), the camera's (camera_adjoints) and ``at``
+    (the image point: g's gradient in x and y); ``points``: the geometry points the inputs are; ``spot``: per
+    crossing its row of ``spots`` (grad_spot_edges.Cones; -1: no cone's)."""
     levels, c = frame.max_depth, len(at)
     faces, branch, eta, level = _path(scene, geom, frame, x)
     corners = geom.indices_np.reshape(-1, 3).astype(np.int64)[faces]  # (C, levels, 3)
     p = geom.points_np.astype(np.float32)
     smooth = (geom.tri_smooth_np[faces] != 0) & bool(frame.fx.smooth)
     normals = geom.normals.numpy()[corners] * smooth[:, :, None, None]
-    light = np.zeros((c, 3), np.float32)
+    light, edge, cos_cutoff = np.zeros((c, 3), np.float32), p[x["edge"]], np.zeros(c, np.float32)
     kind = x["kind"].astype(np.int32)
     if sources is not None:
         light = sources.at[x["light"]].astype(np.float32)
-        kind = np.where(kind != FACE_EDGE, np.where(sources.directional[x["light"]], DIRECTIONAL_WEDGE, POINT_WEDGE),
+        kind = np.where(kind == POINT_WEDGE, np.where(sources.directional[x["light"]], DIRECTIONAL_WEDGE, POINT_WEDGE),
                         kind).astype(np.int32)
+    cone = kind == SPOT_CONE
+    spot = np.where(cone, np.searchsorted(spots.l, x["light"]) if cone.any() else -1, -1)
+    if cone.any():  # the cone's axis in the edge's first row (make_tree_distances)
+        row = spot[cone]
+        light[cone], edge[cone, 0], cos_cutoff[cone] = spots.at[row], spots.axis[row], spots.cos[row]
     grad = lambda v: host_array(np.asarray(v, np.float32).reshape(-1, 3), wp.vec3, device, True)  # noqa: E731
-    path, edge, light_a = grad(p[corners]), grad(p[x["edge"]]), grad(light)
+    path, edge, light_a = grad(p[corners]), grad(edge), grad(light)
     camera, fovy = camera_copies(scene, geom, c, device)
     point = host_array(at.astype(np.float32), wp.vec2, device, True)
     ints = lambda v: host_array(np.asarray(v, np.int32).reshape(-1), int, device)  # noqa: E731
     cam = scene.camera
     launch_points(make_tree_distances(levels), c,
                   [path, edge, light_a, host_array(normals.reshape(-1, 3).astype(np.float32), wp.vec3, device),
-                   ints(branch), host_array(eta.reshape(-1), float, device), ints(level), ints(kind), camera, fovy,
-                   float(cam.near), cam.width, cam.height, point, wp.zeros(c, dtype=float, device=device)],
-                  [3 * levels, 2, 1, 3 * levels, levels, levels, 1, 1, 3, 1, 0, 0, 0, 1, 1], frame.threads, device,
-                  [path.grad, edge.grad, light_a.grad] + [None] * 5 + [camera.grad, fovy.grad] + [None] * 3 +
+                   ints(branch), host_array(eta.reshape(-1), float, device), ints(level), ints(kind),
+                   host_array(cos_cutoff, float, device), camera, fovy, float(cam.near), cam.width, cam.height, point,
+                   wp.zeros(c, dtype=float, device=device)],
+                  [3 * levels, 2, 1, 3 * levels, levels, levels, 1, 1, 1, 3, 1, 0, 0, 0, 1, 1], frame.threads, device,
+                  [path.grad, edge.grad, light_a.grad] + [None] * 6 + [camera.grad, fovy.grad] + [None] * 3 +
                   [point.grad, host_array(np.ones(c, np.float32), float, device)])
     rows = path.grad.numpy().astype(np.float64).reshape(c, levels, 3, 3)
     e = edge.grad.numpy().astype(np.float64).reshape(c, 2, 3)
     speed = {f"p{k}{i}": rows[:, k, i] for k in range(levels) for i in range(3)}
     points = {f"p{k}{i}": corners[:, k, i] for k in range(levels) for i in range(3)}
-    speed.update(v0=e[:, 0], v1=e[:, 1], light=light_a.grad.numpy().astype(np.float64),
-                 at=point.grad.numpy().astype(np.float64), **camera_adjoints(camera, fovy, c))
+    at_light, apart = light_a.grad.numpy().astype(np.float64), ~cone[:, None]
+    speed.update(v0=e[:, 0] * apart, v1=e[:, 1] * apart, light=at_light * apart, position=at_light * cone[:, None],
+                 axis=e[:, 0] * cone[:, None], at=point.grad.numpy().astype(np.float64),
+                 **camera_adjoints(camera, fovy, c))
     points.update(v0=x["edge"][:, 0], v1=x["edge"][:, 1])
-    return {"speed": speed, "points": points}
+    return {"speed": speed, "points": points, "spot": spot}
 
 
-def _axis_crossings(scene, geom, frame, sources, axis: int, curved: np.ndarray | None, device: str) -> tuple:
-    """(EdgePoints, jump, speed, points, light rows) of the crossings of the lines along ``axis``: per crossing
+def _axis_crossings(scene, geom, frame, sources, spots, axis: int, curved: np.ndarray | None, device: str) -> tuple:
+    """(EdgePoints, jump, speed, points, light rows, spot rows) of the crossings of the lines along ``axis``
+    (_speeds' rows: ``sources``'s, ``spots``'s): per crossing
     its place, its pixel, its weight -sign(g_axis) / (LINES (|g_x| + |g_y|)) (the line's Leibniz term
     dx_c/dtheta = -g_theta / g_axis, times the line's share |g_axis| / (|g_x| + |g_y|), over the lines' spacing)
     and f_- - f_+ (the colours EDGE_OFFSET_PX before and after it along the line)."""
@@ -343,7 +377,7 @@ def _axis_crossings(scene, geom, frame, sources, axis: int, curved: np.ndarray |
     step[axis] = EDGE_OFFSET_PX
     colours = traced_colours(scene, geom, frame, np.concatenate([at - step, at + step]), device)
     jump = colours[:len(at)] - colours[len(at):]
-    s = _speeds(scene, geom, frame, x, sources, at, device)
+    s = _speeds(scene, geom, frame, x, sources, spots, at, device)
     g = s["speed"].pop("at")
     size = np.abs(g[:, 0]) + np.abs(g[:, 1])
     weight = np.where(size > 0.0, -np.sign(g[:, axis]) / (LINES * np.where(size > 0.0, size, 1.0)), 0.0)
@@ -352,7 +386,7 @@ def _axis_crossings(scene, geom, frame, sources, axis: int, curved: np.ndarray |
     pts = EdgePoints(None, np.arange(len(at) * STRIP), spread(at), spread(weight) / STRIP, pixel.reshape(-1),
                      np.zeros((len(at) * STRIP, 2)))
     jump, speed = spread(jump), {k: spread(v) for k, v in s["speed"].items()}
-    return pts, jump, speed, {k: spread(v) for k, v in s["points"].items()}, spread(x["light"])
+    return pts, jump, speed, {k: spread(v) for k, v in s["points"].items()}, spread(x["light"]), spread(s["spot"])
 
 
 def _strip_pixels(cam, at: np.ndarray, g: np.ndarray, axis: int) -> np.ndarray:
@@ -376,16 +410,29 @@ def glass_crossings(scene, geom, frame, device: str, through: bool = True) -> li
     split or a curved mirror's bounce: crossed_surfaces): what the frame alone decides of the term, kept for its
     next backward."""
     sources = shadow_sources(scene, geom) if frame.fx.shadows else None
+    spots = cones(scene, geom) if frame.fx.light_model and hard_spots(scene) else None
     curved = crossed_surfaces(scene, geom, frame.fx)["curved mirror"] if through else None
-    parts = [_axis_crossings(scene, geom, frame, sources, axis, curved, device) for axis in (0, 1)]
-    return [(p, sources) for p in parts if p is not None]
+    parts = [_axis_crossings(scene, geom, frame, sources, spots, axis, curved, device) for axis in (0, 1)]
+    return [(p, sources, spots) for p in parts if p is not None]
 
 
 def glass_terms(crossings: list, d: np.ndarray, n_points: int) -> list:
     """The BoundaryTerms of ``crossings`` (glass_crossings) for the image adjoint ``d`` ((pixels, 3), float64),
     summed in the crossings' order (boundary_term)."""
     out = []
-    for (pts, jump, speed, points, light), sources in crossings:
+    for (pts, jump, speed, points, light, _), sources, _ in crossings:
         rows = None if sources is None else (light, len(sources.at))
         out.append(boundary_term(pts, jump, d, speed, points, n_points, rows))
     return out
+
+
+def glass_cone_lights(crossings: list, d: np.ndarray) -> dict:
+    """{lights.<i>.position | direction: (3,)}: the hard spots' sums of ``crossings``' cone crossings
+    (grad_spot_edges.spot_sums, in the crossings' order) for the image adjoint ``d``."""
+    lights = {}
+    for (pts, jump, speed, _, _, spot), _, spots in crossings:
+        if spots is not None and np.any(spot >= 0):
+            w = pts.weight * np.einsum("ij,ij->i", d[pts.pixel], jump)
+            for name, g in spot_sums(spots, np.maximum(spot, 0), w, speed["position"], speed["axis"]).items():
+                lights[name] = lights[name] + g if name in lights else g
+    return lights

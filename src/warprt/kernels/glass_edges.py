@@ -7,18 +7,21 @@ their faces held (make_tree_distances)."""
 import functools  # no "from __future__ import annotations": a kernel factory's types are its locals
 
 from .._warp import wp
-from ..geometry import LIGHT_DIRECTIONAL, SceneData
+from ..geometry import LIGHT_DIRECTIONAL, LIGHT_SPOT, SceneData
 from .dielectric import absorbed, dielectric_children, refract
 from .interaction import Ray, Surface, make_surface, mirror_ray, reflect, spawn_ray
 from .camera import camera_of, image_plane_point
 from .mirror import FROM_CAMERA, Mirrors
 from .raster import Fragments
 from .record import NO_RAY
-from .shading import make_light_test
+from .shading import make_light_arrival, make_light_test
 from .trace import TreeRay, make_first_hit, make_ray_stack
 
+general_light_arrival = make_light_arrival(True)  # where a hard spot is, the general light model is on
+
 REFLECTED, TRANSMITTED, MIRRORED = 0, 1, 2  # how a node's ray leaves its parent's hit
-FACE_EDGE, POINT_WEDGE, DIRECTIONAL_WEDGE = 0, 1, 2  # what parts two signatures: a face, a shadow ray's answer
+FACE_EDGE, POINT_WEDGE, DIRECTIONAL_WEDGE, SPOT_CONE = 0, 1, 2, 3  # what parts two signatures: a face, a shadow
+# ray's answer, a hard spot's cone
 
 
 @functools.cache
@@ -64,13 +67,27 @@ def make_blocked_lights(fx, DETAIL: bool):
     return blocked_lights
 
 
+@wp.func
+def inside_cones(s: SceneData, hit: Surface) -> int:
+    """A bit per hard spot (no ramp: its light a step at the cutoff) whose cone holds the hit, as the forward's
+    light_arrival decides it (the general light model's)."""
+    bits = int(0)
+    for l in range(s.num_lights):
+        shape = s.light_shape[l]
+        if shape.kind == wp.static(LIGHT_SPOT) and shape.inv_ramp == 0.0:
+            if general_light_arrival(s, hit, l).reaches != 0:
+                bits = bits | (1 << l)
+    return bits
+
+
 @functools.cache
-def make_tree_kernel(fx, stack: int, nodes: int, DETAIL: bool):
+def make_tree_kernel(fx, stack: int, nodes: int, DETAIL: bool, CONES: bool = False):
     """The kernel that walks camera rays along ``dirs`` through their Whitted tree as trace.make_path walks it
     (the BVH's nearest hits, Beer's law, a mirror bounce where k_r > 0, else a dielectric's children where they
     carry weight) and writes per point and tree node (``nodes`` of them: node i's reflected or mirror child is
     2 i + 1, its transmitted child 2 i + 2) the face hit (NO_RAY: no ray; -1: none) and a bit per Whitted light
-    whose shadow ray is blocked. With DETAIL also whether the node lies below a dielectric's split, its ray
+    whose shadow ray is blocked; with CONES (a hard spot lights the scene) a bit per hard spot whose cone holds
+    the hit (inside_cones). With DETAIL also whether the node lies below a dielectric's split, its ray
     (origin, direction), its hit's (u, v, distance), and per light the nearest blocker's face and (u, v)."""
     first_hit = make_first_hit(False, False, fx.culling)
     surface = make_surface(fx.smooth, fx.texture, fx.vertex_color)
@@ -84,12 +101,14 @@ def make_tree_kernel(fx, stack: int, nodes: int, DETAIL: bool):
     def tree(s: SceneData, eye: wp.vec3, max_depth: int, frags: Fragments, mir: Mirrors, dirs: wp.array(dtype=wp.vec3),
              face: wp.array(dtype=int), blocked: wp.array(dtype=int), below: wp.array(dtype=int),
              ray: wp.array(dtype=wp.vec3), hit_at: wp.array(dtype=wp.vec3), blocker: wp.array(dtype=int),
-             blocker_at: wp.array(dtype=wp.vec2)):
+             blocker_at: wp.array(dtype=wp.vec2), cone: wp.array(dtype=int)):
         j = wp.tid()
         base = j * nodes
         for i in range(nodes):
             face[base + i] = NO_RAY
             blocked[base + i] = 0
+            if wp.static(CONES):
+                cone[base + i] = 0
         r = TreeRay(Ray(eye, dirs[j]), wp.vec3(1.0), eye, 0, s.eye_medium, FROM_CAMERA, -1)
         node, under, top = int(0), int(0), int(0)
         rows, node_rows, under_rows = RayRows(), NodeRows(), NodeRows()
@@ -109,6 +128,8 @@ def make_tree_kernel(fx, stack: int, nodes: int, DETAIL: bool):
                     r.weight = absorbed(s, r.weight, r.medium, r.start, hit)
                 if wp.static(SHADOWS):
                     blocked[k] = blocked_lights(s, hit, k, blocker, blocker_at)
+                if wp.static(CONES):
+                    cone[k] = inside_cones(s, hit)
                 level = r.depth + 1
                 if wp.static(REFLECTION):
                     kr = s.kr[hit.material]
@@ -189,13 +210,15 @@ def make_tree_distances(LEVELS: int):
     normals or 0, ``branch`` and ``eta`` how it leaves each: bounce), then per ``kind[c]`` FACE_EDGE's
     det(v0 - o, v1 - o, d) of its ray (o, d) and the edge ``edge[2 c:2 c + 2]``, or a shadow wedge's N . (y - v0),
     N = (v0 - L) x (v1 - v0) (POINT_WEDGE, L = ``light[c]``) or L x (v1 - v0) (DIRECTIONAL_WEDGE, L the direction of
-    travel), y the ray's hit on the face path[LEVELS c + level]. Differentiable in the path, the edge, the light, the
-    camera and the image point; each crossing reads copies of its own."""
+    travel), or a hard spot's cone's unit(y - L) . v0 - ``cos_cutoff[c]`` (SPOT_CONE: L its position, v0 its axis),
+    y the ray's hit on the face path[LEVELS c + level]. Differentiable in the path, the edge, the light, the camera
+    and the image point; each crossing reads copies of its own."""
 
     @wp.kernel(module="unique")
     def tree_distances(path: wp.array(dtype=wp.vec3), edge: wp.array(dtype=wp.vec3), light: wp.array(dtype=wp.vec3),
                        normals: wp.array(dtype=wp.vec3), branch: wp.array(dtype=int), eta: wp.array(dtype=float),
-                       level: wp.array(dtype=int), kind: wp.array(dtype=int), camera: wp.array(dtype=wp.vec3),
+                       level: wp.array(dtype=int), kind: wp.array(dtype=int), cos_cutoff: wp.array(dtype=float),
+                       camera: wp.array(dtype=wp.vec3),
                        fovy: wp.array(dtype=float), near: float, width: int, height: int, at: wp.array(dtype=wp.vec2),
                        distance: wp.array(dtype=float)):
         c = wp.tid()
@@ -213,10 +236,13 @@ def make_tree_distances(LEVELS: int):
             f = 3 * (LEVELS * c + level[c])
             e = wp.cross(path[f + 1] - path[f], path[f + 2] - path[f])
             y = o + (wp.dot(path[f] - o, e) / wp.dot(d, e)) * d
-            n = wp.cross(light[c], v1 - v0)
-            if kind[c] == wp.static(POINT_WEDGE):
-                n = wp.cross(v0 - light[c], v1 - v0)
-            g = wp.dot(n, y - v0)
+            if kind[c] == wp.static(SPOT_CONE):
+                g = wp.dot(wp.normalize(y - light[c]), v0) - cos_cutoff[c]
+            else:
+                n = wp.cross(light[c], v1 - v0)
+                if kind[c] == wp.static(POINT_WEDGE):
+                    n = wp.cross(v0 - light[c], v1 - v0)
+                g = wp.dot(n, y - v0)
         distance[c] = g
 
     return tree_distances
