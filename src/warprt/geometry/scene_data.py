@@ -130,9 +130,9 @@ class AreaLights:
     render.area_estimator = "analytic", ``corners`` holds the triangles each light's diffuse term is integrated
     over in closed form (three corners each; none for a disk or a sphere), light e's from polygon[e] to
     polygon[e + 1], and ``spheres`` each sphere light's centre and radius (radius 0: not a sphere), all read
-    only then. ``hull`` holds four corners a light (scene.light_hull) around all its points, and ``hulled`` 1 for a
-    light whose shadow rays a hit may prove clear of them (kernels/clearance.py; 0 for all where the frame traces
-    every shadow ray, shadow_query "bvh", and for a light with no hull)."""
+    only then. ``hull`` holds four corners a light (scene.light_hull) around all its points, ``hulled`` 1 for a
+    light that has one, and ``clear`` 1 where a hit may prove its shadow rays clear of the scene
+    (kernels/clearance.py; 0 where the frame traces every shadow ray, shadow_query "bvh")."""
 
     num: int
     strata: int
@@ -147,6 +147,7 @@ class AreaLights:
     spheres: wp.array(dtype=wp.vec4)
     hull: wp.array(dtype=wp.vec3)
     hulled: wp.array(dtype=wp.int32)
+    clear: int
 
 
 @wp.struct
@@ -380,22 +381,23 @@ class Geometry:
         return [EMITTER_MATERIAL if n == EMITTER_MATERIAL_NAME else scene.materials[n] for n in self.material_names]
 
     def scene_data(self, scene, shadow_grid: ShadowGrid | None = None, strata: int = 1,
-                   clearance: bool = False) -> SceneData:
+                   clearance: bool = True) -> SceneData:
         """The kernels' view of these triangles for a frame of ``scene``: its materials and textures,
         lights, ambient, background and the eye's medium as small new arrays where they changed, and the
         shadow rays' grid if one is given, and the area lights' points spread over ``strata`` pixel samples
-        (light_strata), with their hulls where the shadow rays to them may be proven clear (``clearance``,
-        kernels/clearance.py); the triangle arrays and the BVH are shared, never rebuilt."""
+        (light_strata), their shadow rays proven clear where a hit can (``clearance``, kernels/clearance.py: the
+        same image, so set on the kept tables without making them again); the triangle arrays and the BVH are
+        shared, never rebuilt."""
         m = self.slot_materials(scene)
         dielectric = any(x.dielectric for x in m)
         area = scene.area_lights
         # With glass, the medium the eye is in (eye_medium) depends on the eye too.
         key = (tuple(m), tuple(scene.lights), tuple(scene.render.ambient), tuple(scene.render.background),
                id(shadow_grid), tuple(scene.camera.eye) if dielectric else None,
-               (scene.render.light_samples, scene.render.area_estimator, strata, clearance) if area else None,
+               (scene.render.light_samples, scene.render.area_estimator, strata) if area else None,
                (scene.render.light_samples, strata) if scene.environment else None)
         if self._tables is not None and self._tables[0] == key:
-            return self._tables[1]
+            return _cleared(self._tables[1], clearance)
         d, lights = self.device, scene.whitted_lights
         s = SceneData()
         s.mesh = self.mesh.id if self.mesh is not None else wp.uint64(0)
@@ -428,12 +430,12 @@ class Geometry:
         if shadow_grid is None and self._no_grid is None:
             self._no_grid = empty_grid(d)
         s.shadow_grid = shadow_grid if shadow_grid is not None else self._no_grid
-        s.area = self._area_lights(scene, area, strata, clearance)
+        s.area = self._area_lights(scene, area, strata)
         s.env = self._environment(scene.environment, scene.render.light_samples, strata)
         self._tables = (key, s, shadow_grid, textures)  # the grid and images kept alive with their ids
-        return s
+        return _cleared(s, clearance)
 
-    def _area_lights(self, scene, area: list, strata: int = 1, clearance: bool = False) -> AreaLights:
+    def _area_lights(self, scene, area: list, strata: int = 1) -> AreaLights:
         """The area lights' table for a frame: light_samples points each, relative to the origin (float64,
         then float32), and each triangle's emitter; a stand-in of no lights (kept) for a scene without."""
         d = self.device
@@ -447,6 +449,7 @@ class Geometry:
                 a.spheres = wp.zeros(1, dtype=wp.vec4, device=d)
                 a.hull = wp.zeros(4, dtype=wp.vec3, device=d)
                 a.hulled = wp.zeros(1, dtype=wp.int32, device=d)
+                a.clear = 0
                 a.first = wp.zeros(1, dtype=wp.int32, device=d)
                 a.radiance, a.points, a.normals = (wp.zeros(1, dtype=wp.vec3, device=d) for _ in range(3))
                 a.dA = wp.zeros(1, dtype=float, device=d)
@@ -476,9 +479,10 @@ class Geometry:
         spheres = [[*(np.asarray(l.center if l.center is not None else (0.0, 0.0, 0.0)) - self.origin), l.radius]
                    if l.shape == "sphere" and scene.render.area_estimator == "analytic" else [0.0] * 4 for l in area]
         a.spheres = wp.array(np.asarray(spheres, np.float32), dtype=wp.vec4, device=d)
-        hulls = [light_hull(scene, l) if clearance else None for l in area]
+        hulls = [light_hull(scene, l) for l in area]
         a.hull = vec([h - self.origin if h is not None else np.zeros((4, 3)) for h in hulls])
         a.hulled = wp.array(np.asarray([h is not None for h in hulls], np.int32), dtype=wp.int32, device=d)
+        a.clear = 0
         return a
 
     def _environment(self, light, light_samples: int, strata: int = 1) -> Environment:
@@ -560,3 +564,12 @@ class Geometry:
         the area lights' own shapes, which have none of the scene's."""
         names = list(scene.materials)
         return np.asarray([names.index(n) if n in scene.materials else -1 for n in self.material_names] or [0], np.int32)
+
+
+def _cleared(s: SceneData, clearance: bool) -> SceneData:
+    """``s`` with its area lights' shadow rays proven clear where a hit can, or not (AreaLights.clear)."""
+    if s.area.num > 0 and s.area.clear != int(clearance):
+        area = s.area
+        area.clear = int(clearance)
+        s.area = area
+    return s
