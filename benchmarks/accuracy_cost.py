@@ -330,6 +330,9 @@ def describe_reference(ref: dict) -> str:
 
 
 def scene_paths(only=None) -> list[Path]:
+    """The scenes measured: scenes/ (or those named in ``only``) less those lit by an environment, whose light the
+    Whitted reference does not have (reference/mitsuba_whitted.py refuse_environment); their error against time is
+    the equal-error section's (benchmarks/equal_error.py, against Mitsuba's direct integrator)."""
     paths = sorted([*SCENES.glob("*.toml"), *SCENES.glob("*.xml")], key=lambda p: p.stem)
     if only:
         wanted = set(only)
@@ -337,7 +340,10 @@ def scene_paths(only=None) -> list[Path]:
         missing = wanted - {p.stem for p in paths}
         if missing:
             raise SystemExit(f"accuracy_cost: no scene named {', '.join(sorted(missing))} in {SCENES}")
-    return paths
+    lit = [p.stem for p in paths if warprt.load_scene(p).environment is not None]
+    if only and lit:
+        raise SystemExit(f"accuracy_cost: {', '.join(lit)}: lit by an environment, measured by benchmarks.equal_error")
+    return [p for p in paths if p.stem not in lit]
 
 
 def run(quick: bool = False, scenes=None, out: Path | str = RESULTS, ref_spp: int | None = None,
