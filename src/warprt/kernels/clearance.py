@@ -124,11 +124,12 @@ def beyond(py: Pyramid, a: wp.vec3, b: wp.vec3, c: wp.vec3) -> bool:
 
 
 @wp.func
-def light_clear(s: SceneData, hit: Surface, e: int) -> int:
+def light_clear(s: SceneData, hit: Surface, e: int, points: int) -> int:
     """1 where no triangle can stop a shadow ray from the hit to area light e's points (the module's proof), 0
-    where one might (or the frame traces every ray, or the light has no hull: AreaLights.clear, hulled), and its
-    rays are traced."""
-    if s.area.clear == 0 or s.area.hulled[e] == 0:
+    where one might (or the frame traces every ray, or the light has no hull: AreaLights.clear, hulled, or the
+    hit takes fewer than CLEAR_MIN_POINTS ``points`` of it, too few to pay for the proof), and its rays are
+    traced."""
+    if points < wp.static(CLEAR_MIN_POINTS) or s.area.clear == 0 or s.area.hulled[e] == 0:
         return 0
     py = pyramid(s, hit, e)
     if py.margin < 0.0:

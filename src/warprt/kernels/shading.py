@@ -27,7 +27,7 @@ import math
 
 from .._warp import wp
 from ..geometry import LIGHT_DIRECTIONAL, LIGHT_SPOT, LightShape, SceneData
-from .clearance import CLEAR_MIN_POINTS, SHADOW_EPSILON, light_clear
+from .clearance import SHADOW_EPSILON, light_clear
 from .interaction import Surface, reflect, spawn_ray
 from .record import GradRecord, record_area_point
 from .shadow import make_occluded
@@ -463,8 +463,7 @@ def make_area_light(DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool, RECORD: bool =
                 L_e = a.radiance[e]
                 clear = int(0)
                 if wp.static(SHADOWS):
-                    if a.first[e + 1] - a.first[e] >= wp.static(CLEAR_MIN_POINTS):
-                        clear = light_clear(s, hit, e)
+                    clear = light_clear(s, hit, e, a.first[e + 1] - a.first[e])
                 for q in range(a.first[e], a.first[e + 1]):
                     t = area_sample_test(s, hit, q, clear)
                     out.shadow_rays += t.shadow_ray
@@ -494,8 +493,7 @@ def make_area_light(DIFFUSE: bool, SPECULAR: bool, SHADOWS: bool, RECORD: bool =
                 closed = wp.where(U >= 0.0, 1, 0)
             clear = int(0)
             if wp.static(SHADOWS):
-                if hi - lo >= wp.static(CLEAR_MIN_POINTS):
-                    clear = light_clear(s, hit, e)
+                clear = light_clear(s, hit, e, hi - lo)
                 if wp.static(not SPECULAR):
                     if closed != 0 and clear != 0:
                         hi = lo  # every point seen: the ratio is 1, the closed form alone

@@ -40,6 +40,11 @@ def coordinate_system(n) -> tuple[np.ndarray, np.ndarray]:
     return s, t
 
 
+def frame_corners(c, u, v) -> np.ndarray:
+    """(4, 3): the corners c -+ u -+ v of the parallelogram a frame spans, in order around it (u x v up)."""
+    return np.array([c - u - v, c + u - v, c + u + v, c - u + v])
+
+
 def rectangle_axes(light) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(center, u, v) of a rectangle light: corners at center +- u +- v, emitting along u x v."""
     c = np.asarray(light.center if light.center is not None else (0.0, 0.0, 0.0), np.float64)
@@ -86,8 +91,7 @@ def shape_object(light) -> SceneObject:
     """The triangles of a shape light, wound so that their normal is the light's (the same object for an
     equal light, so that a Geometry built from it is kept across frames)."""
     if light.shape == "rectangle":
-        c, u, v = rectangle_axes(light)
-        vertices = np.array([c - u - v, c + u - v, c + u + v, c - u + v])
+        vertices = frame_corners(*rectangle_axes(light))
         faces = np.array([[0, 1, 2], [0, 2, 3]])
     elif light.shape == "sphere":
         from .shapes import sphere
@@ -240,9 +244,7 @@ def emitting_triangles(scene, light) -> np.ndarray:
     rectangle's two, an object light's own; none (0, 3, 3) for a disk or a sphere, which stay on their sample
     points."""
     if light.shape == "rectangle":
-        c, u, v = rectangle_axes(light)
-        corners = np.array([c - u - v, c + u - v, c + u + v, c - u + v])
-        return corners[[[0, 1, 2], [0, 2, 3]]]
+        return frame_corners(*rectangle_axes(light))[[[0, 1, 2], [0, 2, 3]]]
     if light.shape is not None:
         return np.zeros((0, 3, 3))
     return np.concatenate([o.vertices[o.faces] for o in scene.objects if o.name == light.object])
@@ -257,15 +259,14 @@ def light_hull(scene, light) -> np.ndarray | None:
     rectangle's own corners, a disk's circumscribed square, a flat object light's bounding rectangle in its
     plane; None for a sphere or an object light that is not flat."""
     if light.shape in ("rectangle", "disk"):
-        c, u, v = shape_frame(light)
-        return np.array([c - u - v, c + u - v, c + u + v, c - u + v])
+        return frame_corners(*shape_frame(light))
     if light.shape is not None:
         return None
     points = emitting_triangles(scene, light).reshape(-1, 3)
     if not len(points):
         return None
     centre = points.mean(axis=0)
-    _, sv, vt = np.linalg.svd(points - centre)
+    vt = np.linalg.svd(points - centre)[2]
     n = vt[2]
     extent = float(np.ptp(points, axis=0).max())
     if extent == 0.0 or np.abs((points - centre) @ n).max() > FLAT * extent:
