@@ -15,7 +15,7 @@ import warp as wp
 import warp.autograd
 
 import warprt
-from warprt.image import EdgeFrame, camera_edges, edge_points, edge_sides
+from warprt.image import EdgeFrame, camera_edges, edge_points, edge_sides, segment_points
 from warprt.kernels import edge_distances
 from warprt.scene import camera_basis, resolve_effects
 
@@ -152,6 +152,30 @@ def _distance_inputs(n: int, seed: int = 2):
     keep = pts.edge[first]
     camera = np.tile(np.stack([eye, np.asarray(cam.center), np.asarray(cam.up)]), (len(keep), 1))
     return v0[keep], v1[keep], camera, np.full(len(keep), cam.fovy), at, cam
+
+
+@pytest.mark.parametrize("family, cut", [((0, 1), False), ((0, 0), True), ((-1, 1), True), (None, True)])
+def test_segments_of_two_families_do_not_cut_each_other(family, cut):
+    """Two segments whose images cross inside a pixel: cut there (each piece its own Gauss points) unless both
+    have a family and they differ (two sources' shadow edges: each one's jump is smooth across the other's).
+    Either way each segment's weights sum to its image's length, and a cubic along it integrates exactly."""
+    cam = triangle_scene().camera
+    eye = np.asarray(cam.eye, np.float64)
+    q0 = np.array([[-0.61, -0.23, 0.0], [-0.52, 0.37, 0.0]]) - eye
+    q1 = np.array([[0.58, 0.31, 0.0], [0.49, -0.29, 0.0]]) - eye
+    with_family = segment_points(q0, q1, np.cross(q0, q1), cam, family=None if family is None else np.array(family))
+    alone = [segment_points(q0[i:i + 1], q1[i:i + 1], np.cross(q0[i:i + 1], q1[i:i + 1]), cam) for i in range(2)]
+    b = camera_basis(cam)
+    for i in range(2):
+        mine = with_family.edge == i
+        assert (mine.sum() > len(alone[i].edge)) == cut  # the crossing's cut: one piece more, its Gauss points
+        ends = [(b.width * (0.5 + b.d_f * (q @ b.x_e) / (-(q @ b.z_e) * b.w)),
+                 b.height * (0.5 + b.d_f * (q @ b.y_e) / (-(q @ b.z_e) * b.h))) for q in (q0[i], q1[i])]
+        a, c = np.asarray(ends[0]), np.asarray(ends[1])
+        length = np.linalg.norm(c - a)
+        s = (with_family.at[mine] - a) @ (c - a) / length ** 2  # each point's parameter along the image
+        assert with_family.weight[mine].sum() == pytest.approx(length, rel=1e-12)
+        assert (with_family.weight[mine] * (1 + s - 2 * s ** 3)).sum() == pytest.approx(length * 1.0, rel=1e-10)
 
 
 def test_the_edge_distance_passes_warps_gradcheck():

@@ -174,24 +174,39 @@ def _neighbours(seg: np.ndarray, pixel: np.ndarray, n: int) -> tuple:
     return pairs // n, pairs % n
 
 
+def _cutting(family: np.ndarray, j: np.ndarray, k: np.ndarray) -> tuple:
+    """The pairs (j, k) of segments whose crossing cuts j: all but those of two different families, both at
+    least 0. A hard shadow's segment is of its source's family (its jump is that source's light alone,
+    grad_shadow_edges.light_sides): another source's shadow edge crossing it leaves its integrand smooth, and
+    the soft shadow of a light's many sample points would otherwise be cut at each of their crossings (half
+    its pieces on gradient_cost's soft shadow)."""
+    fj, fk = family[j], family[k]
+    keep = (fj < 0) | (fk < 0) | (fj == fk)
+    return j[keep], k[keep]
+
+
 def _distinct(x: np.ndarray) -> np.ndarray:
     """np.unique of integers, by a sort (np.unique's hash table is slower here)."""
     x = np.sort(x)
     return x[np.concatenate([[True], x[1:] != x[:-1]])] if len(x) else x
 
 
-def segment_points(q0: np.ndarray, q1: np.ndarray, n: np.ndarray, cam, edges=None) -> EdgePoints:
+def segment_points(q0: np.ndarray, q1: np.ndarray, n: np.ndarray, cam, edges=None,
+                   family: np.ndarray | None = None) -> EdgePoints:
     """The EdgePoints of the segments q0 q1 (rows, relative to the eye; ``n``: per segment the normal of the
     plane through the eye and it, whose sign says which side is g > 0; ``edges``: what they stand for): each
     segment's image cut where it crosses the pixels' borders and the images of the other segments in those
-    pixels, GAUSS_POINTS a piece."""
+    pixels (but two of different ``family``, both at least 0: _cutting), GAUSS_POINTS a piece."""
     b = camera_basis(cam)
     gauss, gauss_w = np.polynomial.legendre.leggauss(GAUSS_POINTS)
     normal, rows, ends, spans = _segments(q0, q1, n, b)
     a, c = ends[:, 0], ends[:, 1]
     seg, ts = _pieces(a, c, spans)
     piece, pixel = _pixels_of(a, c, seg, ts, b)
-    crossing, t_crossing = _crossings(ends, spans, *_neighbours(seg[piece], pixel, len(rows)))
+    j, k = _neighbours(seg[piece], pixel, len(rows))
+    if family is not None:
+        j, k = _cutting(np.asarray(family)[rows], j, k)
+    crossing, t_crossing = _crossings(ends, spans, j, k)
     seg, ts = _unique(np.concatenate([seg, crossing]), np.concatenate([ts, t_crossing]))
     piece, pixel = _pixels_of(a, c, seg, ts, b)  # ts increases along a segment (_unique): no piece is empty
     e, s0, s1 = seg[piece], ts[piece], ts[piece + 1]

@@ -187,7 +187,11 @@ def boundary(scene, geom, fx, eye: np.ndarray, mirrors=None) -> Boundary:
                                          spots[0] if spots is not None else None)
             blocks += mirrored.blocks(eye)
     start = np.cumsum([0] + [len(q) for q, _, _ in blocks])
-    pts = segment_points(*(np.concatenate([block[k] for block in blocks]) for k in range(3)), scene.camera)
+    family = np.full(start[-1], -1, np.int64)  # the shadows' by source: they do not cut each other's (_cutting)
+    if segments is not None:
+        family[start[1]:start[2]] = segments.source
+    pts = segment_points(*(np.concatenate([block[k] for block in blocks]) for k in range(3)), scene.camera,
+                         family=family)
     part = lambda i, what=None: pts.part(start[i], start[i + 1], what)  # noqa: E731
     if mirrored is not None:  # its blocks the last (BLOCKS)
         mirrored.take([part(i) for i in range(len(blocks) - len(BLOCKS), len(blocks))])
