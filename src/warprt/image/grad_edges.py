@@ -187,9 +187,12 @@ def boundary(scene, geom, fx, eye: np.ndarray, mirrors=None) -> Boundary:
                                          spots[0] if spots is not None else None)
             blocks += mirrored.blocks(eye)
     start = np.cumsum([0] + [len(q) for q, _, _ in blocks])
-    family = np.full(start[-1], -1, np.int64)  # the shadows' by source: they do not cut each other's (_cutting)
+    family = np.full(start[-1], -1, np.int64)  # the shadows' by source (and chain): not cut by each other's (_cutting)
     if segments is not None:
         family[start[1]:start[2]] = segments.source
+    if mirrored is not None and sources is not None:
+        at = len(blocks) - len(BLOCKS) + BLOCKS.index("shadows")
+        family[start[at]:start[at + 1]] = len(sources.at) * (1 + mirrored.shadow_chain) + mirrored.shadows.source
     pts = segment_points(*(np.concatenate([block[k] for block in blocks]) for k in range(3)), scene.camera,
                          family=family)
     part = lambda i, what=None: pts.part(start[i], start[i + 1], what)  # noqa: E731
