@@ -155,18 +155,23 @@ def _pixels_of(a: np.ndarray, c: np.ndarray, seg: np.ndarray, ts: np.ndarray, b)
     return piece, (b.height - 1 - y) * b.width + x
 
 
-def _neighbours(seg: np.ndarray, pixel: np.ndarray, n: int) -> tuple:
+def _neighbours(seg: np.ndarray, pixel: np.ndarray, n: int, family: np.ndarray | None = None) -> tuple:
     """(j, k): the pairs of two of the ``n`` segments whose pieces (``seg``, ``pixel``) share a pixel, each
-    pair once, both ways."""
+    pair once, both ways; with ``family`` (per segment), less those of two different families both at least 0
+    (segment_points'): such pairs are never made (a soft shadow's pixels hold many sources' edges)."""
     code = _distinct(pixel * n + seg)  # (pixel, segment), by pixel
     pix, seg = code // n, code % n
-    starts = np.flatnonzero(np.concatenate([[True], pix[1:] != pix[:-1]]))
-    size = np.diff(np.append(starts, len(pix)))
-    count = np.repeat(size, size)  # per (pixel, segment): its pixel's segments
-    first = np.repeat(np.arange(len(pix)), count)
-    second = np.repeat(np.repeat(starts, size), count) + np.arange(len(first)) - np.repeat(np.cumsum(count) - count,
-                                                                                          count)
-    j, k = seg[first], seg[second]
+    if family is None:
+        j, k = _pairs_within(pix, seg, np.ones(len(seg), bool))
+    else:
+        fam = family[seg]
+        loose = fam < 0  # cut by, and cutting, every segment in their pixels
+        j0, k0 = _pairs_within(pix, seg, loose)
+        kin = np.flatnonzero(~loose)  # the rest by (pixel, family): each family's own
+        kin = kin[np.lexsort((fam[kin], pix[kin]))]
+        j1, k1 = _pairs_within(pix[kin] * (int(fam.max(initial=0)) + 1) + fam[kin], seg[kin],
+                               np.ones(len(kin), bool))
+        j, k = np.concatenate([j0, k0, j1]), np.concatenate([k0, j0, k1])
     if n * n <= PAIR_TABLE:  # a table of every pair, faster than sorting them
         table = np.zeros((n, n), bool)
         table[j, k] = True
@@ -176,15 +181,16 @@ def _neighbours(seg: np.ndarray, pixel: np.ndarray, n: int) -> tuple:
     return pairs // n, pairs % n
 
 
-def _cutting(family: np.ndarray, j: np.ndarray, k: np.ndarray) -> tuple:
-    """The pairs (j, k) of segments whose crossing cuts j: all but those of two different families, both at
-    least 0. A hard shadow's segment is of its source's family (its jump is that source's light alone,
-    grad_shadow_edges.light_sides): another source's shadow edge crossing it leaves its integrand smooth, and
-    the soft shadow of a light's many sample points would otherwise be cut at each of their crossings (half
-    its pieces on gradient_cost's soft shadow)."""
-    fj, fk = family[j], family[k]
-    keep = (fj < 0) | (fk < 0) | (fj == fk)
-    return j[keep], k[keep]
+def _pairs_within(group: np.ndarray, seg: np.ndarray, first: np.ndarray) -> tuple:
+    """(j, k): per entry of ``seg`` with ``first`` set, it against every entry of its run of equal ``group``
+    (sorted), itself included."""
+    starts = np.flatnonzero(np.concatenate([[True], group[1:] != group[:-1]]))
+    size = np.diff(np.append(starts, len(group)))
+    run = np.repeat(np.arange(len(starts)), size)[first]  # per first entry its run
+    count = size[run]
+    mine = np.repeat(np.flatnonzero(first), count)
+    other = np.repeat(starts[run], count) + np.arange(len(mine)) - np.repeat(np.cumsum(count) - count, count)
+    return seg[mine], seg[other]
 
 
 def _distinct(x: np.ndarray) -> np.ndarray:
@@ -198,16 +204,15 @@ def segment_points(q0: np.ndarray, q1: np.ndarray, n: np.ndarray, cam, edges=Non
     """The EdgePoints of the segments q0 q1 (rows, relative to the eye; ``n``: per segment the normal of the
     plane through the eye and it, whose sign says which side is g > 0; ``edges``: what they stand for): each
     segment's image cut where it crosses the pixels' borders and the images of the other segments in those
-    pixels (but two of different ``family``, both at least 0: _cutting), GAUSS_POINTS a piece."""
+    pixels (but two of different ``family``, both at least 0: a hard shadow's segment is of its source's
+    family, its jump that source's light alone, smooth across another source's edge), GAUSS_POINTS a piece."""
     b = camera_basis(cam)
     gauss, gauss_w = np.polynomial.legendre.leggauss(GAUSS_POINTS)
     normal, rows, ends, spans = _segments(q0, q1, n, b)
     a, c = ends[:, 0], ends[:, 1]
     seg, ts = _pieces(a, c, spans)
     piece, pixel = _pixels_of(a, c, seg, ts, b)
-    j, k = _neighbours(seg[piece], pixel, len(rows))
-    if family is not None:
-        j, k = _cutting(np.asarray(family)[rows], j, k)
+    j, k = _neighbours(seg[piece], pixel, len(rows), None if family is None else np.asarray(family)[rows])
     crossing, t_crossing = _crossings(ends, spans, j, k)
     seg, ts = _unique(np.concatenate([seg, crossing]), np.concatenate([ts, t_crossing]))
     piece, pixel = _pixels_of(a, c, seg, ts, b)  # ts increases along a segment (_unique): no piece is empty

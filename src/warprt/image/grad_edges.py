@@ -187,7 +187,7 @@ def boundary(scene, geom, fx, eye: np.ndarray, mirrors=None) -> Boundary:
                                          spots[0] if spots is not None else None)
             blocks += mirrored.blocks(eye)
     start = np.cumsum([0] + [len(q) for q, _, _ in blocks])
-    family = np.full(start[-1], -1, np.int64)  # the shadows' by source (and chain): not cut by each other's (_cutting)
+    family = np.full(start[-1], -1, np.int64)  # the shadows' by source (and chain): not cut by each other's
     if segments is not None:
         family[start[1]:start[2]] = segments.source
     if mirrored is not None and sources is not None:
