@@ -106,7 +106,7 @@ REFUSED = {"camera": ("camera.eye", "curved mirror's own outline"),
 @pytest.mark.parametrize("case", list(REFUSED))
 def test_what_the_crossings_leave_out_in_a_curved_mirror_is_refused_in_one_line(positive, case):
     """The camera (the mirror ball's rim, its jump read 1e-3 of a pixel inside where the reflection turns fastest:
-    camera.eye 3.3% to 5.3% off along the eye's axes) and the curved mirror's own vertices and pose (they move its
+    camera.eye 3.5% to 4.1% off along the eye's axes) and the curved mirror's own vertices and pose (they move its
     outline and what it reflects at once): one line naming ``edges`` and why; an occluder's vertices and a light's
     position are not refused, and edges=False never is."""
     name, why = REFUSED[case]

@@ -72,27 +72,14 @@ def _crossing_refusal(scene, geom, fx, moving: list, surfaces: dict, kinds: list
     if any(n.startswith("materials.") and n.endswith(".ior") for n in moving):
         return "as its ior bends them"
     camera = [n for n in moving if n.startswith("camera.")]
-    if camera and (why := _camera_refusal(geom, fx, surfaces)):
-        return f"{why} ({camera[0]})"
+    if camera and surfaces["curved mirror"].any():  # its rim's jump, read EDGE_OFFSET_PX inside: docs/gradients.md
+        return f"as the camera moves a curved mirror's own outline and what it reflects ({camera[0]})"
     tri_object = geom.tri_object_np[:geom.triangle_count]
     for name, i in object_names(scene).items():
         for kind in kinds:
             if np.any(surfaces[kind][tri_object == i]) and any(n.startswith(f"objects.{name}.") for n in moving):
                 return (f"as a {kind} object's own vertices or pose move its outline and what it {TURNS[kind]} "
                         f"(objects.{name})")
-    return None
-
-
-def _camera_refusal(geom, fx, surfaces: dict) -> str | None:
-    """Why the camera's term would be off where the crossings meet the other terms (None: measured right, a
-    smooth glass object's; docs/gradients.md): a curved mirror's rim, its jump read by the camera edges
-    EDGE_OFFSET_PX inside where a smooth mirror's reflection turns fastest (3-5% off), and a flat-shaded glass
-    object's creases seen through it (the slab's top crease: 3.8% off in the rows it crosses)."""
-    if surfaces["curved mirror"].any():
-        return "as the camera moves a curved mirror's own outline and what it reflects"
-    smooth = (geom.tri_smooth_np[:geom.triangle_count] != 0) & bool(fx.smooth)
-    if np.any(surfaces["glass"] & ~smooth):
-        return "as the camera moves a flat-shaded glass object's creases seen through it"
     return None
 
 
