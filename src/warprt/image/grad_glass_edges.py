@@ -72,8 +72,8 @@ def _crossing_refusal(scene, geom, fx, moving: list, surfaces: dict, kinds: list
     if any(n.startswith("materials.") and n.endswith(".ior") for n in moving):
         return "as its ior bends them"
     camera = [n for n in moving if n.startswith("camera.")]
-    if camera:
-        return f"as the camera moves the {kinds[0]}'s own outline and what it {TURNS[kinds[0]]} ({camera[0]})"
+    if camera and surfaces["curved mirror"].any():  # its rim's jump, read EDGE_OFFSET_PX inside: docs/gradients.md
+        return f"as the camera moves a curved mirror's own outline and what it reflects ({camera[0]})"
     tri_object = geom.tri_object_np[:geom.triangle_count]
     for name, i in object_names(scene).items():
         for kind in kinds:
@@ -152,18 +152,23 @@ def _lit_alike(a: dict, b: dict) -> np.ndarray:
 
 
 def _smoothly(geom, fx, a: np.ndarray, b: np.ndarray, lit: np.ndarray) -> np.ndarray:
-    """Per row of two signatures' faces (a, b: (N, nodes)) and whether their lights agree (_lit_alike), whether every
-    node where they differ passes between two smooth faces of one object that share a corner: the radiance is
-    continuous there (the interpolated normals are), and no crossing need be looked for; a tessellated glass
-    ball's inner edges, seen at every level of its tree, would otherwise be most of the crossings."""
+    """Per row of two signatures' faces (a, b: (N, nodes)) and whether their lights agree (_lit_alike), whether
+    every node where they differ passes between two smooth faces of one object that share a corner (_smooth_pass):
+    no crossing need be looked for; a tessellated glass ball's inner edges, seen at every level of its tree, would
+    otherwise be most of the crossings."""
+    return lit & np.all((a == b) | _smooth_pass(geom, fx, a, b), axis=1)
+
+
+def _smooth_pass(geom, fx, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Per node of two signatures' faces (a, b: (N, nodes)) whether it passes between two smooth faces of one
+    object that share a corner: the radiance is continuous there (the interpolated normals are)."""
     if not fx.smooth:
-        return np.zeros(len(a), bool)
+        return np.zeros(a.shape, bool)
     corners = geom.indices_np.reshape(-1, 3)
     fa, fb = np.maximum(a, 0), np.maximum(b, 0)
     near = np.any(corners[fa][..., :, None] == corners[fb][..., None, :], axis=(-1, -2))
     smooth = (geom.tri_smooth_np[fa] != 0) & (geom.tri_smooth_np[fb] != 0) & (a >= 0) & (b >= 0)
-    same = geom.tri_object_np[fa] == geom.tri_object_np[fb]
-    return lit & np.all((a == b) | (smooth & same & near), axis=1)
+    return smooth & (geom.tri_object_np[fa] == geom.tri_object_np[fb]) & near
 
 
 def _pairs(scene, geom, frame, at: np.ndarray, device: str) -> tuple:
@@ -237,18 +242,13 @@ def _parting(scene, geom, frame, lo: np.ndarray, hi: np.ndarray, curved: np.ndar
     both) and its edge (``edge``: the nearer face's edge nearest its hit, or the blocker's nearest its shadow ray's
     hit; a cone's unread), the lo side's faces (``faces``) and
     ``keep``: a parting found, and unless ``curved`` is None below a dielectric's split or a bounce off a curved
-    mirror (``curved``: per triangle; _bounced): a camera ray's own node, or one only planar mirrors lead to, is the
-    camera's, shadows' and mirrors' terms'."""
+    mirror (``curved``: per triangle; _through)."""
     a, b = tree_walk(scene, geom, frame, lo, device, True), tree_walk(scene, geom, frame, hi, device, True)
     rows = np.arange(len(lo))
-    both = (a["face"] != NO_RAY) & (b["face"] != NO_RAY)
-    faces_part = both & (a["face"] != b["face"])
-    cone_a, cone_b = (x.get("cone", np.zeros_like(x["face"])) for x in (a, b))
-    differ = faces_part | (both & ((a["blocked"] != b["blocked"]) | (cone_a != cone_b)))
-    node = np.argmax(differ, axis=1)
-    keep = differ.any(axis=1)
+    node, keep, faces_part = _first_parting(geom, frame.fx, a, b)
+    cone_a, cone_b = _cones(a, b)
     if curved is not None:
-        keep &= (node > 0) & ((a["below"][rows, node] != 0) | _bounced(a["face"], node, curved))
+        keep &= _through(a, node, curved)
     fa, fb = a["face"][rows, node], b["face"][rows, node]
     use_a = (fb < 0) | ((fa >= 0) & (a["hit"][rows, node, 2] <= b["hit"][rows, node, 2]))
     face = np.where(use_a, fa, fb)
@@ -267,6 +267,48 @@ def _parting(scene, geom, frame, lo: np.ndarray, hi: np.ndarray, curved: np.ndar
     kind = np.select([shadow, cone], [POINT_WEDGE, SPOT_CONE], FACE_EDGE)
     return {"node": node, "kind": kind, "light": light,
             "edge": _edge_of(geom, face, uv), "faces": a["face"], "keep": keep}
+
+
+def _first_parting(geom, fx, a: dict, b: dict) -> tuple:
+    """(node, found, faces_part): per row of two signatures (tree_walk's, (N, nodes) each) the first node in the
+    tree's level order where they part (faces both traced and different, not passing smoothly: _smooth_pass; the
+    hard cones holding the hit; or the lights its shadow rays find blocked), whether they part at all, and per
+    node whether their faces do."""
+    both = (a["face"] != NO_RAY) & (b["face"] != NO_RAY)
+    faces_part = both & (a["face"] != b["face"]) & ~_smooth_pass(geom, fx, a["face"], b["face"])
+    cone_a, cone_b = _cones(a, b)
+    differ = faces_part | (both & ((a["blocked"] != b["blocked"]) | (cone_a != cone_b)))
+    return np.argmax(differ, axis=1), differ.any(axis=1), faces_part
+
+
+def _cones(a: dict, b: dict) -> tuple:
+    """Two signatures' hard-cone bits (zeros where the walk holds none: tree_walk)."""
+    return tuple(x.get("cone", np.zeros_like(x["face"])) for x in (a, b))
+
+
+def _through(a: dict, node: np.ndarray, curved: np.ndarray) -> np.ndarray:
+    """Per row whether the node ``node`` of the signature ``a`` (a detailed tree_walk) lies below a dielectric's
+    split or a bounce off a face ``curved`` marks (_bounced): the crossings' own; a camera ray's own node, or one
+    only planar mirrors lead to, is the camera's, shadows' and mirrors' terms'."""
+    return (node > 0) & ((a["below"][np.arange(len(node)), node] != 0) | _bounced(a["face"], node, curved))
+
+
+def _theirs_near(scene, geom, frame, lo: np.ndarray, hi: np.ndarray, axis: int, curved: np.ndarray,
+                 device: str) -> np.ndarray:
+    """Per crossing (lo, hi: its sides along a line along ``axis``) whether a boundary of the other terms (not
+    _through) lies within EDGE_OFFSET_PX of it along its line: their jump, read that far either side of their
+    edge, spans this crossing's, which is theirs then. The case: a glass's outline seen directly and, just inside
+    it, the band where the transmitted rays, spawned past the next face's plane by the ray offset, leave the glass
+    without meeting that face; counted by both terms, the slab's outline moved by the camera was counted twice."""
+    step = np.zeros(2)
+    step[axis] = EDGE_OFFSET_PX
+    at = 0.5 * (lo + hi)
+    near = np.zeros(len(lo), bool)
+    for side, reach in ((lo, at - step), (hi, at + step)):
+        a, b = (tree_walk(scene, geom, frame, p, device, True) for p in (side, reach))
+        node, found, _ = _first_parting(geom, frame.fx, a, b)
+        near |= found & ~_through(a, node, curved)
+    return near
 
 
 def _bounced(faces: np.ndarray, node: np.ndarray, curved: np.ndarray) -> np.ndarray:
@@ -363,19 +405,22 @@ def _axis_crossings(scene, geom, frame, sources, spots, axis: int, curved: np.nd
     (_speeds' rows: ``sources``'s, ``spots``'s): per crossing
     its place, its pixel, its weight -sign(g_axis) / (LINES (|g_x| + |g_y|)) (the line's Leibniz term
     dx_c/dtheta = -g_theta / g_axis, times the line's share |g_axis| / (|g_x| + |g_y|), over the lines' spacing)
-    and f_- - f_+ (the colours EDGE_OFFSET_PX before and after it along the line)."""
+    and f_- - f_+ (the colours at its sides, the bisection's last lo and hi: two crossings nearer than a fixed
+    offset each read its own jump); with ``curved`` those below a split or a curved bounce (_through) and not
+    within reach of the other terms' boundaries (_theirs_near)."""
     lo, hi = _pairs(scene, geom, frame, line_points(scene.camera, axis), device)
     if len(lo):
         lo, hi = _crossings(scene, geom, frame, lo, hi, device)
         x = _parting(scene, geom, frame, lo, hi, curved, device)
         keep = x.pop("keep")
         x, lo, hi = {k: v[keep] for k, v in x.items()}, lo[keep], hi[keep]
+        if curved is not None and len(lo):
+            mine = ~_theirs_near(scene, geom, frame, lo, hi, axis, curved, device)
+            x, lo, hi = {k: v[mine] for k, v in x.items()}, lo[mine], hi[mine]
     if not len(lo):
         return None
     at = 0.5 * (lo + hi)
-    step = np.zeros(2)
-    step[axis] = EDGE_OFFSET_PX
-    colours = traced_colours(scene, geom, frame, np.concatenate([at - step, at + step]), device)
+    colours = traced_colours(scene, geom, frame, np.concatenate([lo, hi]), device)
     jump = colours[:len(at)] - colours[len(at):]
     s = _speeds(scene, geom, frame, x, sources, spots, at, device)
     g = s["speed"].pop("at")
