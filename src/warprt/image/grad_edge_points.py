@@ -106,6 +106,23 @@ def _unique(seg: np.ndarray, ts: np.ndarray) -> tuple:
     return seg[keep], ts[keep]
 
 
+def _merged(seg: np.ndarray, ts: np.ndarray, more_seg: np.ndarray, more_ts: np.ndarray) -> tuple:
+    """_unique of (seg, ts), sorted and each pair once, with the few pairs (more_seg, more_ts) added: each put
+    in its place by a binary search within its segment's run, the new pairs among themselves by a sort, so
+    that the whole is in the same order without sorting it all again."""
+    o = np.lexsort((more_ts, more_seg))
+    more_seg, more_ts = more_seg[o], more_ts[o]
+    lo, hi = np.searchsorted(seg, more_seg, "left"), np.searchsorted(seg, more_seg, "right")
+    while np.any(lo < hi):  # the first of the run above more_ts: after its equals, which _unique keeps
+        mid = (lo + hi) // 2
+        below = (lo < hi) & (ts[np.minimum(mid, len(ts) - 1)] <= more_ts)
+        lo, hi = np.where(below, mid + 1, lo), np.where((lo < hi) & ~below, mid, hi)
+    s, t = np.insert(seg, lo, more_seg), np.insert(ts, lo, more_ts)
+    keep = np.ones(len(s), bool)
+    keep[1:] = (s[1:] != s[:-1]) | (t[1:] != t[:-1])
+    return s[keep], t[keep]
+
+
 def _length(v: np.ndarray) -> np.ndarray:
     """Per row its norm, as np.linalg.norm of the row alone computes it (sqrt of its dot product: to the bit,
     which the axis=1 sum of squares is not)."""
@@ -214,7 +231,7 @@ def segment_points(q0: np.ndarray, q1: np.ndarray, n: np.ndarray, cam, edges=Non
     piece, pixel = _pixels_of(a, c, seg, ts, b)
     j, k = _neighbours(seg[piece], pixel, len(rows), None if family is None else np.asarray(family)[rows])
     crossing, t_crossing = _crossings(ends, spans, j, k)
-    seg, ts = _unique(np.concatenate([seg, crossing]), np.concatenate([ts, t_crossing]))
+    seg, ts = _merged(seg, ts, crossing, t_crossing)
     piece, pixel = _pixels_of(a, c, seg, ts, b)  # ts increases along a segment (_unique): no piece is empty
     e, s0, s1 = seg[piece], ts[piece], ts[piece + 1]
     t = s0[:, None] + (s1 - s0)[:, None] * 0.5 * (gauss + 1.0)[None]  # (pieces, GAUSS_POINTS)

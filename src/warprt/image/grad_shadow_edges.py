@@ -206,32 +206,36 @@ def _crossing_pairs(r: Receivers, source: np.ndarray, v0: np.ndarray, v1: np.nda
     """(edge, face, phi): the pairs of an edge and a triangle its source shows whose corners lie strictly
     either side of the edge's wedge plane (unit normal ``unit``), by edge then face, with phi the corners'
     signed distances from it; less those whose triangle's plane holds the edge (its shadow would lie along
-    the edge itself: where the occluder touches the receiver, a camera edge). A source at a time (its
-    matrix products as ever, so each value the same to the bit), a few edges at a time, so that the NumPy
-    arrays stay within PAIRS_AT_ONCE pairs."""
+    the edge itself: where the occluder touches the receiver, a camera edge). The sources that show the same
+    faces at once (a rectangle light's sample points mostly do: one source at a time was most of the shadows'
+    segments' time), a few edges at a time, so that the NumPy arrays stay within PAIRS_AT_ONCE pairs."""
     corner = r.p[r.faces]
     offset = np.einsum("ij,ij->i", r.normal, corner[:, 0])
     corner_t = [np.ascontiguousarray(corner[:, k].T) for k in range(3)]  # (3, faces): BLAS's fast layout
     n_r_t = np.ascontiguousarray(r.normal.T)
-    bounds = np.flatnonzero(np.diff(source, prepend=-1, append=-1))  # each source's run of edges
+    used = np.unique(source)
+    _, kind = np.unique(shows[used], axis=0, return_inverse=True)  # the sources alike: their faces shown
     out_e, out_f, out_phi = [], [], []
-    for first, end in itertools.pairwise(bounds):
-        faces = np.flatnonzero(shows[source[first]])
+    for k in range(int(kind.max(initial=-1)) + 1):
+        edges = np.flatnonzero(np.isin(source, used[kind.reshape(-1) == k]))
+        faces = np.flatnonzero(shows[used[kind.reshape(-1) == k][0]])
         c_t, n_t, off = [c[:, faces] for c in corner_t], n_r_t[:, faces], offset[faces]
         step = max(1, PAIRS_AT_ONCE // max(len(faces), 1))
-        for lo in range(first, end, step):
-            hi = min(lo + step, end)
-            plane = np.einsum("ec,ec->e", unit[lo:hi], v0[lo:hi])[:, None]
-            phi = [unit[lo:hi] @ c - plane for c in c_t]  # (edges, faces) a corner: matrix products
+        for lo in range(0, len(edges), step):
+            rows = edges[lo:lo + step]
+            plane = np.einsum("ec,ec->e", unit[rows], v0[rows])[:, None]
+            phi = [unit[rows] @ c - plane for c in c_t]  # (edges, faces) a corner: matrix products
             low, high = np.minimum(np.minimum(phi[0], phi[1]), phi[2]), np.maximum(np.maximum(phi[0], phi[1]), phi[2])
-            holds = (np.abs(v0[lo:hi] @ n_t - off) <= tol) & (np.abs(v1[lo:hi] @ n_t - off) <= tol)
+            holds = (np.abs(v0[rows] @ n_t - off) <= tol) & (np.abs(v1[rows] @ n_t - off) <= tol)
             e, f = np.nonzero((low < -tol) & (high > tol) & ~holds)
-            out_e.append(e + lo)
+            out_e.append(rows[e])
             out_f.append(faces[f])
             out_phi.append(np.stack([x[e, f] for x in phi], axis=1))
     if not out_e:
         return np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros((0, 3))
-    return np.concatenate(out_e), np.concatenate(out_f), np.concatenate(out_phi)
+    e = np.concatenate(out_e)
+    order = np.argsort(e, kind="stable")  # by edge (then face, as each edge's row gave them)
+    return e[order], np.concatenate(out_f)[order], np.concatenate(out_phi)[order]
 
 
 def _chords(corner: np.ndarray, phi: np.ndarray, tol: float) -> tuple:
