@@ -4,28 +4,12 @@ own (its rays' colours, its own copies of the parameters and their adjoints), so
 give the same values, to the bit, on any thread count."""
 from __future__ import annotations
 
-import os
-import threading
+from .._warp import wp
+from .launch import run_bands
 
 import numpy as np
 
-from .._warp import wp
-from .launch import band_pool, run_bands
-
 BANDS_PER_THREAD = 4  # a point's cost varies (a ray that misses, a shadow ray's BVH walk): bands balance it
-_POOLS: dict = {}  # thread count -> the band threads the edges' launches share (edge_pool)
-_POOLS_LOCK = threading.Lock()
-os.register_at_fork(after_in_child=_POOLS.clear)  # a forked child has the pools but not their threads
-
-
-def edge_pool(threads: int):
-    """The pool of ``threads`` band threads the boundary term's launches run on, made once a process: a
-    backward(edges=True) launches 4 to 8 of them, and a pool made and shut down for each cost 0.2-0.5 ms
-    (measured), a millisecond or more a call. Its threads wait idle between calls and end with the process."""
-    with _POOLS_LOCK:
-        if threads not in _POOLS:
-            _POOLS[threads] = band_pool(threads)
-        return _POOLS[threads]
 
 
 def host_array(values: np.ndarray, dtype, device: str, grad: bool = False) -> wp.array:
@@ -58,5 +42,4 @@ def launch_points(kernel, n: int, args: list, rows: list, threads: int, device: 
                                                                   zip(adjoints, rows)], adjoint=True, device=device,
                       record_tape=False)
 
-    pool = edge_pool(threads) if threads > 1 and wp.get_device(device).is_cpu else None
-    run_bands(band, n, threads, BANDS_PER_THREAD * threads, device, pool)
+    run_bands(band, n, threads, BANDS_PER_THREAD * threads, device)
