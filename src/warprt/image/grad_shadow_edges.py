@@ -213,12 +213,15 @@ def _crossing_pairs(r: Receivers, source: np.ndarray, v0: np.ndarray, v1: np.nda
     offset = np.einsum("ij,ij->i", r.normal, corner[:, 0])
     corner_t = [np.ascontiguousarray(corner[:, k].T) for k in range(3)]  # (3, faces): BLAS's fast layout
     n_r_t = np.ascontiguousarray(r.normal.T)
-    used = np.unique(source)
+    used, of_used = np.unique(source, return_inverse=True)
     _, kind = np.unique(shows[used], axis=0, return_inverse=True)  # the sources alike: their faces shown
+    group = kind.reshape(-1)[of_used.reshape(-1)]  # per edge its source's kind
+    by_group = np.argsort(group, kind="stable")
+    bounds = np.flatnonzero(np.diff(group[by_group], prepend=-1, append=-1))  # each kind's run of edges
     out_e, out_f, out_phi = [], [], []
-    for k in range(int(kind.max(initial=-1)) + 1):
-        edges = np.flatnonzero(np.isin(source, used[kind.reshape(-1) == k]))
-        faces = np.flatnonzero(shows[used[kind.reshape(-1) == k][0]])
+    for first, end in itertools.pairwise(bounds):
+        edges = by_group[first:end]
+        faces = np.flatnonzero(shows[source[edges[0]]])
         c_t, n_t, off = [c[:, faces] for c in corner_t], n_r_t[:, faces], offset[faces]
         step = max(1, PAIRS_AT_ONCE // max(len(faces), 1))
         for lo in range(0, len(edges), step):
