@@ -2,7 +2,9 @@
 derivative), each through warp.autograd.gradcheck (its adjoints against Warp's own central differences of the
 same function) as the replay calls it: the hit record at barycentrics found by the moving ray (barycentrics_on,
 then interaction.make_surface with smooth normals, uvs and vertex colours), a mirror's bounce (mirror_ray) and a
-dielectric's two children (dielectric_children, spawn_ray), Beer's law over a segment (absorbed). The light model
+dielectric's two children (dielectric_children, spawn_ray), Beer's law over a segment (absorbed); and the
+boundary term's own bounce through glass (kernels/glass_edges.py bounce: the ray the crossings' boundary function
+follows, in the faces, their normals, the ray and the ior). The light model
 and the area lights' terms are checked with their gradients (test_light_gradients.py, test_area_light_gradients.py),
 the texture lookup with the texels' (test_texture_gradients.py), the camera rays with the camera's.
 
@@ -17,7 +19,8 @@ import warp as wp
 import warp.autograd
 
 from warprt.geometry import SceneData
-from warprt.kernels import Surface, absorbed, barycentrics_on, dielectric_children, make_surface, mirror_ray, spawn_ray
+from warprt.kernels import (Surface, absorbed, barycentrics_on, bounce, dielectric_children, make_surface, mirror_ray,
+                            spawn_ray)
 
 SURFACE = make_surface(True, True, True)
 FACES = [0, 1, 2, 1, 3, 2]  # two triangles of one smooth, textured, coloured object
@@ -161,3 +164,52 @@ def test_the_bounce_the_dielectric_children_and_beer_pass_warps_gradcheck():
                                _vec(rng.uniform(0.5, 1.0, (6, 3)))]
     outputs = [wp.zeros(18, dtype=wp.vec3, requires_grad=True) for _ in range(3)]
     assert check(_children, inputs, outputs, 18)
+
+
+@wp.kernel
+def _bounced(points: wp.array(dtype=wp.vec3), indices: wp.array(dtype=int), normals: wp.array(dtype=wp.vec3),
+             o: wp.array(dtype=wp.vec3), d: wp.array(dtype=wp.vec3), eta: wp.array(dtype=float),
+             p: wp.array(dtype=wp.vec3), out: wp.array(dtype=wp.vec3)):
+    """Per ray (3 a ray: REFLECTED, TRANSMITTED, MIRRORED, as glass_edges' branches number them) the crossings'
+    bounce off face ray % 2 (the smooth pair of _hit_inputs)."""
+    i = wp.tid()
+    r = i / 3
+    f = 3 * (r % 2)
+    a, b, c = indices[f], indices[f + 1], indices[f + 2]
+    hit, leaves = bounce(o[r], wp.normalize(d[r]), points[a], points[b], points[c], normals[a], normals[b],
+                         normals[c], i % 3, eta[r])
+    p[i] = hit
+    out[i] = leaves
+
+
+def test_the_glass_edges_bounce_passes_warps_gradcheck():
+    """The crossings' bounce (reflected, refracted through Snell, mirrored about the interpolated normal),
+    entering from above and leaving from below, in the vertices, their normals, the ray and the ior (the ior's
+    adjoint is the boundary term's in materials.<name>.ior: grad_glass_edges._speeds), away from the critical
+    angle; the control: the same with the ior's adjoint cut fails it."""
+    hit_inputs = _hit_inputs()
+    rng = np.random.default_rng(5)
+    d = rng.uniform(-0.3, 0.3, (6, 3)) + [0.0, -1.0, 0.0]
+    o = rng.uniform(-0.3, 0.3, (6, 3)) + [0.0, 2.0, 0.0]
+    o[3:, 1], d[3:, 1] = -2.0, 1.0  # from below: leaving the medium
+    inputs = hit_inputs[:3] + [_vec(o), _vec(d), wp.array([1.5, 1.33, 1.7, 1.5, 1.4, 1.2], dtype=float,
+                                                          requires_grad=True)]
+    outputs = [wp.zeros(18, dtype=wp.vec3, requires_grad=True) for _ in range(2)]
+    assert check(_bounced, inputs, outputs, 18)
+    assert not check(_bounced_eta_held, inputs, outputs, 18)
+
+
+@wp.kernel
+def _bounced_eta_held(points: wp.array(dtype=wp.vec3), indices: wp.array(dtype=int), normals: wp.array(dtype=wp.vec3),
+                      o: wp.array(dtype=wp.vec3), d: wp.array(dtype=wp.vec3), eta: wp.array(dtype=float),
+                      p: wp.array(dtype=wp.vec3), out: wp.array(dtype=wp.vec3)):
+    """The control: _bounced with the ior read through an int (no adjoint) to a millionth."""
+    i = wp.tid()
+    r = i / 3
+    f = 3 * (r % 2)
+    a, b, c = indices[f], indices[f + 1], indices[f + 2]
+    held = float(int(eta[r] * 1.0e6)) * 1.0e-6
+    hit, leaves = bounce(o[r], wp.normalize(d[r]), points[a], points[b], points[c], normals[a], normals[b],
+                         normals[c], i % 3, held)
+    p[i] = hit
+    out[i] = leaves

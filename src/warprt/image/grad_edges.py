@@ -19,8 +19,8 @@ from .grad_checker_edges import CheckerSegments, checker_segments, checker_speed
 from .grad_edge_launch import host_array, launch_points
 from .grad_edge_points import (EDGE_OFFSET_PX, BoundaryTerm, EdgePoints, add_terms, boundary_term, camera_adjoints, camera_copies,
                                segment_points)
-from .grad_glass_edges import (crossed_surfaces, crossing_refusal, glass_cone_lights, glass_crossings, glass_terms,
-                               traced_colours)
+from .grad_glass_edges import (crossed_surfaces, crossing_refusal, glass_cone_lights, glass_crossings, glass_iors,
+                               glass_terms, traced_colours)
 from .grad_mesh_edges import MeshEdges, camera_edges, face_normals, facing, mesh_edges
 from .grad_mirror_edges import (BLOCKS, MirroredSegments, frame_mirrors, mirror_terms, mirrored_segments,
                                 on_mirrored_cones)
@@ -130,10 +130,12 @@ def edge_speeds(scene, geom, pts: EdgePoints, device: str, threads: int = 1) -> 
 def covered(name: str) -> bool:
     """Whether edge_gradients gives ``name`` a term: the camera, objects' vertices (their poses through them:
     grad.pose_edge_gradients), a Whitted light's position or direction, a shape light's own shape (its sample
-    points' and outline's term taken back to it: grad_area_shape.shape_edge_gradients)."""
+    points' and outline's term taken back to it: grad_area_shape.shape_edge_gradients), a dielectric's ior (the
+    crossings' alone: grad_glass_edges.glass_iors)."""
     parts = name.split(".")
     return (parts[0] == "camera" or (parts[0] == "objects" and parts[-1] == "vertices")
-            or (parts[0] == "lights" and parts[-1] in ("position", "direction") + SHAPE_KEYS))
+            or (parts[0] == "lights" and parts[-1] in ("position", "direction") + SHAPE_KEYS)
+            or (parts[0] == "materials" and parts[-1] == "ior"))
 
 
 @dataclass
@@ -212,11 +214,12 @@ def boundary(scene, geom, fx, eye: np.ndarray, mirrors=None) -> Boundary:
 
 def edge_gradients(scene, geom, frame: EdgeFrame, d: np.ndarray, wrt, device: str) -> dict:
     """The boundary term of d(sum(d * image)) / d(param) for each name in ``wrt`` the frame's edges move
-    (covered: objects' vertices, the camera, lights' positions, directions and centres), float64, shaped as
-    the parameter: per edge point, d at its pixel dotted with f_+ - f_- (edge_sides; a shadow's: its source's
-    light alone, grad_shadow_edges.light_sides), times its weight and its edge's speed (edge_speeds,
-    shadow_speeds), summed in the points' order (np.add.at: in order, one at a time), so the sum is the same
-    on every run and thread count. What is the frame's alone is kept in it for its next backward (kept_part)."""
+    (covered: objects' vertices, the camera, lights' positions, directions and centres, dielectrics' iors),
+    float64, shaped as the parameter: per edge point, d at its pixel dotted with f_+ - f_- (edge_sides; a
+    shadow's: its source's light alone, grad_shadow_edges.light_sides), times its weight and its edge's speed
+    (edge_speeds, shadow_speeds), summed in the points' order (np.add.at: in order, one at a time), so the sum
+    is the same on every run and thread count. What is the frame's alone is kept in it for its next backward
+    (kept_part)."""
     wrt = [n for n in wrt if covered(n)]
     if not wrt:
         return {}
@@ -239,21 +242,23 @@ def edge_gradients(scene, geom, frame: EdgeFrame, d: np.ndarray, wrt, device: st
                                   keep("checker sides", lambda: edge_sides(scene, geom, frame, b.checker, device)),
                                   keep("checker speeds", lambda: checker_speeds(scene, geom, b.checkers, b.checker,
                                                                                 device, frame.threads)), d3))
-    lights = {}
+    named = {}  # the hard spots' lights and the iors: sums of their own, not BoundaryTerm rows
     if b.spot is not None and len(b.spot.edge):
-        term, lights = spot_term(scene, geom, frame.fx, b.cones, b.spots, b.spot, d3, device, frame.threads, keep)
+        term, named = spot_term(scene, geom, frame.fx, b.cones, b.spots, b.spot, d3, device, frame.threads, keep)
         terms.append(term)
     if b.mirrored is not None:
         mirrored, seen = mirror_terms(scene, geom, frame.fx, b.mirrored, b.sources,
                                       partial(edge_sides, scene, geom, frame, device=device), d3, device, keep)
         terms += mirrored
         for name, g in seen.items():
-            lights[name] = lights[name] + g if name in lights else g
+            named[name] = named[name] + g if name in named else g
     if any(on.any() for on in keep("crossed", lambda: crossed_surfaces(scene, geom, frame.fx)).values()):
         crossings = keep("glass", lambda: glass_crossings(scene, geom, frame, device))
         terms += glass_terms(crossings, d3, len(geom.points_np))
         for name, g in glass_cone_lights(crossings, d3).items():
-            lights[name] = lights[name] + g if name in lights else g
+            named[name] = named[name] + g if name in named else g
+        if any(n.startswith("materials.") for n in wrt):
+            named.update(glass_iors(crossings, d3, geom.material_names))
     term = add_terms(terms, len(geom.points_np))
     shapes = {}
     if any(n.startswith("lights.") and n.endswith(tuple(f".{k}" for k in SHAPE_KEYS)) for n in wrt):
@@ -262,8 +267,8 @@ def edge_gradients(scene, geom, frame: EdgeFrame, d: np.ndarray, wrt, device: st
                                       int(round(np.sqrt(scene.render.light_samples))), device)
     out = {name: g for name in wrt if (g := shapes.get(name, _by_name(scene, b.sources, term, name))) is not None}
     for name in wrt:
-        if name in lights:
-            out[name] = out[name] + lights[name] if name in out else lights[name]
+        if name in named:
+            out[name] = out[name] + named[name] if name in out else named[name]
     return out
 
 
@@ -273,6 +278,8 @@ def _by_name(scene, sources: ShadowSources | None, term: BoundaryTerm, name: str
     shape light's own shape's is its sample points' and its own triangles' points' taken back through the
     shape (edge_gradients: grad_area_shape.shape_edge_gradients)."""
     section, owner, key = (name.split(".") + [""])[:3]
+    if section == "materials":  # an ior's: the crossings' alone (edge_gradients)
+        return None
     if section == "camera":
         return np.asarray(term.camera[owner], np.float64).reshape(np.shape(getattr(scene.camera, owner)))
     starts = np.cumsum([0] + [len(o.vertices) for o in drawn_objects(scene)])

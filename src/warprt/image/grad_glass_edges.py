@@ -69,8 +69,6 @@ def _crossing_refusal(scene, geom, fx, moving: list, surfaces: dict, kinds: list
         return f"at more than {MAX_GLASS_DEPTH} ray levels (render.max_depth)"
     if fx.area_lights:
         return "with area lights (their sample points' shadow edges share lines)"
-    if any(n.startswith("materials.") and n.endswith(".ior") for n in moving):
-        return "as its ior bends them"
     camera = [n for n in moving if n.startswith("camera.")]
     if camera and surfaces["curved mirror"].any():  # its rim's jump, read EDGE_OFFSET_PX inside: docs/gradients.md
         return f"as the camera moves a curved mirror's own outline and what it reflects ({camera[0]})"
@@ -354,7 +352,8 @@ def _path(scene, geom, frame, x: dict) -> tuple:
 def _speeds(scene, geom, frame, x: dict, sources, spots, at: np.ndarray, device: str) -> dict:
     """Per crossing the adjoint of its boundary function g (make_tree_distances) in each of its inputs: ``p<k><i>``
     corner i of the path's face at level k, ``v0`` and ``v1`` the edge, ``light`` (a shadow's source), a hard
-    cone's ``position`` and ``axis`` (0 where the crossing is no cone's), the camera's (camera_adjoints) and ``at``
+    cone's ``position`` and ``axis`` (0 where the crossing is no cone's), ``ior`` (C, slots) each material slot's
+    ior (the eta of the refractions above the node: _by_slot), the camera's (camera_adjoints) and ``at``
     (the image point: g's gradient in x and y); ``points``: the geometry points the inputs are; ``spot``: per
     crossing its row of ``spots`` (grad_spot_edges.Cones; -1: no cone's)."""
     levels, c = frame.max_depth, len(at)
@@ -376,18 +375,19 @@ def _speeds(scene, geom, frame, x: dict, sources, spots, at: np.ndarray, device:
         light[cone], edge[cone, 0], cos_cutoff[cone] = spots.at[row], spots.axis[row], spots.cos[row]
     grad = lambda v: host_array(np.asarray(v, np.float32).reshape(-1, 3), wp.vec3, device, True)  # noqa: E731
     path, edge, light_a = grad(p[corners]), grad(edge), grad(light)
+    eta_a = host_array(eta.reshape(-1), float, device, True)
     camera, fovy = camera_copies(scene, geom, c, device)
     point = host_array(at.astype(np.float32), wp.vec2, device, True)
     ints = lambda v: host_array(np.asarray(v, np.int32).reshape(-1), int, device)  # noqa: E731
     cam = scene.camera
     launch_points(make_tree_distances(levels), c,
                   [path, edge, light_a, host_array(normals.reshape(-1, 3).astype(np.float32), wp.vec3, device),
-                   ints(branch), host_array(eta.reshape(-1), float, device), ints(level), ints(kind),
+                   ints(branch), eta_a, ints(level), ints(kind),
                    host_array(cos_cutoff, float, device), camera, fovy, float(cam.near), cam.width, cam.height, point,
                    wp.zeros(c, dtype=float, device=device)],
                   [3 * levels, 2, 1, 3 * levels, levels, levels, 1, 1, 1, 3, 1, 0, 0, 0, 1, 1], frame.threads, device,
-                  [path.grad, edge.grad, light_a.grad] + [None] * 6 + [camera.grad, fovy.grad] + [None] * 3 +
-                  [point.grad, host_array(np.ones(c, np.float32), float, device)])
+                  [path.grad, edge.grad, light_a.grad, None, None, eta_a.grad, None, None, None, camera.grad,
+                   fovy.grad, None, None, None, point.grad, host_array(np.ones(c, np.float32), float, device)])
     rows = path.grad.numpy().astype(np.float64).reshape(c, levels, 3, 3)
     e = edge.grad.numpy().astype(np.float64).reshape(c, 2, 3)
     speed = {f"p{k}{i}": rows[:, k, i] for k in range(levels) for i in range(3)}
@@ -395,9 +395,22 @@ def _speeds(scene, geom, frame, x: dict, sources, spots, at: np.ndarray, device:
     at_light, apart = light_a.grad.numpy().astype(np.float64), ~cone[:, None]
     speed.update(v0=e[:, 0] * apart, v1=e[:, 1] * apart, light=at_light * apart, position=at_light * cone[:, None],
                  axis=e[:, 0] * cone[:, None], at=point.grad.numpy().astype(np.float64),
+                 ior=_by_slot(geom, faces, level, eta_a.grad.numpy().reshape(c, levels)),
                  **camera_adjoints(camera, fovy, c))
     points.update(v0=x["edge"][:, 0], v1=x["edge"][:, 1])
     return {"speed": speed, "points": points, "spot": spot}
+
+
+def _by_slot(geom, faces: np.ndarray, level: np.ndarray, d_eta: np.ndarray) -> np.ndarray:
+    """(C, slots) float64: per crossing its boundary function's adjoint in each material slot's ior, from its
+    adjoints in the eta of each level of its path (``d_eta``: (C, LEVELS), _path's ``faces`` and ``level``), the
+    levels above its node added in order (a slot's glass entered and left is two levels of one ior)."""
+    slots, (c, levels) = len(geom.material_names), d_eta.shape
+    out, rows, slot = np.zeros((c, slots)), np.arange(c), geom.tri_material_np[faces]
+    for k in range(levels - 1):
+        above = k < level
+        out[rows[above], slot[above, k]] += d_eta[above, k]
+    return out
 
 
 def _axis_crossings(scene, geom, frame, sources, spots, axis: int, curved: np.ndarray | None, device: str) -> tuple:
@@ -481,3 +494,17 @@ def glass_cone_lights(crossings: list, d: np.ndarray) -> dict:
             for name, g in spot_sums(spots, np.maximum(spot, 0), w, speed["position"], speed["axis"]).items():
                 lights[name] = lights[name] + g if name in lights else g
     return lights
+
+
+def glass_iors(crossings: list, d: np.ndarray, slot_names: list) -> dict:
+    """{materials.<name>.ior: ()}: the crossings' term in each dielectric's ior (the refractions above each
+    crossing's node bend the ray that meets its edge: _speeds' ``ior``) for the image adjoint ``d``, summed in the
+    crossings' order; ``slot_names``: the material slots' names (geom.material_names). The edges camera rays see
+    directly, the shadows' (a shadow ray's answer is the glass's faces', whatever its ior) and the unfolded planar
+    mirrors' do not move with an ior: this is all of its boundary term."""
+    total = np.zeros(len(slot_names))
+    for (pts, jump, speed, _, _, _), _, _ in crossings:
+        w = pts.weight * np.einsum("ij,ij->i", d[pts.pixel], jump)
+        first = np.zeros(len(w), np.intp)
+        total += [np.bincount(first, w * speed["ior"][:, k], minlength=1)[0] for k in range(len(slot_names))]
+    return {f"materials.{name}.ior": np.float64(total[k]) for k, name in enumerate(slot_names)}

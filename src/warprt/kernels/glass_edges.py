@@ -211,8 +211,8 @@ def make_tree_distances(LEVELS: int):
     det(v0 - o, v1 - o, d) of its ray (o, d) and the edge ``edge[2 c:2 c + 2]``, or a shadow wedge's N . (y - v0),
     N = (v0 - L) x (v1 - v0) (POINT_WEDGE, L = ``light[c]``) or L x (v1 - v0) (DIRECTIONAL_WEDGE, L the direction of
     travel), or a hard spot's cone's unit(y - L) . v0 - ``cos_cutoff[c]`` (SPOT_CONE: L its position, v0 its axis),
-    y the ray's hit on the face path[LEVELS c + level]. Differentiable in the path, the edge, the light, the camera
-    and the image point; each crossing reads copies of its own."""
+    y the ray's hit on the face path[LEVELS c + level]. Differentiable in the path, the edge, the light, the eta of
+    each refraction (a dielectric's ior), the camera and the image point; each crossing reads copies of its own."""
 
     @wp.kernel(module="unique")
     def tree_distances(path: wp.array(dtype=wp.vec3), edge: wp.array(dtype=wp.vec3), light: wp.array(dtype=wp.vec3),
