@@ -301,7 +301,7 @@ CHECKER = [(_with_checker_wall, "objects.wall.vertices", 3, 4e-2),  # 0.14% (int
 def test_a_checker_seen_through_glass_equals_central_differences(positive, make, name, u, h):
     """A checker's lines seen through the slab, moved by the wall's vertices and the camera, against the
     differences of the converged forward, every pixel kept; the control: the interior derivative alone
-    (edges=False, 0 inside a square) is far off."""
+    (edges=False) is far off."""
     along = step(make, name, u) if isinstance(u, int) else np.asarray(u, np.float64)
     check_against_differences(make, name, along, positive, h, TOL, CONTROL, k=1)
 
