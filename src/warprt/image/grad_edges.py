@@ -35,13 +35,15 @@ class EdgeFrame:
     """What the edges' rays need of the frame: its effect set, ray stack and ray levels (FramePlan's), the
     CPU threads its per-point launches run on (grad_edge_launch.launch_points), what its backward calls
     keep for the next (``kept``: kept_part's), and whether the crossings' tree signatures hold the hard cones
-    (``cone_bits``; False only as a check's control: grad_glass_edges.tree_walk)."""
+    (``cone_bits``) and the checker squares (``square_bits``; each False only as a check's control:
+    grad_glass_edges.tree_walk)."""
 
     fx: object
     stack: int
     max_depth: int
     threads: int = 1
     cone_bits: bool = True
+    square_bits: bool = True
     kept: dict = field(default_factory=dict, compare=False, repr=False)
 
 
@@ -74,8 +76,8 @@ def edge_refusal(scene, geom, fx, wrt, mirrors=None) -> str | None:
     """Why backward(edges=True) would leave out an edge that the parameters ``wrt`` move (None: the camera
     rays' edges, the hard shadows', a checker's squares', a spot's hard cone, and those seen in mirrors and
     through glass are all of them): glass's and curved mirrors' that the crossings do not cover
-    (grad_glass_edges.crossing_refusal), a checker's squares seen through glass or in a curved mirror, too many
-    planar mirrors' (frame_mirrors, or ``mirrors()``: its answer kept). (A reflectivity of 0
+    (grad_glass_edges.crossing_refusal; a checker's squares seen through them they do), too many planar mirrors'
+    (frame_mirrors, or ``mirrors()``: its answer kept). (A reflectivity of 0
     whose mirror rays a frame records for its derivative reflects nothing: no edge is seen in it.)"""
     moving = [n for n in wrt if moves_edges(n)]
     if not moving:
@@ -85,11 +87,6 @@ def edge_refusal(scene, geom, fx, wrt, mirrors=None) -> str | None:
         why = crossing_refusal(scene, geom, fx, moving)
         if why is not None:
             return f"{moving[0]} moves {why}, not differentiated yet"
-        where = " or ".join(w for w, k in (("through glass", "glass"), ("in curved mirrors", "curved mirror"))
-                            if surfaces[k].any())
-        if has_checker(scene, geom):  # the crossings' signature has faces, shadow answers and hard cones, not squares
-            return (f"{moving[0]} moves a checker texture's squares' edges seen {where}, not differentiated yet: "
-                    f"only where camera rays see them")
     reflects = scene.render.max_depth > 1 and fx.reflection
     chains, why = (mirrors or partial(frame_mirrors, scene, geom))()[2:] if reflects else ((), None)
     if why is not None:

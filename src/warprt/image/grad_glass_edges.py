@@ -11,10 +11,11 @@ from __future__ import annotations
 import numpy as np
 
 from .._warp import wp
-from ..kernels import (DIRECTIONAL_WEDGE, FACE_EDGE, MIRRORED, NO_RAY, POINT_WEDGE, REFLECTED, SPOT_CONE,
-                       TRANSMITTED, empty_aov_buffers, empty_record, make_edge_sides_kernel, make_tree_distances,
-                       make_tree_kernel)
+from ..kernels import (CHECKER_LINE, DIRECTIONAL_WEDGE, FACE_EDGE, MIRRORED, NO_RAY, POINT_WEDGE, REFLECTED,
+                       SPOT_CONE, TRANSMITTED, empty_aov_buffers, empty_record, make_edge_sides_kernel,
+                       make_tree_distances, make_tree_kernel)
 from ..scene import camera_basis
+from .grad_checker_edges import checker_rows, has_checker
 from .grad_edge_launch import host_array, launch_points
 from .grad_edge_points import EDGE_OFFSET_PX, EdgePoints, boundary_term, camera_adjoints, camera_copies, \
     ray_directions
@@ -33,7 +34,8 @@ MAX_CROSSINGS = 8  # signature changes found between two neighbouring points  # 
 MAX_GLASS_DEPTH = 6  # ray levels: 63 tree nodes a point
 POINTS_A_WALK = 1 << 18  # points walked at once (their signatures' memory: nodes x 8 bytes each)
 TURNS = {"glass": "bends", "curved mirror": "reflects"}  # what each crossed surface does to what is seen in it
-SIGNATURE = ("face", "blocked", "cone")  # a tree's signature: per node its face, blocked lights, hard cones holding it
+SIGNATURE = ("face", "blocked", "cone", "square")  # a tree's signature: per node its face, blocked lights, hard
+# cones holding it, checker squares holding it
 
 
 def crossed_surfaces(scene, geom, fx) -> dict:
@@ -96,33 +98,37 @@ def traced_colours(scene, geom, frame, at: np.ndarray, device: str) -> np.ndarra
 def tree_walk(scene, geom, frame, at: np.ndarray, device: str, detail: bool = False) -> dict:
     """The tree signatures of camera rays through ``at`` (make_tree_kernel): ``face``, ``blocked`` and, where the
     frame has a hard spot (and EdgeFrame.cone_bits), ``cone`` (N, nodes; its bits the hard spots whose cone holds
-    each hit: absent, the walk is the one without); with ``detail`` also ``below``, ``ray`` (N, nodes, 2, 3), ``hit`` (N, nodes, 3: u,
-    v, distance), ``blocker`` (N, nodes, lights) and ``blocker_at`` (N, nodes, lights, 2)."""
+    each hit: absent, the walk is the one without), where it has a checker (and EdgeFrame.square_bits)
+    ``square`` (N, nodes: the checker squares holding each hit, kernels.glass_edges.checker_squares); with
+    ``detail`` also ``below``, ``ray`` (N, nodes, 2, 3), ``hit`` (N, nodes, 3: u, v, distance), ``blocker`` (N,
+    nodes, lights) and ``blocker_at`` (N, nodes, lights, 2)."""
     nodes, n = 2 ** frame.max_depth - 1, len(at)
     data = geom.scene_data(scene)
     lights = max(int(data.num_lights), 1)
     k = nodes if detail else 0
     spots = bool(frame.fx.light_model and hard_spots(scene) and frame.cone_bits)
+    squares = bool(frame.fx.texture and has_checker(scene, geom) and frame.square_bits)
     out = {"face": np.empty(n * nodes, np.int32), "blocked": np.empty(n * nodes, np.int32),
            "below": np.zeros(max(n * k, 1), np.int32), "ray": np.zeros((max(n * k, 1) * 2, 3), np.float32),
            "hit": np.zeros((max(n * k, 1), 3), np.float32), "blocker": np.full(max(n * k * lights, 1), -1, np.int32),
            "blocker_at": np.zeros((max(n * k * lights, 1), 2), np.float32),
-           "cone": np.zeros(n * nodes if spots else 1, np.int32)}
+           "cone": np.zeros(n * nodes if spots else 1, np.int32),
+           "square": np.zeros(n * nodes if squares else 1, np.int32)}
     types = {"face": int, "blocked": int, "below": int, "ray": wp.vec3, "hit": wp.vec3, "blocker": int,
-             "blocker_at": wp.vec2, "cone": int}
+             "blocker_at": wp.vec2, "cone": int, "square": int}
     arrays = {name: host_array(v, types[name], device) for name, v in out.items()}
     dirs = host_array(ray_directions(at, camera_basis(scene.camera)), wp.vec3, device)
-    launch_points(make_tree_kernel(frame.fx, frame.stack, nodes, detail, spots), n,
+    launch_points(make_tree_kernel(frame.fx, frame.stack, nodes, detail, spots, squares), n,
                   [data, wp.vec3(*geom.eye_offset(scene.camera.eye)), frame.max_depth, empty_fragments(device),
                    empty_mirrors(device), dirs, *arrays.values()],
-                  [0] * 5 + [1, nodes, nodes, k, 2 * k, k, k * lights, k * lights, nodes * spots], frame.threads,
-                  device)
+                  [0] * 5 + [1, nodes, nodes, k, 2 * k, k, k * lights, k * lights, nodes * spots, nodes * squares],
+                  frame.threads, device)
     got = {name: a.numpy() for name, a in arrays.items()}
     shapes = {"face": (n, nodes), "blocked": (n, nodes), "below": (n, nodes), "ray": (n, nodes, 2, 3),
               "hit": (n, nodes, 3), "blocker": (n, nodes, lights), "blocker_at": (n, nodes, lights, 2),
-              "cone": (n, nodes)}
+              "cone": (n, nodes), "square": (n, nodes)}
     return {name: v.reshape(shapes[name]) for name, v in got.items()
-            if (detail or name in SIGNATURE) and (spots or name != "cone")}
+            if (detail or name in SIGNATURE) and (spots or name != "cone") and (squares or name != "square")}
 
 
 def line_points(cam, axis: int) -> np.ndarray:
@@ -143,10 +149,12 @@ def _same(a: dict, b: dict) -> np.ndarray:
 
 
 def _lit_alike(a: dict, b: dict) -> np.ndarray:
-    """Per point whether two signatures' lights agree in every node: the blocked ones and the hard cones (where
-    the signatures hold them: tree_walk)."""
+    """Per point whether two signatures' lights agree in every node: the blocked ones and the hard cones, and
+    so do their checker squares (where the signatures hold them: tree_walk)."""
     alike = np.all(a["blocked"] == b["blocked"], axis=1)
-    return alike & np.all(a["cone"] == b["cone"], axis=1) if "cone" in a else alike
+    for name in ("cone", "square"):
+        alike = alike & np.all(a[name] == b[name], axis=1) if name in a else alike
+    return alike
 
 
 def _smoothly(geom, fx, a: np.ndarray, b: np.ndarray, lit: np.ndarray) -> np.ndarray:
@@ -234,13 +242,14 @@ def _edge_of(geom, face: np.ndarray, uv: np.ndarray) -> np.ndarray:
 
 def _parting(scene, geom, frame, lo: np.ndarray, hi: np.ndarray, curved: np.ndarray | None, device: str) -> dict:
     """Per crossing (lo, hi its two sides) the first tree node (in the tree's level order) where the two
-    signatures part (faces both traced and different, the hard cones holding the hit, or the lights its shadow
-    rays find blocked), what parts them (``kind``: FACE_EDGE, SPOT_CONE of the spot ``light``, or a wedge of light
-    ``light``; a cone's before a wedge's: outside a cone no shadow ray is traced, so its edge in a shadow parts
-    both) and its edge (``edge``: the nearer face's edge nearest its hit, or the blocker's nearest its shadow ray's
-    hit; a cone's unread), the lo side's faces (``faces``) and
-    ``keep``: a parting found, and unless ``curved`` is None below a dielectric's split or a bounce off a curved
-    mirror (``curved``: per triangle; _through)."""
+    signatures part (faces both traced and different, the hard cones holding the hit, the lights its shadow
+    rays find blocked, or the checker squares holding it), what parts them (``kind``: FACE_EDGE, SPOT_CONE of the
+    spot ``light``, a wedge of light ``light``, or CHECKER_LINE; a cone's before a wedge's: outside a cone no shadow
+    ray is traced, so its edge in a shadow parts both; a wedge's before a line's) and its edge (``edge``: the nearer
+    face's edge nearest its hit, or the blocker's nearest its shadow ray's hit; a cone's and a line's unread), a
+    checker line's values at the lo side's face's corners (``line``: _checker_lines; 0 elsewhere), the lo side's
+    faces (``faces``) and ``keep``: a parting found, and unless ``curved`` is None below a dielectric's split or a
+    bounce off a curved mirror (``curved``: per triangle; _through)."""
     a, b = tree_walk(scene, geom, frame, lo, device, True), tree_walk(scene, geom, frame, hi, device, True)
     rows = np.arange(len(lo))
     node, keep, faces_part = _first_parting(geom, frame.fx, a, b)
@@ -255,33 +264,71 @@ def _parting(scene, geom, frame, lo: np.ndarray, hi: np.ndarray, curved: np.ndar
     cone = ~faces_part[rows, node] & (parted != 0)
     bits = np.where(cone, parted, a["blocked"][rows, node] ^ b["blocked"][rows, node]).astype(np.int64)
     light = np.where(faces_part[rows, node], 0, np.log2(np.maximum(bits & -bits, 1)).astype(np.int64))
-    shadow = ~faces_part[rows, node] & ~cone
+    squares = ~faces_part[rows, node] & (bits == 0) & (_squares(a)[rows, node] != _squares(b)[rows, node])
+    shadow = ~faces_part[rows, node] & ~cone & ~squares
+    line = np.zeros((len(lo), 3))
+    if squares.any():
+        line[squares], on = _checker_lines(scene, geom, a, b, rows[squares], node[squares])
+        keep[squares] &= on
     if shadow.any():
         lit_a = ((a["blocked"][rows, node] >> light) & 1) != 0
         blocker = np.where(lit_a, a["blocker"][rows, node, light], b["blocker"][rows, node, light])
         at = np.where(lit_a[:, None], a["blocker_at"][rows, node, light], b["blocker_at"][rows, node, light])
         face, uv = np.where(shadow, blocker, face), np.where(shadow[:, None], at, uv)
     keep &= face >= 0
-    kind = np.select([shadow, cone], [POINT_WEDGE, SPOT_CONE], FACE_EDGE)
+    kind = np.select([shadow, cone, squares], [POINT_WEDGE, SPOT_CONE, CHECKER_LINE], FACE_EDGE)
     return {"node": node, "kind": kind, "light": light,
-            "edge": _edge_of(geom, face, uv), "faces": a["face"], "keep": keep}
+            "edge": _edge_of(geom, face, uv), "line": line, "faces": a["face"], "keep": keep}
+
+
+def _checker_lines(scene, geom, a: dict, b: dict, rows: np.ndarray, node: np.ndarray) -> tuple:
+    """(values (S, 3), found (S,)): per crossing where the checker squares part (``rows`` of the detailed
+    signatures a and b, at ``node``) the line between them: of its face's material's checker rows (checker_rows:
+    a u + b v + c) the one whose coordinate lies nearest an integer k midway between the two sides' hits (the
+    bisection leaves them 2^-14 of a step apart), as its value a u + b v + c - k at the lo side's face's three
+    corners (make_tree_distances' CHECKER_LINE), and whether that face has a checker at all."""
+    corners = geom.indices_np.reshape(-1, 3).astype(np.int64)
+    uv = np.c_[geom.uv_array().numpy().astype(np.float64), np.ones(len(geom.points_np))]
+    maps = [checker_rows(m) for m in geom.slot_materials(scene)]
+    table = np.full((len(maps), max(map(len, maps)), 3), np.nan)
+    for slot, m in enumerate(maps):
+        table[slot, :len(m)] = np.reshape(m, (-1, 3))
+    fa, fb = a["face"][rows, node], b["face"][rows, node]
+
+    def at(x: dict, f: np.ndarray) -> np.ndarray:  # (u, v, 1) at a side's hit, from its barycentrics
+        w = x["hit"][rows, node, :2].astype(np.float64)
+        return np.einsum("sc,scx->sx", np.c_[w, 1.0 - w.sum(axis=1)], uv[corners[f]])
+
+    lines = table[geom.tri_material_np[fa]]  # (S, R, 3)
+    q = np.einsum("srx,sx->sr", lines, 0.5 * (at(a, fa) + at(b, fb)))
+    off = np.where(np.isnan(q), np.inf, np.abs(q - np.round(q)))
+    r = np.argmin(off, axis=1)
+    s = np.arange(len(rows))
+    line = np.nan_to_num(lines[s, r]) - np.c_[np.zeros((len(s), 2)), np.round(np.nan_to_num(q[s, r]))]
+    return np.einsum("scx,sx->sc", uv[corners[fa]], line), np.isfinite(off[s, r])
 
 
 def _first_parting(geom, fx, a: dict, b: dict) -> tuple:
     """(node, found, faces_part): per row of two signatures (tree_walk's, (N, nodes) each) the first node in the
     tree's level order where they part (faces both traced and different, not passing smoothly: _smooth_pass; the
-    hard cones holding the hit; or the lights its shadow rays find blocked), whether they part at all, and per
-    node whether their faces do."""
+    hard cones holding the hit; the lights its shadow rays find blocked; or the checker squares holding it),
+    whether they part at all, and per node whether their faces do."""
     both = (a["face"] != NO_RAY) & (b["face"] != NO_RAY)
     faces_part = both & (a["face"] != b["face"]) & ~_smooth_pass(geom, fx, a["face"], b["face"])
     cone_a, cone_b = _cones(a, b)
-    differ = faces_part | (both & ((a["blocked"] != b["blocked"]) | (cone_a != cone_b)))
+    squares = _squares(a) != _squares(b)
+    differ = faces_part | (both & ((a["blocked"] != b["blocked"]) | (cone_a != cone_b) | squares))
     return np.argmax(differ, axis=1), differ.any(axis=1), faces_part
 
 
 def _cones(a: dict, b: dict) -> tuple:
     """Two signatures' hard-cone bits (zeros where the walk holds none: tree_walk)."""
     return tuple(x.get("cone", np.zeros_like(x["face"])) for x in (a, b))
+
+
+def _squares(a: dict) -> np.ndarray:
+    """A signature's checker squares (zeros where the walk holds none: tree_walk)."""
+    return a.get("square", np.zeros_like(a["face"]))
 
 
 def _through(a: dict, node: np.ndarray, curved: np.ndarray) -> np.ndarray:
@@ -368,11 +415,12 @@ def _speeds(scene, geom, frame, x: dict, sources, spots, at: np.ndarray, device:
         light = sources.at[x["light"]].astype(np.float32)
         kind = np.where(kind == POINT_WEDGE, np.where(sources.directional[x["light"]], DIRECTIONAL_WEDGE, POINT_WEDGE),
                         kind).astype(np.int32)
-    cone = kind == SPOT_CONE
+    cone, check = kind == SPOT_CONE, kind == CHECKER_LINE
     spot = np.where(cone, np.searchsorted(spots.l, x["light"]) if cone.any() else -1, -1)
     if cone.any():  # the cone's axis in the edge's first row (make_tree_distances)
         row = spot[cone]
         light[cone], edge[cone, 0], cos_cutoff[cone] = spots.at[row], spots.axis[row], spots.cos[row]
+    edge[check, 0] = x["line"][check]  # a checker line's values at its face's corners (make_tree_distances)
     grad = lambda v: host_array(np.asarray(v, np.float32).reshape(-1, 3), wp.vec3, device, True)  # noqa: E731
     path, edge, light_a = grad(p[corners]), grad(edge), grad(light)
     eta_a = host_array(eta.reshape(-1), float, device, True)
@@ -392,7 +440,7 @@ def _speeds(scene, geom, frame, x: dict, sources, spots, at: np.ndarray, device:
     e = edge.grad.numpy().astype(np.float64).reshape(c, 2, 3)
     speed = {f"p{k}{i}": rows[:, k, i] for k in range(levels) for i in range(3)}
     points = {f"p{k}{i}": corners[:, k, i] for k in range(levels) for i in range(3)}
-    at_light, apart = light_a.grad.numpy().astype(np.float64), ~cone[:, None]
+    at_light, apart = light_a.grad.numpy().astype(np.float64), ~(cone | check)[:, None]
     speed.update(v0=e[:, 0] * apart, v1=e[:, 1] * apart, light=at_light * apart, position=at_light * cone[:, None],
                  axis=e[:, 0] * cone[:, None], at=point.grad.numpy().astype(np.float64),
                  ior=_by_slot(geom, faces, level, eta_a.grad.numpy().reshape(c, levels)),

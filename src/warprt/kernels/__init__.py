@@ -83,8 +83,8 @@ from .spot_edges import cone_distance, spot_edge_distances  # noqa: E402 (a spot
 
 __all__ += ["cone_distance", "spot_edge_distances"]
 
-from .glass_edges import (DIRECTIONAL_WEDGE, FACE_EDGE, MIRRORED, POINT_WEDGE, REFLECTED, SPOT_CONE,  # noqa: E402
-                          TRANSMITTED, bounce, make_tree_distances, make_tree_kernel)
+from .glass_edges import (CHECKER_LINE, DIRECTIONAL_WEDGE, FACE_EDGE, MIRRORED, POINT_WEDGE, REFLECTED,  # noqa: E402
+                          SPOT_CONE, TRANSMITTED, bounce, make_tree_distances, make_tree_kernel)
 
-__all__ += ["DIRECTIONAL_WEDGE", "FACE_EDGE", "MIRRORED", "POINT_WEDGE", "REFLECTED", "SPOT_CONE", "TRANSMITTED",
-            "bounce", "make_tree_distances", "make_tree_kernel"]  # and the edges seen through glass
+__all__ += ["CHECKER_LINE", "DIRECTIONAL_WEDGE", "FACE_EDGE", "MIRRORED", "POINT_WEDGE", "REFLECTED", "SPOT_CONE",
+            "TRANSMITTED", "bounce", "make_tree_distances", "make_tree_kernel"]  # and the edges seen through glass

@@ -1,13 +1,13 @@
 """The edges seen through glass's ray tree, for the gradient's boundary term (image/grad_glass_edges.py launches
-them): a camera ray's tree signature (each node's face and the lights its shadow rays find blocked, walked as the
-forward walks it: make_tree_kernel), and the boundary function of the node where two signatures part, as a
-differentiable function of the image point and the parameters through the refractions and reflections above it,
-their faces held (make_tree_distances)."""
+them): a camera ray's tree signature (each node's face, the lights its shadow rays find blocked and the checker
+square it lies in, walked as the forward walks it: make_tree_kernel), and the boundary function of the node where
+two signatures part, as a differentiable function of the image point and the parameters through the refractions
+and reflections above it, their faces held (make_tree_distances)."""
 
 import functools  # no "from __future__ import annotations": a kernel factory's types are its locals
 
 from .._warp import wp
-from ..geometry import LIGHT_DIRECTIONAL, LIGHT_SPOT, SceneData
+from ..geometry import CHECKER, LIGHT_DIRECTIONAL, LIGHT_SPOT, SceneData, TextureSlot
 from .dielectric import absorbed, dielectric_children, refract
 from .interaction import Ray, Surface, make_surface, mirror_ray, reflect, spawn_ray
 from .camera import camera_of, image_plane_point
@@ -20,8 +20,8 @@ from .trace import TreeRay, make_first_hit, make_ray_stack
 general_light_arrival = make_light_arrival(True)  # where a hard spot is, the general light model is on
 
 REFLECTED, TRANSMITTED, MIRRORED = 0, 1, 2  # how a node's ray leaves its parent's hit
-FACE_EDGE, POINT_WEDGE, DIRECTIONAL_WEDGE, SPOT_CONE = 0, 1, 2, 3  # what parts two signatures: a face, a shadow
-# ray's answer, a hard spot's cone
+FACE_EDGE, POINT_WEDGE, DIRECTIONAL_WEDGE, SPOT_CONE, CHECKER_LINE = 0, 1, 2, 3, 4  # what parts two signatures: a
+# face, a shadow ray's answer, a hard spot's cone, a checker's line
 
 
 @functools.cache
@@ -80,15 +80,37 @@ def inside_cones(s: SceneData, hit: Surface) -> int:
     return bits
 
 
+@wp.func
+def slot_square(slot: TextureSlot, uv: wp.vec2, shift: int) -> int:
+    """The checker square uv lies in, as texture.texel maps uv (the same floats: its floors), each floor kept
+    mod 32 (neighbouring points' squares differ by fewer), the two floors' 10 bits shifted left by ``shift``;
+    0 where the slot is no checker."""
+    if slot.image != wp.static(CHECKER):
+        return 0
+    p = wp.vec3(uv[0], uv[1], 1.0)
+    q = wp.vec2(wp.dot(slot.u_map, p), wp.dot(slot.v_map, p))
+    return ((int(wp.floor(q[0])) & 31) | ((int(wp.floor(q[1])) & 31) << 5)) << shift
+
+
+@wp.func
+def checker_squares(s: SceneData, hit: Surface) -> int:
+    """The checker squares the hit lies in, of its material's ka, kd and ks checkers (slot_square, 10 bits
+    each): where two neighbouring points' differ, a checker's line lies between them."""
+    m = hit.material
+    return slot_square(s.ka_map[m], hit.uv, 0) | slot_square(s.kd_map[m], hit.uv, 10) | slot_square(
+        s.ks_map[m], hit.uv, 20)
+
+
 @functools.cache
-def make_tree_kernel(fx, stack: int, nodes: int, DETAIL: bool, CONES: bool = False):
+def make_tree_kernel(fx, stack: int, nodes: int, DETAIL: bool, CONES: bool = False, SQUARES: bool = False):
     """The kernel that walks camera rays along ``dirs`` through their Whitted tree as trace.make_path walks it
     (the BVH's nearest hits, Beer's law, a mirror bounce where k_r > 0, else a dielectric's children where they
     carry weight) and writes per point and tree node (``nodes`` of them: node i's reflected or mirror child is
     2 i + 1, its transmitted child 2 i + 2) the face hit (NO_RAY: no ray; -1: none) and a bit per Whitted light
     whose shadow ray is blocked; with CONES (a hard spot lights the scene) a bit per hard spot whose cone holds
-    the hit (inside_cones). With DETAIL also whether the node lies below a dielectric's split, its ray
-    (origin, direction), its hit's (u, v, distance), and per light the nearest blocker's face and (u, v)."""
+    the hit (inside_cones), with SQUARES (a checker) the checker squares holding it (checker_squares; ``square``
+    zeroed by the caller). With DETAIL also whether the node lies below a dielectric's split, its ray (origin,
+    direction), its hit's (u, v, distance), and per light the nearest blocker's face and (u, v)."""
     first_hit = make_first_hit(False, False, fx.culling)
     surface = make_surface(fx.smooth, fx.texture, fx.vertex_color)
     blocked_lights = make_blocked_lights(fx, DETAIL)
@@ -101,7 +123,7 @@ def make_tree_kernel(fx, stack: int, nodes: int, DETAIL: bool, CONES: bool = Fal
     def tree(s: SceneData, eye: wp.vec3, max_depth: int, frags: Fragments, mir: Mirrors, dirs: wp.array(dtype=wp.vec3),
              face: wp.array(dtype=int), blocked: wp.array(dtype=int), below: wp.array(dtype=int),
              ray: wp.array(dtype=wp.vec3), hit_at: wp.array(dtype=wp.vec3), blocker: wp.array(dtype=int),
-             blocker_at: wp.array(dtype=wp.vec2), cone: wp.array(dtype=int)):
+             blocker_at: wp.array(dtype=wp.vec2), cone: wp.array(dtype=int), square: wp.array(dtype=int)):
         j = wp.tid()
         base = j * nodes
         for i in range(nodes):
@@ -130,6 +152,8 @@ def make_tree_kernel(fx, stack: int, nodes: int, DETAIL: bool, CONES: bool = Fal
                     blocked[k] = blocked_lights(s, hit, k, blocker, blocker_at)
                 if wp.static(CONES):
                     cone[k] = inside_cones(s, hit)
+                if wp.static(SQUARES):
+                    square[k] = checker_squares(s, hit)
                 level = r.depth + 1
                 if wp.static(REFLECTION):
                     kr = s.kr[hit.material]
@@ -211,8 +235,10 @@ def make_tree_distances(LEVELS: int):
     det(v0 - o, v1 - o, d) of its ray (o, d) and the edge ``edge[2 c:2 c + 2]``, or a shadow wedge's N . (y - v0),
     N = (v0 - L) x (v1 - v0) (POINT_WEDGE, L = ``light[c]``) or L x (v1 - v0) (DIRECTIONAL_WEDGE, L the direction of
     travel), or a hard spot's cone's unit(y - L) . v0 - ``cos_cutoff[c]`` (SPOT_CONE: L its position, v0 its axis),
-    y the ray's hit on the face path[LEVELS c + level]. Differentiable in the path, the edge, the light, the eta of
-    each refraction (a dielectric's ior), the camera and the image point; each crossing reads copies of its own."""
+    or a checker's line's a u + b v + c - k (CHECKER_LINE: v0 its value at the face's three corners, y's barycentric
+    weights on them), y the ray's hit on the face path[LEVELS c + level]. Differentiable in the path, the edge, the
+    light, the eta of each refraction (a dielectric's ior), the camera and the image point; each crossing reads
+    copies of its own."""
 
     @wp.kernel(module="unique")
     def tree_distances(path: wp.array(dtype=wp.vec3), edge: wp.array(dtype=wp.vec3), light: wp.array(dtype=wp.vec3),
@@ -238,6 +264,11 @@ def make_tree_distances(LEVELS: int):
             y = o + (wp.dot(path[f] - o, e) / wp.dot(d, e)) * d
             if kind[c] == wp.static(SPOT_CONE):
                 g = wp.dot(wp.normalize(y - light[c]), v0) - cos_cutoff[c]
+            elif kind[c] == wp.static(CHECKER_LINE):
+                ee = wp.dot(e, e)
+                u = wp.dot(wp.cross(path[f + 1] - y, path[f + 2] - y), e) / ee
+                v = wp.dot(wp.cross(path[f + 2] - y, path[f] - y), e) / ee
+                g = v0[0] * u + v0[1] * v + v0[2] * (1.0 - u - v)
             else:
                 n = wp.cross(light[c], v1 - v0)
                 if kind[c] == wp.static(POINT_WEDGE):
