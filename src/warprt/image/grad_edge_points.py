@@ -14,6 +14,8 @@ from ..scene import camera_basis
 GAUSS_POINTS = 1  # per piece of an edge inside a pixel: the midpoint, exact for a linear integrand; within 9.3e-5
 # of 8 a piece on gradient_cost's soft shadow (2: 2.5e-5), as much as the jump's own reading 1e-3 px off the edge
 # moves it (8.6e-5 at 5e-4 px), for half the points (2 a piece: that backward 46.4 against 36.3 ms, alternated, loaded)
+FINE_POINTS = 8  # a piece of a fine segment's (segment_points): a curved mirror's rim, whose jump turns within a
+# pixel (grad_mesh_edges.rims); the mirror ball's camera.eye z -51.18 at 1 a piece, -52.41 at 8, -52.62 at 32
 END_SLACK = 1e-9  # a segment ending on another (a checker line or a cone on a face's side) cuts it, its end rounded either way
 PAIR_TABLE = 1 << 24  # segments' pairs that _neighbours finds in a table (bytes), more by a sort
 EDGE_OFFSET_PX = 1e-3  # the two rays either side of an edge, this far from it in the image: at any depth, that
@@ -217,14 +219,14 @@ def _distinct(x: np.ndarray) -> np.ndarray:
 
 
 def segment_points(q0: np.ndarray, q1: np.ndarray, n: np.ndarray, cam, edges=None,
-                   family: np.ndarray | None = None) -> EdgePoints:
+                   family: np.ndarray | None = None, fine: np.ndarray | None = None) -> EdgePoints:
     """The EdgePoints of the segments q0 q1 (rows, relative to the eye; ``n``: per segment the normal of the
     plane through the eye and it, whose sign says which side is g > 0; ``edges``: what they stand for): each
     segment's image cut where it crosses the pixels' borders and the images of the other segments in those
     pixels (but two of different ``family``, both at least 0: a hard shadow's segment is of its source's
-    family, its jump that source's light alone, smooth across another source's edge), GAUSS_POINTS a piece."""
+    family, its jump that source's light alone, smooth across another source's edge), GAUSS_POINTS a piece,
+    FINE_POINTS on the segments ``fine`` marks (per segment; none: no segment)."""
     b = camera_basis(cam)
-    gauss, gauss_w = np.polynomial.legendre.leggauss(GAUSS_POINTS)
     normal, rows, ends, spans = _segments(q0, q1, n, b)
     a, c = ends[:, 0], ends[:, 1]
     seg, ts = _pieces(a, c, spans)
@@ -234,11 +236,25 @@ def segment_points(q0: np.ndarray, q1: np.ndarray, n: np.ndarray, cam, edges=Non
     seg, ts = _merged(seg, ts, crossing, t_crossing)
     piece, pixel = _pixels_of(a, c, seg, ts, b)  # ts increases along a segment (_unique): no piece is empty
     e, s0, s1 = seg[piece], ts[piece], ts[piece + 1]
-    t = s0[:, None] + (s1 - s0)[:, None] * 0.5 * (gauss + 1.0)[None]  # (pieces, GAUSS_POINTS)
-    at = np.repeat(a[e], GAUSS_POINTS, axis=0) + t.reshape(-1, 1) * np.repeat((c - a)[e], GAUSS_POINTS, axis=0)
-    weight = (gauss_w[None] * 0.5 * (s1 - s0)[:, None] * _length(c - a)[e][:, None]).reshape(-1)
-    return EdgePoints(edges, np.repeat(rows[e], GAUSS_POINTS).astype(np.int64), at.reshape(-1, 2), weight,
-                      np.repeat(pixel, GAUSS_POINTS).astype(np.int64), normal)
+    gauss, gauss_w, count = _nodes(e, None if fine is None else np.asarray(fine, bool)[rows])
+    on = np.repeat(np.arange(len(e)), count)  # per point its piece
+    e, s0, s1 = e[on], s0[on], s1[on]
+    t = s0 + (s1 - s0) * 0.5 * (gauss + 1.0)
+    at = a[e] + t[:, None] * (c - a)[e]
+    weight = gauss_w * 0.5 * (s1 - s0) * _length(c - a)[e]
+    return EdgePoints(edges, rows[e].astype(np.int64), at, weight, pixel[on].astype(np.int64), normal)
+
+
+def _nodes(e: np.ndarray, fine: np.ndarray | None) -> tuple:
+    """(nodes, weights, count): per piece (of the segment ``e``) its count of Gauss-Legendre points, GAUSS_POINTS or
+    FINE_POINTS where its segment is ``fine``, and per point its node and weight on [-1, 1], piece by piece."""
+    count = np.full(len(e), GAUSS_POINTS, np.int64) if fine is None else np.where(fine[e], FINE_POINTS, GAUSS_POINTS)
+    k = np.arange(int(count.sum())) - np.repeat(np.cumsum(count) - count, count)  # per point its place in its piece
+    nodes, weights = np.zeros((FINE_POINTS + 1, FINE_POINTS)), np.zeros((FINE_POINTS + 1, FINE_POINTS))
+    for size in {GAUSS_POINTS, FINE_POINTS}:
+        nodes[size, :size], weights[size, :size] = np.polynomial.legendre.leggauss(size)
+    size = np.repeat(count, count)
+    return nodes[size, k], weights[size, k], count
 
 
 def edge_points(edges: np.ndarray, points: np.ndarray, eye: np.ndarray, cam) -> EdgePoints:

@@ -21,7 +21,7 @@ from .grad_edge_points import (EDGE_OFFSET_PX, BoundaryTerm, EdgePoints, add_ter
                                segment_points)
 from .grad_glass_edges import (crossed_surfaces, crossing_refusal, glass_cone_lights, glass_crossings, glass_iors,
                                glass_terms, traced_colours)
-from .grad_mesh_edges import MeshEdges, camera_edges, face_normals, facing, mesh_edges
+from .grad_mesh_edges import MeshEdges, camera_edges, face_normals, facing, mesh_edges, rims
 from .grad_mirror_edges import (BLOCKS, MirroredSegments, frame_mirrors, mirror_terms, mirrored_segments,
                                 on_mirrored_cones)
 from .grad_shadow_edges import ShadowSources, receivers, shadow_segments, shadow_sources, shadow_term
@@ -165,7 +165,8 @@ def boundary(scene, geom, fx, eye: np.ndarray, mirrors=None) -> Boundary:
     made here; ``eye`` is then the frame's own)."""
     m = mesh_edges(scene, geom) if geom.triangle_count else None
     sources = shadow_sources(scene, geom) if fx.shadows and m is not None else None
-    edges = camera_edges(scene, geom, fx, eye, sources, m)
+    edges, rows = camera_edges(scene, geom, fx, eye, sources, m, rows=True)
+    fine = [rims(geom, m, rows, eye, crossed_surfaces(scene, geom, fx)["curved mirror"])]
     p = geom.points_np.astype(np.float64)
     q0, q1 = p[edges[:, 0]] - eye, p[edges[:, 1]] - eye
     blocks, segments, mirrored = [(q0, q1, np.cross(q0, q1))], None, None
@@ -192,8 +193,9 @@ def boundary(scene, geom, fx, eye: np.ndarray, mirrors=None) -> Boundary:
     if mirrored is not None and sources is not None:
         at = len(blocks) - len(BLOCKS) + BLOCKS.index("shadows")
         family[start[at]:start[at + 1]] = len(sources.at) * (1 + mirrored.shadow_chain) + mirrored.shadows.source
+    fine = np.concatenate(fine + [np.zeros(start[-1] - start[1], bool)])
     pts = segment_points(*(np.concatenate([block[k] for block in blocks]) for k in range(3)), scene.camera,
-                         family=family)
+                         family=family, fine=fine)
     part = lambda i, what=None: pts.part(start[i], start[i + 1], what)  # noqa: E731
     if mirrored is not None:  # its blocks the last (BLOCKS)
         mirrored.take([part(i) for i in range(len(blocks) - len(BLOCKS), len(blocks))])

@@ -71,9 +71,6 @@ def _crossing_refusal(scene, geom, fx, moving: list, surfaces: dict, kinds: list
         return f"at more than {MAX_GLASS_DEPTH} ray levels (render.max_depth)"
     if fx.area_lights:
         return "with area lights (their sample points' shadow edges share lines)"
-    camera = [n for n in moving if n.startswith("camera.")]
-    if camera and surfaces["curved mirror"].any():  # its rim's jump, read EDGE_OFFSET_PX inside: docs/gradients.md
-        return f"as the camera moves a curved mirror's own outline and what it reflects ({camera[0]})"
     tri_object = geom.tri_object_np[:geom.triangle_count]
     for name, i in object_names(scene).items():
         for kind in kinds:

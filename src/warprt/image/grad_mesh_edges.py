@@ -84,16 +84,16 @@ def _same(a: np.ndarray, i: np.ndarray, k: np.ndarray) -> np.ndarray:
     return np.all(a[i] == a[k], axis=-1)
 
 
-def camera_edges(scene, geom, fx, eye, sources=None, m: MeshEdges | None = None) -> np.ndarray:
+def camera_edges(scene, geom, fx, eye, sources=None, m: MeshEdges | None = None, rows: bool = False):
     """(E, 2) vertex indices of the edges whose image can jump, sorted by (object, position): of each mesh's
     edges (mesh_edges, or ``m``), those that are open (one face), silhouettes from ``eye`` (two faces facing
     opposite ways from it), shared by more than two faces, or creases where the shading jumps (two faces of
     other materials, a flat pair not coplanar, a smooth pair whose normals, uvs or colours differ at the
     edge, or with shadows (``sources``: ShadowSources) a smooth pair one of whose faces faces a source and
     the other does not: there the mesh shadows itself); each by its face facing the eye (the edge the
-    visible side shows), else its first."""
+    visible side shows), else its first. With ``rows`` also their rows of ``m``."""
     if geom.triangle_count == 0:
-        return np.zeros((0, 2), np.int64)
+        return (np.zeros((0, 2), np.int64), np.zeros(0, np.int64)) if rows else np.zeros((0, 2), np.int64)
     m = mesh_edges(scene, geom) if m is None else m
     p = geom.points_np.astype(np.float64)
     faces = geom.indices_np.reshape(-1, 3).astype(np.int64)
@@ -113,4 +113,20 @@ def camera_edges(scene, geom, fx, eye, sources=None, m: MeshEdges | None = None)
         jump |= smooth & (lit[f1] != lit[f2])
     keep = ~m.pair | jump
     use_second = m.pair & ~front[f1] & front[f2]
-    return np.where(use_second[:, None], m.v2, m.v)[keep]
+    edges = np.where(use_second[:, None], m.v2, m.v)[keep]
+    return (edges, np.flatnonzero(keep)) if rows else edges
+
+
+def rims(geom, m: MeshEdges, rows: np.ndarray, eye, curved: np.ndarray) -> np.ndarray:
+    """Per edge (``rows`` of ``m``) whether it is a rim of a curved mirror seen from ``eye``: a silhouette whose
+    face towards the eye is smooth and one ``curved`` marks (grad_glass_edges.crossed_surfaces), where the
+    reflection its jump reads turns fast along it (at grazing incidence the interpolated normal sweeps what it
+    reflects), so that one Gauss point a piece misreads the integral (grad_edge_points.FINE_POINTS)."""
+    if not len(rows) or not curved.any():
+        return np.zeros(len(rows), bool)
+    p = geom.points_np.astype(np.float64)
+    faces = geom.indices_np.reshape(-1, 3).astype(np.int64)
+    front = facing(face_normals(p, faces), p[faces[:, 0]], np.asarray(eye, np.float64))
+    f1, f2 = m.f1[rows], m.f2[rows]
+    near = np.where(front[f1], f1, f2)
+    return m.pair[rows] & (front[f1] != front[f2]) & (geom.tri_smooth_np[near] != 0) & curved[near]
