@@ -5,8 +5,8 @@ own vertices and pose, through one mirror and through a mirror seen in a mirror,
 the forward at 128 x 128 samples a pixel (no pixel masked), each with the control that the interior derivative
 alone (edges=False) is far off; the mirrored edge's speed against a float64 reflection and projection and Warp's
 gradcheck; a reflected edge off its mirror jumps by nothing; the sum the same to the bit on every run and thread
-count; glass past 6 ray levels and more than MAX_CHAINS chains of mirrors still refused (a curved mirror's edges
-are the crossings': test_curved_mirror_edges.py).
+count; glass past MAX_GLASS_DEPTH (12) ray levels and more than MAX_CHAINS chains of mirrors still refused (a curved
+mirror's edges are the crossings': test_curved_mirror_edges.py).
 """
 
 from __future__ import annotations
@@ -21,7 +21,8 @@ import warp.autograd
 import warprt
 from marks import exhaustive, slow
 from oracle import image_point, line_distance, mirror_point, shadow_point
-from warprt.image import MAX_CHAINS, EdgeFrame, boundary, chain_faces, edge_sides, mirrored_speeds, shadow_rows
+from warprt.image import (MAX_CHAINS, MAX_GLASS_DEPTH, EdgeFrame, boundary, chain_faces, edge_sides, mirrored_speeds,
+                          shadow_rows)
 from warprt.kernels import CONE, DIRECTIONAL_SHADOW, EDGE, POINT_SHADOW, make_mirrored_distances
 from warprt.scene import resolve_effects
 
@@ -343,17 +344,18 @@ def _box_of_mirrors(spp: int):
 
 def _glass_floor(spp: int):
     """floor_scene with its mirror glass, traced to more ray levels than the edges seen through glass cover
-    (grad_glass_edges.MAX_GLASS_DEPTH)."""
+    (MAX_GLASS_DEPTH, 12: to 8 they are, test_glass_edges.py)."""
     s = floor_scene(spp)
     glass = replace(s.materials["mirror"], ior=1.5, transmittance=(0.9,) * 3, reflectivity=(0.0,) * 3)
-    return replace(s, materials={**s.materials, "mirror": glass}, render=replace(s.render, max_depth=7))
+    return replace(s, materials={**s.materials, "mirror": glass},
+                   render=replace(s.render, max_depth=MAX_GLASS_DEPTH + 1))
 
 
 @pytest.mark.parametrize("make, why", [(_glass_floor, "glass"),
                                        (_box_of_mirrors, f"more than {MAX_CHAINS} chains")],
                          ids=["glass", "too many chains"])
 def test_what_mirror_edges_leave_out_is_refused_in_one_line(weights, make, why):
-    """Glass's rays past 6 levels and more chains of mirrors than MAX_CHAINS: one line naming
+    """Glass's rays past MAX_GLASS_DEPTH levels and more chains of mirrors than MAX_CHAINS: one line naming
     ``edges`` and why; a colour is not refused, and edges=False never is."""
     r = warprt.Renderer(make(1))
     r.render(grad=True)

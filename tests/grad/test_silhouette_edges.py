@@ -255,7 +255,7 @@ REFUSED = {"glass": ({"max_depth": 7, "crate": {"ior": 1.5, "transmittance": [0.
 def test_edges_are_refused_where_other_edges_move(weights, case, shadows):
     """A scene whose named parameters also move edges this derivative does not cover: one line naming
     ``edges``, with shadows traced or not (a shadow's edges are covered: test_shadow_edges.py; those seen in a
-    planar mirror too: test_mirror_edges.py, and through glass to 6 ray levels: test_glass_edges.py, deeper not); a
+    planar mirror too: test_mirror_edges.py, and through glass to 12 ray levels: test_glass_edges.py, deeper not); a
     parameter that moves no edge (a
     colour) is not refused, and edges=False never is."""
     kwargs, why = REFUSED[case]

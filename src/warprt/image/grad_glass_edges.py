@@ -31,8 +31,9 @@ STEPS = 8  # points a pixel along a line, where neighbours' signatures are compa
 STRIP = 8  # points along the boundary's piece a crossing stands for, where the image adjoint is read
 BISECTIONS = 14
 MAX_CROSSINGS = 8  # signature changes found between two neighbouring points  # a crossing found within 2^-14 of a step (8e-6 of a pixel)
-MAX_GLASS_DEPTH = 6  # ray levels: 63 tree nodes a point
-POINTS_A_WALK = 1 << 18  # points walked at once (their signatures' memory: nodes x 8 bytes each)
+MAX_GLASS_DEPTH = 12  # ray levels: 4095 tree nodes a point, each walked and compared: a walk's work grows as 2^levels
+NODES_A_WALK = 1 << 24  # points x tree nodes a signature walk takes at once (8 bytes a node: 2^18 points at 6 levels)
+NODES_A_PART = 1 << 22  # crossings x tree nodes a part's detailed walks hold at most (48 bytes a node + 12 a light)
 TURNS = {"glass": "bends", "curved mirror": "reflects"}  # what each crossed surface does to what is seen in it
 SIGNATURE = ("face", "blocked", "cone", "square")  # a tree's signature: per node its face, blocked lights, hard
 # cones holding it, checker squares holding it
@@ -174,25 +175,29 @@ def _smooth_pass(geom, fx, a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return smooth & (geom.tri_object_np[fa] == geom.tri_object_np[fb]) & near
 
 
+def points_a_walk(frame, nodes: int = NODES_A_WALK) -> int:
+    """How many points a tree walk takes at once: ``nodes`` tree nodes (2^max_depth - 1 a point), so that a
+    walk's memory is the same at any depth."""
+    return max(2, nodes // (2 ** frame.max_depth - 1))
+
+
 def _pairs(scene, geom, frame, at: np.ndarray, device: str) -> tuple:
-    """(lo, hi): neighbouring points of the lines ``at`` whose signatures differ, walked POINTS_A_WALK at a
-    time."""
-    lines, points = at.shape[:2]
-    per = max(1, POINTS_A_WALK // points)
+    """(lo, hi): neighbouring points of the lines ``at`` whose signatures differ, in the lines' order, walked
+    points_a_walk at a time (the lines' points one run, each walk's last point the next one's first)."""
+    points = at.shape[1]
+    flat = at.reshape(-1, 2)
+    per = points_a_walk(frame)
     lo, hi = [], []
-    for first in range(0, lines, per):
-        part = at[first:first + per]
-        sig = {k: v.reshape(len(part), points, -1) for k, v in
-               tree_walk(scene, geom, frame, part.reshape(-1, 2), device).items()}
-        differ = np.zeros((len(part), points - 1), bool)
-        for v in sig.values():
-            differ |= np.any(v[:, 1:] != v[:, :-1], axis=2)
-        line, i = np.nonzero(differ)
-        a, b = ({k: v[line, i + j] for k, v in sig.items()} for j in (0, 1))
-        keep = ~_smoothly(geom, frame.fx, a["face"], b["face"], _lit_alike(a, b))
-        line, i = line[keep], i[keep]
-        lo.append(part[line, i])
-        hi.append(part[line, i + 1])
+    for first in range(0, len(flat) - 1, per - 1):
+        part = flat[first:first + per]
+        sig = tree_walk(scene, geom, frame, part, device)
+        differ = (first + np.arange(len(part) - 1)) % points != points - 1  # not from a line's end to the next
+        differ &= np.any([np.any(v[1:] != v[:-1], axis=1) for v in sig.values()], axis=0)
+        i = np.nonzero(differ)[0]
+        a, b = ({k: v[i + j] for k, v in sig.items()} for j in (0, 1))
+        i = i[~_smoothly(geom, frame.fx, a["face"], b["face"], _lit_alike(a, b))]
+        lo.append(part[i])
+        hi.append(part[i + 1])
     return np.concatenate(lo), np.concatenate(hi)
 
 
@@ -350,6 +355,7 @@ def _theirs_near(scene, geom, frame, lo: np.ndarray, hi: np.ndarray, axis: int, 
         a, b = (tree_walk(scene, geom, frame, p, device, True) for p in (side, reach))
         node, found, _ = _first_parting(geom, frame.fx, a, b)
         near |= found & ~_through(a, node, curved)
+        del a, b  # two detailed walks held at once, not four
     return near
 
 
@@ -458,15 +464,27 @@ def _by_slot(geom, faces: np.ndarray, level: np.ndarray, d_eta: np.ndarray) -> n
     return out
 
 
-def _axis_crossings(scene, geom, frame, sources, spots, axis: int, curved: np.ndarray | None, device: str) -> tuple:
-    """(EdgePoints, jump, speed, points, light rows, spot rows) of the crossings of the lines along ``axis``
-    (_speeds' rows: ``sources``'s, ``spots``'s): per crossing
+def _axis_crossings(scene, geom, frame, sources, spots, axis: int, curved: np.ndarray | None, device: str) -> list:
+    """The parts (_part_crossings) of the crossings of the lines along ``axis``, a part per points_a_walk of
+    their pairs (_pairs): each part's detailed walks (per node its ray, hit and blockers) hold the trees of as
+    many points as its pairs hold crossings, MAX_CROSSINGS a pair at most, so NODES_A_PART nodes at most
+    (scenes/glass_slab.toml: 1.8 crossings a pair at 32 x 16 pixels, 5.2 at 8 x 4, its stripes finer than a pixel)."""
+    lo, hi = _pairs(scene, geom, frame, line_points(scene.camera, axis), device)
+    per = points_a_walk(frame, NODES_A_PART // MAX_CROSSINGS)
+    parts = [_part_crossings(scene, geom, frame, sources, spots, axis, curved, lo[i:i + per], hi[i:i + per], device)
+             for i in range(0, len(lo), per)]
+    return [p for p in parts if p is not None]
+
+
+def _part_crossings(scene, geom, frame, sources, spots, axis: int, curved: np.ndarray | None, lo: np.ndarray,
+                    hi: np.ndarray, device: str) -> tuple | None:
+    """(EdgePoints, jump, speed, points, light rows, spot rows) of the crossings between the pairs lo hi of the
+    lines along ``axis`` (_speeds' rows: ``sources``'s, ``spots``'s): per crossing
     its place, its pixel, its weight -sign(g_axis) / (LINES (|g_x| + |g_y|)) (the line's Leibniz term
     dx_c/dtheta = -g_theta / g_axis, times the line's share |g_axis| / (|g_x| + |g_y|), over the lines' spacing)
     and f_- - f_+ (the colours at its sides, the bisection's last lo and hi: two crossings nearer than a fixed
     offset each read its own jump); with ``curved`` those below a split or a curved bounce (_through) and not
     within reach of the other terms' boundaries (_theirs_near)."""
-    lo, hi = _pairs(scene, geom, frame, line_points(scene.camera, axis), device)
     if len(lo):
         lo, hi = _crossings(scene, geom, frame, lo, hi, device)
         x = _parting(scene, geom, frame, lo, hi, curved, device)
@@ -515,8 +533,8 @@ def glass_crossings(scene, geom, frame, device: str, through: bool = True) -> li
     sources = shadow_sources(scene, geom) if frame.fx.shadows else None
     spots = cones(scene, geom) if frame.fx.light_model and hard_spots(scene) else None
     curved = crossed_surfaces(scene, geom, frame.fx)["curved mirror"] if through else None
-    parts = [_axis_crossings(scene, geom, frame, sources, spots, axis, curved, device) for axis in (0, 1)]
-    return [(p, sources, spots) for p in parts if p is not None]
+    parts = [p for axis in (0, 1) for p in _axis_crossings(scene, geom, frame, sources, spots, axis, curved, device)]
+    return [(p, sources, spots) for p in parts]
 
 
 def glass_terms(crossings: list, d: np.ndarray, n_points: int) -> list:
