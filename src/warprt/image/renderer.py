@@ -353,7 +353,7 @@ class Renderer:
         camera and a glass's ior), a checker texture's squares and a hard spot's cone among them. Where the named
         parameters move an edge not covered yet (more chains of mirrors than grad_mirror_edges.MAX_CHAINS; with
         glass or a curved mirror, that object's own vertices and pose, area lights, more ray levels than
-        grad_glass_edges.MAX_GLASS_DEPTH) it is refused in one line naming ``edges``; ``edges=False`` gives the
+        grad_glass_edges.MAX_GLASS_DEPTH, 12) it is refused in one line naming ``edges``; ``edges=False`` gives the
         interior derivative alone, as before (docs/gradients.md)."""
         if self._first_hits is None:
             raise ArgumentError("backward", "render", "no frame was rendered with grad=True since the last change")
