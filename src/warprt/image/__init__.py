@@ -3,7 +3,8 @@
 changes between frames (params.py); launching bands (launch.py), the stats (stats.py), the Z-buffer
 (zbuffer.py), the planar mirrors' virtual cameras (mirrors.py), the AOVs (aovs.py), memory (memory.py),
 image files (film.py), the progress line (progress.py) and render.adaptive's refinement (adaptive.py); the gradient: its record (grad_record.py), its
-parameters (grad_params.py), its replay and backward() (grad.py), and its boundary term (grad_edges.py: the
+parameters (grad_params.py), its replay and backward() (grad.py), a smooth object's vertex normals from its moving
+points (grad_normals.py), and its boundary term (grad_edges.py: the
 edges camera rays see; grad_shadow_edges.py: hard shadows' edges; grad_checker_edges.py: a checker's squares;
 grad_spot_edges.py: a spot's hard cone; grad_mirror_edges.py: edges and shadows seen in planar mirrors;
 grad_edge_points.py: where they lie in the image; grad_mesh_edges.py: the meshes' edges and silhouettes).

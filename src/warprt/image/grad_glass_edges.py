@@ -17,9 +17,10 @@ from ..kernels import (CHECKER_LINE, DIRECTIONAL_WEDGE, FACE_EDGE, MIRRORED, NO_
 from ..scene import camera_basis
 from .grad_checker_edges import checker_rows, has_checker
 from .grad_edge_launch import host_array, launch_points
-from .grad_edge_points import EDGE_OFFSET_PX, EdgePoints, boundary_term, camera_adjoints, camera_copies, \
+from .grad_edge_points import EDGE_OFFSET_PX, EdgePoints, add_at, boundary_term, camera_adjoints, camera_copies, \
     ray_directions
 from .grad_mirror_edges import mirror_planes
+from .grad_normals import normals_to_points
 from .grad_shadow_edges import shadow_sources
 from .grad_spot_edges import cones, hard_spots, spot_sums
 from .mirrors import empty_mirrors
@@ -62,22 +63,23 @@ def crossing_refusal(scene, geom, fx, moving: list) -> str | None:
     if not kinds:
         return None
     seen = " and ".join({"glass": "through glass", "curved mirror": "in curved mirrors"}[k] for k in kinds)
-    why = _crossing_refusal(scene, geom, fx, moving, surfaces, kinds)
+    why = _crossing_refusal(scene, geom, fx, moving, surfaces)
     return None if why is None else f"the edges seen {seen} {why}"
 
 
-def _crossing_refusal(scene, geom, fx, moving: list, surfaces: dict, kinds: list) -> str | None:
+def _crossing_refusal(scene, geom, fx, moving: list, surfaces: dict) -> str | None:
     """crossing_refusal's why, in the words after "the edges seen through glass"."""
     if scene.render.max_depth > MAX_GLASS_DEPTH:
         return f"at more than {MAX_GLASS_DEPTH} ray levels (render.max_depth)"
     if fx.area_lights:
         return "with area lights (their sample points' shadow edges share lines)"
+    # A glass object's own vertices and pose are covered (its faces on the speeds' path, a smooth one's normals
+    # taken back to its vertices: glass_terms); a curved mirror's are refused below.
     tri_object = geom.tri_object_np[:geom.triangle_count]
     for name, i in object_names(scene).items():
-        for kind in kinds:
-            if np.any(surfaces[kind][tri_object == i]) and any(n.startswith(f"objects.{name}.") for n in moving):
-                return (f"as a {kind} object's own vertices or pose move its outline and what it {TURNS[kind]} "
-                        f"(objects.{name})")
+        if np.any(surfaces["curved mirror"][tri_object == i]) and any(n.startswith(f"objects.{name}.") for n in moving):
+            return (f"as a curved mirror object's own vertices or pose move its outline and what it reflects "
+                    f"(objects.{name})")
     return None
 
 
@@ -401,11 +403,13 @@ def _path(scene, geom, frame, x: dict) -> tuple:
 
 def _speeds(scene, geom, frame, x: dict, sources, spots, at: np.ndarray, device: str) -> dict:
     """Per crossing the adjoint of its boundary function g (make_tree_distances) in each of its inputs: ``p<k><i>``
-    corner i of the path's face at level k, ``v0`` and ``v1`` the edge, ``light`` (a shadow's source), a hard
-    cone's ``position`` and ``axis`` (0 where the crossing is no cone's), ``ior`` (C, slots) each material slot's
-    ior (the eta of the refractions above the node: _by_slot), the camera's (camera_adjoints) and ``at``
-    (the image point: g's gradient in x and y); ``points``: the geometry points the inputs are; ``spot``: per
-    crossing its row of ``spots`` (grad_spot_edges.Cones; -1: no cone's)."""
+    corner i of the path's face at level k, ``n<k><i>`` its vertex normal (where a smooth face is at level k: the
+    ray turns about them), ``v0`` and ``v1`` the edge, ``light`` (a shadow's source), a hard cone's ``position``
+    and ``axis`` (0 where the crossing is no cone's), ``ior`` (C, slots) each material slot's ior (the eta of the
+    refractions above the node: _by_slot), the camera's (camera_adjoints) and ``at`` (the image point: g's
+    gradient in x and y); ``points``: the geometry points the inputs are; ``normals``: the vertices whose normals
+    the ``n<k><i>`` are (grad_normals.normals_to_points takes them to the points); ``spot``: per crossing its row
+    of ``spots`` (grad_spot_edges.Cones; -1: no cone's)."""
     levels, c = frame.max_depth, len(at)
     faces, branch, eta, level = _path(scene, geom, frame, x)
     corners = geom.indices_np.reshape(-1, 3).astype(np.int64)[faces]  # (C, levels, 3)
@@ -425,31 +429,33 @@ def _speeds(scene, geom, frame, x: dict, sources, spots, at: np.ndarray, device:
         light[cone], edge[cone, 0], cos_cutoff[cone] = spots.at[row], spots.axis[row], spots.cos[row]
     edge[check, 0] = x["line"][check]  # a checker line's values at its face's corners (make_tree_distances)
     grad = lambda v: host_array(np.asarray(v, np.float32).reshape(-1, 3), wp.vec3, device, True)  # noqa: E731
-    path, edge, light_a = grad(p[corners]), grad(edge), grad(light)
+    path, edge, light_a, turn = grad(p[corners]), grad(edge), grad(light), grad(normals)
     eta_a = host_array(eta.reshape(-1), float, device, True)
     camera, fovy = camera_copies(scene, geom, c, device)
     point = host_array(at.astype(np.float32), wp.vec2, device, True)
     ints = lambda v: host_array(np.asarray(v, np.int32).reshape(-1), int, device)  # noqa: E731
     cam = scene.camera
     launch_points(make_tree_distances(levels), c,
-                  [path, edge, light_a, host_array(normals.reshape(-1, 3).astype(np.float32), wp.vec3, device),
-                   ints(branch), eta_a, ints(level), ints(kind),
+                  [path, edge, light_a, turn, ints(branch), eta_a, ints(level), ints(kind),
                    host_array(cos_cutoff, float, device), camera, fovy, float(cam.near), cam.width, cam.height, point,
                    wp.zeros(c, dtype=float, device=device)],
                   [3 * levels, 2, 1, 3 * levels, levels, levels, 1, 1, 1, 3, 1, 0, 0, 0, 1, 1], frame.threads, device,
-                  [path.grad, edge.grad, light_a.grad, None, None, eta_a.grad, None, None, None, camera.grad,
+                  [path.grad, edge.grad, light_a.grad, turn.grad, None, eta_a.grad, None, None, None, camera.grad,
                    fovy.grad, None, None, None, point.grad, host_array(np.ones(c, np.float32), float, device)])
     rows = path.grad.numpy().astype(np.float64).reshape(c, levels, 3, 3)
     e = edge.grad.numpy().astype(np.float64).reshape(c, 2, 3)
+    turned = np.where(smooth[:, :, None, None], turn.grad.numpy().astype(np.float64).reshape(c, levels, 3, 3), 0.0)
     speed = {f"p{k}{i}": rows[:, k, i] for k in range(levels) for i in range(3)}
+    speed.update({f"n{k}{i}": turned[:, k, i] for k in range(levels) for i in range(3) if smooth[:, k].any()})
     points = {f"p{k}{i}": corners[:, k, i] for k in range(levels) for i in range(3)}
+    turning = {key: corners[:, int(key[1]), int(key[2])] for key in speed if key[0] == "n"}
     at_light, apart = light_a.grad.numpy().astype(np.float64), ~(cone | check)[:, None]
     speed.update(v0=e[:, 0] * apart, v1=e[:, 1] * apart, light=at_light * apart, position=at_light * cone[:, None],
                  axis=e[:, 0] * cone[:, None], at=point.grad.numpy().astype(np.float64),
                  ior=_by_slot(geom, faces, level, eta_a.grad.numpy().reshape(c, levels)),
                  **camera_adjoints(camera, fovy, c))
     points.update(v0=x["edge"][:, 0], v1=x["edge"][:, 1])
-    return {"speed": speed, "points": points, "spot": spot}
+    return {"speed": speed, "points": points, "normals": turning, "spot": spot}
 
 
 def _by_slot(geom, faces: np.ndarray, level: np.ndarray, d_eta: np.ndarray) -> np.ndarray:
@@ -479,7 +485,8 @@ def _axis_crossings(scene, geom, frame, sources, spots, axis: int, curved: np.nd
 def _part_crossings(scene, geom, frame, sources, spots, axis: int, curved: np.ndarray | None, lo: np.ndarray,
                     hi: np.ndarray, device: str) -> tuple | None:
     """(EdgePoints, jump, speed, points, light rows, spot rows) of the crossings between the pairs lo hi of the
-    lines along ``axis`` (_speeds' rows: ``sources``'s, ``spots``'s): per crossing
+    lines along ``axis`` (_speeds' rows: ``sources``'s, ``spots``'s; ``points`` its points and normals, n<k><i>
+    naming a vertex whose normal that speed is): per crossing
     its place, its pixel, its weight -sign(g_axis) / (LINES (|g_x| + |g_y|)) (the line's Leibniz term
     dx_c/dtheta = -g_theta / g_axis, times the line's share |g_axis| / (|g_x| + |g_y|), over the lines' spacing)
     and f_- - f_+ (the colours at its sides, the bisection's last lo and hi: two crossings nearer than a fixed
@@ -507,7 +514,8 @@ def _part_crossings(scene, geom, frame, sources, spots, axis: int, curved: np.nd
     pts = EdgePoints(None, np.arange(len(at) * STRIP), spread(at), spread(weight) / STRIP, pixel.reshape(-1),
                      np.zeros((len(at) * STRIP, 2)))
     jump, speed = spread(jump), {k: spread(v) for k, v in s["speed"].items()}
-    return pts, jump, speed, {k: spread(v) for k, v in s["points"].items()}, spread(x["light"]), spread(s["spot"])
+    points = {k: spread(v) for k, v in {**s["points"], **s["normals"]}.items()}
+    return pts, jump, speed, points, spread(x["light"]), spread(s["spot"])
 
 
 def _strip_pixels(cam, at: np.ndarray, g: np.ndarray, axis: int) -> np.ndarray:
@@ -528,22 +536,32 @@ def _strip_pixels(cam, at: np.ndarray, g: np.ndarray, axis: int) -> np.ndarray:
 
 def glass_crossings(scene, geom, frame, device: str, through: bool = True) -> list:
     """The crossings of both sets of lines (_axis_crossings; with ``through`` only those below a dielectric's
-    split or a curved mirror's bounce: crossed_surfaces): what the frame alone decides of the term, kept for its
-    next backward."""
+    split or a curved mirror's bounce: crossed_surfaces), with what takes their normals' adjoint to the points
+    (grad_normals.normals_to_points; None without smooth faces): what the frame alone decides of the term, kept
+    for its next backward."""
     sources = shadow_sources(scene, geom) if frame.fx.shadows else None
     spots = cones(scene, geom) if frame.fx.light_model and hard_spots(scene) else None
     curved = crossed_surfaces(scene, geom, frame.fx)["curved mirror"] if through else None
     parts = [p for axis in (0, 1) for p in _axis_crossings(scene, geom, frame, sources, spots, axis, curved, device)]
-    return [(p, sources, spots) for p in parts]
+    turns = normals_to_points(scene, geom, device) if frame.fx.smooth else None
+    return [(p, sources, spots, turns) for p in parts]
 
 
 def glass_terms(crossings: list, d: np.ndarray, n_points: int) -> list:
     """The BoundaryTerms of ``crossings`` (glass_crossings) for the image adjoint ``d`` ((pixels, 3), float64),
-    summed in the crossings' order (boundary_term)."""
+    summed in the crossings' order (boundary_term); the smooth faces' vertex normals' share (the n<k><i>
+    speeds: a smooth glass's normals turn its rays as its vertices move) summed per vertex the same way and
+    taken to the points through the normals (the crossings' normals_to_points)."""
     out = []
-    for (pts, jump, speed, points, light, _), sources, _ in crossings:
+    for (pts, jump, speed, points, light, _), sources, _, turns in crossings:
         rows = None if sources is None else (light, len(sources.at))
-        out.append(boundary_term(pts, jump, d, speed, points, n_points, rows))
+        normals = {k: v for k, v in points.items() if k[0] == "n"}
+        term = boundary_term(pts, jump, d, speed, {k: v for k, v in points.items() if k[0] != "n"}, n_points, rows)
+        if normals and turns is not None:
+            w = pts.weight * np.einsum("ij,ij->i", d[pts.pixel], jump)
+            term.points = term.points + turns(add_at(n_points, list(normals.values()), w,
+                                                     [speed[k] for k in normals]))
+        out.append(term)
     return out
 
 
@@ -551,7 +569,7 @@ def glass_cone_lights(crossings: list, d: np.ndarray) -> dict:
     """{lights.<i>.position | direction: (3,)}: the hard spots' sums of ``crossings``' cone crossings
     (grad_spot_edges.spot_sums, in the crossings' order) for the image adjoint ``d``."""
     lights = {}
-    for (pts, jump, speed, _, _, spot), _, spots in crossings:
+    for (pts, jump, speed, _, _, spot), _, spots, _ in crossings:
         if spots is not None and np.any(spot >= 0):
             w = pts.weight * np.einsum("ij,ij->i", d[pts.pixel], jump)
             for name, g in spot_sums(spots, np.maximum(spot, 0), w, speed["position"], speed["axis"]).items():
@@ -566,7 +584,7 @@ def glass_iors(crossings: list, d: np.ndarray, slot_names: list) -> dict:
     directly, the shadows' (a shadow ray's answer is the glass's faces', whatever its ior) and the unfolded planar
     mirrors' do not move with an ior: this is all of its boundary term."""
     total = np.zeros(len(slot_names))
-    for (pts, jump, speed, _, _, _), _, _ in crossings:
+    for (pts, jump, speed, _, _, _), *_ in crossings:
         w = pts.weight * np.einsum("ij,ij->i", d[pts.pixel], jump)
         first = np.zeros(len(w), np.intp)
         total += [np.bincount(first, w * speed["ior"][:, k], minlength=1)[0] for k in range(len(slot_names))]
