@@ -24,7 +24,6 @@ from .grad_normals import normals_to_points
 from .grad_shadow_edges import shadow_sources
 from .grad_spot_edges import cones, hard_spots, spot_sums
 from .mirrors import empty_mirrors
-from .params import object_names
 from .zbuffer import empty_fragments
 
 LINES = 16  # sample lines a pixel, each way
@@ -35,7 +34,6 @@ MAX_CROSSINGS = 8  # signature changes found between two neighbouring points  # 
 MAX_GLASS_DEPTH = 12  # ray levels: 4095 tree nodes a point, each walked and compared: a walk's work grows as 2^levels
 NODES_A_WALK = 1 << 24  # points x tree nodes a signature walk takes at once (8 bytes a node: 2^18 points at 6 levels)
 NODES_A_PART = 1 << 22  # crossings x tree nodes a part's detailed walks hold at most (48 bytes a node + 12 a light)
-TURNS = {"glass": "bends", "curved mirror": "reflects"}  # what each crossed surface does to what is seen in it
 SIGNATURE = ("face", "blocked", "cone", "square")  # a tree's signature: per node its face, blocked lights, hard
 # cones holding it, checker squares holding it
 
@@ -63,23 +61,18 @@ def crossing_refusal(scene, geom, fx, moving: list) -> str | None:
     if not kinds:
         return None
     seen = " and ".join({"glass": "through glass", "curved mirror": "in curved mirrors"}[k] for k in kinds)
-    why = _crossing_refusal(scene, geom, fx, moving, surfaces)
+    why = _crossing_refusal(scene, fx)
     return None if why is None else f"the edges seen {seen} {why}"
 
 
-def _crossing_refusal(scene, geom, fx, moving: list, surfaces: dict) -> str | None:
+def _crossing_refusal(scene, fx) -> str | None:
     """crossing_refusal's why, in the words after "the edges seen through glass"."""
     if scene.render.max_depth > MAX_GLASS_DEPTH:
         return f"at more than {MAX_GLASS_DEPTH} ray levels (render.max_depth)"
     if fx.area_lights:
         return "with area lights (their sample points' shadow edges share lines)"
-    # A glass object's own vertices and pose are covered (its faces on the speeds' path, a smooth one's normals
-    # taken back to its vertices: glass_terms); a curved mirror's are refused below.
-    tri_object = geom.tri_object_np[:geom.triangle_count]
-    for name, i in object_names(scene).items():
-        if np.any(surfaces["curved mirror"][tri_object == i]) and any(n.startswith(f"objects.{name}.") for n in moving):
-            return (f"as a curved mirror object's own vertices or pose move its outline and what it reflects "
-                    f"(objects.{name})")
+    # A glass or curved mirror object's own vertices and pose are covered: its faces are on the speeds' path, a
+    # smooth one's normals taken back to its vertices (glass_terms), its rims read at FINE_POINTS (grad_mesh_edges.rims).
     return None
 
 
