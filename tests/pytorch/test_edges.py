@@ -16,6 +16,7 @@ import torch
 import warprt
 import warprt.torch
 from warprt import SceneError
+from warprt.image import MAX_GLASS_DEPTH
 
 from .scenes import HEIGHT, WIDTH, ball
 
@@ -29,11 +30,12 @@ def one_level() -> warprt.Scene:
     return replace(s, render=replace(s.render, max_depth=1))
 
 
-def curved_mirror() -> warprt.Scene:
-    """ball() with the ball itself a mirror: smooth, curved, what it reflects has no edge term yet (the
-    floor's planar reflections have: tests/grad/test_mirror_edges.py)."""
+def deep_curved_mirror() -> warprt.Scene:
+    """ball() with the ball itself a mirror (smooth, curved: the crossings' edges) traced past the ray levels the
+    crossings follow (MAX_GLASS_DEPTH): what it reflects there has no edge term."""
     s = ball()
-    return replace(s, materials={**s.materials, "ball": replace(s.materials["ball"], reflectivity=(0.3,) * 3)})
+    return replace(s, materials={**s.materials, "ball": replace(s.materials["ball"], reflectivity=(0.3,) * 3)},
+                   render=replace(s.render, max_depth=MAX_GLASS_DEPTH + 1))
 
 
 @pytest.fixture(scope="module")
@@ -80,8 +82,8 @@ def test_the_default_is_backwards_own():
 
 
 def test_backwards_refusal_of_edges_reaches_the_caller_in_one_line():
-    """A mirroring ball and two ray levels: what it reflects has no edge term yet."""
-    with warprt.Renderer(curved_mirror()) as r:
+    """A mirroring ball traced past MAX_GLASS_DEPTH ray levels: what it reflects there has no edge term."""
+    with warprt.Renderer(deep_curved_mirror()) as r:
         t = torch.tensor(r.params["objects.ball.translation"], requires_grad=True)
         image = warprt.torch.render(r, {"objects.ball.translation": t}, edges=True)
         with pytest.raises(SceneError) as e:
