@@ -32,7 +32,7 @@ import warprt
 from marks import exhaustive, slow
 
 from .converged import check_against_differences, gradient
-from .test_glass_edges import _crossing_terms, assert_refused, checker_wall
+from .test_glass_edges import X, Y, Z, assert_camera_term_found_two_ways, assert_refused, checker_wall
 from .test_mirror_edges import floor_scene, step
 
 WIDTH, HEIGHT = 24, 18
@@ -112,26 +112,12 @@ def test_the_camera_edges_and_the_crossings_count_the_mirror_rim_once(positive):
     (edges=True less edges=False), and the crossings at every node alone, each boundary once by construction; they
     agree (measured: 0.5% of the largest eye component, 0.15% of fovy; at one point a piece on the rim the eye's z
     was 2.6% off, 48.14 against 46.93). The control: the crossings below the bounce alone are far off."""
-    s = ball_scene(1)
-    r = warprt.Renderer(s)
-    r.render(grad=True)
-    names = ["camera.eye", "camera.fovy"]
-    edges, interior = r.backward(positive, wrt=names, edges=True), r.backward(positive, wrt=names, edges=False)
-    every, below = (_crossing_terms(s, r, positive, through) for through in (False, True))
-    for name in names:
-        key = name.split(".")[1]
-        want = sum(np.asarray(t.camera[key]) for t in every)
-        got = np.asarray(edges[name]) - np.asarray(interior[name])
-        scale = np.abs(want).max()
-        assert np.abs(got - want).max() <= 0.015 * scale, (name, got, want)
-        assert np.abs(sum(np.asarray(t.camera[key]) for t in below) - want).max() > 0.3 * scale, name
-    r.close()
+    assert_camera_term_found_two_ways(ball_scene(1), positive, 0.015)
 
 
 # The camera along each axis of the eye and its fovy, with the measured error and the interior's, against the
 # differences at h 1e-2 (fovy: 0.5 degrees), 64 x 64 strata (k = 1) unless noted. The rim's jump turns fast along
 # it: at one Gauss point a piece eye y read 4.052 against 3.896 (4.0%; at 128 x 128 strata); FINE_POINTS there.
-X, Y, Z = (1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)
 CAMERA = [("camera.eye", X, 1e-2),  # 7.311 against 7.486: 2.33% (7.516 at 128 x 128: 2.7%; interior 63%)
           ("camera.eye", Y, 1e-2),  # 3.914 against 3.909: 0.12% (3.896 at 128 x 128: 0.46%; interior 175%)
           ("camera.eye", Z, 1e-2),  # -52.463 against -52.149: 0.60% (-52.193: 0.52%; interior 90%)

@@ -156,17 +156,18 @@ class Boundary:
     spot: EdgePoints | None = None
 
 
-def boundary(scene, geom, fx, eye: np.ndarray, mirrors=None) -> Boundary:
+def boundary(scene, geom, fx, eye: np.ndarray, mirrors=None, crossed=None) -> Boundary:
     """The Boundary of a frame seen from ``eye`` (relative to the frame origin): with shadows (fx.shadows),
     the sources (shadow_sources), the camera's edges and the shadows' (shadow_segments), with mirror rays
     (fx.reflection, render.max_depth > 1) those seen through each chain of planar mirrors (mirrored_segments),
     with a checker its lines (checker_segments), with a hard spot its cone's chords (spot_segments, on_cones),
     each one's image cut where it crosses the others'. ``mirrors()``: the frame's frame_mirrors, kept (else
-    made here; ``eye`` is then the frame's own)."""
+    made here; ``eye`` is then the frame's own); ``crossed()`` its crossed_surfaces, kept (else made here: a
+    curved mirror's rims get FINE_POINTS, grad_mesh_edges.rims)."""
     m = mesh_edges(scene, geom) if geom.triangle_count else None
     sources = shadow_sources(scene, geom) if fx.shadows and m is not None else None
-    edges, rows = camera_edges(scene, geom, fx, eye, sources, m, rows=True)
-    fine = [rims(geom, m, rows, eye, crossed_surfaces(scene, geom, fx)["curved mirror"])]
+    edges, rows, front = camera_edges(scene, geom, fx, eye, sources, m, rows=True)
+    fine = [rims(geom, m, rows, front, (crossed or partial(crossed_surfaces, scene, geom, fx))()["curved mirror"])]
     p = geom.points_np.astype(np.float64)
     q0, q1 = p[edges[:, 0]] - eye, p[edges[:, 1]] - eye
     blocks, segments, mirrored = [(q0, q1, np.cross(q0, q1))], None, None
@@ -225,7 +226,8 @@ def edge_gradients(scene, geom, frame: EdgeFrame, d: np.ndarray, wrt, device: st
     eye = geom.eye_offset(scene.camera.eye).astype(np.float64)
     keep = partial(kept_part, frame, scene, geom)
     mirrors = partial(keep, "mirrors", partial(frame_mirrors, scene, geom))  # check_edges' too
-    b = keep("boundary", lambda: boundary(scene, geom, frame.fx, eye, mirrors))
+    crossed = partial(keep, "crossed", partial(crossed_surfaces, scene, geom, frame.fx))
+    b = keep("boundary", lambda: boundary(scene, geom, frame.fx, eye, mirrors, crossed))
     d3 = d.reshape(-1, 3).astype(np.float64)
     terms = []
     if len(b.camera.edge):
@@ -251,7 +253,7 @@ def edge_gradients(scene, geom, frame: EdgeFrame, d: np.ndarray, wrt, device: st
         terms += mirrored
         for name, g in seen.items():
             named[name] = named[name] + g if name in named else g
-    if any(on.any() for on in keep("crossed", lambda: crossed_surfaces(scene, geom, frame.fx)).values()):
+    if any(on.any() for on in crossed().values()):
         crossings = keep("glass", lambda: glass_crossings(scene, geom, frame, device))
         terms += glass_terms(crossings, d3, len(geom.points_np))
         for name, g in glass_cone_lights(crossings, d3).items():

@@ -91,9 +91,11 @@ def camera_edges(scene, geom, fx, eye, sources=None, m: MeshEdges | None = None,
     other materials, a flat pair not coplanar, a smooth pair whose normals, uvs or colours differ at the
     edge, or with shadows (``sources``: ShadowSources) a smooth pair one of whose faces faces a source and
     the other does not: there the mesh shadows itself); each by its face facing the eye (the edge the
-    visible side shows), else its first. With ``rows`` also their rows of ``m``."""
+    visible side shows), else its first. With ``rows`` also their rows of ``m`` and per face whether it faces the
+    eye (for rims)."""
     if geom.triangle_count == 0:
-        return (np.zeros((0, 2), np.int64), np.zeros(0, np.int64)) if rows else np.zeros((0, 2), np.int64)
+        none = np.zeros((0, 2), np.int64)
+        return (none, np.zeros(0, np.int64), np.zeros(0, bool)) if rows else none
     m = mesh_edges(scene, geom) if m is None else m
     p = geom.points_np.astype(np.float64)
     faces = geom.indices_np.reshape(-1, 3).astype(np.int64)
@@ -114,19 +116,17 @@ def camera_edges(scene, geom, fx, eye, sources=None, m: MeshEdges | None = None,
     keep = ~m.pair | jump
     use_second = m.pair & ~front[f1] & front[f2]
     edges = np.where(use_second[:, None], m.v2, m.v)[keep]
-    return (edges, np.flatnonzero(keep)) if rows else edges
+    return (edges, np.flatnonzero(keep), front) if rows else edges
 
 
-def rims(geom, m: MeshEdges, rows: np.ndarray, eye, curved: np.ndarray) -> np.ndarray:
-    """Per edge (``rows`` of ``m``) whether it is a rim of a curved mirror seen from ``eye``: a silhouette whose
+def rims(geom, m: MeshEdges, rows: np.ndarray, front: np.ndarray, curved: np.ndarray) -> np.ndarray:
+    """Per edge (``rows`` of ``m``) whether it is a rim of a curved mirror seen from the eye whose faces ``front``
+    faces (camera_edges'): a silhouette whose
     face towards the eye is smooth and one ``curved`` marks (grad_glass_edges.crossed_surfaces), where the
     reflection its jump reads turns fast along it (at grazing incidence the interpolated normal sweeps what it
     reflects), so that one Gauss point a piece misreads the integral (grad_edge_points.FINE_POINTS)."""
     if not len(rows) or not curved.any():
         return np.zeros(len(rows), bool)
-    p = geom.points_np.astype(np.float64)
-    faces = geom.indices_np.reshape(-1, 3).astype(np.int64)
-    front = facing(face_normals(p, faces), p[faces[:, 0]], np.asarray(eye, np.float64))
     f1, f2 = m.f1[rows], m.f2[rows]
     near = np.where(front[f1], f1, f2)
     return m.pair[rows] & (front[f1] != front[f2]) & (geom.tri_smooth_np[near] != 0) & curved[near]
