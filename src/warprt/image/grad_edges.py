@@ -72,21 +72,19 @@ def moves_edges(name: str) -> bool:
             or (parts[0] == "materials" and parts[-1] == "ior"))
 
 
-def edge_refusal(scene, geom, fx, wrt, mirrors=None) -> str | None:
+def edge_refusal(scene, geom, fx, wrt, mirrors=None, crossed=None) -> str | None:
     """Why backward(edges=True) would leave out an edge that the parameters ``wrt`` move (None: the camera
     rays' edges, the hard shadows', a checker's squares', a spot's hard cone, and those seen in mirrors and
     through glass are all of them): glass's and curved mirrors' that the crossings do not cover
     (grad_glass_edges.crossing_refusal; a checker's squares seen through them they do), too many planar mirrors'
-    (frame_mirrors, or ``mirrors()``: its answer kept). (A reflectivity of 0
+    (frame_mirrors, or ``mirrors()``: its answer kept; ``crossed()`` crossed_surfaces' kept). (A reflectivity of 0
     whose mirror rays a frame records for its derivative reflects nothing: no edge is seen in it.)"""
     moving = [n for n in wrt if moves_edges(n)]
     if not moving:
         return None
-    surfaces = crossed_surfaces(scene, geom, fx)
-    if any(on.any() for on in surfaces.values()):
-        why = crossing_refusal(scene, geom, fx, moving)
-        if why is not None:
-            return f"{moving[0]} moves {why}, not differentiated yet"
+    why = crossing_refusal(scene, fx, (crossed or partial(crossed_surfaces, scene, geom, fx))())
+    if why is not None:
+        return f"{moving[0]} moves {why}, not differentiated yet"
     reflects = scene.render.max_depth > 1 and fx.reflection
     chains, why = (mirrors or partial(frame_mirrors, scene, geom))()[2:] if reflects else ((), None)
     if why is not None:
@@ -301,8 +299,9 @@ def check_edges(scene, geom, frame: EdgeFrame | None, wrt):
     """backward(edges=True)'s refusal (edge_refusal) as one ArgumentError naming ``edges``."""
     if frame is None:
         raise ArgumentError("backward", "edges", "no frame's plan was kept: render(grad=True) first")
-    why = edge_refusal(scene, geom, frame.fx, wrt, partial(kept_part, frame, scene, geom, "mirrors",
-                                                           partial(frame_mirrors, scene, geom)))
+    keep = partial(kept_part, frame, scene, geom)
+    why = edge_refusal(scene, geom, frame.fx, wrt, partial(keep, "mirrors", partial(frame_mirrors, scene, geom)),
+                       partial(keep, "crossed", partial(crossed_surfaces, scene, geom, frame.fx)))
     if why is not None:
         raise ArgumentError("backward", "edges", f"{why} (edges=False: the derivative with each ray's face and "
                                                  f"each shadow ray's answer held)")

@@ -52,28 +52,23 @@ def crossed_surfaces(scene, geom, fx) -> dict:
     return {"glass": glass, "curved mirror": curved}
 
 
-def crossing_refusal(scene, geom, fx, moving: list) -> str | None:
-    """Why the crossings would miss an edge seen through glass or in a curved mirror that the parameters
-    ``moving`` move (None: they cover them, or there are none): "the edges seen through glass" (or "in curved
-    mirrors") and why."""
-    surfaces = crossed_surfaces(scene, geom, fx)
+def crossing_refusal(scene, fx, surfaces: dict) -> str | None:
+    """Why the crossings would miss an edge seen through glass or in a curved mirror (None: they cover them all,
+    or there are none; ``surfaces``: crossed_surfaces'): "the edges seen through glass" (or "in curved mirrors")
+    and why: more ray levels than MAX_GLASS_DEPTH, or area lights. Every parameter's edges there are covered
+    otherwise: a glass or curved mirror object's own vertices and pose too (its faces on the speeds' path, a smooth
+    one's normals taken back to its vertices: glass_terms; its rims read at FINE_POINTS: grad_mesh_edges.rims)."""
     kinds = [kind for kind, on in surfaces.items() if on.any()]
     if not kinds:
         return None
-    seen = " and ".join({"glass": "through glass", "curved mirror": "in curved mirrors"}[k] for k in kinds)
-    why = _crossing_refusal(scene, fx)
-    return None if why is None else f"the edges seen {seen} {why}"
-
-
-def _crossing_refusal(scene, fx) -> str | None:
-    """crossing_refusal's why, in the words after "the edges seen through glass"."""
     if scene.render.max_depth > MAX_GLASS_DEPTH:
-        return f"at more than {MAX_GLASS_DEPTH} ray levels (render.max_depth)"
-    if fx.area_lights:
-        return "with area lights (their sample points' shadow edges share lines)"
-    # A glass or curved mirror object's own vertices and pose are covered: its faces are on the speeds' path, a
-    # smooth one's normals taken back to its vertices (glass_terms), its rims read at FINE_POINTS (grad_mesh_edges.rims).
-    return None
+        why = f"at more than {MAX_GLASS_DEPTH} ray levels (render.max_depth)"
+    elif fx.area_lights:
+        why = "with area lights (their sample points' shadow edges share lines)"
+    else:
+        return None
+    seen = " and ".join({"glass": "through glass", "curved mirror": "in curved mirrors"}[k] for k in kinds)
+    return f"the edges seen {seen} {why}"
 
 
 def traced_colours(scene, geom, frame, at: np.ndarray, device: str) -> np.ndarray:
