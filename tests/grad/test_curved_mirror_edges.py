@@ -17,8 +17,9 @@ the crossings below a bounce off a reflective triangle in no planar group). Chec
   (make test-exhaustive's), with the same control;
 - the mirror ball's own vertices and translation against the same differences (make test-exhaustive's), with the
   same control;
-- what the crossings do not cover refused in one line naming ``edges``: area lights (a hard spot's cone seen in it
-  is covered: test_glass_spot_edges.py).
+- what the crossings do not cover refused in one line naming ``edges``: more than MAX_GLASS_DEPTH ray levels (a
+  hard spot's cone seen in it is covered: test_glass_spot_edges.py; an area light's soft shadow:
+  test_glass_area_edges.py).
 """
 
 from __future__ import annotations
@@ -30,6 +31,7 @@ import pytest
 
 import warprt
 from marks import exhaustive, slow
+from warprt.image import MAX_GLASS_DEPTH
 
 from .converged import check_against_differences, gradient
 from .test_glass_edges import X, Y, Z, assert_camera_term_found_two_ways, assert_refused, checker_wall
@@ -151,19 +153,13 @@ def test_the_curved_mirror_own_vertices_and_pose_equal_central_differences(posit
     check_against_differences(ball_scene, name, u, positive, h, TOL, control, k=1)
 
 
-def _area_lit_ball(spp: int):
-    """ball_scene lit by a rectangle area light instead of its point light."""
-    light = {"type": "area", "shape": "rectangle", "center": [0.6, 0.5, 1.3], "normal": [-0.3, -0.2, -1.0],
-             "size": [0.4, 0.3], "radiance": [6.0, 5.0, 4.0]}
-    s = ball_scene(spp)
-    return replace(s, lights=warprt.load_dict({"lights": [light], "objects": [], "materials": {}}).lights)
-
-
 def test_what_the_crossings_leave_out_in_a_curved_mirror_is_refused_in_one_line(positive):
-    """A curved mirror lit by area lights (their sample points' shadow edges would share the lines): one line
-    naming ``edges`` and why; edges=False is not refused. Its own vertices and pose, the camera, an occluder's
-    vertices and a point light's position are covered (above)."""
-    assert_refused(_area_lit_ball(1), positive, "objects.occ.vertices", ["area lights", "in curved mirrors"])
+    """A curved mirror traced past MAX_GLASS_DEPTH ray levels: one line naming ``edges`` and why; edges=False is not
+    refused. Its own vertices and pose, the camera, an occluder's vertices and a point light's position are covered
+    (above; an area light's soft shadow seen in it too: test_glass_area_edges.py)."""
+    s = ball_scene(1)
+    assert_refused(replace(s, render=replace(s.render, max_depth=MAX_GLASS_DEPTH + 1)), positive,
+                   "objects.occ.vertices", ["ray levels", "in curved mirrors"])
     r = warprt.Renderer(ball_scene(1))
     r.render(grad=True)
     r.backward(positive, wrt=["objects.ball.vertices", "objects.ball.translation", "objects.ball.rotation",

@@ -26,8 +26,9 @@ image/grad_glass_edges.py): a deterministic screen-space crossing estimator. Che
 - a checker's squares (the signatures' squares, their lines' boundary function): without glass the crossings of
   every node agree with the direct checker lines' term (image/grad_checker_edges.py), and seen through the slab
   the wall's vertices and the camera's eye against the same differences, with the same control;
-- what the crossings do not cover refused in one line naming ``edges`` (a hard spot's cone seen through glass is
-  covered: test_glass_spot_edges.py).
+- what the crossings do not cover, more than MAX_GLASS_DEPTH ray levels, refused in one line naming ``edges``:
+  test_mirror_edges.py (a hard spot's cone seen through glass is covered: test_glass_spot_edges.py; area lights'
+  soft shadows too: test_glass_area_edges.py).
 """
 
 from __future__ import annotations
@@ -353,25 +354,6 @@ def test_a_smooth_glass_own_vertices_term_is_linear_in_the_image_adjoint(weights
     r.close()
     assert np.array_equal(first, again)
     np.testing.assert_allclose(halves, first, rtol=0.0, atol=1e-5 * np.abs(first).max())
-
-
-def _area_lit_slab(spp: int):
-    """slab_scene lit by a rectangle area light instead of its point light."""
-    light = {"type": "area", "shape": "rectangle", "center": [1.0, 2.5, 3.0], "normal": [-0.3, -1.0, -0.8],
-             "size": [0.6, 0.4], "radiance": [6.0, 5.0, 4.0]}
-    s = slab_scene(spp)
-    return replace(s, lights=warprt.load_dict({"lights": [light], "objects": [], "materials": {}}).lights)
-
-
-REFUSED = {"area light": (_area_lit_slab, "objects.occ.vertices", "area lights")}
-
-
-@pytest.mark.parametrize("case", list(REFUSED))
-def test_what_the_crossings_leave_out_is_refused_in_one_line(weights, case):
-    """What the crossings do not cover yet: glass lit by area lights (their sample points' shadow edges would share
-    the lines): one line naming ``edges`` and why; edges=False is not refused."""
-    make, name, why = REFUSED[case]
-    assert_refused(make(1), weights, name, [why])
 
 
 def checker_wall(s):

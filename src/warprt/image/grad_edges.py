@@ -35,8 +35,8 @@ class EdgeFrame:
     """What the edges' rays need of the frame: its effect set, ray stack and ray levels (FramePlan's), the
     CPU threads its per-point launches run on (grad_edge_launch.launch_points), what its backward calls
     keep for the next (``kept``: kept_part's), and whether the crossings' tree signatures hold the hard cones
-    (``cone_bits``) and the checker squares (``square_bits``; each False only as a check's control:
-    grad_glass_edges.tree_walk)."""
+    (``cone_bits``), the checker squares (``square_bits``) and the area lights' blocked sample points
+    (``hidden_bits``; each False only as a check's control: grad_glass_edges.tree_walk)."""
 
     fx: object
     stack: int
@@ -44,6 +44,7 @@ class EdgeFrame:
     threads: int = 1
     cone_bits: bool = True
     square_bits: bool = True
+    hidden_bits: bool = True
     kept: dict = field(default_factory=dict, compare=False, repr=False)
 
 
@@ -82,7 +83,7 @@ def edge_refusal(scene, geom, fx, wrt, mirrors=None, crossed=None) -> str | None
     moving = [n for n in wrt if moves_edges(n)]
     if not moving:
         return None
-    why = crossing_refusal(scene, fx, (crossed or partial(crossed_surfaces, scene, geom, fx))())
+    why = crossing_refusal(scene, (crossed or partial(crossed_surfaces, scene, geom, fx))())
     if why is not None:
         return f"{moving[0]} moves {why}, not differentiated yet"
     reflects = scene.render.max_depth > 1 and fx.reflection

@@ -33,9 +33,10 @@ BISECTIONS = 14
 MAX_CROSSINGS = 8  # signature changes found between two neighbouring points  # a crossing found within 2^-14 of a step (8e-6 of a pixel)
 MAX_GLASS_DEPTH = 12  # ray levels: 4095 tree nodes a point, each walked and compared: a walk's work grows as 2^levels
 NODES_A_WALK = 1 << 24  # points x tree nodes a signature walk takes at once (8 bytes a node: 2^18 points at 6 levels)
-NODES_A_PART = 1 << 22  # crossings x tree nodes a part's detailed walks hold at most (48 bytes a node + 12 a light)
-SIGNATURE = ("face", "blocked", "cone", "square")  # a tree's signature: per node its face, blocked lights, hard
-# cones holding it, checker squares holding it
+NODES_A_PART = 1 << 22  # crossings x tree nodes a part's detailed walks hold at most, at one light (48 bytes a
+# node + 12 a light; with area lights 24 a light or sample point: detail_columns, _axis_crossings)
+SIGNATURE = ("face", "blocked", "cone", "square", "hidden")  # a tree's signature: per node its face, blocked
+# lights, hard cones holding it, checker squares holding it, its area lights' blocked sample points' key
 
 
 def crossed_surfaces(scene, geom, fx) -> dict:
@@ -52,23 +53,18 @@ def crossed_surfaces(scene, geom, fx) -> dict:
     return {"glass": glass, "curved mirror": curved}
 
 
-def crossing_refusal(scene, fx, surfaces: dict) -> str | None:
+def crossing_refusal(scene, surfaces: dict) -> str | None:
     """Why the crossings would miss an edge seen through glass or in a curved mirror (None: they cover them all,
     or there are none; ``surfaces``: crossed_surfaces'): "the edges seen through glass" (or "in curved mirrors")
-    and why: more ray levels than MAX_GLASS_DEPTH, or area lights. Every parameter's edges there are covered
-    otherwise: a glass or curved mirror object's own vertices and pose too (its faces on the speeds' path, a smooth
-    one's normals taken back to its vertices: glass_terms; its rims read at FINE_POINTS: grad_mesh_edges.rims)."""
+    and why: more ray levels than MAX_GLASS_DEPTH. Every parameter's edges there are covered otherwise: a glass or
+    curved mirror object's own vertices and pose too (its faces on the speeds' path, a smooth one's normals taken
+    back to its vertices: glass_terms; its rims read at FINE_POINTS: grad_mesh_edges.rims), an area light's sample
+    points' shadows (each point a point light's wedge: _parting) and its own outline."""
     kinds = [kind for kind, on in surfaces.items() if on.any()]
-    if not kinds:
-        return None
-    if scene.render.max_depth > MAX_GLASS_DEPTH:
-        why = f"at more than {MAX_GLASS_DEPTH} ray levels (render.max_depth)"
-    elif fx.area_lights:
-        why = "with area lights (their sample points' shadow edges share lines)"
-    else:
+    if not kinds or scene.render.max_depth <= MAX_GLASS_DEPTH:
         return None
     seen = " and ".join({"glass": "through glass", "curved mirror": "in curved mirrors"}[k] for k in kinds)
-    return f"the edges seen {seen} {why}"
+    return f"the edges seen {seen} at more than {MAX_GLASS_DEPTH} ray levels (render.max_depth)"
 
 
 def traced_colours(scene, geom, frame, at: np.ndarray, device: str) -> np.ndarray:
@@ -87,36 +83,51 @@ def tree_walk(scene, geom, frame, at: np.ndarray, device: str, detail: bool = Fa
     """The tree signatures of camera rays through ``at`` (make_tree_kernel): ``face``, ``blocked`` and, where the
     frame has a hard spot (and EdgeFrame.cone_bits), ``cone`` (N, nodes; its bits the hard spots whose cone holds
     each hit: absent, the walk is the one without), where it has a checker (and EdgeFrame.square_bits)
-    ``square`` (N, nodes: the checker squares holding each hit, kernels.glass_edges.checker_squares); with
-    ``detail`` also ``below``, ``ray`` (N, nodes, 2, 3), ``hit`` (N, nodes, 3: u, v, distance), ``blocker`` (N,
-    nodes, lights) and ``blocker_at`` (N, nodes, lights, 2)."""
+    ``square`` (N, nodes: the checker squares holding each hit, kernels.glass_edges.checker_squares), where it
+    has area lights and shadows (and EdgeFrame.hidden_bits) ``hidden`` (N, nodes: the key of the sample points its
+    shadow rays find blocked, kernels.glass_edges.hidden_points); with ``detail`` also ``below``, ``ray`` (N,
+    nodes, 2, 3), ``hit`` (N, nodes, 3: u, v, distance), ``blocker`` (N, nodes, columns: a Whitted light's, then an
+    area light sample point's, detail_columns), ``blocker_at`` (N, nodes, columns, 2) and ``share`` (N, nodes,
+    columns, 3: a sample point's share of the colour were it seen, kernels.glass_edges.hidden_points; 0 in a
+    Whitted light's column; only with ``hidden``)."""
     nodes, n = 2 ** frame.max_depth - 1, len(at)
     data = geom.scene_data(scene)
-    lights = max(int(data.num_lights), 1)
+    lights = detail_columns(data)
     k = nodes if detail else 0
     spots = bool(frame.fx.light_model and hard_spots(scene) and frame.cone_bits)
     squares = bool(frame.fx.texture and has_checker(scene, geom) and frame.square_bits)
-    out = {"face": np.empty(n * nodes, np.int32), "blocked": np.empty(n * nodes, np.int32),
+    hidden = bool(frame.fx.shadows and frame.fx.area_lights and (frame.fx.diffuse or frame.fx.specular)
+                  and frame.hidden_bits)
+    out = {"face": np.full(n * nodes, NO_RAY, np.int32), "blocked": np.zeros(n * nodes, np.int32),
            "below": np.zeros(max(n * k, 1), np.int32), "ray": np.zeros((max(n * k, 1) * 2, 3), np.float32),
            "hit": np.zeros((max(n * k, 1), 3), np.float32), "blocker": np.full(max(n * k * lights, 1), -1, np.int32),
            "blocker_at": np.zeros((max(n * k * lights, 1), 2), np.float32),
            "cone": np.zeros(n * nodes if spots else 1, np.int32),
-           "square": np.zeros(n * nodes if squares else 1, np.int32)}
+           "square": np.zeros(n * nodes if squares else 1, np.int32),
+           "hidden": np.zeros(n * nodes if hidden else 1, np.int32),
+           "share": np.zeros((max(n * k * lights * hidden, 1), 3), np.float32)}
     types = {"face": int, "blocked": int, "below": int, "ray": wp.vec3, "hit": wp.vec3, "blocker": int,
-             "blocker_at": wp.vec2, "cone": int, "square": int}
+             "blocker_at": wp.vec2, "cone": int, "square": int, "hidden": int, "share": wp.vec3}
     arrays = {name: host_array(v, types[name], device) for name, v in out.items()}
     dirs = host_array(ray_directions(at, camera_basis(scene.camera)), wp.vec3, device)
-    launch_points(make_tree_kernel(frame.fx, frame.stack, nodes, detail, spots, squares), n,
+    launch_points(make_tree_kernel(frame.fx, frame.stack, nodes, detail, spots, squares, hidden), n,
                   [data, wp.vec3(*geom.eye_offset(scene.camera.eye)), frame.max_depth, empty_fragments(device),
                    empty_mirrors(device), dirs, *arrays.values()],
-                  [0] * 5 + [1, nodes, nodes, k, 2 * k, k, k * lights, k * lights, nodes * spots, nodes * squares],
-                  frame.threads, device)
+                  [0] * 5 + [1, nodes, nodes, k, 2 * k, k, k * lights, k * lights, nodes * spots, nodes * squares,
+                             nodes * hidden, k * lights * hidden], frame.threads, device)
     got = {name: a.numpy() for name, a in arrays.items()}
     shapes = {"face": (n, nodes), "blocked": (n, nodes), "below": (n, nodes), "ray": (n, nodes, 2, 3),
               "hit": (n, nodes, 3), "blocker": (n, nodes, lights), "blocker_at": (n, nodes, lights, 2),
-              "cone": (n, nodes), "square": (n, nodes)}
+              "cone": (n, nodes), "square": (n, nodes), "hidden": (n, nodes), "share": (n, nodes, lights, 3)}
+    held = {"cone": spots, "square": squares, "hidden": hidden, "share": hidden}
     return {name: v.reshape(shapes[name]) for name, v in got.items()
-            if (detail or name in SIGNATURE) and (spots or name != "cone") and (squares or name != "square")}
+            if (detail or name in SIGNATURE) and held.get(name, True)}
+
+
+def detail_columns(data) -> int:
+    """A detailed walk's blocker columns a node (kernels.glass_edges.detail_columns; 1 at least): one per Whitted
+    light, then one per area light sample point, in shadow_sources' order of rows."""
+    return max(int(data.num_lights) + int(data.area.first.numpy()[data.area.num]), 1)
 
 
 def line_points(cam, axis: int) -> np.ndarray:
@@ -137,10 +148,11 @@ def _same(a: dict, b: dict) -> np.ndarray:
 
 
 def _lit_alike(a: dict, b: dict) -> np.ndarray:
-    """Per point whether two signatures' lights agree in every node: the blocked ones and the hard cones, and
-    so do their checker squares (where the signatures hold them: tree_walk)."""
+    """Per point whether two signatures' lights agree in every node: the blocked ones (Whitted lights and area
+    lights' sample points) and the hard cones, and so do their checker squares (where the signatures hold them:
+    tree_walk)."""
     alike = np.all(a["blocked"] == b["blocked"], axis=1)
-    for name in ("cone", "square"):
+    for name in ("cone", "square", "hidden"):
         alike = alike & np.all(a[name] == b[name], axis=1) if name in a else alike
     return alike
 
@@ -234,17 +246,21 @@ def _edge_of(geom, face: np.ndarray, uv: np.ndarray) -> np.ndarray:
 
 def _parting(scene, geom, frame, lo: np.ndarray, hi: np.ndarray, curved: np.ndarray | None, device: str) -> dict:
     """Per crossing (lo, hi its two sides) the first tree node (in the tree's level order) where the two
-    signatures part (faces both traced and different, the hard cones holding the hit, the lights its shadow
-    rays find blocked, or the checker squares holding it), what parts them (``kind``: FACE_EDGE, SPOT_CONE of the
-    spot ``light``, a wedge of light ``light``, or CHECKER_LINE; a cone's before a wedge's: outside a cone no shadow
+    signatures part (faces both traced and different, the hard cones holding the hit, the lights or area light
+    sample points its shadow rays find blocked, or the checker squares holding it), what parts them (``kind``:
+    FACE_EDGE, SPOT_CONE of the spot ``light``, a wedge of light or sample point ``light`` (a row of shadow_sources:
+    _each_point), or CHECKER_LINE; a cone's before a wedge's: outside a cone no shadow
     ray is traced, so its edge in a shadow parts both; a wedge's before a line's) and its edge (``edge``: the nearer
     face's edge nearest its hit, or the blocker's nearest its shadow ray's hit; a cone's and a line's unread), a
     checker line's values at the lo side's face's corners (``line``: _checker_lines; 0 elsewhere), the lo side's
-    faces (``faces``) and ``keep``: a parting found, and unless ``curved`` is None below a dielectric's split or a
-    bounce off a curved mirror (``curved``: per triangle; _through)."""
+    faces (``faces``), ``keep``: a parting found, and unless ``curved`` is None below a dielectric's split or a
+    bounce off a curved mirror (``curved``: per triangle; _through), and ``own``: a sample point's wedge, whose
+    jump f_- - f_+ is its share alone (``jump``: the share on its lit side, hidden_points'); a crossing parted by
+    several sample points is a row each, ``row`` the crossing each row is (_each_point)."""
     a, b = tree_walk(scene, geom, frame, lo, device, True), tree_walk(scene, geom, frame, hi, device, True)
-    rows = np.arange(len(lo))
     node, keep, faces_part = _first_parting(geom, frame.fx, a, b)
+    row, column, points, a, b, node, keep = _each_point(a, b, node, keep, faces_part, len(scene.whitted_lights))
+    faces_part, rows = faces_part[row], np.arange(len(row))
     cone_a, cone_b = _cones(a, b)
     if curved is not None:
         keep &= _through(a, node, curved)
@@ -256,21 +272,50 @@ def _parting(scene, geom, frame, lo: np.ndarray, hi: np.ndarray, curved: np.ndar
     cone = ~faces_part[rows, node] & (parted != 0)
     bits = np.where(cone, parted, a["blocked"][rows, node] ^ b["blocked"][rows, node]).astype(np.int64)
     light = np.where(faces_part[rows, node], 0, np.log2(np.maximum(bits & -bits, 1)).astype(np.int64))
-    squares = ~faces_part[rows, node] & (bits == 0) & (_squares(a)[rows, node] != _squares(b)[rows, node])
+    squares = ~faces_part[rows, node] & (bits == 0) & ~points & (_squares(a)[rows, node] != _squares(b)[rows, node])
     shadow = ~faces_part[rows, node] & ~cone & ~squares
-    line = np.zeros((len(lo), 3))
+    blocked_a = ((a["blocked"][rows, node] >> light) & 1) != 0  # a's side the blocked one (a wedge's)
+    light[points] = column[points]
+    blocked_a[points] = a["blocker"][rows, node, light][points] != -1
+    jump = np.zeros((len(rows), 3))
+    if points.any():
+        r, n, q = rows[points], node[points], light[points]
+        jump[points] = np.where(blocked_a[points, None], -b["share"][r, n, q], a["share"][r, n, q])
+    line = np.zeros((len(rows), 3))
     if squares.any():
         line[squares], on = _checker_lines(scene, geom, a, b, rows[squares], node[squares])
         keep[squares] &= on
     if shadow.any():
-        lit_a = ((a["blocked"][rows, node] >> light) & 1) != 0
-        blocker = np.where(lit_a, a["blocker"][rows, node, light], b["blocker"][rows, node, light])
-        at = np.where(lit_a[:, None], a["blocker_at"][rows, node, light], b["blocker_at"][rows, node, light])
+        blocker = np.where(blocked_a, a["blocker"][rows, node, light], b["blocker"][rows, node, light])
+        at = np.where(blocked_a[:, None], a["blocker_at"][rows, node, light], b["blocker_at"][rows, node, light])
         face, uv = np.where(shadow, blocker, face), np.where(shadow[:, None], at, uv)
     keep &= face >= 0
     kind = np.select([shadow, cone, squares], [POINT_WEDGE, SPOT_CONE, CHECKER_LINE], FACE_EDGE)
-    return {"node": node, "kind": kind, "light": light,
-            "edge": _edge_of(geom, face, uv), "line": line, "faces": a["face"], "keep": keep}
+    return {"node": node, "kind": kind, "light": light, "edge": _edge_of(geom, face, uv), "line": line,
+            "faces": a["face"], "keep": keep, "row": row, "own": points, "jump": jump}
+
+
+def _each_point(a: dict, b: dict, node: np.ndarray, keep: np.ndarray, faces_part: np.ndarray, whitted: int) -> tuple:
+    """(row, column, points, a, b, node, keep): the crossings of two detailed signatures (a, b: tree_walk's;
+    ``node``, ``keep`` and ``faces_part``: _first_parting's) one row each, but those parted by the area lights'
+    blocked sample points alone (their faces, hard cones and Whitted lights alike there: ``points``, per row) a row
+    per point whose shadow ray's answer differs (``column``: its blocker column, past the ``whitted`` lights': a row
+    of shadow_sources; 0 elsewhere; a key parted with no column, their chance collision, no row), the rows of the
+    crossing they come from (``row``, in order) and a, b, node and keep taken to them. Several points' shadow edges
+    at one crossing are the rule, not the exception, where a rectangle light's row of points lies in one plane with
+    an occluder's edge (an axis-aligned box under an axis-aligned light): one jump, each point's share of it its
+    own (hidden_points)."""
+    c = np.arange(len(node))
+    cone_a, cone_b = _cones(a, b)
+    alike = (cone_a[c, node] == cone_b[c, node]) & (a["blocked"][c, node] == b["blocked"][c, node])
+    points = ~faces_part[c, node] & alike & (_hidden(a)[c, node] != _hidden(b)[c, node])
+    differ = (a["blocker"][c, node, whitted:] != -1) != (b["blocker"][c, node, whitted:] != -1)
+    differ &= points[:, None]
+    count = np.where(points, differ.sum(axis=1), 1)
+    row = np.repeat(c, count)
+    column, on = np.zeros(len(row), np.int64), np.repeat(points, count)
+    column[on] = whitted + np.nonzero(differ)[1]  # row-major: each crossing's points in order, as row repeats it
+    return row, column, on, {k: v[row] for k, v in a.items()}, {k: v[row] for k, v in b.items()}, node[row], keep[row]
 
 
 def _checker_lines(scene, geom, a: dict, b: dict, rows: np.ndarray, node: np.ndarray) -> tuple:
@@ -303,13 +348,13 @@ def _checker_lines(scene, geom, a: dict, b: dict, rows: np.ndarray, node: np.nda
 def _first_parting(geom, fx, a: dict, b: dict) -> tuple:
     """(node, found, faces_part): per row of two signatures (tree_walk's, (N, nodes) each) the first node in the
     tree's level order where they part (faces both traced and different, not passing smoothly: _smooth_pass; the
-    hard cones holding the hit; the lights its shadow rays find blocked; or the checker squares holding it),
-    whether they part at all, and per node whether their faces do."""
+    hard cones holding the hit; the lights and area light sample points its shadow rays find blocked; or the
+    checker squares holding it), whether they part at all, and per node whether their faces do."""
     both = (a["face"] != NO_RAY) & (b["face"] != NO_RAY)
     faces_part = both & (a["face"] != b["face"]) & ~_smooth_pass(geom, fx, a["face"], b["face"])
     cone_a, cone_b = _cones(a, b)
-    squares = _squares(a) != _squares(b)
-    differ = faces_part | (both & ((a["blocked"] != b["blocked"]) | (cone_a != cone_b) | squares))
+    squares, hidden = (x(a) != x(b) for x in (_squares, _hidden))
+    differ = faces_part | (both & ((a["blocked"] != b["blocked"]) | (cone_a != cone_b) | squares | hidden))
     return np.argmax(differ, axis=1), differ.any(axis=1), faces_part
 
 
@@ -321,6 +366,11 @@ def _cones(a: dict, b: dict) -> tuple:
 def _squares(a: dict) -> np.ndarray:
     """A signature's checker squares (zeros where the walk holds none: tree_walk)."""
     return a.get("square", np.zeros_like(a["face"]))
+
+
+def _hidden(a: dict) -> np.ndarray:
+    """A signature's blocked sample points' keys (zeros where the walk holds none: tree_walk)."""
+    return a.get("hidden", np.zeros_like(a["face"]))
 
 
 def _through(a: dict, node: np.ndarray, curved: np.ndarray) -> np.ndarray:
@@ -461,10 +511,14 @@ def _by_slot(geom, faces: np.ndarray, level: np.ndarray, d_eta: np.ndarray) -> n
 def _axis_crossings(scene, geom, frame, sources, spots, axis: int, curved: np.ndarray | None, device: str) -> list:
     """The parts (_part_crossings) of the crossings of the lines along ``axis``, a part per points_a_walk of
     their pairs (_pairs): each part's detailed walks (per node its ray, hit and blockers) hold the trees of as
-    many points as its pairs hold crossings, MAX_CROSSINGS a pair at most, so NODES_A_PART nodes at most
+    many points as its pairs hold crossings, MAX_CROSSINGS a pair at most, so NODES_A_PART nodes at most, fewer
+    where a node holds more than one light's blockers (48 bytes a node, 12 a light; with area lights a column per
+    sample point, detail_columns, and 24 a column: their shares)
     (scenes/glass_slab.toml: 1.8 crossings a pair at 32 x 16 pixels, 5.2 at 8 x 4, its stripes finer than a pixel)."""
     lo, hi = _pairs(scene, geom, frame, line_points(scene.camera, axis), device)
-    per = points_a_walk(frame, NODES_A_PART // MAX_CROSSINGS)
+    columns = detail_columns(geom.scene_data(scene))
+    area = bool(frame.fx.shadows and frame.fx.area_lights)  # a share a column too (tree_walk's ``share``)
+    per = points_a_walk(frame, NODES_A_PART * 60 // (48 + (24 if area else 12) * columns) // MAX_CROSSINGS)
     parts = [_part_crossings(scene, geom, frame, sources, spots, axis, curved, lo[i:i + per], hi[i:i + per], device)
              for i in range(0, len(lo), per)]
     return [p for p in parts if p is not None]
@@ -478,11 +532,13 @@ def _part_crossings(scene, geom, frame, sources, spots, axis: int, curved: np.nd
     its place, its pixel, its weight -sign(g_axis) / (LINES (|g_x| + |g_y|)) (the line's Leibniz term
     dx_c/dtheta = -g_theta / g_axis, times the line's share |g_axis| / (|g_x| + |g_y|), over the lines' spacing)
     and f_- - f_+ (the colours at its sides, the bisection's last lo and hi: two crossings nearer than a fixed
-    offset each read its own jump); with ``curved`` those below a split or a curved bounce (_through) and not
+    offset each read its own jump; an area light sample point's shadow edge its point's share alone, _each_point:
+    several points' edges may lie at one crossing); with ``curved`` those below a split or a curved bounce (_through) and not
     within reach of the other terms' boundaries (_theirs_near)."""
     if len(lo):
         lo, hi = _crossings(scene, geom, frame, lo, hi, device)
         x = _parting(scene, geom, frame, lo, hi, curved, device)
+        lo, hi = lo[x["row"]], hi[x["row"]]
         keep = x.pop("keep")
         x, lo, hi = {k: v[keep] for k, v in x.items()}, lo[keep], hi[keep]
         if curved is not None and len(lo):
@@ -492,7 +548,7 @@ def _part_crossings(scene, geom, frame, sources, spots, axis: int, curved: np.nd
         return None
     at = 0.5 * (lo + hi)
     colours = traced_colours(scene, geom, frame, np.concatenate([lo, hi]), device)
-    jump = colours[:len(at)] - colours[len(at):]
+    jump = _jumps(x, colours[:len(at)] - colours[len(at):])
     s = _speeds(scene, geom, frame, x, sources, spots, at, device)
     g = s["speed"].pop("at")
     size = np.abs(g[:, 0]) + np.abs(g[:, 1])
@@ -504,6 +560,22 @@ def _part_crossings(scene, geom, frame, sources, spots, axis: int, curved: np.nd
     jump, speed = spread(jump), {k: spread(v) for k, v in s["speed"].items()}
     points = {k: spread(v) for k, v in {**s["points"], **s["normals"]}.items()}
     return pts, jump, speed, points, spread(x["light"]), spread(s["spot"])
+
+
+def _jumps(x: dict, traced: np.ndarray) -> np.ndarray:
+    """(C, 3) float64: per crossing row (_parting's ``x``) f_- - f_+: the ``traced`` colours' (its sides'), or a
+    sample point's wedge its share alone (``own``), the first row of its crossing also the rest of the traced jump
+    (a crossing parted by one point alone: the traced jump; by several in one plane, each its own share: the rest
+    0; by points whose shares are 0, as on a dielectric's face, where what parts the tree below moves with them:
+    the node's hit on a crease, its children spawned past the next face's plane within the ray offset of it, the
+    traced jump, as a Whitted light's wedge takes it)."""
+    own, crossing = x["own"], x["row"]
+    if not own.any():
+        return traced
+    first = np.r_[True, crossing[1:] != crossing[:-1]]
+    shares = np.zeros((crossing.max() + 1, 3))
+    np.add.at(shares, crossing[own], x["jump"][own])
+    return np.where(own[:, None], x["jump"] + first[:, None] * (traced - shares[crossing]), traced)
 
 
 def _strip_pixels(cam, at: np.ndarray, g: np.ndarray, axis: int) -> np.ndarray:

@@ -350,9 +350,9 @@ class Renderer:
         directly and in planar mirrors (render.max_depth > 1: through each chain of mirror planes a camera ray
         may follow, moving with the mirrors' vertices too: image/grad_mirror_edges.py), and what glass's ray tree
         and curved (smooth) mirrors show (image/grad_glass_edges.py: moving with other objects, the lights, the
-        camera, their own vertices and pose and a glass's ior), a checker texture's squares and a hard spot's cone
-        among them. Where the named parameters move an edge not covered yet (more chains of mirrors than
-        grad_mirror_edges.MAX_CHAINS; with glass or a curved mirror, area lights or more ray levels than
+        camera, their own vertices and pose and a glass's ior), a checker texture's squares, a hard spot's cone and
+        an area light's soft shadows among them. Where the named parameters move an edge not covered yet (more
+        chains of mirrors than grad_mirror_edges.MAX_CHAINS; with glass or a curved mirror, more ray levels than
         grad_glass_edges.MAX_GLASS_DEPTH, 12) it is refused in one line naming ``edges``; ``edges=False`` gives
         the interior derivative alone, as before (docs/gradients.md)."""
         if self._first_hits is None:

@@ -13,8 +13,9 @@ from .interaction import Ray, Surface, make_surface, mirror_ray, reflect, spawn_
 from .camera import camera_of, image_plane_point
 from .mirror import FROM_CAMERA, Mirrors
 from .raster import Fragments
+from .clearance import SHADOW_EPSILON
 from .record import NO_RAY
-from .shading import make_light_arrival, make_light_test
+from .shading import make_area_sample_test, make_coefficients, make_light_arrival, make_light_terms, make_light_test
 from .trace import TreeRay, make_first_hit, make_ray_stack
 
 general_light_arrival = make_light_arrival(True)  # where a hard spot is, the general light model is on
@@ -22,6 +23,9 @@ general_light_arrival = make_light_arrival(True)  # where a hard spot is, the ge
 REFLECTED, TRANSMITTED, MIRRORED = 0, 1, 2  # how a node's ray leaves its parent's hit
 FACE_EDGE, POINT_WEDGE, DIRECTIONAL_WEDGE, SPOT_CONE, CHECKER_LINE = 0, 1, 2, 3, 4  # what parts two signatures: a
 # face, a shadow ray's answer, a hard spot's cone, a checker's line
+NOT_FOUND = -2  # a detailed walk's blocker of an area light's sample point whose shadow ray is blocked but whose
+# nearest hit the query missed (-1: not blocked)
+HIDDEN_SEED = 38  # the seed of the sample points' keys (point_key)
 
 
 @functools.cache
@@ -42,11 +46,17 @@ def make_shadow_blocker(LIGHT_MODEL: bool):
     return shadow_blocker
 
 
+@wp.func
+def detail_columns(s: SceneData) -> int:
+    """A detailed walk's blocker columns a node: one per Whitted light, then one per area light sample point."""
+    return s.num_lights + s.area.first[s.area.num]
+
+
 @functools.cache
 def make_blocked_lights(fx, DETAIL: bool):
     """blocked_lights(s, hit, k, blocker, blocker_at) -> bits: a bit per Whitted light whose shadow ray from the hit
     is blocked (light_test's, the forward's own test); with DETAIL each such light's nearest blocker's face and
-    (u, v) written at node row k (shadow_blocker)."""
+    (u, v) written at node row k, its column the light's (shadow_blocker; detail_columns a row)."""
     light_test = make_light_test(fx.light_model, fx.shadows)
     shadow_blocker = make_shadow_blocker(fx.light_model)
 
@@ -60,11 +70,59 @@ def make_blocked_lights(fx, DETAIL: bool):
                 bits = bits | (1 << l)
                 if wp.static(DETAIL):
                     q = shadow_blocker(s, hit, t.arrival.L, l)
-                    blocker[k * s.num_lights + l] = wp.where(q.result, q.face, -1)
-                    blocker_at[k * s.num_lights + l] = wp.vec2(q.u, q.v)
+                    blocker[k * detail_columns(s) + l] = wp.where(q.result, q.face, -1)
+                    blocker_at[k * detail_columns(s) + l] = wp.vec2(q.u, q.v)
         return bits
 
     return blocked_lights
+
+
+@wp.func
+def point_key(q: int) -> int:
+    """Sample point q's key in a hidden-points sum (a random 32-bit value, the same on every run)."""
+    return wp.randi(wp.rand_init(wp.static(HIDDEN_SEED), q))
+
+
+@functools.cache
+def make_hidden_points(fx, DETAIL: bool):
+    """hidden_points(s, hit, k, weight, v, blocker, blocker_at, share) -> key: the area lights' sample points whose
+    shadow ray from the hit is blocked (make_area_sample_test's, the forward's own test, every ray traced: a light
+    proven clear of the scene is unblocked either way), as the exclusive or of their keys (point_key): two sets of
+    points part where their keys do, but for a chance of 2^-32. With DETAIL, at node row k and column
+    num_lights + q (detail_columns a row), each blocked point's nearest blocker's face and (u, v) (NOT_FOUND where
+    the query missed it; -1 stays where unblocked), and each point that faces the hit both ways its share of the
+    ray's colour were it seen: ``weight`` (the ray's, as the forward's local shading takes it) times shading's own
+    term of it (area_term; ``v`` the direction to the viewer), what its shadow's edge alone jumps by."""
+    area_sample_test = make_area_sample_test(True)
+    coefficients = make_coefficients(fx.texture, fx.vertex_color)
+    _, area_term = make_light_terms(fx.diffuse, fx.specular)
+
+    @wp.func
+    def hidden_points(s: SceneData, hit: Surface, k: int, weight: wp.vec3, v: wp.vec3, blocker: wp.array(dtype=int),
+                      blocker_at: wp.array(dtype=wp.vec2), share: wp.array(dtype=wp.vec3)) -> int:
+        key = int(0)
+        a = s.area
+        for e in range(a.num):
+            for q in range(a.first[e], a.first[e + 1]):
+                t = area_sample_test(s, hit, q, 0)
+                if t.shadow_ray != 0 and t.lit == 0:
+                    key = key ^ point_key(q)
+                if wp.static(DETAIL):
+                    c = k * detail_columns(s) + s.num_lights + q
+                    if t.shadow_ray != 0:
+                        term = area_term(t, a.radiance[e], a.dA[q], coefficients(s, hit), s.shininess[hit.material],
+                                         hit.n, v)
+                        share[c] = wp.cw_mul(weight, term)
+                    if t.shadow_ray != 0 and t.lit == 0:
+                        o = spawn_ray(hit, t.L).o
+                        to_q = a.points[q] - o
+                        dist = wp.length(to_q)
+                        b = wp.mesh_query_ray(s.mesh, o, to_q / dist, dist * wp.static(1.0 - SHADOW_EPSILON))
+                        blocker[c] = wp.where(b.result, b.face, wp.static(NOT_FOUND))
+                        blocker_at[c] = wp.vec2(b.u, b.v)
+        return key
+
+    return hidden_points
 
 
 @wp.func
@@ -102,35 +160,57 @@ def checker_squares(s: SceneData, hit: Surface) -> int:
 
 
 @functools.cache
-def make_tree_kernel(fx, stack: int, nodes: int, DETAIL: bool, CONES: bool = False, SQUARES: bool = False):
+def make_node_words(fx, DETAIL: bool, CONES: bool, SQUARES: bool, HIDDEN: bool):
+    """node_words(s, hit, k, weight, v, blocked, cone, square, hidden, blocker, blocker_at, share): what a tree node's
+    hit writes at its row k beside its face (make_tree_kernel): with shadows its blocked Whitted lights
+    (blocked_lights) and with HIDDEN its area lights' blocked sample points (hidden_points; ``weight``, ``v``: its
+    ray's), with CONES the hard cones holding it (inside_cones), with SQUARES its checker squares
+    (checker_squares); with DETAIL the blockers and shares those write."""
+    blocked_lights = make_blocked_lights(fx, DETAIL)
+    hidden_points = make_hidden_points(fx, DETAIL)
+    SHADOWS = fx.shadows and (fx.diffuse or fx.specular)
+
+    @wp.func
+    def node_words(s: SceneData, hit: Surface, k: int, weight: wp.vec3, v: wp.vec3, blocked: wp.array(dtype=int),
+                   cone: wp.array(dtype=int), square: wp.array(dtype=int), hidden: wp.array(dtype=int),
+                   blocker: wp.array(dtype=int), blocker_at: wp.array(dtype=wp.vec2), share: wp.array(dtype=wp.vec3)):
+        if wp.static(SHADOWS):
+            blocked[k] = blocked_lights(s, hit, k, blocker, blocker_at)
+            if wp.static(HIDDEN):
+                hidden[k] = hidden_points(s, hit, k, weight, v, blocker, blocker_at, share)
+        if wp.static(CONES):
+            cone[k] = inside_cones(s, hit)
+        if wp.static(SQUARES):
+            square[k] = checker_squares(s, hit)
+
+    return node_words
+
+
+@functools.cache
+def make_tree_kernel(fx, stack: int, nodes: int, DETAIL: bool, CONES: bool = False, SQUARES: bool = False,
+                     HIDDEN: bool = False):
     """The kernel that walks camera rays along ``dirs`` through their Whitted tree as trace.make_path walks it
-    (the BVH's nearest hits, Beer's law, a mirror bounce where k_r > 0, else a dielectric's children where they
-    carry weight) and writes per point and tree node (``nodes`` of them: node i's reflected or mirror child is
-    2 i + 1, its transmitted child 2 i + 2) the face hit (NO_RAY: no ray; -1: none) and a bit per Whitted light
-    whose shadow ray is blocked; with CONES (a hard spot lights the scene) a bit per hard spot whose cone holds
-    the hit (inside_cones), with SQUARES (a checker) the checker squares holding it (checker_squares; ``square``
-    zeroed by the caller). With DETAIL also whether the node lies below a dielectric's split, its ray (origin,
-    direction), its hit's (u, v, distance), and per light the nearest blocker's face and (u, v)."""
+    (nearest hits, Beer's law, a mirror bounce where k_r > 0, else a dielectric's children where they carry weight)
+    and writes per point and tree node (``nodes``: node i's reflected or mirror child 2 i + 1, its transmitted child
+    2 i + 2) the face hit (NO_RAY: no ray; -1: none) and node_words' (the blocked Whitted lights; with CONES, SQUARES
+    and HIDDEN the hard cones, checker squares and blocked sample points' key; the caller sets ``face`` NO_RAY and
+    the words 0: a node not reached keeps them); with DETAIL also whether it lies below a dielectric's split, its ray (origin, direction), its hit's
+    (u, v, distance) and node_words' blockers and shares (detail_columns a node)."""
     first_hit = make_first_hit(False, False, fx.culling)
     surface = make_surface(fx.smooth, fx.texture, fx.vertex_color)
-    blocked_lights = make_blocked_lights(fx, DETAIL)
+    node_words = make_node_words(fx, DETAIL, CONES, SQUARES, HIDDEN)
     RayRows, waiting, resumed = make_ray_stack(max(stack, 1))
     NodeRows = wp.types.vector(length=max(stack, 1), dtype=int)
     REFLECTION, REFRACTION, ABSORPTION = fx.reflection, fx.refraction, fx.absorption
-    SHADOWS = fx.shadows and (fx.diffuse or fx.specular)
 
     @wp.kernel(module="unique", enable_backward=False)
     def tree(s: SceneData, eye: wp.vec3, max_depth: int, frags: Fragments, mir: Mirrors, dirs: wp.array(dtype=wp.vec3),
              face: wp.array(dtype=int), blocked: wp.array(dtype=int), below: wp.array(dtype=int),
              ray: wp.array(dtype=wp.vec3), hit_at: wp.array(dtype=wp.vec3), blocker: wp.array(dtype=int),
-             blocker_at: wp.array(dtype=wp.vec2), cone: wp.array(dtype=int), square: wp.array(dtype=int)):
+             blocker_at: wp.array(dtype=wp.vec2), cone: wp.array(dtype=int), square: wp.array(dtype=int),
+             hidden: wp.array(dtype=int), share: wp.array(dtype=wp.vec3)):
         j = wp.tid()
         base = j * nodes
-        for i in range(nodes):
-            face[base + i] = NO_RAY
-            blocked[base + i] = 0
-            if wp.static(CONES):
-                cone[base + i] = 0
         r = TreeRay(Ray(eye, dirs[j]), wp.vec3(1.0), eye, 0, s.eye_medium, FROM_CAMERA, -1)
         node, under, top = int(0), int(0), int(0)
         rows, node_rows, under_rows = RayRows(), NodeRows(), NodeRows()
@@ -148,12 +228,7 @@ def make_tree_kernel(fx, stack: int, nodes: int, DETAIL: bool, CONES: bool = Fal
                     hit_at[k] = wp.vec3(h.u, h.v, wp.length(hit.p - r.ray.o))
                 if wp.static(ABSORPTION):
                     r.weight = absorbed(s, r.weight, r.medium, r.start, hit)
-                if wp.static(SHADOWS):
-                    blocked[k] = blocked_lights(s, hit, k, blocker, blocker_at)
-                if wp.static(CONES):
-                    cone[k] = inside_cones(s, hit)
-                if wp.static(SQUARES):
-                    square[k] = checker_squares(s, hit)
+                node_words(s, hit, k, r.weight, -r.ray.d, blocked, cone, square, hidden, blocker, blocker_at, share)
                 level = r.depth + 1
                 if wp.static(REFLECTION):
                     kr = s.kr[hit.material]
