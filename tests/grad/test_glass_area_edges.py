@@ -26,13 +26,12 @@ import pytest
 
 import warprt
 from marks import exhaustive, slow
-from warprt.image import EdgeFrame, glass_crossings, glass_terms
-from warprt.kernels import SOURCE_SAMPLE, stack_size
-from warprt.scene import resolve_effects
+from warprt.image import glass_terms
+from warprt.kernels import SOURCE_SAMPLE
 
 from .converged import check_against_differences, gradient
 from .test_curved_mirror_edges import ball_scene as mirror_ball_scene
-from .test_glass_edges import ball_scene, slab_scene
+from .test_glass_edges import ball_scene, frame_crossings, slab_scene
 from .test_mirror_edges import step
 
 WIDTH, HEIGHT = 24, 18
@@ -125,15 +124,14 @@ def test_soft_shadows_through_glass_equal_central_differences(positive, make, na
 
 
 def _crossings(s, hidden_bits: bool = True) -> tuple:
-    """(crossings, renderer): glass_crossings of a grad frame of ``s`` (EdgeFrame.hidden_bits: ``hidden_bits``)."""
+    """(crossings, renderer): test_glass_edges.frame_crossings of a grad frame of ``s`` (EdgeFrame.hidden_bits:
+    ``hidden_bits``)."""
     r = warprt.Renderer(s)
     r.render(grad=True)
-    fx = resolve_effects(s)
-    frame = EdgeFrame(fx, stack_size(s.render.max_depth), s.render.max_depth, hidden_bits=hidden_bits)
-    return glass_crossings(s, r.geometry, frame, "cpu"), r
+    return frame_crossings(s, r, hidden_bits=hidden_bits), r
 
 
-def test_an_aligned_lights_points_part_one_crossing(positive):
+def test_an_aligned_lights_points_part_one_crossing():
     """In aligned_slab the crossings parted by a sample point's wedge include some where two points' shadow edges
     are one line (the light's row in one plane with the triangle's edge): the same image point twice in a part's
     crossings, from two sources (the first point alone taking their jump would count the row's jump for one)."""

@@ -119,15 +119,18 @@ def weights():
     return (np.random.default_rng(11).random((HEIGHT, WIDTH, 3)) - 0.5).astype(np.float32)
 
 
+def frame_crossings(s, r, through: bool = True, **bits) -> list:
+    """glass_crossings of a grad frame ``r`` of ``s`` (``bits``: EdgeFrame's cone_bits, square_bits, hidden_bits)."""
+    fx = resolve_effects(s)
+    frame = EdgeFrame(fx, stack_size(s.render.max_depth) if fx.refraction else 0, s.render.max_depth, **bits)
+    return glass_crossings(s, r.geometry, frame, "cpu", through)
+
+
 def _crossing_terms(s, r, weights, through: bool, square_bits: bool = True) -> list:
     """The BoundaryTerms of the crossings of a grad frame ``r`` of ``s``, one per set of lines
     (EdgeFrame.square_bits: ``square_bits``)."""
-    fx = resolve_effects(s)
-    frame = EdgeFrame(fx, stack_size(s.render.max_depth) if fx.refraction else 0, s.render.max_depth,
-                      square_bits=square_bits)
-    n = len(r.geometry.points_np)
-    return glass_terms(glass_crossings(s, r.geometry, frame, "cpu", through), weights.reshape(-1, 3).astype(np.float64),
-                       n)
+    return glass_terms(frame_crossings(s, r, through, square_bits=square_bits),
+                       weights.reshape(-1, 3).astype(np.float64), len(r.geometry.points_np))
 
 
 def test_the_crossings_agree_with_the_camera_edges_term(weights):

@@ -96,8 +96,7 @@ def tree_walk(scene, geom, frame, at: np.ndarray, device: str, detail: bool = Fa
     k = nodes if detail else 0
     spots = bool(frame.fx.light_model and hard_spots(scene) and frame.cone_bits)
     squares = bool(frame.fx.texture and has_checker(scene, geom) and frame.square_bits)
-    hidden = bool(frame.fx.shadows and frame.fx.area_lights and (frame.fx.diffuse or frame.fx.specular)
-                  and frame.hidden_bits)
+    hidden = holds_points(frame)
     out = {"face": np.full(n * nodes, NO_RAY, np.int32), "blocked": np.zeros(n * nodes, np.int32),
            "below": np.zeros(max(n * k, 1), np.int32), "ray": np.zeros((max(n * k, 1) * 2, 3), np.float32),
            "hit": np.zeros((max(n * k, 1), 3), np.float32), "blocker": np.full(max(n * k * lights, 1), -1, np.int32),
@@ -122,6 +121,13 @@ def tree_walk(scene, geom, frame, at: np.ndarray, device: str, detail: bool = Fa
     held = {"cone": spots, "square": squares, "hidden": hidden, "share": hidden}
     return {name: v.reshape(shapes[name]) for name, v in got.items()
             if (detail or name in SIGNATURE) and held.get(name, True)}
+
+
+def holds_points(frame) -> bool:
+    """Whether the frame's tree walks hold its area lights' blocked sample points (``hidden``, and with detail their
+    shares: tree_walk): with area lights lighting through shadow rays, and EdgeFrame.hidden_bits."""
+    fx = frame.fx
+    return bool(fx.shadows and fx.area_lights and (fx.diffuse or fx.specular) and frame.hidden_bits)
 
 
 def detail_columns(data) -> int:
@@ -516,9 +522,9 @@ def _axis_crossings(scene, geom, frame, sources, spots, axis: int, curved: np.nd
     sample point, detail_columns, and 24 a column: their shares)
     (scenes/glass_slab.toml: 1.8 crossings a pair at 32 x 16 pixels, 5.2 at 8 x 4, its stripes finer than a pixel)."""
     lo, hi = _pairs(scene, geom, frame, line_points(scene.camera, axis), device)
-    columns = detail_columns(geom.scene_data(scene))
-    area = bool(frame.fx.shadows and frame.fx.area_lights)  # a share a column too (tree_walk's ``share``)
-    per = points_a_walk(frame, NODES_A_PART * 60 // (48 + (24 if area else 12) * columns) // MAX_CROSSINGS)
+    column = 24 if holds_points(frame) else 12  # bytes: a blocker and its (u, v), and a share where held
+    per = points_a_walk(frame, NODES_A_PART * 60 // (48 + column * detail_columns(geom.scene_data(scene)))
+                        // MAX_CROSSINGS)
     parts = [_part_crossings(scene, geom, frame, sources, spots, axis, curved, lo[i:i + per], hi[i:i + per], device)
              for i in range(0, len(lo), per)]
     return [p for p in parts if p is not None]
@@ -533,8 +539,8 @@ def _part_crossings(scene, geom, frame, sources, spots, axis: int, curved: np.nd
     dx_c/dtheta = -g_theta / g_axis, times the line's share |g_axis| / (|g_x| + |g_y|), over the lines' spacing)
     and f_- - f_+ (the colours at its sides, the bisection's last lo and hi: two crossings nearer than a fixed
     offset each read its own jump; an area light sample point's shadow edge its point's share alone, _each_point:
-    several points' edges may lie at one crossing); with ``curved`` those below a split or a curved bounce (_through) and not
-    within reach of the other terms' boundaries (_theirs_near)."""
+    several points' edges may lie at one crossing); with ``curved`` those below a split or a curved bounce
+    (_through) and not within reach of the other terms' boundaries (_theirs_near)."""
     if len(lo):
         lo, hi = _crossings(scene, geom, frame, lo, hi, device)
         x = _parting(scene, geom, frame, lo, hi, curved, device)

@@ -11,9 +11,9 @@ from ..geometry import CHECKER, LIGHT_DIRECTIONAL, LIGHT_SPOT, SceneData, Textur
 from .dielectric import absorbed, dielectric_children, refract
 from .interaction import Ray, Surface, make_surface, mirror_ray, reflect, spawn_ray
 from .camera import camera_of, image_plane_point
+from .clearance import SHADOW_EPSILON
 from .mirror import FROM_CAMERA, Mirrors
 from .raster import Fragments
-from .clearance import SHADOW_EPSILON
 from .record import NO_RAY
 from .shading import make_area_sample_test, make_coefficients, make_light_arrival, make_light_terms, make_light_test
 from .trace import TreeRay, make_first_hit, make_ray_stack
@@ -102,18 +102,20 @@ def make_hidden_points(fx, DETAIL: bool):
                       blocker_at: wp.array(dtype=wp.vec2), share: wp.array(dtype=wp.vec3)) -> int:
         key = int(0)
         a = s.area
+        if wp.static(DETAIL):
+            coeffs = coefficients(s, hit)
         for e in range(a.num):
             for q in range(a.first[e], a.first[e + 1]):
                 t = area_sample_test(s, hit, q, 0)
-                if t.shadow_ray != 0 and t.lit == 0:
+                blocked = t.shadow_ray != 0 and t.lit == 0
+                if blocked:
                     key = key ^ point_key(q)
                 if wp.static(DETAIL):
                     c = k * detail_columns(s) + s.num_lights + q
                     if t.shadow_ray != 0:
-                        term = area_term(t, a.radiance[e], a.dA[q], coefficients(s, hit), s.shininess[hit.material],
-                                         hit.n, v)
+                        term = area_term(t, a.radiance[e], a.dA[q], coeffs, s.shininess[hit.material], hit.n, v)
                         share[c] = wp.cw_mul(weight, term)
-                    if t.shadow_ray != 0 and t.lit == 0:
+                    if blocked:
                         o = spawn_ray(hit, t.L).o
                         to_q = a.points[q] - o
                         dist = wp.length(to_q)
@@ -194,8 +196,9 @@ def make_tree_kernel(fx, stack: int, nodes: int, DETAIL: bool, CONES: bool = Fal
     and writes per point and tree node (``nodes``: node i's reflected or mirror child 2 i + 1, its transmitted child
     2 i + 2) the face hit (NO_RAY: no ray; -1: none) and node_words' (the blocked Whitted lights; with CONES, SQUARES
     and HIDDEN the hard cones, checker squares and blocked sample points' key; the caller sets ``face`` NO_RAY and
-    the words 0: a node not reached keeps them); with DETAIL also whether it lies below a dielectric's split, its ray (origin, direction), its hit's
-    (u, v, distance) and node_words' blockers and shares (detail_columns a node)."""
+    the words 0: a node not reached keeps them); with DETAIL also whether it lies below a dielectric's split, its
+    ray (origin, direction), its hit's (u, v, distance) and node_words' blockers and shares (detail_columns a
+    node)."""
     first_hit = make_first_hit(False, False, fx.culling)
     surface = make_surface(fx.smooth, fx.texture, fx.vertex_color)
     node_words = make_node_words(fx, DETAIL, CONES, SQUARES, HIDDEN)
